@@ -1,0 +1,1 @@
+"""Subcommands of the acdrive CLI, one module each."""
