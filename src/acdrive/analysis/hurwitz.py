@@ -1,0 +1,387 @@
+"""Hurwitz tests for polynomials with real or complex coefficients, in floating point or exactly.
+
+A polynomial is Hurwitz (stable) when all its roots lie in the open left half plane. Bodson
+(15)-(17) decides this for the degree-2 complex polynomial Delta Z(s - j w_e) with the
+determinant conditions of his reference [30]; here the test is general (any degree).
+
+Coefficients are given highest power first (the ``numpy.roots`` order). Each coefficient may be
+an int, float, complex, ``fractions.Fraction`` or a pair ``(re, im)`` (a Gaussian rational when
+both are ints or Fractions). With ``exact=None`` the mode is chosen from the input: exact when
+every number is an int or a Fraction, floating point otherwise. ``exact=True`` converts floats
+to the Fractions of their exact binary values; no floating-point operation is then used.
+
+Method of :func:`complex_hurwitz` (argument principle + Cauchy index + Sturm chain)
+-----------------------------------------------------------------------------------
+Let p(s) = sum_k c_k s^(n-k), c_0 != 0. Multiply p by conj(c_0) (by sign(c_0) if c_0 is real):
+the roots do not change and the leading coefficient becomes real and positive. Put s = j w and
+P(w) = j^(-n) p(j w) = A(w) + j B(w), with A, B real polynomials, deg A = n, deg B < n. A root
+s_r of p maps to w_r = -j s_r, so Re s_r < 0 <=> Im w_r > 0. If P has no real root (p none on
+the imaginary axis), the argument of P increases by pi (n_lhp - n_rhp) along the real w axis,
+and because B/A -> 0 at both ends this change equals pi I(-B/A), where I is the Cauchy index
+over the real line. Sturm's theorem gives I(f_1/f_0) = V(-inf) - V(+inf) for the chain
+f_0 = A, f_1 = -B, f_(k+1) = -rem(f_(k-1), f_k), V counting sign changes along the chain.
+Hence n_rhp = (n - I) / 2.
+
+* Regular case (each f_k has degree n - k, chain of n + 1 members): I = n - 2 V where V is the
+  number of sign changes among the leading coefficients ("first column"). So n_rhp = V and p is
+  Hurwitz iff every leading coefficient is positive. This is the complex Routh array.
+* Otherwise p is not Hurwitz (then I < n). In exact mode the counts are still computed: the
+  last chain member g = gcd(A, B) holds the roots of P shared with its conjugate. Its non-real
+  roots come in conjugate pairs (one root of p on each side of the imaginary axis, no change of
+  the index); its real roots (multiplicity m, counted by Sturm sequences of g, gcd(g, g'), ...)
+  are the imaginary-axis roots of p. Then n_rhp = (n - m - I) / 2 and n_imag = m.
+  In floating point a (near-)zero leading coefficient cannot be told from rounding, so the
+  result says ``determined=False`` (and ``stable=False``): rerun with ``exact=True``.
+
+The reported ``determinants`` D_1..D_n are the leading principal minors of odd order 2k - 1 of
+the matrix whose rows alternate the coefficients of f_1 (padded to degree n - 1) and f_0, each
+pair shifted one column to the right (the Bilharz-Frank form; expanding Hurwitz's determinant
+nabla_2k of the pair (f_0, f_1) along its first column gives lc(f_0) D_k; see Gantmacher,
+Theory of Matrices II, ch. XV, on the Cauchy index). When no
+D_k is zero, I = n - 2 V(1, D_1, ..., D_n), so n_rhp = V(1, D_1, ..., D_n) and p is Hurwitz iff
+every D_k > 0 (the tests check this against the chain and numpy roots). For
+p = a_0 s^2 + (a_1 + j b_1) s + a_2 + j b_2 with a_0 > 0, D_1 = a_1 and D_2 is Bodson's
+determinant Delta_2 of (17).
+
+Method of :func:`routh_hurwitz`: the classical Routh array of a real polynomial (first column
+sign changes = number of right-half-plane roots when no first-column entry is zero) and the
+Hurwitz determinants H_1..H_n. On a zero in the first column, exact mode takes the counts from
+the general chain above; floating-point mode returns ``determined=False``.
+"""
+
+from __future__ import annotations
+
+import itertools
+import numbers
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+
+from acdrive.errors import InputError
+
+__all__ = ["HurwitzResult", "complex_hurwitz", "is_hurwitz", "routh_hurwitz"]
+
+
+@dataclass(frozen=True)
+class HurwitzResult:
+    """Outcome of a Hurwitz test.
+
+    stable: True iff every root is in the open left half plane (certified; False when not
+        ``determined``).
+    determined: False only in floating-point mode when a first-column entry was zero within the
+        tolerance: then ``stable`` is False, and the counts are None; use ``exact=True``.
+    n_rhp: number of roots with positive real part (with multiplicity), or None.
+    n_imag: number of roots on the imaginary axis (with multiplicity), or None.
+    first_column: leading coefficients of the chain (complex test) or first column of the Routh
+        array (real test), as far as it could be built.
+    determinants: Bilharz-Frank determinants D_1..D_n (complex) or Hurwitz determinants H_1..H_n
+        (real).
+    array: the rows used (chain polynomials f_0, f_1, ... highest power first, or Routh rows).
+    exact: True when computed with Fractions only.
+    method: "complex-sturm" or "routh".
+    """
+
+    stable: bool
+    determined: bool
+    n_rhp: int | None
+    n_imag: int | None
+    first_column: tuple
+    determinants: tuple
+    array: tuple
+    exact: bool
+    method: str
+
+
+# --- input ---------------------------------------------------------------------------------
+
+
+def _is_exact_number(x) -> bool:
+    return isinstance(x, (int, np.integer, Fraction)) and not isinstance(x, bool)
+
+
+def _is_real_number(x) -> bool:
+    return isinstance(x, (numbers.Real, np.integer, np.floating)) and not isinstance(x, bool)
+
+
+def _split(field: str, c):
+    """Return (re, im) of one coefficient without converting it."""
+    if isinstance(c, (tuple, list)):
+        if len(c) != 2 or not all(_is_real_number(v) for v in c):
+            raise InputError(field, "a pair must be (re, im) of two real numbers")
+        return c[0], c[1]
+    if _is_real_number(c):
+        return c, 0
+    if isinstance(c, (complex, np.complexfloating)):
+        return float(c.real), float(c.imag)
+    raise InputError(field, f"must be a number or an (re, im) pair, got {type(c).__name__}")
+
+
+def _convert(field: str, v, exact: bool):
+    if exact:
+        if isinstance(v, (float, np.floating)):
+            if not np.isfinite(v):
+                raise InputError(field, "must be finite (not NaN or infinite)")
+            return Fraction(float(v))
+        return Fraction(int(v)) if isinstance(v, np.integer) else Fraction(v)
+    v = float(v)
+    if not np.isfinite(v):
+        raise InputError(field, "must be finite (not NaN or infinite)")
+    return v
+
+
+def _parse(coeffs, exact: bool | None, real_only: bool):
+    """Coefficients -> (list of (re, im), exact flag); validates."""
+    if isinstance(coeffs, np.ndarray):
+        coeffs = coeffs.tolist()
+    try:
+        items = list(coeffs)
+    except TypeError:
+        raise InputError("coeffs", "must be a sequence of coefficients") from None
+    if not items:
+        raise InputError("coeffs", "must hold at least one coefficient")
+    pairs = [_split(f"coeffs[{k}]", c) for k, c in enumerate(items)]
+    if exact is None:
+        exact = all(_is_exact_number(v) for pair in pairs for v in pair)
+    out = []
+    for k, (re, im) in enumerate(pairs):
+        re = _convert(f"coeffs[{k}]", re, exact)
+        im = _convert(f"coeffs[{k}]", im, exact)
+        if real_only and im != 0:
+            raise InputError(f"coeffs[{k}]", "must be real for the real Routh-Hurwitz test")
+        out.append((re, im))
+    if out[0] == (0, 0):
+        raise InputError("coeffs[0]", "leading coefficient must be nonzero")
+    return out, bool(exact)
+
+
+# --- real polynomial helpers (lists, highest power first; Fractions or floats) -------------
+
+
+def _strip(p):
+    k = 0
+    while k < len(p) and p[k] == 0:
+        k += 1
+    return p[k:]
+
+
+def _rem(f, g, rtol):
+    """Remainder of f / g. Float mode (rtol > 0): entries below rtol x (sum of the magnitudes
+    that were added into them) are set to zero, since they cannot be told from rounding."""
+    r = list(f)
+    bound = [abs(x) for x in f]
+    dg = len(g) - 1
+    for i in range(len(f) - dg):
+        q = r[i] / g[0]
+        for j in range(len(g)):
+            r[i + j] -= q * g[j]
+            bound[i + j] += abs(q * g[j])
+    start = len(f) - dg
+    rem = r[start:]
+    if rtol:
+        rem = [0.0 if abs(x) <= rtol * b else x for x, b in zip(rem, bound[start:])]
+    return _strip(rem)
+
+
+def _chain(f0, f1, rtol):
+    """Sturm chain f_0, f_1, f_(k+1) = -rem(f_(k-1), f_k) (nonzero members only)."""
+    chain = [f0]
+    if f1:
+        chain.append(f1)
+        while True:
+            r = _rem(chain[-2], chain[-1], rtol)
+            if not r:
+                break
+            chain.append([-x for x in r])
+    return chain
+
+
+def _sign(x) -> int:
+    return (x > 0) - (x < 0)
+
+
+def _variations(signs) -> int:
+    signs = [s for s in signs if s != 0]
+    return sum(1 for a, b in itertools.pairwise(signs) if a != b)
+
+
+def _cauchy_index(chain) -> int:
+    """V(-inf) - V(+inf) of a Sturm chain: the Cauchy index of f_1/f_0 over the real line."""
+    at_plus = [_sign(p[0]) for p in chain]
+    at_minus = [_sign(p[0]) * (-1) ** (len(p) - 1) for p in chain]
+    return _variations(at_minus) - _variations(at_plus)
+
+
+def _derivative(p):
+    n = len(p) - 1
+    return [c * (n - k) for k, c in enumerate(p[:-1])]
+
+
+def _real_roots_with_multiplicity(g) -> int:
+    """Number of real roots of g counted with multiplicity (exact arithmetic).
+
+    Sturm: distinct real roots of h = V(-inf) - V(+inf) of the chain (h, h', ...). A root of
+    multiplicity mu of g is a root of multiplicity mu - 1 of gcd(g, g'), so summing the distinct
+    counts of g, gcd(g, g'), gcd(gcd, gcd'), ... counts each root mu times.
+    """
+    total = 0
+    h = g
+    while len(h) > 1:
+        chain = _chain(h, _derivative(h), 0)
+        total += _cauchy_index(chain)
+        h = chain[-1]
+    return total
+
+
+def _det(rows):
+    """Determinant by Gaussian elimination with row pivoting (exact for Fractions)."""
+    a = [list(r) for r in rows]
+    n = len(a)
+    det = 1
+    for col in range(n):
+        piv = max(range(col, n), key=lambda r: abs(a[r][col]))
+        if a[piv][col] == 0:
+            return a[piv][col]
+        if piv != col:
+            a[col], a[piv] = a[piv], a[col]
+            det = -det
+        det = det * a[col][col]
+        for r in range(col + 1, n):
+            m = a[r][col] / a[col][col]
+            if m != 0:
+                for c in range(col, n):
+                    a[r][c] -= m * a[col][c]
+    return det
+
+
+def _leading_minors(matrix, orders):
+    return tuple(_det([row[:k] for row in matrix[:k]]) for k in orders)
+
+
+# --- complex test --------------------------------------------------------------------------
+
+
+def _gmul(x, y):
+    return (x[0] * y[0] - x[1] * y[1], x[0] * y[1] + x[1] * y[0])
+
+
+def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
+    """Hurwitz test of a polynomial with complex coefficients (any degree); see module docstring.
+
+    ``coeffs``: highest power first. ``rtol``: float mode only, relative size below which a
+    computed chain coefficient is taken as zero. Generalises Bodson (15)-(17).
+    """
+    c, exact = _parse(coeffs, exact, real_only=False)
+    rtol = 0 if exact else float(rtol)
+    n = len(c) - 1
+    one = Fraction(1) if exact else 1.0
+    zero = 0 * one
+    x0, y0 = c[0]
+    scale = (one if x0 > 0 else -one, zero) if y0 == 0 else (x0, -y0)
+    j_pow = [(one, zero), (zero, -one), (-one, zero), (zero, one)]  # j^(-k), k mod 4
+    d = [_gmul(_gmul(ck, scale), j_pow[k % 4]) for k, ck in enumerate(c)]
+    f0 = [dk[0] for dk in d]
+    f1 = _strip([-dk[1] for dk in d[1:]])
+    chain = _chain(f0, f1, rtol)
+
+    f1_full = [-dk[1] for dk in d[1:]]
+    size = 2 * n - 1
+    matrix = []
+    for i in range(size):
+        src = f1_full if i % 2 == 0 else f0
+        row = [zero] * size
+        for k, v in enumerate(src):
+            if i // 2 + k < size:
+                row[i // 2 + k] = v
+        matrix.append(row)
+    dets = _leading_minors(matrix, range(1, size + 1, 2))
+
+    first_column = tuple(p[0] for p in chain)
+    regular = len(chain) == n + 1 and all(len(p) == n + 1 - k for k, p in enumerate(chain))
+    common = {
+        "first_column": first_column,
+        "determinants": dets,
+        "array": tuple(tuple(p) for p in chain),
+        "exact": exact,
+        "method": "complex-sturm",
+    }
+    if regular:
+        v = _variations([_sign(x) for x in first_column])
+        return HurwitzResult(v == 0, True, v, 0, **common)
+    if not exact:
+        return HurwitzResult(False, False, None, None, **common)
+    index = _cauchy_index(chain)
+    m = _real_roots_with_multiplicity(chain[-1])
+    n_rhp, odd = divmod(n - m - index, 2)
+    assert odd == 0 and n_rhp >= 0, "Cauchy index inconsistent with the degree"
+    return HurwitzResult(n_rhp == 0 and m == 0, True, n_rhp, m, **common)
+
+
+# --- real test -----------------------------------------------------------------------------
+
+
+def routh_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
+    """Routh-Hurwitz test of a polynomial with real coefficients (any degree).
+
+    Builds the Routh array (rows s^n, s^(n-1), ...) and the Hurwitz determinants H_1..H_n
+    (leading principal minors of the matrix with entries a_(2j-i), 1-based). With a_0 > 0 the
+    polynomial is Hurwitz iff every first-column entry (equivalently every H_k) is positive,
+    and the number of right-half-plane roots is the number of sign changes in the first column.
+    ``rtol``: float mode only, relative size below which a computed entry is taken as zero.
+    """
+    c, exact = _parse(coeffs, exact, real_only=True)
+    a = [re for re, _ in c]
+    if a[0] < 0:
+        a = [-x for x in a]
+    n = len(a) - 1
+    zero = a[0] * 0
+    width = n // 2 + 1
+    rows = [a[0::2], a[1::2]]
+    rows = [r + [zero] * (width - len(r)) for r in rows][: n + 1]
+    singular = False
+    while len(rows) < n + 1:
+        prev, cur = rows[-2], rows[-1]
+        if cur[0] == 0:
+            singular = True
+            break
+        ratio = prev[0] / cur[0]
+        new = []
+        for j in range(width - 1):
+            v = prev[j + 1] - ratio * cur[j + 1]
+            if rtol and not exact and abs(v) <= rtol * (abs(prev[j + 1]) + abs(ratio * cur[j + 1])):
+                v = 0.0
+            new.append(v)
+        rows.append(new + [zero])
+    first_column = tuple(r[0] for r in rows)
+    singular = singular or any(x == 0 for x in first_column)
+
+    hurwitz = [
+        [a[2 * j - i] if 0 <= 2 * j - i <= n else zero for j in range(1, n + 1)]
+        for i in range(1, n + 1)
+    ]
+    dets = _leading_minors(hurwitz, range(1, n + 1))
+    common = {
+        "first_column": first_column,
+        "determinants": dets,
+        "array": tuple(tuple(r) for r in rows),
+        "exact": exact,
+        "method": "routh",
+    }
+    if not singular:
+        v = _variations([_sign(x) for x in first_column])
+        return HurwitzResult(v == 0, True, v, 0, **common)
+    if not exact:
+        return HurwitzResult(False, False, None, None, **common)
+    general = complex_hurwitz([x for x in a], exact=True)
+    return HurwitzResult(general.stable, True, general.n_rhp, general.n_imag, **common)
+
+
+def is_hurwitz(coeffs, *, exact: bool | None = None) -> bool:
+    """True iff every root of the polynomial (real or complex coefficients) has Re < 0.
+
+    Raises InputError when floating point cannot decide (a zero pivot within rounding).
+    """
+    result = complex_hurwitz(coeffs, exact=exact)
+    if not result.determined:
+        raise InputError("coeffs", "stability undetermined in floating point; use exact=True")
+    return result.stable
