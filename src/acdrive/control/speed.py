@@ -1,0 +1,43 @@
+"""Speed PI with feedforward and conditional integration (Bodson (25)-(27))."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from numba import njit
+
+from acdrive.errors import require_positive
+
+
+@dataclass(frozen=True)
+class SpeedPIGains:
+    """K_P, K_I, K_F of Bodson (25)."""
+
+    K_P: float
+    K_I: float
+    K_F: float
+
+    @classmethod
+    def design(cls, J: float, bandwidth: float, K_F: float = 2.0 / 3.0) -> "SpeedPIGains":
+        """Both roots of J s^2 + K_P s + K_I (27) at s = -a_D,VEL: K_P = 2 a J, K_I = a^2 J.
+
+        ``bandwidth`` is a_D,VEL in rad/s; K_F = 2/3 is the paper's no-overshoot choice.
+        """
+        J = require_positive("J", J)
+        a = require_positive("speed_bandwidth", bandwidth)
+        return cls(K_P=2.0 * a * J, K_I=a * a * J, K_F=K_F)
+
+
+@njit(cache=True)
+def speed_pi(K_P, K_I, K_F, e_int, w_ref, w, tau_lo, tau_hi, T_s):
+    """One sample of (25): returns (tau_com, new e_int, limited).
+
+    tau_com = K_F K_P w_ref - K_P w + K_I e_int, clipped to [tau_lo, tau_hi]; the integrator
+    e_int advances (forward Euler) only while the unclipped command is inside the limits.
+    """
+    tau = K_F * K_P * w_ref - K_P * w + K_I * e_int
+    if tau > tau_hi:
+        return tau_hi, e_int, True
+    if tau < tau_lo:
+        return tau_lo, e_int, True
+    return tau, e_int + T_s * (w_ref - w), False

@@ -1,0 +1,111 @@
+"""Continuous-time plant: N DFIMs with their shafts, on one three-phase supply behind a shared
+series R-L impedance (Bodson's transformer), each stator connected through a relay.
+
+Model: Bodson (9) written in the stationary frame (theta_e = 0, so w_e = 0 in (9)) with the
+stator and rotor flux linkages as states,
+
+    d psi_s/dt = v_s - R_s i_s
+    d psi_r/dt = v_r - R_r i_r + j n_p w psi_r
+    psi_s = L_s i_s + M i_r,   psi_r = M i_s + L_r i_r,
+    J dw/dt = tau_e - tau_L - B w - tau_c tanh(w / W_COULOMB),   d theta/dt = w     (26)
+
+Rotor quantities are referred to the stator (rotor frame value times e^{j n_p theta}, Bodson (3)).
+The bus voltage follows from the supply and the shared impedance,
+    v_bus = v_g - R_g sum(i_s) - L_g sum(d i_s/dt),
+which is linear in v_bus because each d i_s/dt is, so it is solved exactly at every evaluation.
+An open relay forces i_s = 0: the stator flux is then M i_r and the stator terminal voltage is
+d psi_s/dt = (M / L_r) d psi_r/dt (the voltage the synchroniser matches to the grid).
+
+State vector layout: for motor k, x[6k : 6k+6] = (Re psi_s, Im psi_s, Re psi_r, Im psi_r, theta, w);
+the last entry is the supply angle theta_g (d theta_g/dt = 2 pi f(t)).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from acdrive.machines.dfim import (
+    B_VISCOUS, J_INERTIA, L_R, L_S, M_SR, N_P, R_R, R_S, TAU_COULOMB, electromagnetic_torque,
+)
+from acdrive.plant.profiles import profile_at
+
+STATES_PER_MOTOR = 6
+PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA = range(STATES_PER_MOTOR)
+#: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
+W_COULOMB = 0.5
+SQRT_3_2 = np.sqrt(1.5)
+
+# supply / bus parameters
+BUS_R, BUS_L = 0, 1
+
+
+def n_states(n_motors: int) -> int:
+    return STATES_PER_MOTOR * n_motors + 1
+
+
+@njit(cache=True)
+def motor_currents(p, psi_s, psi_r, closed):
+    """(i_s, i_r) from the flux linkages; i_s = 0 and psi_s irrelevant when the relay is open."""
+    if closed:
+        det = p[L_S] * p[L_R] - p[M_SR] * p[M_SR]
+        return (p[L_R] * psi_s - p[M_SR] * psi_r) / det, (p[L_S] * psi_r - p[M_SR] * psi_s) / det
+    return 0.0 + 0.0j, psi_r / p[L_R]
+
+
+@njit(cache=True)
+def supply_voltage(theta_g, t, supply_V_t, supply_V):
+    """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g} (Bodson (8))."""
+    return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * np.exp(1j * theta_g)
+
+
+@njit(cache=True)
+def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rotor, closed, v_term):
+    """Write dx/dt into ``dx`` and the stator terminal voltages into ``v_term``; return v_g.
+
+    supply: tuple (V_times, V_pk_values, f_times, f_values); load_t/load_tau: per-motor profiles.
+    v_r_rotor[k]: rotor voltage of motor k in rotor coordinates (held by the converter).
+    """
+    n = machines.shape[0]
+    theta_g = x[STATES_PER_MOTOR * n]
+    v_g = supply_voltage(theta_g, t, supply[0], supply[1])
+    # First pass: currents, rotor-flux derivatives, and the terms of the bus equation.
+    sum_i_s = 0.0 + 0.0j
+    sum_a = 0.0           # sum of d(di_s/dt)/d v_bus
+    sum_b = 0.0 + 0.0j    # sum of the v_bus-independent parts of di_s/dt
+    for k in range(n):
+        p = machines[k]
+        o = STATES_PER_MOTOR * k
+        psi_s = complex(x[o + PSI_S_RE], x[o + PSI_S_IM])
+        psi_r = complex(x[o + PSI_R_RE], x[o + PSI_R_IM])
+        i_s, i_r = motor_currents(p, psi_s, psi_r, closed[k])
+        v_r = v_r_rotor[k] * np.exp(1j * p[N_P] * x[o + THETA])
+        dpsi_r = v_r - p[R_R] * i_r + 1j * p[N_P] * x[o + OMEGA] * psi_r
+        dx[o + PSI_R_RE], dx[o + PSI_R_IM] = dpsi_r.real, dpsi_r.imag
+        if closed[k]:
+            det = p[L_S] * p[L_R] - p[M_SR] * p[M_SR]
+            sum_i_s += i_s
+            sum_a += p[L_R] / det
+            sum_b += (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) / det
+        # mechanics (26) with load and friction
+        w = x[o + OMEGA]
+        tau_l = profile_at(load_t[k], load_tau[k], t) + p[B_VISCOUS] * w + p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
+        dx[o + OMEGA] = (electromagnetic_torque(p, i_s, i_r) - tau_l) / p[J_INERTIA]
+        dx[o + THETA] = w
+    v_bus = (v_g - bus[BUS_R] * sum_i_s - bus[BUS_L] * sum_b) / (1.0 + bus[BUS_L] * sum_a)
+    # Second pass: stator fluxes, which need the bus voltage.
+    for k in range(n):
+        p = machines[k]
+        o = STATES_PER_MOTOR * k
+        if closed[k]:
+            psi_s = complex(x[o + PSI_S_RE], x[o + PSI_S_IM])
+            psi_r = complex(x[o + PSI_R_RE], x[o + PSI_R_IM])
+            i_s, _ = motor_currents(p, psi_s, psi_r, True)
+            dpsi_s = v_bus - p[R_S] * i_s
+            v_term[k] = v_bus
+        else:
+            dpsi_s = p[M_SR] / p[L_R] * complex(dx[o + PSI_R_RE], dx[o + PSI_R_IM])
+            v_term[k] = dpsi_s
+        dx[o + PSI_S_RE], dx[o + PSI_S_IM] = dpsi_s.real, dpsi_s.imag
+    dx[STATES_PER_MOTOR * n] = 2.0 * np.pi * profile_at(supply[2], supply[3], t)
+    return v_g
