@@ -52,7 +52,8 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
         VB = np.linalg.solve(Vg, B2[good].astype(complex))  # (b, n, m)
         # residue matrices R_k = (C V)[:, k] (V^-1 B)[k, :], flattened to (b, n, p*m)
         R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(-1, n, p * m)
-        inv = 1.0 / (s[None, :, None] - lam[good][:, None, :])  # (b, k, n)
+        with np.errstate(divide="ignore", invalid="ignore"):  # s on a pole gives inf
+            inv = 1.0 / (s[None, :, None] - lam[good][:, None, :])  # (b, k, n)
         G[good] = (inv @ R).reshape(-1, s.size, p, m) + D2[good][:, None]
     for b in np.flatnonzero(~good):
         M = s[:, None, None] * np.eye(n) - A2[b]  # (k, n, n)
@@ -148,7 +149,7 @@ class LTI:
 
     def __post_init__(self):
         A = np.array(self.A, dtype=float)
-        n = int(round(np.sqrt(A.size)))
+        n = round(float(np.sqrt(A.size)))
         if n * n != A.size:
             raise InputError("controller.A", "must be square")
         A = A.reshape(n, n)
@@ -208,12 +209,16 @@ class LTI:
     @classmethod
     def paper_20(cls) -> LTI:
         """Controller (20) of Amezquita-Brooks et al.: 326.5 (s+400)^2 (s+1000) / (s (s^2+100s+42500))."""
-        return cls.pi_lag(326.5, 1000.0, [-400.0, -400.0], [-50 + 200j, -50 - 200j], name="paper-20")
+        return cls.pi_lag(
+            326.5, 1000.0, [-400.0, -400.0], [-50 + 200j, -50 - 200j], name="paper-20"
+        )
 
     @classmethod
     def gain(cls, k: float, name: str = "") -> LTI:
         """Static gain k(s) = k."""
-        return cls(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[require_finite("k", k)]], name)
+        return cls(
+            np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), [[require_finite("k", k)]], name
+        )
 
     @classmethod
     def from_control(cls, sys, name: str = "") -> LTI:

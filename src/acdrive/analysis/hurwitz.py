@@ -25,35 +25,41 @@ Hence n_rhp = (n - I) / 2.
 * Regular case (each f_k has degree n - k, chain of n + 1 members): I = n - 2 V where V is the
   number of sign changes among the leading coefficients ("first column"). So n_rhp = V and p is
   Hurwitz iff every leading coefficient is positive. This is the complex Routh array.
-* Otherwise p is not Hurwitz (then I < n). In exact mode the counts are still computed: the
-  last chain member g = gcd(A, B) holds the roots of P shared with its conjugate. Its non-real
-  roots come in conjugate pairs (one root of p on each side of the imaginary axis, no change of
-  the index); its real roots (multiplicity m, counted by Sturm sequences of g, gcd(g, g'), ...)
-  are the imaginary-axis roots of p. Then n_rhp = (n - m - I) / 2 and n_imag = m.
-  In floating point a (near-)zero leading coefficient cannot be told from rounding, so the
-  result says ``determined=False`` (and ``stable=False``): rerun with ``exact=True``.
+* Singular case (a degree drops by more than one, or the chain stops early): p is not Hurwitz
+  (then I < n) and the counts still follow. The last chain member g = gcd(A, B) holds the roots
+  P shares with its conjugate. Its non-real roots come in conjugate pairs (one root of p on
+  each side of the imaginary axis: no change of the index); its real roots (multiplicity m,
+  counted by Sturm sequences of g, gcd(g, g'), ...) are the imaginary-axis roots of p. Then
+  n_rhp = (n - m - I) / 2 and n_imag = m.
+
+Floating point: every computed chain coefficient carries a bound (the sum of the magnitudes
+that were added into it); a value below ``rtol`` times its bound is taken as zero. When the
+floating-point chain is regular its signs are trusted. Otherwise (the singular case, or a pivot
+that cannot be told from zero) the test is redone in exact arithmetic on the binary values of
+the coefficients, so no answer is ever a guess; ``marginal=True`` then reports that a pivot was
+within rounding of zero: the polynomial is that close to the set where the counts change.
 
 The reported ``determinants`` D_1..D_n are the leading principal minors of odd order 2k - 1 of
 the matrix whose rows alternate the coefficients of f_1 (padded to degree n - 1) and f_0, each
 pair shifted one column to the right (the Bilharz-Frank form; expanding Hurwitz's determinant
 nabla_2k of the pair (f_0, f_1) along its first column gives lc(f_0) D_k; see Gantmacher,
-Theory of Matrices II, ch. XV, on the Cauchy index). When no
-D_k is zero, I = n - 2 V(1, D_1, ..., D_n), so n_rhp = V(1, D_1, ..., D_n) and p is Hurwitz iff
-every D_k > 0 (the tests check this against the chain and numpy roots). For
+Theory of Matrices II, ch. XV, on the Cauchy index). When no D_k is zero,
+I = n - 2 V(1, D_1, ..., D_n), so n_rhp = V(1, D_1, ..., D_n) and p is Hurwitz iff every D_k > 0
+(the tests check this against the chain and numpy roots). For
 p = a_0 s^2 + (a_1 + j b_1) s + a_2 + j b_2 with a_0 > 0, D_1 = a_1 and D_2 is Bodson's
 determinant Delta_2 of (17).
 
 Method of :func:`routh_hurwitz`: the classical Routh array of a real polynomial (first column
 sign changes = number of right-half-plane roots when no first-column entry is zero) and the
-Hurwitz determinants H_1..H_n. On a zero in the first column, exact mode takes the counts from
-the general chain above; floating-point mode returns ``determined=False``.
+Hurwitz determinants H_1..H_n. On a zero in the first column the counts come from the exact
+general chain above (in floating point, on the exact binary values of the coefficients).
 """
 
 from __future__ import annotations
 
 import itertools
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
@@ -67,25 +73,25 @@ __all__ = ["HurwitzResult", "complex_hurwitz", "is_hurwitz", "routh_hurwitz"]
 class HurwitzResult:
     """Outcome of a Hurwitz test.
 
-    stable: True iff every root is in the open left half plane (certified; False when not
-        ``determined``).
-    determined: False only in floating-point mode when a first-column entry was zero within the
-        tolerance: then ``stable`` is False, and the counts are None; use ``exact=True``.
-    n_rhp: number of roots with positive real part (with multiplicity), or None.
-    n_imag: number of roots on the imaginary axis (with multiplicity), or None.
+    stable: True iff every root is in the open left half plane.
+    n_rhp: number of roots with positive real part (with multiplicity).
+    n_imag: number of roots on the imaginary axis (with multiplicity).
+    marginal: floating-point input only: a pivot was zero within ``rtol`` of rounding, so the
+        counts were computed exactly from the binary values of the coefficients; they are
+        exact for those values, but a relative perturbation of about ``rtol`` may change them.
     first_column: leading coefficients of the chain (complex test) or first column of the Routh
         array (real test), as far as it could be built.
     determinants: Bilharz-Frank determinants D_1..D_n (complex) or Hurwitz determinants H_1..H_n
         (real).
     array: the rows used (chain polynomials f_0, f_1, ... highest power first, or Routh rows).
-    exact: True when computed with Fractions only.
+    exact: True when the counts were computed with Fractions only.
     method: "complex-sturm" or "routh".
     """
 
     stable: bool
-    determined: bool
-    n_rhp: int | None
-    n_imag: int | None
+    n_rhp: int
+    n_imag: int
+    marginal: bool
     first_column: tuple
     determinants: tuple
     array: tuple
@@ -158,42 +164,53 @@ def _parse(coeffs, exact: bool | None, real_only: bool):
 # --- real polynomial helpers (lists, highest power first; Fractions or floats) -------------
 
 
-def _strip(p):
+def _strip(p, bounds=None, rtol=0.0):
+    """Drop leading zeros. Float mode (rtol > 0): values below rtol x bound count as zero.
+
+    Returns (p, bounds, near) where near tells that a dropped value was a computed one (nonzero
+    bound), i.e. a zero that cannot be told from rounding.
+    """
+    if rtol:
+        p = [0.0 if abs(x) <= rtol * b else x for x, b in zip(p, bounds)]
     k = 0
     while k < len(p) and p[k] == 0:
         k += 1
-    return p[k:]
+    near = bool(rtol) and any(b > 0 for b in bounds[:k])
+    return p[k:], (bounds[k:] if rtol else None), near
 
 
-def _rem(f, g, rtol):
-    """Remainder of f / g. Float mode (rtol > 0): entries below rtol x (sum of the magnitudes
-    that were added into them) are set to zero, since they cannot be told from rounding."""
+def _rem(f, fb, g, gb, rtol):
+    """Remainder of f / g, with magnitude bounds propagated in float mode (rtol > 0)."""
     r = list(f)
-    bound = [abs(x) for x in f]
+    bound = list(fb) if rtol else None
     dg = len(g) - 1
     for i in range(len(f) - dg):
         q = r[i] / g[0]
         for j in range(len(g)):
             r[i + j] -= q * g[j]
-            bound[i + j] += abs(q * g[j])
+            if rtol:
+                bound[i + j] += abs(q) * gb[j]
     start = len(f) - dg
-    rem = r[start:]
-    if rtol:
-        rem = [0.0 if abs(x) <= rtol * b else x for x, b in zip(rem, bound[start:])]
-    return _strip(rem)
+    return _strip(r[start:], bound[start:] if rtol else None, rtol)
 
 
-def _chain(f0, f1, rtol):
-    """Sturm chain f_0, f_1, f_(k+1) = -rem(f_(k-1), f_k) (nonzero members only)."""
-    chain = [f0]
+def _chain(f0, f1, rtol=0.0, b0=None, b1=None):
+    """Sturm chain f_0, f_1, f_(k+1) = -rem(f_(k-1), f_k) (nonzero members only).
+
+    Returns (chain, near): near is True when a float pivot could not be told from zero.
+    """
+    chain, bounds, near = [f0], [b0], False
     if f1:
         chain.append(f1)
+        bounds.append(b1)
         while True:
-            r = _rem(chain[-2], chain[-1], rtol)
+            r, rb, flag = _rem(chain[-2], bounds[-2], chain[-1], bounds[-1], rtol)
+            near = near or flag
             if not r:
                 break
             chain.append([-x for x in r])
-    return chain
+            bounds.append(rb)
+    return chain, near
 
 
 def _sign(x) -> int:
@@ -227,7 +244,7 @@ def _real_roots_with_multiplicity(g) -> int:
     total = 0
     h = g
     while len(h) > 1:
-        chain = _chain(h, _derivative(h), 0)
+        chain, _ = _chain(h, _derivative(h))
         total += _cauchy_index(chain)
         h = chain[-1]
     return total
@@ -265,15 +282,8 @@ def _gmul(x, y):
     return (x[0] * y[0] - x[1] * y[1], x[0] * y[1] + x[1] * y[0])
 
 
-def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
-    """Hurwitz test of a polynomial with complex coefficients (any degree); see module docstring.
-
-    ``coeffs``: highest power first. ``rtol``: float mode only, relative size below which a
-    computed chain coefficient is taken as zero. Generalises Bodson (15)-(17).
-    """
-    c, exact = _parse(coeffs, exact, real_only=False)
-    rtol = 0 if exact else float(rtol)
-    n = len(c) - 1
+def _complex_chain(c, exact: bool, rtol: float):
+    """f_0, f_1 of the module docstring from the coefficients, then the chain."""
     one = Fraction(1) if exact else 1.0
     zero = 0 * one
     x0, y0 = c[0]
@@ -281,10 +291,22 @@ def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) ->
     j_pow = [(one, zero), (zero, -one), (-one, zero), (zero, one)]  # j^(-k), k mod 4
     d = [_gmul(_gmul(ck, scale), j_pow[k % 4]) for k, ck in enumerate(c)]
     f0 = [dk[0] for dk in d]
-    f1 = _strip([-dk[1] for dk in d[1:]])
-    chain = _chain(f0, f1, rtol)
-
     f1_full = [-dk[1] for dk in d[1:]]
+    if exact:
+        f1, b1, near = _strip(f1_full)
+        b0 = None
+    else:
+        # |x0 xk| + |y0 yk| <= |c0| |ck| (Cauchy-Schwarz): a bound for both parts of d_k
+        size = abs(complex(*scale))
+        b0 = [size * abs(complex(*ck)) for ck in c]
+        f0 = [0.0 if abs(v) <= rtol * b else v for v, b in zip(f0, b0)]
+        f1, b1, near = _strip(f1_full, b0[1:], rtol)
+    chain, near_chain = _chain(f0, f1, rtol, b0, b1)
+    return chain, f0, f1_full, near or near_chain
+
+
+def _bilharz_determinants(f0, f1_full, zero):
+    n = len(f0) - 1
     size = 2 * n - 1
     matrix = []
     for i in range(size):
@@ -294,27 +316,38 @@ def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) ->
             if i // 2 + k < size:
                 row[i // 2 + k] = v
         matrix.append(row)
-    dets = _leading_minors(matrix, range(1, size + 1, 2))
+    return _leading_minors(matrix, range(1, size + 1, 2))
 
-    first_column = tuple(p[0] for p in chain)
+
+def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
+    """Hurwitz test of a polynomial with complex coefficients (any degree); see module docstring.
+
+    ``coeffs``: highest power first. ``rtol``: float mode only, relative size below which a
+    computed chain coefficient is taken as zero. Generalises Bodson (15)-(17).
+    """
+    c, exact = _parse(coeffs, exact, real_only=False)
+    n = len(c) - 1
+    chain, f0, f1_full, near = _complex_chain(c, exact, 0.0 if exact else float(rtol))
     regular = len(chain) == n + 1 and all(len(p) == n + 1 - k for k, p in enumerate(chain))
+    if not exact and not regular:
+        result = complex_hurwitz(_parse(coeffs, True, real_only=False)[0], exact=True)
+        return replace(result, marginal=near)
     common = {
-        "first_column": first_column,
-        "determinants": dets,
+        "first_column": tuple(p[0] for p in chain),
+        "determinants": _bilharz_determinants(f0, f1_full, 0 * f0[0]),
         "array": tuple(tuple(p) for p in chain),
         "exact": exact,
         "method": "complex-sturm",
+        "marginal": False,
     }
     if regular:
-        v = _variations([_sign(x) for x in first_column])
-        return HurwitzResult(v == 0, True, v, 0, **common)
-    if not exact:
-        return HurwitzResult(False, False, None, None, **common)
+        v = _variations([_sign(p[0]) for p in chain])
+        return HurwitzResult(stable=v == 0, n_rhp=v, n_imag=0, **common)
     index = _cauchy_index(chain)
     m = _real_roots_with_multiplicity(chain[-1])
     n_rhp, odd = divmod(n - m - index, 2)
     assert odd == 0 and n_rhp >= 0, "Cauchy index inconsistent with the degree"
-    return HurwitzResult(n_rhp == 0 and m == 0, True, n_rhp, m, **common)
+    return HurwitzResult(stable=n_rhp == 0 and m == 0, n_rhp=n_rhp, n_imag=m, **common)
 
 
 # --- real test -----------------------------------------------------------------------------
@@ -336,52 +369,46 @@ def routh_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> H
     n = len(a) - 1
     zero = a[0] * 0
     width = n // 2 + 1
-    rows = [a[0::2], a[1::2]]
-    rows = [r + [zero] * (width - len(r)) for r in rows][: n + 1]
-    singular = False
-    while len(rows) < n + 1:
-        prev, cur = rows[-2], rows[-1]
-        if cur[0] == 0:
-            singular = True
-            break
+    rows = [r + [zero] * (width - len(r)) for r in (a[0::2], a[1::2])][: n + 1]
+    bounds = [[abs(x) for x in r] for r in rows]
+    near = False
+    while len(rows) < n + 1 and rows[-1][0] != 0:
+        (prev, cur), (pb, cb) = rows[-2:], bounds[-2:]
         ratio = prev[0] / cur[0]
-        new = []
-        for j in range(width - 1):
-            v = prev[j + 1] - ratio * cur[j + 1]
-            if rtol and not exact and abs(v) <= rtol * (abs(prev[j + 1]) + abs(ratio * cur[j + 1])):
-                v = 0.0
-            new.append(v)
-        rows.append(new + [zero])
+        new = [prev[j + 1] - ratio * cur[j + 1] for j in range(width - 1)] + [zero]
+        nb = [pb[j + 1] + abs(ratio) * cb[j + 1] for j in range(width - 1)] + [0.0]
+        if not exact:
+            near = near or (abs(new[0]) <= rtol * nb[0] and nb[0] > 0)
+            new = [0.0 if abs(x) <= rtol * b else x for x, b in zip(new, nb)]
+        rows.append(new)
+        bounds.append(nb)
     first_column = tuple(r[0] for r in rows)
-    singular = singular or any(x == 0 for x in first_column)
+    singular = len(rows) < n + 1 or any(x == 0 for x in first_column)
+    if singular and not exact:
+        result = routh_hurwitz(_parse(coeffs, True, real_only=True)[0], exact=True)
+        return replace(result, marginal=near)
 
     hurwitz = [
         [a[2 * j - i] if 0 <= 2 * j - i <= n else zero for j in range(1, n + 1)]
         for i in range(1, n + 1)
     ]
-    dets = _leading_minors(hurwitz, range(1, n + 1))
     common = {
         "first_column": first_column,
-        "determinants": dets,
+        "determinants": _leading_minors(hurwitz, range(1, n + 1)),
         "array": tuple(tuple(r) for r in rows),
         "exact": exact,
         "method": "routh",
+        "marginal": False,
     }
     if not singular:
         v = _variations([_sign(x) for x in first_column])
-        return HurwitzResult(v == 0, True, v, 0, **common)
-    if not exact:
-        return HurwitzResult(False, False, None, None, **common)
-    general = complex_hurwitz([x for x in a], exact=True)
-    return HurwitzResult(general.stable, True, general.n_rhp, general.n_imag, **common)
+        return HurwitzResult(stable=v == 0, n_rhp=v, n_imag=0, **common)
+    general = complex_hurwitz([(x, zero) for x in a], exact=True)
+    return HurwitzResult(
+        stable=general.stable, n_rhp=general.n_rhp, n_imag=general.n_imag, **common
+    )
 
 
 def is_hurwitz(coeffs, *, exact: bool | None = None) -> bool:
-    """True iff every root of the polynomial (real or complex coefficients) has Re < 0.
-
-    Raises InputError when floating point cannot decide (a zero pivot within rounding).
-    """
-    result = complex_hurwitz(coeffs, exact=exact)
-    if not result.determined:
-        raise InputError("coeffs", "stability undetermined in floating point; use exact=True")
-    return result.stable
+    """True iff every root of the polynomial (real or complex coefficients) has Re < 0."""
+    return complex_hurwitz(coeffs, exact=exact).stable

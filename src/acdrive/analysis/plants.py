@@ -125,7 +125,8 @@ def as_plant(obj, speed: float | None = None) -> Plant2x2:
             raise InputError("plant", "must be continuous-time (dt = 0)")
         return Plant2x2(obj.A, obj.B, obj.C, obj.D, speed=speed)
     raise InputError(
-        "plant", f"must be a Plant2x2, an (A, B, C, D) tuple or a StateSpace, got {type(obj).__name__}"
+        "plant",
+        f"must be a Plant2x2, an (A, B, C, D) tuple or a StateSpace, got {type(obj).__name__}",
     )
 
 

@@ -1,0 +1,812 @@
+"""Individual channel analysis (ICAD) of 2x2 plants with diagonal controllers.
+
+Ugalde-Loo et al. (1)-(6) and Amezquita-Brooks et al. (5)-(10): for y = G u and u_i = k_i e_i,
+
+- multivariable structure function (MSF)  gamma = g12 g21 / (g11 g22)           (4) / (8)
+- diagonal closed loops                  h_i = k_i g_ii / (1 + k_i g_ii)          (5) / (9)
+- individual channels                    c_i = k_i g_ii (1 - gamma h_j), i != j   (3) / (7)
+- cross coupling                          y_i / r_j = S_i (g_ij / g_jj) h_j, S_i = 1/(1 + c_i)
+                                                                                    (6) / (10)
+
+Frequency data are evaluated batched over (speed or parameter set) x frequency from state-space
+data (``acdrive.analysis.freqresp``). Channels and coupling use algebraically identical forms
+that never divide by g_ii: c_i = k_i (g_ii + k_j det G) / (1 + k_j g_jj) and
+y_i/r_j = S_i g_ij k_j / (1 + k_j g_jj).
+
+Exact Nyquist counts. Every Nyquist function used here is a ratio of characteristic
+polynomials of state-space realisations, so its right-half-plane (RHP) zeros and poles are
+eigenvalues or invariant zeros computed from state-space data:
+
+- 1 - gamma      = det(sI - A) z_G(s) / (n_11(s) n_22(s))
+- 1 - gamma h_j  = zeta_i(s) det(sI - A) / (n_ii(s) phi_j(s))
+- 1 + k_i g_ii   = phi_i(s) / (det(sI - A) d_ki(s))
+- 1 + c_i        = phi_cl(s) / (phi_j(s) d_ki(s))
+
+with z_G the invariant-zero polynomial of G (Rosenbrock pencil), n_ij the numerator of g_ij over
+det(sI - A), d_k the controller denominator, phi_j the characteristic polynomial of the plant with
+loop j closed, zeta_i the numerator of u_i -> y_i with loop j closed and phi_cl that of the full
+loop. Clockwise encirclements of the critical point are N = Z - P (Nyquist). Roots on the
+imaginary axis of the denominators (integrators, imaginary zeros of g_ii) are excluded by
+indenting the contour to their right; uncancelled roots of the numerators on the axis mean the
+plot passes through the critical point and are reported as such (encirclements = None). The
+same count is cross-checked by the winding number of F on the indented contour
+(``margins.winding_number``); a mismatch raises InputError instead of returning a wrong count.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from acdrive.analysis.freqresp import LTI, check_frequency_grid, evaluate_ss
+from acdrive.analysis.margins import (
+    LoopMargins,
+    StructuralMargin,
+    bandwidth,
+    loop_margins,
+    structural_margin,
+    winding_number,
+)
+from acdrive.analysis.plants import Plant2x2, as_plant
+from acdrive.errors import InputError, require_finite
+from acdrive.machines.induction import IMParams
+from acdrive.machines.pmsm import PMSGParams
+
+AXIS_TOL = 1e-9  # |Re s| <= AXIS_TOL * max(1, |s|): root on the imaginary axis
+MARKOV_TOL = 1e-10  # relative size below which a Markov parameter counts as zero
+INFINITE_EIG = 1e8  # generalised eigenvalues above this times the pencil norm are infinite
+
+
+# ---------------------------------------------------------------------------------------------
+# batched frequency data
+
+
+def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
+    """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...).
+
+    Returns arrays with the shape of k1 (channel arrays stacked on a last axis of length 2):
+    gamma, kg (k_i g_ii), h (h_i), gamma_h (gamma h_j for channel i), c (c_i), S (1/(1+c_i)),
+    coupling (y_i / r_j), T (c_i/(1+c_i)).
+    """
+    g11, g12, g21, g22 = G[..., 0, 0], G[..., 0, 1], G[..., 1, 0], G[..., 1, 1]
+    det = g11 * g22 - g12 * g21
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gamma = (g12 * g21) / (g11 * g22)
+        kg1, kg2 = k1 * g11, k2 * g22
+        h1, h2 = kg1 / (1.0 + kg1), kg2 / (1.0 + kg2)
+        c1 = k1 * (g11 + k2 * det) / (1.0 + kg2)
+        c2 = k2 * (g22 + k1 * det) / (1.0 + kg1)
+        S1, S2 = 1.0 / (1.0 + c1), 1.0 / (1.0 + c2)
+        y1_r2 = S1 * g12 * k2 / (1.0 + kg2)
+        y2_r1 = S2 * g21 * k1 / (1.0 + kg1)
+    stack = np.stack
+    return {
+        "gamma": gamma,
+        "kg": stack([kg1, kg2], axis=-1),
+        "h": stack([h1, h2], axis=-1),
+        "gamma_h": stack([gamma * h2, gamma * h1], axis=-1),
+        "c": stack([c1, c2], axis=-1),
+        "S": stack([S1, S2], axis=-1),
+        "T": stack([c1 * S1, c2 * S2], axis=-1),
+        "coupling": stack([y1_r2, y2_r1], axis=-1),
+    }
+
+
+@dataclass(frozen=True)
+class ICADResponse:
+    """ICAD frequency data over a (plant, frequency) grid.
+
+    Shapes: w (nw,); speeds (ns,) (nan for plants without a speed); G (ns, nw, 2, 2);
+    k (2, nw); gamma (ns, nw); kg, h, gamma_h, c, S, T, coupling (ns, nw, 2), where index i of the
+    last axis is channel i+1 (gamma_h[..., i] = gamma h_j with j != i; coupling[..., i] = y_i/r_j).
+    """
+
+    w: np.ndarray
+    speeds: np.ndarray
+    G: np.ndarray
+    k: np.ndarray
+    gamma: np.ndarray
+    kg: np.ndarray
+    h: np.ndarray
+    gamma_h: np.ndarray
+    c: np.ndarray
+    S: np.ndarray
+    T: np.ndarray
+    coupling: np.ndarray
+
+
+def stack_plants(plants) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B, C, D, speeds) stacked over a sequence of plants with the same number of states."""
+    if isinstance(plants, Plant2x2) or not isinstance(plants, Sequence):
+        plants = [plants]
+    plants = [as_plant(p) for p in plants]
+    if not plants:
+        raise InputError("plants", "must not be empty")
+    n = plants[0].n_states
+    if any(p.n_states != n for p in plants):
+        raise InputError("plants", "must all have the same number of states")
+    speeds = np.array([np.nan if p.speed is None else p.speed for p in plants])
+    return (
+        np.stack([p.A for p in plants]),
+        np.stack([p.B for p in plants]),
+        np.stack([p.C for p in plants]),
+        np.stack([p.D for p in plants]),
+        speeds,
+    )
+
+
+def icad_response_arrays(A, B, C, D, k1: LTI, k2: LTI, w, speeds=None) -> ICADResponse:
+    """``icad_response`` on stacked state-space arrays A (ns, n, n), B (ns, n, 2), ..."""
+    w = check_frequency_grid(w)
+    G = evaluate_ss(A, B, C, D, 1j * w)
+    if G.shape[-2:] != (2, 2):
+        raise InputError("plant", f"must be 2x2, got {G.shape[-2]}x{G.shape[-1]}")
+    kv = np.stack([k1.freqresp(w), k2.freqresp(w)])
+    q = icad_quantities(G, kv[0], kv[1])
+    ns = G.shape[0]
+    speeds = np.full(ns, np.nan) if speeds is None else np.asarray(speeds, dtype=float)
+    return ICADResponse(w=w, speeds=speeds, G=G, k=kv, **q)
+
+
+def icad_response(plants, k1: LTI, k2: LTI, w) -> ICADResponse:
+    """Batched ICAD frequency data for one plant or a sequence of plants on grid w [rad/s]."""
+    A, B, C, D, speeds = stack_plants(plants)
+    return icad_response_arrays(A, B, C, D, k1, k2, w, speeds)
+
+
+# ---------------------------------------------------------------------------------------------
+# roots from state-space data
+
+
+def _markov_zero(A, b, c, d) -> bool:
+    """True if the SISO transfer c (sI - A)^-1 b + d is identically zero."""
+    if abs(d) > 0.0:
+        return False
+    n = A.shape[0]
+    scale = max(np.linalg.norm(A, 2), 1e-300)
+    v = b.ravel().astype(float)
+    cn = np.linalg.norm(c) * np.linalg.norm(b)
+    if cn == 0.0:
+        return True
+    for k in range(n):
+        if abs(float(c.ravel() @ v)) > MARKOV_TOL * cn * scale**k:
+            return False
+        v = A @ v
+    return True
+
+
+def _relative_degree(A, b, c, d) -> int | None:
+    """Relative degree of a SISO element from its Markov parameters (None if identically 0)."""
+    if abs(d) > 0.0:
+        return 0
+    n = A.shape[0]
+    scale = max(np.linalg.norm(A, 2), 1e-300)
+    cn = np.linalg.norm(c) * np.linalg.norm(b)
+    v = b.ravel().astype(float)
+    for k in range(n):
+        if cn > 0 and abs(float(c.ravel() @ v)) > MARKOV_TOL * cn * scale**k:
+            return k + 1
+        v = A @ v
+    return None
+
+
+def invariant_zeros(A, B, C, D) -> np.ndarray:
+    """Finite invariant zeros of a square system: finite eigenvalues of the Rosenbrock pencil.
+
+    For a SISO element these are the roots of its numerator over det(sI - A); for the 2x2 plant
+    they are the roots of z_G(s) = det(sI - A) det G(s).
+    """
+    A = np.atleast_2d(A)
+    n = A.shape[0]
+    m = B.shape[1]
+    M = np.block([[A, B], [C, D]])
+    N = np.zeros_like(M)
+    N[:n, :n] = np.eye(n)
+    if M.size == 0:
+        return np.zeros(0, dtype=complex)
+    alpha, beta = scipy.linalg.eig(M, N, right=False, homogeneous_eigvals=True)
+    limit = INFINITE_EIG * max(1.0, np.linalg.norm(M, 2))
+    finite = np.abs(alpha) < limit * np.abs(beta)
+    zeros = alpha[finite] / beta[finite]
+    if zeros.size > n + m:  # pragma: no cover - singular pencil
+        raise InputError("plant", "Rosenbrock pencil is singular (zeros undefined)")
+    return zeros
+
+
+def close_loop(A, B, C, D, j_in: int, j_out: int, k: LTI):
+    """Close u_{j_in} = k (r - y_{j_out}) (r = 0) around a state-space plant.
+
+    Returns (A', B', C', D') with states (x, x_k), the input j_in removed and all outputs kept.
+    Raises InputError if the loop is ill-posed (1 + k(inf) D[j_out, j_in] = 0).
+    """
+    n, m = B.shape
+    rest = [i for i in range(m) if i != j_in]
+    Ak, Bk, Ck, Dk = k.A, k.B, k.C, float(k.D[0, 0])
+    nk = Ak.shape[0]
+    djj = D[j_out, j_in]
+    if abs(1.0 + Dk * djj) < 1e-12:
+        raise InputError("controller", "feedback loop is ill-posed (1 + k(inf) d_jj = 0)")
+    mfac = 1.0 / (1.0 + Dk * djj)
+    cj = C[j_out : j_out + 1, :]
+    Ux = mfac * np.hstack([-Dk * cj, Ck])  # u_j = Ux [x; x_k] + Uu u_rest
+    Uu = -mfac * Dk * D[j_out : j_out + 1, rest]
+    bj = np.vstack([B[:, j_in : j_in + 1], np.zeros((nk, 1))])
+    minus_Bk = np.vstack([np.zeros((n, 1)), -Bk])
+    yj_x = np.hstack([cj, np.zeros((1, nk))]) + djj * Ux
+    yj_u = D[j_out : j_out + 1, rest] + djj * Uu
+    A_new = scipy.linalg.block_diag(A, Ak) + bj @ Ux + minus_Bk @ yj_x
+    B_new = np.vstack([B[:, rest], np.zeros((nk, len(rest)))]) + bj @ Uu + minus_Bk @ yj_u
+    C_new = np.hstack([C, np.zeros((C.shape[0], nk))]) + D[:, j_in : j_in + 1] @ Ux
+    D_new = D[:, rest] + D[:, j_in : j_in + 1] @ Uu
+    return A_new, B_new, C_new, D_new
+
+
+def _eig(A) -> np.ndarray:
+    return np.linalg.eigvals(A) if A.shape[0] else np.zeros(0, dtype=complex)
+
+
+# ---------------------------------------------------------------------------------------------
+# Nyquist counts
+
+
+def _on_axis(r: np.ndarray) -> np.ndarray:
+    return np.abs(r.real) <= AXIS_TOL * np.maximum(1.0, np.abs(r))
+
+
+def _rhp(r: np.ndarray) -> int:
+    return int(np.sum((r.real > 0) & ~_on_axis(r)))
+
+
+@dataclass(frozen=True)
+class NyquistCount:
+    """Nyquist count of a critical point for F = (numerator roots) / (denominator roots).
+
+    ``encirclements`` is the number of clockwise encirclements of the critical point (Z - P
+    with the contour indented to the right of imaginary-axis poles), or None if the plot passes
+    through the critical point (F has an uncancelled zero on the imaginary axis).
+    ``winding`` is the independent count from the indented contour (None if not computed).
+    """
+
+    critical_point: float
+    rhp_zeros: int
+    rhp_poles: int
+    axis_zeros: tuple[complex, ...]
+    axis_poles: tuple[complex, ...]
+    encirclements: int | None
+    winding: int | None
+
+    @property
+    def passes_through(self) -> bool:
+        return self.encirclements is None
+
+
+def _cancel_axis(zeros: np.ndarray, poles: np.ndarray):
+    """Remove pairs of equal imaginary-axis roots from zeros and poles (multiplicity aware)."""
+    zeros, poles = list(zeros), list(poles)
+    for z in list(zeros):
+        for idx, p in enumerate(poles):
+            if abs(z - p) <= 1e-6 * max(1.0, abs(p)):
+                zeros.remove(z)
+                poles.pop(idx)
+                break
+    return np.array(zeros, dtype=complex), np.array(poles, dtype=complex)
+
+
+def nyquist_count(
+    num_roots: Sequence[np.ndarray],
+    den_roots: Sequence[np.ndarray],
+    critical_point: float,
+    F=None,
+    singular: np.ndarray | None = None,
+) -> NyquistCount:
+    """Count encirclements of the critical point from the roots of F's factors.
+
+    F(s) - as a function of complex s whose zeros are the critical-point crossings - if given, is
+    integrated along the indented contour and its winding number must agree with the count.
+    ``singular``: further points where the parts of F cannot be evaluated (e.g. controller
+    integrators that cancel in F); imaginary-axis ones are indented too.
+    """
+    num = np.concatenate([np.asarray(r, dtype=complex).ravel() for r in num_roots] or [np.zeros(0)])
+    den = np.concatenate([np.asarray(r, dtype=complex).ravel() for r in den_roots] or [np.zeros(0)])
+    az, ap = _cancel_axis(num[_on_axis(num)], den[_on_axis(den)])
+    Z, P = _rhp(num), _rhp(den)
+    enc = None if az.size else Z - P
+    winding = None
+    if F is not None and enc is not None:
+        extra = np.zeros(0, dtype=complex) if singular is None else np.asarray(singular, complex)
+        winding = _winding(F, num, den, extra)
+        if winding != enc:
+            raise InputError(
+                "plant",
+                f"encirclement count is ill-conditioned: pole/zero count {enc}, contour winding"
+                f" {winding}",
+            )
+    return NyquistCount(
+        critical_point=critical_point,
+        rhp_zeros=Z,
+        rhp_poles=P,
+        axis_zeros=tuple(complex(z) for z in az),
+        axis_poles=tuple(complex(p) for p in ap),
+        encirclements=enc,
+        winding=winding,
+    )
+
+
+def _winding(F, num: np.ndarray, den: np.ndarray, extra: np.ndarray) -> int:
+    roots = np.concatenate([num, den, extra])
+    mags = np.abs(roots)
+    radius = 4.0 * (mags.max() if mags.size else 1.0) + 10.0
+    nonzero = mags[mags > 0]
+    scale = 0.1 * nonzero.min() if nonzero.size else 1.0
+    axis = roots[_on_axis(roots)]
+    centres: list[float] = []
+    for r in axis:  # unique imaginary-axis points
+        if all(abs(r.imag - c) > 1e-6 * max(1.0, abs(c)) for c in centres):
+            centres.append(float(r.imag))
+    radii = []
+    for c in centres:
+        d = np.abs(roots - 1j * c)
+        others = d[d > 1e-6 * max(1.0, abs(c))]
+        near = others.min() if others.size else radius
+        radii.append(min(0.1 * near, 1e-3 * max(1.0, abs(c)), 0.1 * scale))
+    return winding_number(F, radius, np.array(centres), np.array(radii), scale=max(scale, 1e-6))
+
+
+# ---------------------------------------------------------------------------------------------
+# structure conditions i-iv / (a.1)-(a.3)
+
+
+@dataclass(frozen=True)
+class StructureConditions:
+    """ICAD conditions of Ugalde-Loo et al. sec. 2 (i-iv) = Amezquita-Brooks et al. (a.1)-(a.3).
+
+    i: open-loop poles in the open LHP; ii (a.1): gamma has no poles in the closed RHP;
+    iii (a.3): gamma(s) -> 0 as s -> infinity; iv (a.2): the Nyquist plot of gamma neither
+    encircles nor passes through (1, 0). ``gamma_count`` gives Z and P of 1 - gamma: Z counts the
+    RHP transmission zeros of G plus the RHP poles of G, P the RHP poles of gamma.
+    """
+
+    i: bool
+    ii: bool
+    iii: bool
+    iv: bool
+    plant_poles: np.ndarray
+    gamma_poles: np.ndarray  # zeros of g11 g22 (before any cancellation with g12 g21)
+    gamma_identically_zero: bool
+    gamma_limit: float  # |gamma(s)| as s -> infinity
+    transmission_zeros: np.ndarray
+    gamma_count: NyquistCount
+
+
+def _gamma_limit(plant: Plant2x2) -> tuple[float, bool]:
+    """(|gamma(inf)|, gamma identically zero) from relative degrees (Markov parameters)."""
+    rd = {}
+    for i in range(2):
+        for j in range(2):
+            A, b, c, d = plant.siso(i, j)
+            rd[i, j] = _relative_degree(A, b, c, float(d[0, 0]))
+    if rd[0, 1] is None or rd[1, 0] is None:
+        return 0.0, True
+    if rd[0, 0] is None or rd[1, 1] is None:
+        raise InputError("plant", "a diagonal element g_ii is identically zero (gamma undefined)")
+    excess = rd[0, 1] + rd[1, 0] - rd[0, 0] - rd[1, 1]
+    if excess > 0:
+        return 0.0, False
+    if excess < 0:
+        return math.inf, False
+
+    def lead(i, j):
+        A, b, c, d = plant.siso(i, j)
+        r = rd[i, j]
+        if r == 0:
+            return float(d[0, 0])
+        return float(c.ravel() @ np.linalg.matrix_power(A, r - 1) @ b.ravel())
+
+    return abs(lead(0, 1) * lead(1, 0) / (lead(0, 0) * lead(1, 1))), False
+
+
+def _siso_zeros(plant: Plant2x2, i: int, j: int) -> np.ndarray:
+    A, b, c, d = plant.siso(i, j)
+    return invariant_zeros(A, b, c, d)
+
+
+def structure_conditions(plant, *, verify: bool = True) -> StructureConditions:
+    """Check conditions i-iv for a 2x2 plant (exact counts; ``verify`` adds the contour check)."""
+    plant = as_plant(plant)
+    poles = plant.poles()
+    cond_i = bool(np.all(poles.real < 0) and not np.any(_on_axis(poles)))
+    limit, gamma_zero = _gamma_limit(plant)
+    if gamma_zero:
+        empty = np.zeros(0, dtype=complex)
+        count = NyquistCount(1.0, 0, 0, (), (), 0, 0 if verify else None)
+        return StructureConditions(
+            cond_i,
+            True,
+            True,
+            True,
+            poles,
+            empty,
+            True,
+            0.0,
+            invariant_zeros(plant.A, plant.B, plant.C, plant.D),
+            count,
+        )
+    z11, z22 = _siso_zeros(plant, 0, 0), _siso_zeros(plant, 1, 1)
+    z12, z21 = _siso_zeros(plant, 0, 1), _siso_zeros(plant, 1, 0)
+    tz = invariant_zeros(plant.A, plant.B, plant.C, plant.D)
+    if _det_identically_zero(plant):
+        raise InputError("plant", "det G(s) is identically zero (gamma = 1, no 2x2 structure)")
+    # poles of gamma: zeros of g11 g22 not cancelled by zeros of g12 g21
+    gp = list(np.concatenate([z11, z22]))
+    for z in np.concatenate([z12, z21]):
+        for idx, p in enumerate(gp):
+            if abs(z - p) <= 1e-6 * max(1.0, abs(p)):
+                gp.pop(idx)
+                break
+    gamma_poles = np.array(gp, dtype=complex)
+    cond_ii = not np.any((gamma_poles.real > 0) | _on_axis(gamma_poles))
+    ev = _Evaluator(plant, None, None)
+    F = (lambda s: 1.0 - ev.gamma(s)) if verify else None
+    count = nyquist_count([poles, tz], [z11, z22], 1.0, F)
+    return StructureConditions(
+        i=cond_i,
+        ii=bool(cond_ii),
+        iii=limit == 0.0,
+        iv=count.encirclements == 0,
+        plant_poles=poles,
+        gamma_poles=gamma_poles,
+        gamma_identically_zero=False,
+        gamma_limit=limit,
+        transmission_zeros=tz,
+        gamma_count=count,
+    )
+
+
+def _det_identically_zero(plant: Plant2x2) -> bool:
+    rng = np.random.default_rng(12345)
+    scale = max(1.0, float(np.max(np.abs(plant.poles()))) if plant.n_states else 1.0)
+    s = scale * (rng.uniform(0.5, 2.0, 3) + 1j * rng.uniform(-2.0, 2.0, 3))
+    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, s)
+    det = G[:, 0, 0] * G[:, 1, 1] - G[:, 0, 1] * G[:, 1, 0]
+    ref = np.abs(G[:, 0, 0] * G[:, 1, 1]) + np.abs(G[:, 0, 1] * G[:, 1, 0])
+    return bool(np.all(np.abs(det) <= 1e-10 * ref))
+
+
+# ---------------------------------------------------------------------------------------------
+# channel analysis
+
+
+class _Evaluator:
+    """Point evaluation of the ICAD functions of one plant at complex s."""
+
+    def __init__(self, plant: Plant2x2, k1: LTI | None, k2: LTI | None):
+        self.plant, self.k = plant, (k1, k2)
+
+    def G(self, s):
+        p = self.plant
+        return evaluate_ss(p.A, p.B, p.C, p.D, s)
+
+    def gamma(self, s):
+        G = self.G(s)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
+
+    def all(self, s):
+        return icad_quantities(self.G(s), self.k[0].evaluate(s), self.k[1].evaluate(s))
+
+    def of_w(self, key: str, i: int | None = None):
+        """Function of real frequency w returning quantity ``key`` (channel i, 0-based)."""
+
+        def f(w):
+            q = self.all(1j * np.asarray(w, dtype=float))[key]
+            return q if i is None else q[..., i]
+
+        return f
+
+
+@dataclass(frozen=True)
+class ChannelAnalysis:
+    """Channel i of the ICAD decomposition (1-based ``index``).
+
+    ``margins``: of c_i (critical point -1); ``kg_margins``: of k_i g_ii (the loop of h_i);
+    ``bandwidth_rad_s``: -3 dB bandwidth of c_i/(1 + c_i); ``channel_count``: c_i around -1;
+    ``kg_count``: k_i g_ii around -1; ``gamma_h_count``: gamma h_j around +1;
+    ``structural``: structural gain margin of gamma h_j; ``coupling_peak_db``: peak |y_i / r_j|.
+    ``h_stable`` / ``channel_stable``: h_i and the closed loop of c_i are stable (eigenvalues).
+    """
+
+    index: int
+    margins: LoopMargins
+    kg_margins: LoopMargins
+    bandwidth_rad_s: float
+    channel_count: NyquistCount
+    kg_count: NyquistCount
+    gamma_h_count: NyquistCount
+    structural: StructuralMargin
+    coupling_peak_db: float
+    h_stable: bool
+    channel_stable: bool
+
+
+@dataclass(frozen=True)
+class ICADAnalysis:
+    """Full ICAD of one plant with a diagonal controller on a frequency grid.
+
+    ``b1``: both channels and both h_i closed loops are stable (Amezquita-Brooks et al. (b.1)
+    without a margin threshold); ``b2``: neither gamma nor gamma h_j encircles or passes through
+    (1, 0) ((b.2) without a proximity threshold; see ``structural`` and channel margins).
+    """
+
+    plant: Plant2x2
+    conditions: StructureConditions
+    structural: StructuralMargin  # of gamma
+    channels: tuple[ChannelAnalysis, ChannelAnalysis]
+    closed_loop_poles: np.ndarray
+    closed_loop_stable: bool
+    b1: bool
+    b2: bool
+    response: ICADResponse
+
+    @property
+    def coupling_peak_db(self) -> float:
+        return max(ch.coupling_peak_db for ch in self.channels)
+
+
+def check_controller(k: LTI, name: str) -> LTI:
+    """Require a controller without open right-half-plane poles (integrators are allowed)."""
+    if not isinstance(k, LTI):
+        raise InputError(name, f"must be an LTI controller, got {type(k).__name__}")
+    bad = k.rhp_poles()
+    if bad.size:
+        raise InputError(
+            name,
+            f"has right-half-plane pole(s) {', '.join(f'{p:.4g}' for p in bad)}; the channel"
+            " analysis needs a stable controller (imaginary-axis poles are allowed)",
+        )
+    return k
+
+
+def default_grid(plant: Plant2x2, k1: LTI, k2: LTI, n: int = 4000) -> np.ndarray:
+    """Log-spaced grid from 1/100 of the slowest to 100 x the fastest plant/controller root."""
+    roots = [plant.poles(), k1.poles(), k2.poles(), invariant_zeros(k1.A, k1.B, k1.C, k1.D)]
+    if plant.speed:
+        roots.append(np.array([plant.speed]))
+    r = np.abs(np.concatenate(roots))
+    r = r[r > 0]
+    lo, hi = (r.min() / 100.0, r.max() * 300.0) if r.size else (1e-2, 1e3)
+    ev = _Evaluator(plant, k1, k2)
+    for _ in range(8):  # extend until both loops k_i g_ii are well below 0 dB at the top
+        with np.errstate(all="ignore"):
+            kg = ev.all(np.array([1j * hi]))["kg"]
+        if np.all(np.abs(kg) < 0.05):
+            break
+        hi *= 10.0
+    return np.logspace(np.log10(lo), np.log10(hi), n)
+
+
+def analyse(plant, k1: LTI, k2: LTI, w=None, *, verify: bool = True) -> ICADAnalysis:
+    """ICAD of a 2x2 plant with diagonal controller diag(k1, k2).
+
+    Conditions i-iv (exact counts), structural margins of gamma and gamma h_j, channel and
+    k_i g_ii margins, bandwidths and coupling peaks on grid ``w`` (default ``default_grid``).
+    ``verify`` cross-checks every encirclement count with a contour winding number.
+    """
+    plant = as_plant(plant)
+    k1, k2 = check_controller(k1, "k1"), check_controller(k2, "k2")
+    w = default_grid(plant, k1, k2) if w is None else check_frequency_grid(w)
+    cond = structure_conditions(plant, verify=verify)
+    ev = _Evaluator(plant, k1, k2)
+    A, B, C, D = plant.A, plant.B, plant.C, plant.D
+    ks = (k1, k2)
+    loops = [close_loop(A, B, C, D, i, i, ks[i]) for i in range(2)]  # loop i closed
+    phi = [_eig(lp[0]) for lp in loops]
+    full = close_loop(*loops[1], 0, 0, k1)  # loop 2 then loop 1 (remaining input is u_1)
+    phi_cl = _eig(full[0])
+    poles = cond.plant_poles
+    dk = [k.poles() for k in ks]
+    sing = np.concatenate([poles, dk[0], dk[1]])
+    gdc = _dc(ev)
+    channels = []
+    for i in range(2):
+        j = 1 - i
+        Aj, Bj, Cj, Dj = loops[j]  # plant with loop j closed, remaining input u_i
+        zeta = invariant_zeros(Aj, Bj, Cj[i : i + 1, :], Dj[i : i + 1, :])
+        nii = _siso_zeros(plant, i, i)
+
+        def f_c(s, i=i):
+            return 1.0 + ev.all(s)["c"][..., i]
+
+        def f_kg(s, i=i):
+            return 1.0 + ev.all(s)["kg"][..., i]
+
+        def f_gh(s, i=i):
+            return 1.0 - ev.all(s)["gamma_h"][..., i]
+
+        c_count = nyquist_count([phi_cl], [phi[j], dk[i]], -1.0, f_c if verify else None, sing)
+        kg_count = nyquist_count([phi[i]], [poles, dk[i]], -1.0, f_kg if verify else None, sing)
+        if cond.gamma_identically_zero:
+            gh_count = NyquistCount(1.0, 0, 0, (), (), 0, None)
+        else:
+            gh_count = nyquist_count(
+                [zeta, poles], [nii, phi[j]], 1.0, f_gh if verify else None, sing
+            )
+        T = ev.of_w("T", i)
+        channels.append(
+            ChannelAnalysis(
+                index=i + 1,
+                margins=loop_margins(ev.of_w("c", i), w),
+                kg_margins=loop_margins(ev.of_w("kg", i), w),
+                bandwidth_rad_s=bandwidth(T, w, dc_gain=_dc_T(ev, i)),
+                channel_count=c_count,
+                kg_count=kg_count,
+                gamma_h_count=gh_count,
+                structural=structural_margin(ev.of_w("gamma_h", i), w, _dc_gh(ev, i)),
+                coupling_peak_db=_db(np.nanmax(np.abs(ev.of_w("coupling", i)(w)))),
+                h_stable=_stable(phi[i]),
+                channel_stable=_stable(phi_cl) and _stable(phi[j]),
+            )
+        )
+    response = icad_response(plant, k1, k2, w)
+    cl_stable = _stable(phi_cl)
+    b1 = all(ch.h_stable and ch.channel_stable for ch in channels)
+    b2 = cond.iv and all(ch.gamma_h_count.encirclements == 0 for ch in channels)
+    return ICADAnalysis(
+        plant=plant,
+        conditions=cond,
+        structural=structural_margin(lambda x: ev.gamma(1j * np.asarray(x)), w, gdc),
+        channels=(channels[0], channels[1]),
+        closed_loop_poles=phi_cl,
+        closed_loop_stable=cl_stable,
+        b1=b1,
+        b2=b2,
+        response=response,
+    )
+
+
+def _db(x: float) -> float:
+    return 20.0 * math.log10(x) if x > 0 else -math.inf
+
+
+def _stable(roots: np.ndarray) -> bool:
+    return bool(np.all(roots.real < 0) and not np.any(_on_axis(roots)))
+
+
+def _finite_at_zero(values) -> complex | None:
+    v = complex(values[0])
+    return v if np.isfinite(v) else None
+
+
+def _dc(ev: _Evaluator) -> complex | None:
+    """gamma(0) if the plant has no pole at s = 0."""
+    if np.any(np.abs(ev.plant.poles()) < 1e-12):
+        return None
+    with np.errstate(all="ignore"):
+        return _finite_at_zero(ev.gamma(np.zeros(1)))
+
+
+def _dc_T(ev: _Evaluator, i: int) -> float | None:
+    """|T_i(0)| of c_i/(1+c_i) as a limit (evaluated just off s = 0 to pass integrators)."""
+    s = np.array([1e-9 * max(1.0, float(np.max(np.abs(ev.plant.poles()), initial=1.0)))]) * 1j
+    v = ev.all(s)["T"][0, i]
+    return float(abs(v)) if np.isfinite(v) else None
+
+
+def _dc_gh(ev: _Evaluator, i: int) -> complex | None:
+    s = np.array([1e-9 * max(1.0, float(np.max(np.abs(ev.plant.poles()), initial=1.0)))]) * 1j
+    v = ev.all(s)["gamma_h"][0, i]
+    return complex(v.real, 0.0) if np.isfinite(v) else None
+
+
+# ---------------------------------------------------------------------------------------------
+# sweeps
+
+
+@dataclass(frozen=True)
+class SweepSummary:
+    """Worst case of each ICAD figure over a set of analyses (speeds or perturbed plants)."""
+
+    speeds: np.ndarray
+    all_conditions: bool  # i-iv hold for every member
+    closed_loop_stable: bool
+    structural_gm_db: float  # min over members of the gamma structural margin
+    structural_gm_h_db: float  # min over members and channels of the gamma h_j margin
+    pm_deg: float  # min channel phase margin
+    gm_db: float  # min channel upward gain margin
+    kg_pm_deg: float
+    kg_gm_db: float
+    bandwidth_rad_s: float  # min channel bandwidth
+    crossover_rad_s: float  # min channel crossover
+    coupling_peak_db: float  # max coupling
+
+
+def summarize(analyses: Sequence[ICADAnalysis]) -> SweepSummary:
+    """Worst-case figures over a sequence of analyses."""
+    if not analyses:
+        raise InputError("analyses", "must not be empty")
+    chans = [ch for a in analyses for ch in a.channels]
+    return SweepSummary(
+        speeds=np.array([np.nan if a.plant.speed is None else a.plant.speed for a in analyses]),
+        all_conditions=all(
+            a.conditions.i and a.conditions.ii and a.conditions.iii and a.conditions.iv
+            for a in analyses
+        ),
+        closed_loop_stable=all(a.closed_loop_stable for a in analyses),
+        structural_gm_db=min(a.structural.gm_db for a in analyses),
+        structural_gm_h_db=min(ch.structural.gm_db for ch in chans),
+        pm_deg=min(ch.margins.pm_deg for ch in chans),
+        gm_db=min(ch.margins.gm_db for ch in chans),
+        kg_pm_deg=min(ch.kg_margins.pm_deg for ch in chans),
+        kg_gm_db=min(ch.kg_margins.gm_db for ch in chans),
+        bandwidth_rad_s=min(ch.bandwidth_rad_s for ch in chans),
+        crossover_rad_s=min(ch.margins.crossover_rad_s for ch in chans),
+        coupling_peak_db=max(ch.coupling_peak_db for ch in chans),
+    )
+
+
+def sweep(plants: Sequence, k1: LTI, k2: LTI, w=None, *, verify: bool = False):
+    """``analyse`` over plants (e.g. ``plants_for(machine, speeds)``); returns (list, summary)."""
+    analyses = [analyse(p, k1, k2, w, verify=verify) for p in plants]
+    return analyses, summarize(analyses)
+
+
+# ---------------------------------------------------------------------------------------------
+# closed forms of the papers
+
+
+def im_msf_closed_form(p: IMParams, w_r: float, w) -> np.ndarray:
+    """gamma(j w) of the IM, Ugalde-Loo et al. (60)-(61) (real numerator over d_gamma^2)."""
+    w_r = require_finite("w_r", w_r)
+    w = np.asarray(w, dtype=float)
+    sig, Ls, Lr, Lm, Rs, Rr = p.sigma, p.L_s, p.L_r, p.L_m, p.R_s, p.R_r
+    re = (
+        -(Lr**3) * Rs * w_r**2
+        + 2 * w**2 * sig * Ls * Lr**2 * Rr
+        + w**2 * Lr**3 * Rs
+        - Lr * Rs * Rr**2
+        + w**2 * Lr * Lm**2 * Rr
+    )
+    im = (
+        -w * sig * Ls * Lr**3 * w_r**2
+        + w**3 * sig * Ls * Lr**3
+        - w * sig * Ls * Lr * Rr**2
+        - 2 * w * Lr**2 * Rs * Rr
+        - w * Lm**2 * Rr**2
+    )
+    return Lr**2 * Lm**4 * Rr**2 * w_r**2 * w**2 / (re + 1j * im) ** 2
+
+
+def im_msf_at_rotor_speed(p: IMParams, w_r: float) -> complex:
+    """gamma(j w_r) of the IM, Amezquita-Brooks et al. (14)."""
+    w_r = require_finite("w_r", w_r)
+    sig, Ls, Lr, Lm, Rs, Rr = p.sigma, p.L_s, p.L_r, p.L_m, p.R_s, p.R_r
+    re = 2 * w_r**2 * sig * Ls * Lr**2 + w_r**2 * Lr * Lm**2 - Lr * Rs * Rr
+    im = -w_r * sig * Ls * Lr * Rr - 2 * w_r * Lr**2 * Rs - w_r * Lm**2 * Rr
+    return Lr**2 * Lm**4 * w_r**4 / complex(re, im) ** 2
+
+
+def im_msf_magnitude_at_rotor_speed(p: IMParams, w_r: float) -> float:
+    """|gamma(j w_r)| of the IM, Amezquita-Brooks et al. (18)."""
+    w_r = require_finite("w_r", w_r)
+    sig, Ls, Lr, Lm, Rs, Rr = p.sigma, p.L_s, p.L_r, p.L_m, p.R_s, p.R_r
+    re = 2 * w_r**2 * sig * Ls * Lr**2 + w_r**2 * Lr * Lm**2 - Lr * Rs * Rr
+    im = -w_r * sig * Ls * Lr * Rr - 2 * w_r * Lr**2 * Rs - w_r * Lm**2 * Rr
+    return Lr**2 * Lm**4 * w_r**4 / math.sqrt((re**2 - im**2) ** 2 + 4 * re**2 * im**2)
+
+
+def gm_min(p: IMParams) -> float:
+    """Structural gain-margin lower bound G_M,min of the IM, Amezquita-Brooks et al. (19)."""
+    sig, Ls, Lr, Lm = p.sigma, p.L_s, p.L_r, p.L_m
+    return (
+        Lr**2 * Lm**4 / (Lr**2 * Lm**4 + 4 * sig * Lr**3 * Ls * Lm**2 + 4 * sig**2 * Lr**4 * Ls**2)
+    )
+
+
+def pmsg_msf(p: PMSGParams, w_r: float, s) -> np.ndarray:
+    """gamma(s) of the PMSG, Ugalde-Loo et al. (18): -L_d L_q w_r^2 / ((L_q s + R_s)(L_d s + R_s))."""
+    w_r = require_finite("w_r", w_r)
+    s = np.asarray(s, dtype=complex)
+    return -p.L_d * p.L_q * w_r**2 / ((p.L_q * s + p.R_s) * (p.L_d * s + p.R_s))

@@ -1,0 +1,226 @@
+"""Scenario files (TOML): loading, validation, and translation into a ``DriveSetup``.
+
+Every field is checked on load; a bad one raises ``InputError("<path.to.field>", "<rule>")``.
+Schema (all tables optional except [[motor]]; units in the key names where not SI):
+
+    name, description
+    [simulation]  duration, sample_time, substeps, log_every
+    [supply]      voltage_pk | voltage_pk_profile = [[t, V], ...], frequency_hz |
+                  frequency_hz_profile, resistance, inductance
+    [[motor]]     machine (built-in name) or [motor.params] (R_s, R_r, L_s, L_r, M, n_p, J),
+                  viscous_friction, coulomb_friction, load_torque | load_torque_profile,
+                  speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
+                  encoder_counts_per_rev, encoder_offset
+    [motor.controller]  mode ("voltage"), speed_bandwidth, K_F, reactive_power,
+                  stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
+                  speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.control.speed import SpeedPIGains
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
+from acdrive.sim.setup import DFIMController, DriveSetup, MotorSetup, Supply, check_setup, constant
+
+MACHINES = {"bodson-dfim": BODSON_DFIM}
+RAD_S_PER_RPM = math.pi / 30.0
+
+
+def builtin_names() -> list[str]:
+    folder = resources.files("acdrive.scenarios") / "builtin"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def builtin_text(name: str) -> str:
+    return (resources.files("acdrive.scenarios") / "builtin" / f"{name}.toml").read_text()
+
+
+def read_scenario(source: str | Path) -> dict:
+    """Parse a scenario: a built-in name or a path to a TOML file."""
+    source = str(source)
+    if source in builtin_names():
+        text, origin = builtin_text(source), source
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise InputError("scenario", f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file")
+        text, origin = path.read_text(), str(path)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError("scenario", f"{origin} is not valid TOML ({exc})") from None
+
+
+def load_scenario(source: str | Path) -> DriveSetup:
+    """Read, validate and build a scenario into a ``DriveSetup``."""
+    return build_setup(read_scenario(source))
+
+
+class _Section:
+    """A TOML table being validated: tracks the keys read so unknown keys can be reported."""
+
+    def __init__(self, data, path: str):
+        if not isinstance(data, dict):
+            raise InputError(path, "must be a table")
+        self.data, self.path, self.used = data, path, set()
+
+    def field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def get(self, key, default=None):
+        self.used.add(key)
+        return self.data.get(key, default)
+
+    def has(self, key) -> bool:
+        return key in self.data
+
+    def number(self, key, default, rule=require_finite):
+        value = self.get(key, default)
+        return rule(self.field(key), value)
+
+    def integer(self, key, default, minimum=1):
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise InputError(self.field(key), f"must be an integer >= {minimum}")
+        return value
+
+    def text(self, key, default=None, choices=None):
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            raise InputError(self.field(key), "must be a string")
+        if choices is not None and value not in choices:
+            raise InputError(self.field(key), f"must be one of {', '.join(choices)}")
+        return value
+
+    def profile(self, key, scale=1.0, rule=require_finite):
+        """A list of [t, value] pairs with non-decreasing t >= 0, as (times, values) arrays."""
+        value = self.get(key)
+        name = self.field(key)
+        if not isinstance(value, list) or not value:
+            raise InputError(name, "must be a non-empty list of [time_s, value] pairs")
+        times, values = [], []
+        for i, pair in enumerate(value):
+            if not isinstance(pair, list) or len(pair) != 2:
+                raise InputError(f"{name}[{i}]", "must be a [time_s, value] pair")
+            times.append(require_nonnegative(f"{name}[{i}][0]", pair[0]))
+            values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
+        if any(b < a for a, b in zip(times, times[1:])):
+            raise InputError(name, "times must be non-decreasing")
+        return np.array(times), np.array(values)
+
+    def constant_or_profile(self, key, default, scale=1.0, rule=require_finite):
+        if self.has(key) and self.has(f"{key}_profile"):
+            raise InputError(self.field(key), f"give either {key} or {key}_profile, not both")
+        if self.has(f"{key}_profile"):
+            return self.profile(f"{key}_profile", scale, rule)
+        return constant(self.number(key, default, rule) * scale)
+
+    def done(self):
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise InputError(self.field(unknown[0]), "unknown key")
+
+
+def _machine(section: _Section, index: int) -> DFIMParams:
+    if section.has("machine") and section.has("params"):
+        raise InputError(section.field("machine"), "give either machine or [params], not both")
+    if section.has("params"):
+        params = _Section(section.get("params"), section.field("params"))
+        fields = ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J")
+        values = {k: params.get(k) for k in fields}
+        params.done()
+        missing = [k for k, v in values.items() if v is None]
+        if missing:
+            raise InputError(params.field(missing[0]), "is required")
+        try:
+            machine = DFIMParams(**values)
+        except InputError as exc:
+            raise InputError(params.field(exc.field), exc.rule) from None
+    else:
+        name = section.text("machine", "bodson-dfim", choices=tuple(MACHINES))
+        machine = MACHINES[name]
+    B = section.number("viscous_friction", 0.0, require_nonnegative)
+    tau_c = section.number("coulomb_friction", 0.0, require_nonnegative)
+    return dataclasses.replace(machine, B=B, tau_c=tau_c)
+
+
+def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
+    section.text("mode", "voltage", choices=("voltage",))
+    bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
+    K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
+    gains = dataclasses.replace(SpeedPIGains.design(machine.J, bandwidth), K_F=K_F)
+    controller = DFIMController(
+        gains=gains,
+        reactive_power=section.number("reactive_power", 0.0),
+        stator_current_limit_pk=section.number("stator_current_limit_pk", 6.0, require_positive),
+        rotor_current_limit_pk=section.number("rotor_current_limit_pk", 6.0, require_positive),
+        theta_adj=section.number("theta_adj", 0.0),
+        m_adj=section.number("m_adj", 1.0, require_positive),
+        speed_filter_tau=section.number("speed_filter_tau", 0.0, require_nonnegative),
+        frequency_filter_tau=section.number("frequency_filter_tau", 0.01, require_nonnegative),
+        min_stator_voltage_pk=section.number("min_stator_voltage_pk", 1.0, require_positive),
+    )
+    section.done()
+    return controller
+
+
+def build_setup(data: dict) -> DriveSetup:
+    """Validate a parsed scenario and build its ``DriveSetup``."""
+    top = _Section(data, "")
+    name = top.text("name", "custom")
+    top.text("description", "")
+    sim = _Section(top.get("simulation", {}), "simulation")
+    duration = sim.number("duration", 1.0, require_positive)
+    sample_time = sim.number("sample_time", 200e-6, require_positive)
+    if sample_time > duration:
+        raise InputError("simulation.sample_time", "must not exceed simulation.duration")
+    substeps = sim.integer("substeps", 4)
+    log_every = sim.integer("log_every", 1)
+    sim.done()
+
+    sup = _Section(top.get("supply", {}), "supply")
+    supply = Supply(
+        voltage_pk=sup.constant_or_profile("voltage_pk", 11.1, rule=require_nonnegative),
+        frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=require_positive),
+        resistance=sup.number("resistance", 0.0, require_nonnegative),
+        inductance=sup.number("inductance", 0.0, require_nonnegative),
+    )
+    sup.done()
+    if supply.voltage_pk[1][0] <= 0.0:
+        raise InputError("supply.voltage_pk", "must be > 0 at t = 0 (the drive starts connected)")
+
+    motors_data = top.get("motor")
+    if not isinstance(motors_data, list) or not motors_data:
+        raise InputError("motor", "at least one [[motor]] table is required")
+    motors = []
+    for k, raw in enumerate(motors_data):
+        sec = _Section(raw, f"motor[{k}]")
+        machine = _machine(sec, k)
+        if not sec.has("speed_reference_rpm"):
+            raise InputError(sec.field("speed_reference_rpm"), "is required")
+        motor = MotorSetup(
+            machine=machine,
+            controller=_controller(_Section(sec.get("controller", {}), sec.field("controller")), machine),
+            speed_reference=sec.profile("speed_reference_rpm", RAD_S_PER_RPM),
+            load_torque=sec.constant_or_profile("load_torque", 0.0),
+            dc_link_voltage=sec.number("dc_link_voltage", 30.0, require_positive),
+            encoder_counts_per_rev=float(sec.integer("encoder_counts_per_rev", 0, minimum=0)),
+            encoder_offset=sec.number("encoder_offset", 0.0),
+            initial_speed=sec.number("initial_speed_rpm", 0.0) * RAD_S_PER_RPM,
+        )
+        sec.done()
+        motors.append(motor)
+    top.done()
+    setup = DriveSetup(motors=tuple(motors), supply=supply, duration=duration, sample_time=sample_time,
+                       substeps=substeps, log_every=log_every, name=name)
+    check_setup(setup)
+    return setup
