@@ -387,8 +387,7 @@ def _gamma_limit(plant: Plant2x2) -> tuple[float, bool]:
     rd = {}
     for i in range(2):
         for j in range(2):
-            A, b, c, d = plant.siso(i, j)
-            rd[i, j] = _relative_degree(A, b, c, float(d[0, 0]))
+            rd[i, j] = _relative_degree(*_scalar_d(plant.siso(i, j)))
     if rd[0, 1] is None or rd[1, 0] is None:
         return 0.0, True
     if rd[0, 0] is None or rd[1, 1] is None:
@@ -645,7 +644,9 @@ def analyse(plant, k1: LTI, k2: LTI, w=None, *, verify: bool = True) -> ICADAnal
                 kg_count=kg_count,
                 gamma_h_count=gh_count,
                 structural=structural_margin(ev.of_w("gamma_h", i), w, _dc_gh(ev, i)),
-                coupling_peak_db=_db(np.nanmax(np.abs(ev.of_w("coupling", i)(w)))),
+                coupling_peak_db=-math.inf
+                if _markov_zero(*_scalar_d(plant.siso(i, j)))
+                else _db(np.nanmax(np.abs(ev.of_w("coupling", i)(w)))),
                 h_stable=_stable(phi[i]),
                 channel_stable=_stable(phi_cl) and _stable(phi[j]),
             )
@@ -665,6 +666,11 @@ def analyse(plant, k1: LTI, k2: LTI, w=None, *, verify: bool = True) -> ICADAnal
         b2=b2,
         response=response,
     )
+
+
+def _scalar_d(siso):
+    A, b, c, d = siso
+    return A, b, c, float(d[0, 0])
 
 
 def _db(x: float) -> float:
@@ -810,3 +816,54 @@ def pmsg_msf(p: PMSGParams, w_r: float, s) -> np.ndarray:
     w_r = require_finite("w_r", w_r)
     s = np.asarray(s, dtype=complex)
     return -p.L_d * p.L_q * w_r**2 / ((p.L_q * s + p.R_s) * (p.L_d * s + p.R_s))
+
+
+# ---------------------------------------------------------------------------------------------
+# built-in controllers
+
+#: Bodson's current-loop bandwidth a_D,CUR = 2 pi 500 Hz (section IV-A), reused as the default
+#: bandwidth of the internal-model PI below.
+A_CUR_DEFAULT = 3142.0
+
+CONTROLLER_NAMES = ("paper-20", "paper-pi", "imc-pi")
+
+
+def imc_pi(params, a: float = A_CUR_DEFAULT) -> LTI:
+    """Internal-model PI K_P = L' a, K_I = R' a for the first-order model 1/(L' s + R').
+
+    Bodson (49) with R_T = R_R: (L', R') = (sigma L_r, R_r) for the DFIM rotor current; by the
+    same rule (sigma L_s, R_s) for the IM stator current and (L_d, R_s) for the PMSG.
+    """
+    from acdrive.machines.dfim import DFIMParams
+
+    a = require_finite("bandwidth", a)
+    if a <= 0:
+        raise InputError("bandwidth", "must be > 0 rad/s")
+    if isinstance(params, IMParams):
+        L, R = params.sigma * params.L_s, params.R_s
+    elif isinstance(params, PMSGParams):
+        L, R = params.L_d, params.R_s
+    elif isinstance(params, DFIMParams):
+        L, R = params.sigma * params.L_r, params.R_r
+    else:
+        raise InputError("params", f"unsupported machine parameters {type(params).__name__}")
+    return LTI.pi(L * a, R * a, name="imc-pi")
+
+
+def controller_for(name: str, params=None, a: float = A_CUR_DEFAULT) -> LTI:
+    """Built-in controller by name: ``paper-20`` (Amezquita-Brooks et al. (20)), ``paper-pi``
+    (their PI, K_P = 360, K_I = 9000) or ``imc-pi`` (``imc_pi`` for the machine ``params``)."""
+    if name == "paper-20":
+        return LTI.paper_20()
+    if name == "paper-pi":
+        return LTI.pi(360.0, 9000.0, name="paper-pi")
+    if name == "imc-pi":
+        if params is None:
+            raise InputError("controller", "imc-pi needs machine parameters")
+        return imc_pi(params, a)
+    raise InputError("controller", f"unknown '{name}', known: {', '.join(CONTROLLER_NAMES)}")
+
+
+def default_controller_name(params) -> str:
+    """paper-20 for induction motors (it was designed for one), imc-pi otherwise."""
+    return "paper-20" if isinstance(params, IMParams) else "imc-pi"

@@ -1,0 +1,165 @@
+"""``acdrive icad``: individual channel analysis of a machine's current subsystem.
+
+``acdrive icad MACHINE --speed W [--controller NAME] [--json]`` analyses one operating speed;
+``acdrive icad MACHINE --sweep [--out DIR]`` analyses a speed range and writes the figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from acdrive.analysis.icad import (
+    A_CUR_DEFAULT,
+    CONTROLLER_NAMES,
+    analyse,
+    controller_for,
+    default_controller_name,
+    gm_min,
+    icad_response,
+    im_msf_magnitude_at_rotor_speed,
+    summarize,
+)
+from acdrive.analysis.plants import MACHINES, machine_params, plant_for
+from acdrive.errors import InputError, require_finite
+from acdrive.machines.induction import IMParams
+from acdrive.machines.pmsm import PMSGParams
+
+HELP = f"""Individual channel analysis (ICAD) of a machine current subsystem with a diagonal
+controller k_1 = k_2. Machines: {", ".join(MACHINES)}. Controllers: paper-20 (Amezquita-Brooks
+et al. (20)), paper-pi (K_P = 360, K_I = 9000), imc-pi (K_P = L' a, K_I = R' a, Bodson (49)
+style, a = --bandwidth). Default controller: paper-20 for induction motors, imc-pi for
+pmsg-2mw and bodson-dfim. Speeds are electrical rotor speeds in rad/s. JSON margins that are
+infinite (no crossing) or undefined are written as null."""
+
+#: Default sweep ranges of electrical speed [rad/s] (the papers' operating ranges).
+SWEEP_RANGES = {IMParams: (0.0, 375.0), PMSGParams: (0.0, 2 * math.pi * 50.0)}
+DFIM_SWEEP = (0.0, 1.5 * 2 * math.pi * 60.0)
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("icad", help="individual channel analysis", description=HELP)
+    parser.add_argument("machine", help=f"one of {', '.join(MACHINES)}")
+    mode = parser.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--speed", type=float, help="electrical rotor speed w_r [rad/s]")
+    mode.add_argument("--sweep", action="store_true", help="sweep speed and write figures")
+    parser.add_argument("--controller", choices=CONTROLLER_NAMES, help="built-in controller")
+    parser.add_argument(
+        "--bandwidth", type=float, default=A_CUR_DEFAULT, help="a [rad/s] of imc-pi (3142)"
+    )
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"))
+    parser.add_argument("--out", default=None, help="figure directory (default icad-MACHINE)")
+    parser.add_argument("--no-verify", action="store_true", help="skip contour cross-checks")
+    parser.set_defaults(handler=run)
+
+
+def _num(x) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def single_report(machine: str, speed: float, controller: str, analysis) -> dict:
+    """The JSON-ready report of one analysis (field names documented in docs/icad.md)."""
+    params = machine_params(machine)
+    c = analysis.conditions
+    chans = analysis.channels
+    is_im = isinstance(params, IMParams)
+    return {
+        "machine": machine,
+        "speed_rad_s": speed,
+        "controller": controller,
+        "conditions": {"i": c.i, "ii": c.ii, "iii": c.iii, "iv": c.iv},
+        "gm_min_db": _num(20 * math.log10(gm_min(params))) if is_im else None,
+        "msf_at_wr_db": _num(20 * math.log10(im_msf_magnitude_at_rotor_speed(params, speed)))
+        if is_im and speed != 0.0
+        else None,
+        "crossover_rad_s": _num(min(ch.margins.crossover_rad_s for ch in chans)),
+        "pm_deg": _num(min(ch.margins.pm_deg for ch in chans)),
+        "gm_db": _num(min(ch.margins.gm_db for ch in chans)),
+        "gm_reduction_db": _num(max(ch.margins.gm_reduction_db for ch in chans)),
+        "bandwidth_rad_s": _num(min(ch.bandwidth_rad_s for ch in chans)),
+        "kg_pm_deg": _num(min(ch.kg_margins.pm_deg for ch in chans)),
+        "kg_gm_db": _num(min(ch.kg_margins.gm_db for ch in chans)),
+        "structural_gm_db": _num(analysis.structural.gm_db),
+        "structural_gm_h_db": _num(min(ch.structural.gm_db for ch in chans)),
+        "coupling_peak_db": _num(analysis.coupling_peak_db),
+        "closed_loop_stable": analysis.closed_loop_stable,
+        "b1": analysis.b1,
+        "b2": analysis.b2,
+        "encirclements": {
+            "gamma": c.gamma_count.encirclements,
+            "gamma_h": [ch.gamma_h_count.encirclements for ch in chans],
+            "channels": [ch.channel_count.encirclements for ch in chans],
+        },
+    }
+
+
+def run(args) -> int:
+    params = machine_params(args.machine)
+    name = args.controller or default_controller_name(params)
+    k = controller_for(name, params, args.bandwidth)
+    if args.sweep:
+        return _sweep(args, params, name, k)
+    speed = require_finite("speed", args.speed)
+    analysis = analyse(plant_for(args.machine, speed), k, k, verify=not args.no_verify)
+    report = single_report(args.machine, speed, name, analysis)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        for key, value in report.items():
+            print(f"{key:20s} {value}")
+    return 0
+
+
+def _sweep(args, params, name, k) -> int:
+    from acdrive.report.icad_figures import write_sweep_figures
+
+    if args.speeds is not None:
+        start, stop, n = args.speeds
+        for label, v in (("speeds.start", start), ("speeds.stop", stop), ("speeds.n", n)):
+            require_finite(label, v)
+        if n < 1 or n != int(n):
+            raise InputError("speeds.n", "must be a positive integer")
+        lo, hi, n = start, stop, int(n)
+    else:
+        lo, hi = SWEEP_RANGES.get(type(params), DFIM_SWEEP)
+        n = 7
+    speeds = np.linspace(lo, hi, n)
+    plants = [plant_for(args.machine, float(s)) for s in speeds]
+    analyses = [analyse(p, k, k, verify=not args.no_verify) for p in plants]
+    w = analyses[-1].response.w
+    resp = icad_response(plants, k, k, w)
+    out = args.out or f"icad-{args.machine}"
+    paths = write_sweep_figures(analyses, resp, out, title=f"{args.machine}, controller {name}")
+    summary = summarize(analyses)
+    report = {
+        "machine": args.machine,
+        "controller": name,
+        "speeds_rad_s": [float(s) for s in speeds],
+        "all_conditions": summary.all_conditions,
+        "closed_loop_stable": summary.closed_loop_stable,
+        "worst": {
+            key: _num(getattr(summary, key))
+            for key in (
+                "structural_gm_db",
+                "structural_gm_h_db",
+                "pm_deg",
+                "gm_db",
+                "kg_pm_deg",
+                "kg_gm_db",
+                "bandwidth_rad_s",
+                "crossover_rad_s",
+                "coupling_peak_db",
+            )
+        },
+        "figures": [str(p) for p in paths],
+    }
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        for key, value in report.items():
+            print(f"{key:20s} {value}")
+    return 0
