@@ -295,6 +295,10 @@ def _complex_chain(c, exact: bool, rtol: float):
     if exact:
         f1, b1, near = _strip(f1_full)
         b0 = None
+    elif y0 == 0:  # scaling by +-1 is exact: the input values carry no rounding
+        f1, _, near = _strip(f1_full)
+        b0 = [abs(v) for v in f0]
+        b1 = [abs(v) for v in f1]
     else:
         # |x0 xk| + |y0 yk| <= |c0| |ck| (Cauchy-Schwarz): a bound for both parts of d_k
         size = abs(complex(*scale))

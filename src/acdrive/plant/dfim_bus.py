@@ -48,15 +48,21 @@ def n_states(n_motors: int) -> int:
 def motor_currents(p, psi_s, psi_r, closed):
     """(i_s, i_r) from the flux linkages; i_s = 0 and psi_s irrelevant when the relay is open."""
     if closed:
-        det = p[L_S] * p[L_R] - p[M_SR] * p[M_SR]
-        return (p[L_R] * psi_s - p[M_SR] * psi_r) / det, (p[L_S] * psi_r - p[M_SR] * psi_s) / det
-    return 0.0 + 0.0j, psi_r / p[L_R]
+        inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])   # real: avoid complex division
+        return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
+    return 0.0 + 0.0j, psi_r * (1.0 / p[L_R])
+
+
+@njit(cache=True)
+def unit_phasor(angle):
+    """e^{j angle}, computed as cos + j sin (cheaper than the general complex exponential)."""
+    return complex(np.cos(angle), np.sin(angle))
 
 
 @njit(cache=True)
 def supply_voltage(theta_g, t, supply_V_t, supply_V):
     """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g} (Bodson (8))."""
-    return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * np.exp(1j * theta_g)
+    return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * unit_phasor(theta_g)
 
 
 @njit(cache=True)
@@ -79,20 +85,20 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
         psi_s = complex(x[o + PSI_S_RE], x[o + PSI_S_IM])
         psi_r = complex(x[o + PSI_R_RE], x[o + PSI_R_IM])
         i_s, i_r = motor_currents(p, psi_s, psi_r, closed[k])
-        v_r = v_r_rotor[k] * np.exp(1j * p[N_P] * x[o + THETA])
+        v_r = v_r_rotor[k] * unit_phasor(p[N_P] * x[o + THETA])
         dpsi_r = v_r - p[R_R] * i_r + 1j * p[N_P] * x[o + OMEGA] * psi_r
         dx[o + PSI_R_RE], dx[o + PSI_R_IM] = dpsi_r.real, dpsi_r.imag
         if closed[k]:
-            det = p[L_S] * p[L_R] - p[M_SR] * p[M_SR]
+            inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
             sum_i_s += i_s
-            sum_a += p[L_R] / det
-            sum_b += (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) / det
+            sum_a += p[L_R] * inv_det
+            sum_b += (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) * inv_det
         # mechanics (26) with load and friction
         w = x[o + OMEGA]
         tau_l = profile_at(load_t[k], load_tau[k], t) + p[B_VISCOUS] * w + p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
         dx[o + OMEGA] = (electromagnetic_torque(p, i_s, i_r) - tau_l) / p[J_INERTIA]
         dx[o + THETA] = w
-    v_bus = (v_g - bus[BUS_R] * sum_i_s - bus[BUS_L] * sum_b) / (1.0 + bus[BUS_L] * sum_a)
+    v_bus = (v_g - bus[BUS_R] * sum_i_s - bus[BUS_L] * sum_b) * (1.0 / (1.0 + bus[BUS_L] * sum_a))
     # Second pass: stator fluxes, which need the bus voltage.
     for k in range(n):
         p = machines[k]
@@ -104,7 +110,7 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
             dpsi_s = v_bus - p[R_S] * i_s
             v_term[k] = v_bus
         else:
-            dpsi_s = p[M_SR] / p[L_R] * complex(dx[o + PSI_R_RE], dx[o + PSI_R_IM])
+            dpsi_s = (p[M_SR] / p[L_R]) * complex(dx[o + PSI_R_RE], dx[o + PSI_R_IM])
             v_term[k] = dpsi_s
         dx[o + PSI_S_RE], dx[o + PSI_S_IM] = dpsi_s.real, dpsi_s.imag
     dx[STATES_PER_MOTOR * n] = 2.0 * np.pi * profile_at(supply[2], supply[3], t)
