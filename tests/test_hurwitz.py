@@ -221,6 +221,14 @@ def test_bad_input(coeffs):
         routh_hurwitz(coeffs)
 
 
+def test_bad_tolerance():
+    for test in (complex_hurwitz, routh_hurwitz):
+        with pytest.raises(InputError):
+            test([1.0, 2.0], rtol=-1.0)
+        with pytest.raises(InputError):
+            test([1.0, 2.0], rtol=float("nan"))
+
+
 def test_real_test_rejects_complex_coefficients():
     with pytest.raises(InputError):
         routh_hurwitz([1, 1j])

@@ -64,7 +64,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from acdrive.errors import InputError
+from acdrive.errors import InputError, require_nonnegative
 
 __all__ = ["HurwitzResult", "complex_hurwitz", "is_hurwitz", "routh_hurwitz"]
 
@@ -329,9 +329,10 @@ def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) ->
     ``coeffs``: highest power first. ``rtol``: float mode only, relative size below which a
     computed chain coefficient is taken as zero. Generalises Bodson (15)-(17).
     """
+    rtol = require_nonnegative("rtol", rtol)
     c, exact = _parse(coeffs, exact, real_only=False)
     n = len(c) - 1
-    chain, f0, f1_full, near = _complex_chain(c, exact, 0.0 if exact else float(rtol))
+    chain, f0, f1_full, near = _complex_chain(c, exact, 0.0 if exact else rtol)
     regular = len(chain) == n + 1 and all(len(p) == n + 1 - k for k, p in enumerate(chain))
     if not exact and not regular:
         result = complex_hurwitz(_parse(coeffs, True, real_only=False)[0], exact=True)
@@ -366,6 +367,7 @@ def routh_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> H
     and the number of right-half-plane roots is the number of sign changes in the first column.
     ``rtol``: float mode only, relative size below which a computed entry is taken as zero.
     """
+    rtol = require_nonnegative("rtol", rtol)
     c, exact = _parse(coeffs, exact, real_only=True)
     a = [re for re, _ in c]
     if a[0] < 0:
