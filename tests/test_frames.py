@@ -184,3 +184,22 @@ def test_bodson_example_supply_and_current_limit():
 def test_bad_input(call):
     with pytest.raises(InputError):
         call()
+
+
+def test_numba_versions_callable_from_njit_code():
+    from numba import njit
+
+    @njit
+    def round_trip(a, b, theta_e, theta, n_p):
+        x = frames.abc_to_complex_nb(a, b, -a - b, theta_e)
+        ra, rb, rc = frames.complex_to_abc_nb(x, theta_e)
+        y = frames.rotor_abc_to_complex_nb(a, b, -a - b, theta_e, theta, n_p)
+        xa, xb, xc = frames.complex_to_rotor_abc_nb(y, theta_e, theta, n_p)
+        c = -a - b
+        err = abs(ra - a) + abs(rb - b) + abs(rc - c) + abs(xa - a) + abs(xb - b) + abs(xc - c)
+        return err, x, y
+
+    err, x, y = round_trip(1.5, -0.25, 0.8, 0.3, 2)
+    assert err < 1e-12
+    assert abs(x - frames.abc_to_complex(1.5, -0.25, -1.25, 0.8)) < 1e-12
+    assert abs(y - frames.rotor_abc_to_complex(1.5, -0.25, -1.25, 0.8, 0.3, 2)) < 1e-12
