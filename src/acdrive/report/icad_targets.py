@@ -146,7 +146,9 @@ NOMINAL_20 = {
     "kg_at_375": Printed(AMEZQUITA, "sec. V-C, Fig. 6", 20.0, "dB", "|k g_ii| > 20 dB near 375"),
     "coupling_peak": Printed(AMEZQUITA, "sec. V-D, Fig. 8", -20.0, "dB", "coupling at most -20 dB"),
     "pm_full": Printed(AMEZQUITA, "sec. VII, Fig. 19", 67.0, "deg", "PM of c_i with (20)"),
-    "pm_inner_pi": Printed(AMEZQUITA, "sec. VII, Fig. 19", 80.0, "deg", "PM of c_i with PI of (22)"),
+    "pm_inner_pi": Printed(
+        AMEZQUITA, "sec. VII, Fig. 19", 80.0, "deg", "PM of c_i with PI of (22)"
+    ),
     "lag_gain_at_peak": Printed(AMEZQUITA, "sec. VII", 20.0, "dB", "open-loop gain at resonance"),
 }
 
