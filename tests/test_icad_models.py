@@ -82,7 +82,8 @@ def test_im_transfer_matrix_matches_ugalde_44_45():
         1.0,
         kap * 2 * sig * Ls * Lr**2 * (Lm**2 * Rr + sig * Ls * Lr * Rr + Lr**2 * Rs),
         kap * (Lm**4 * Rr**2 + Lr**4 * Rs**2 + sig**2 * Ls**2 * Lr**2 * (Rr**2 + Lr**2 * w_r**2))
-        + kap * (2 * Lr**2 * Lm**2 * Rs * Rr + 2 * sig * Ls * Lr * Rr * (2 * Lr**2 * Rs + Lm**2 * Rr)),
+        + kap
+        * (2 * Lr**2 * Lm**2 * Rs * Rr + 2 * sig * Ls * Lr * Rr * (2 * Lr**2 * Rs + Lm**2 * Rr)),
         2 * kap * Lr * Rs * Rr * (Lr**2 * Rs + Lm**2 * Rr)
         + 2 * kap * sig * Ls * Lr**2 * Rs * (Rr**2 + Lr**2 * w_r**2),
         kap * (Lr**4 * Rs**2 * w_r**2 + Lr**2 * Rs**2 * Rr**2),
@@ -91,7 +92,8 @@ def test_im_transfer_matrix_matches_ugalde_44_45():
     eta = [
         1 / (sig * Ls),
         (2 * sig * Ls * Lr**2 * Rr + Lm**2 * Rr * Lr + Lr**3 * Rs) / q,
-        (sig * Ls * Lr**3 * w_r**2 + 2 * Lr**2 * Rs * Rr + sig * Ls * Lr * Rr**2 + Lm**2 * Rr**2) / q,
+        (sig * Ls * Lr**3 * w_r**2 + 2 * Lr**2 * Rs * Rr + sig * Ls * Lr * Rr**2 + Lm**2 * Rr**2)
+        / q,
         (Lr**3 * Rs * w_r**2 + Lr * Rs * Rr**2) / q,
     ]
     n12 = Lm**2 * Rr * w_r / (sig**2 * Ls**2 * Lr**2)
@@ -131,7 +133,9 @@ def test_delorenzo_matrix_13_reconciliation():
     assert B13[0, 0] == pytest.approx(9.7, rel=1e-12)
     assert A13[0, 2] == pytest.approx(141.8, rel=2e-3)  # the redundant entry, rounding only
     for name in ("R_s", "R_r", "L_r", "L_m"):
-        assert getattr(DELORENZO_IM_13, name) == pytest.approx(getattr(DELORENZO_IM, name), rel=0.01)
+        assert getattr(DELORENZO_IM_13, name) == pytest.approx(
+            getattr(DELORENZO_IM, name), rel=0.01
+        )
     assert DELORENZO_IM_13.L_s - DELORENZO_IM.L_s == pytest.approx(0.0119, abs=5e-4)
     A_app = stator_current_ss(DELORENZO_IM, 1.0)[0]
     assert abs(A_app[0, 0] - A13[0, 0]) / abs(A13[0, 0]) > 0.05  # the two do not agree
@@ -142,7 +146,7 @@ def test_delorenzo_matrix_13_reconciliation():
     [("R_s", 0.0), ("R_r", -1.0), ("L_s", float("nan")), ("n_p", 1.5), ("J", -1.0)],
 )
 def test_im_params_validation(field, value):
-    kwargs = dict(R_s=1.0, R_r=1.0, L_s=0.1, L_r=0.1, L_m=0.09, n_p=1)
+    kwargs = {"R_s": 1.0, "R_r": 1.0, "L_s": 0.1, "L_r": 0.1, "L_m": 0.09, "n_p": 1}
     kwargs[field] = value
     with pytest.raises(InputError, match=field):
         IMParams(**kwargs)

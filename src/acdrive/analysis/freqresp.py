@@ -5,7 +5,9 @@ batch axis, e.g. rotor speed or parameter set) at many complex points s at once.
 path diagonalises each A once (A = V diag(lambda) V^-1), after which every point costs one small
 matrix product: G(s) = (C V) diag(1/(s - lambda)) (V^-1 B) + D. Models whose eigenvector matrix
 is ill-conditioned (defective or nearly defective A) fall back to one batched linear solve per
-point. No transfer-function polynomials are formed.
+point, and so do single points where the modal terms cancel by more than ``CANCEL_LIMIT`` (an
+element of high relative degree far above its poles). No transfer-function polynomials are
+formed.
 """
 
 from __future__ import annotations
@@ -16,8 +18,28 @@ import numpy as np
 
 from acdrive.errors import InputError, require_finite
 
-#: Eigenvector matrices with a condition number above this use the linear-solve path.
-EIG_COND_LIMIT = 1e8
+#: Eigenvector matrices with a condition number above this use the linear-solve path (the
+#: eigen path loses about cond(V) * eps of relative accuracy).
+EIG_COND_LIMIT = 1e5
+#: Points where the modal sum cancels by more than this factor are recomputed by a solve.
+CANCEL_LIMIT = 1e6
+
+
+def _solve_points(A, B, C, D, s) -> np.ndarray:
+    """G(s) of one model by a batched linear solve per point (inf where s is a pole)."""
+    n, m = B.shape
+    M = s[:, None, None] * np.eye(n) - A  # (k, n, n)
+    rhs = np.broadcast_to(B, (s.size, n, m)).astype(complex)
+    try:
+        X = np.linalg.solve(M, rhs)
+    except np.linalg.LinAlgError:  # some s is an eigenvalue: G is infinite there
+        X = np.full((s.size, n, m), np.inf, dtype=complex)
+        for idx in range(s.size):
+            try:
+                X[idx] = np.linalg.solve(M[idx], rhs[idx])
+            except np.linalg.LinAlgError:
+                pass
+    return C @ X + D
 
 
 def evaluate_ss(A, B, C, D, s) -> np.ndarray:
@@ -54,11 +76,16 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
         R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(-1, n, p * m)
         with np.errstate(divide="ignore", invalid="ignore"):  # s on a pole gives inf
             inv = 1.0 / (s[None, :, None] - lam[good][:, None, :])  # (b, k, n)
-        G[good] = (inv @ R).reshape(-1, s.size, p, m) + D2[good][:, None]
+            modal = inv @ R  # (b, k, p*m)
+            # cancellation among the modal terms (high relative degree far above the poles)
+            loss = (np.abs(inv) @ np.abs(R)) / np.abs(modal)
+        G[good] = modal.reshape(-1, s.size, p, m) + D2[good][:, None]
+        for gb, b in enumerate(np.flatnonzero(good)):
+            pts = np.flatnonzero(np.any(loss[gb] > CANCEL_LIMIT, axis=-1))
+            if pts.size:
+                G[b, pts] = _solve_points(A2[b], B2[b], C2[b], D2[b], s[pts])
     for b in np.flatnonzero(~good):
-        M = s[:, None, None] * np.eye(n) - A2[b]  # (k, n, n)
-        X = np.linalg.solve(M, np.broadcast_to(B2[b], (s.size, n, m)).astype(complex))
-        G[b] = C2[b] @ X + D2[b]
+        G[b] = _solve_points(A2[b], B2[b], C2[b], D2[b], s)
     return G.reshape(out_shape)
 
 

@@ -340,7 +340,7 @@ def _winding(F, num: np.ndarray, den: np.ndarray, extra: np.ndarray) -> int:
     roots = np.concatenate([num, den, extra])
     mags = np.abs(roots)
     radius = 4.0 * (mags.max() if mags.size else 1.0) + 10.0
-    nonzero = mags[mags > 0]
+    nonzero = mags[mags > 1e-9 * (mags.max() if mags.size else 0.0)]
     scale = 0.1 * nonzero.min() if nonzero.size else 1.0
     axis = roots[_on_axis(roots)]
     centres: list[float] = []
