@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from numba import njit
+from acdrive.jit import jit
 
 from acdrive.errors import require_positive
 
@@ -28,7 +28,7 @@ class SpeedPIGains:
         return cls(K_P=2.0 * a * J, K_I=a * a * J, K_F=K_F)
 
 
-@njit(cache=True)
+@jit
 def speed_pi(K_P, K_I, K_F, e_int, w_ref, w, tau_lo, tau_hi, T_s):
     """One sample of (25): returns (tau_com, new e_int, limited).
 

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from acdrive.jit import jit
 
 from acdrive.errors import InputError, require_nonnegative, require_positive
 
@@ -70,12 +70,23 @@ N_MACHINE_PARAMS = 9
 def machine_vector(params: DFIMParams) -> np.ndarray:
     """Pack ``params`` in the float64 layout read by the compiled functions below."""
     p = np.empty(N_MACHINE_PARAMS)
-    p[R_S], p[R_R], p[L_S], p[L_R], p[M_SR] = params.R_s, params.R_r, params.L_s, params.L_r, params.M
-    p[N_P], p[J_INERTIA], p[B_VISCOUS], p[TAU_COULOMB] = params.n_p, params.J, params.B, params.tau_c
+    p[R_S], p[R_R], p[L_S], p[L_R], p[M_SR] = (
+        params.R_s,
+        params.R_r,
+        params.L_s,
+        params.L_r,
+        params.M,
+    )
+    p[N_P], p[J_INERTIA], p[B_VISCOUS], p[TAU_COULOMB] = (
+        params.n_p,
+        params.J,
+        params.B,
+        params.tau_c,
+    )
     return p
 
 
-@njit(cache=True)
+@jit
 def impedances(p, w_e, w_m):
     """Z_S, Z_MS, Z_R, Z_MR of Bodson (11) at electrical frequency w_e and shaft speed w_m."""
     w_slip = w_e - p[N_P] * w_m
@@ -86,14 +97,14 @@ def impedances(p, w_e, w_m):
     return Z_S, Z_MS, Z_R, Z_MR
 
 
-@njit(cache=True)
+@jit
 def rotor_voltage_for(p, w_e, w_m, v_s, i_s):
     """Steady-state rotor voltage that gives stator current ``i_s`` (Bodson (20))."""
     Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
     return Z_R / Z_MS * v_s - (Z_S * Z_R - Z_MS * Z_MR) / Z_MS * i_s
 
 
-@njit(cache=True)
+@jit
 def rotor_current_for(p, w_e, v_s, i_s):
     """Steady-state rotor current that gives stator current ``i_s`` (Bodson (43), from (19))."""
     Z_S = p[R_S] + 1j * w_e * p[L_S]
@@ -101,7 +112,7 @@ def rotor_current_for(p, w_e, v_s, i_s):
     return (v_s - Z_S * i_s) / Z_MS
 
 
-@njit(cache=True)
+@jit
 def steady_state_currents(p, w_e, w_m, v_s, v_r):
     """Solve the steady-state equations (19) for (i_s, i_r) given both voltages."""
     Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
@@ -111,13 +122,13 @@ def steady_state_currents(p, w_e, w_m, v_s, v_r):
     return i_s, i_r
 
 
-@njit(cache=True)
+@jit
 def electromagnetic_torque(p, i_s, i_r):
     """tau_e = n_p M Im(i_s i_r*) (Bodson (9), third line)."""
     return p[N_P] * p[M_SR] * (i_s * np.conj(i_r)).imag
 
 
-@njit(cache=True)
+@jit
 def stator_current_command(p, w_e, v_s, tau, Q):
     """Stator current giving torque ``tau`` and reactive power ``Q`` with real ``v_s`` > 0.
 
@@ -138,13 +149,13 @@ def stator_current_command(p, w_e, v_s, tau, Q):
     return i_d - 1j * Q / v_s, limited
 
 
-@njit(cache=True)
+@jit
 def _torque_at_stator_current(p, w_e, v_s, i_d):
     """Torque for a real stator current i_d (Q = 0), from (31): n_p/w_e (v_s i_d - R_s i_d^2)."""
     return p[N_P] / w_e * (v_s * i_d - p[R_S] * i_d * i_d)
 
 
-@njit(cache=True)
+@jit
 def torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max):
     """Torque limits with Q = 0 (Bodson case 1, (29)-(37)), for motoring and generating torque.
 
@@ -178,7 +189,7 @@ def torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max):
     return tau_max_1, tau_max_2, tau_max_3, tau_min_2, tau_min_3, True
 
 
-@njit(cache=True)
+@jit
 def torque_window(p, w_e, v_s, i_s_max, i_r_max):
     """Admissible torque interval [tau_lo, tau_hi] with Q = 0, the tightest of case 1 limits.
 
@@ -190,7 +201,7 @@ def torque_window(p, w_e, v_s, i_s_max, i_r_max):
     return tau_lo, tau_hi, feasible
 
 
-@njit(cache=True)
+@jit
 def torque_limit_case2(p, w_e, v_s, Q, i_s_max, i_r_max):
     """Torque limits for R_s = 0 and any Q (Bodson case 2, (40)-(42)).
 
@@ -211,7 +222,9 @@ def delta_z_coefficients(params: DFIMParams, w_e: float, w_m: float) -> np.ndarr
     p = machine_vector(params)
     Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
     L_s, L_r, M = params.L_s, params.L_r, params.M
-    return np.array([L_s * L_r - M * M, L_s * Z_R + L_r * Z_S - M * (Z_MR + Z_MS), Z_S * Z_R - Z_MR * Z_MS])
+    return np.array(
+        [L_s * L_r - M * M, L_s * Z_R + L_r * Z_S - M * (Z_MR + Z_MS), Z_S * Z_R - Z_MR * Z_MS]
+    )
 
 
 def electrical_poles(params: DFIMParams, w_e: float, w_m: float) -> np.ndarray:
@@ -221,7 +234,14 @@ def electrical_poles(params: DFIMParams, w_e: float, w_m: float) -> np.ndarray:
 
 def shifted_delta_z_coefficients(params: DFIMParams, w_m: float) -> np.ndarray:
     """Coefficients of Delta Z(s - j w_e) = a0 s^2 + (a1 + j b1) s + a2 + j b2 (Bodson (15)-(16))."""
-    L_s, L_r, M, R_s, R_r, n_p = params.L_s, params.L_r, params.M, params.R_s, params.R_r, params.n_p
+    L_s, L_r, M, R_s, R_r, n_p = (
+        params.L_s,
+        params.L_r,
+        params.M,
+        params.R_s,
+        params.R_r,
+        params.n_p,
+    )
     a0 = L_s * L_r - M * M
     a1 = L_s * R_r + L_r * R_s
     a2 = R_s * R_r

@@ -9,7 +9,7 @@ beyond it is scaled back along its own direction.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from acdrive.jit import jit
 
 
 def max_voltage_magnitude(v_dc: float) -> float:
@@ -17,7 +17,7 @@ def max_voltage_magnitude(v_dc: float) -> float:
     return v_dc / np.sqrt(2.0)
 
 
-@njit(cache=True)
+@jit
 def converter_output(v_command, v_max):
     """(applied voltage, saturated) for a complex command and magnitude limit ``v_max``."""
     magnitude = np.abs(v_command)

@@ -23,10 +23,19 @@ the last entry is the supply angle theta_g (d theta_g/dt = 2 pi f(t)).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from acdrive.jit import jit
 
 from acdrive.machines.dfim import (
-    B_VISCOUS, J_INERTIA, L_R, L_S, M_SR, N_P, R_R, R_S, TAU_COULOMB, electromagnetic_torque,
+    B_VISCOUS,
+    J_INERTIA,
+    L_R,
+    L_S,
+    M_SR,
+    N_P,
+    R_R,
+    R_S,
+    TAU_COULOMB,
+    electromagnetic_torque,
 )
 from acdrive.plant.profiles import profile_at
 
@@ -44,28 +53,30 @@ def n_states(n_motors: int) -> int:
     return STATES_PER_MOTOR * n_motors + 1
 
 
-@njit(cache=True)
+@jit
 def motor_currents(p, psi_s, psi_r, closed):
     """(i_s, i_r) from the flux linkages; i_s = 0 and psi_s irrelevant when the relay is open."""
     if closed:
-        inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])   # real: avoid complex division
-        return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
+        inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])  # real: avoid complex division
+        return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (
+            p[L_S] * psi_r - p[M_SR] * psi_s
+        ) * inv_det
     return 0.0 + 0.0j, psi_r * (1.0 / p[L_R])
 
 
-@njit(cache=True)
+@jit
 def unit_phasor(angle):
     """e^{j angle}, computed as cos + j sin (cheaper than the general complex exponential)."""
     return complex(np.cos(angle), np.sin(angle))
 
 
-@njit(cache=True)
+@jit
 def supply_voltage(theta_g, t, supply_V_t, supply_V):
     """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g} (Bodson (8))."""
     return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * unit_phasor(theta_g)
 
 
-@njit(cache=True)
+@jit
 def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rotor, closed, v_term):
     """Write dx/dt into ``dx`` and the stator terminal voltages into ``v_term``; return v_g.
 
@@ -77,8 +88,8 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
     v_g = supply_voltage(theta_g, t, supply[0], supply[1])
     # First pass: currents, rotor-flux derivatives, and the terms of the bus equation.
     sum_i_s = 0.0 + 0.0j
-    sum_a = 0.0           # sum of d(di_s/dt)/d v_bus
-    sum_b = 0.0 + 0.0j    # sum of the v_bus-independent parts of di_s/dt
+    sum_a = 0.0  # sum of d(di_s/dt)/d v_bus
+    sum_b = 0.0 + 0.0j  # sum of the v_bus-independent parts of di_s/dt
     for k in range(n):
         p = machines[k]
         o = STATES_PER_MOTOR * k
@@ -95,7 +106,11 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
             sum_b += (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) * inv_det
         # mechanics (26) with load and friction
         w = x[o + OMEGA]
-        tau_l = profile_at(load_t[k], load_tau[k], t) + p[B_VISCOUS] * w + p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
+        tau_l = (
+            profile_at(load_t[k], load_tau[k], t)
+            + p[B_VISCOUS] * w
+            + p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
+        )
         dx[o + OMEGA] = (electromagnetic_torque(p, i_s, i_r) - tau_l) / p[J_INERTIA]
         dx[o + THETA] = w
     v_bus = (v_g - bus[BUS_R] * sum_i_s - bus[BUS_L] * sum_b) * (1.0 / (1.0 + bus[BUS_L] * sum_a))

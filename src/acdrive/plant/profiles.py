@@ -7,10 +7,10 @@ before the first and after the last point. Compiled code evaluates them with ``p
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from acdrive.jit import jit
 
 
-@njit(cache=True)
+@jit
 def profile_at(times, values, t):
     """Value of the piecewise-linear profile (times, values) at time ``t``."""
     n = times.shape[0]

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from acdrive.jit import jit
 
 
-@njit(cache=True)
+@jit
 def encoder_angle(theta, offset, counts_per_rev):
     """Incremental-encoder reading: the shaft angle plus an unknown ``offset``, truncated to whole
     counts of 2 pi / counts_per_rev (counts_per_rev <= 0 means an ideal sensor)."""

@@ -11,7 +11,8 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   viscous_friction, coulomb_friction, load_torque | load_torque_profile,
                   speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
                   encoder_counts_per_rev, encoder_offset
-    [motor.controller]  mode ("voltage"), speed_bandwidth, K_F, reactive_power,
+    [motor.controller]  mode ("voltage"), speed_bandwidth, design_inertia (J used in (27),
+                  default: the machine's J), K_F, reactive_power,
                   stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
                   speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk
 """
@@ -52,7 +53,10 @@ def read_scenario(source: str | Path) -> dict:
     else:
         path = Path(source)
         if not path.is_file():
-            raise InputError("scenario", f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file")
+            raise InputError(
+                "scenario",
+                f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file",
+            )
         text, origin = path.read_text(), str(path)
     try:
         return tomllib.loads(text)
@@ -157,7 +161,8 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     section.text("mode", "voltage", choices=("voltage",))
     bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
     K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
-    gains = dataclasses.replace(SpeedPIGains.design(machine.J, bandwidth), K_F=K_F)
+    design_inertia = section.number("design_inertia", machine.J, require_positive)
+    gains = dataclasses.replace(SpeedPIGains.design(design_inertia, bandwidth), K_F=K_F)
     controller = DFIMController(
         gains=gains,
         reactive_power=section.number("reactive_power", 0.0),
@@ -209,7 +214,9 @@ def build_setup(data: dict) -> DriveSetup:
             raise InputError(sec.field("speed_reference_rpm"), "is required")
         motor = MotorSetup(
             machine=machine,
-            controller=_controller(_Section(sec.get("controller", {}), sec.field("controller")), machine),
+            controller=_controller(
+                _Section(sec.get("controller", {}), sec.field("controller")), machine
+            ),
             speed_reference=sec.profile("speed_reference_rpm", RAD_S_PER_RPM),
             load_torque=sec.constant_or_profile("load_torque", 0.0),
             dc_link_voltage=sec.number("dc_link_voltage", 30.0, require_positive),
@@ -220,7 +227,14 @@ def build_setup(data: dict) -> DriveSetup:
         sec.done()
         motors.append(motor)
     top.done()
-    setup = DriveSetup(motors=tuple(motors), supply=supply, duration=duration, sample_time=sample_time,
-                       substeps=substeps, log_every=log_every, name=name)
+    setup = DriveSetup(
+        motors=tuple(motors),
+        supply=supply,
+        duration=duration,
+        sample_time=sample_time,
+        substeps=substeps,
+        log_every=log_every,
+        name=name,
+    )
     check_setup(setup)
     return setup

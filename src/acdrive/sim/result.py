@@ -51,14 +51,18 @@ class DriveResult:
     def events(self, motor: int = 0) -> dict[str, int]:
         """Number of samples on which each event flag was raised."""
         flags = self.signal("flags", motor).astype(np.int64)
-        return {name: int(np.count_nonzero(flags & (1 << bit))) for bit, name in enumerate(EVENT_NAMES)}
+        return {
+            name: int(np.count_nonzero(flags & (1 << bit))) for bit, name in enumerate(EVENT_NAMES)
+        }
 
     def first_event_time(self, name: str, motor: int = 0) -> float | None:
         flags = self.signal("flags", motor).astype(np.int64)
         hits = np.flatnonzero(flags & (1 << EVENT_NAMES.index(name)))
         return float(self.t[hits[0]]) if hits.size else None
 
-    def tracking_mask(self, motor: int = 0, settle_s: float = 0.5, jump_rpm: float = 10.0) -> np.ndarray:
+    def tracking_mask(
+        self, motor: int = 0, settle_s: float = 0.5, jump_rpm: float = 10.0
+    ) -> np.ndarray:
         """Samples where the speed is expected to track: not within ``settle_s`` after a reference
         jump (a change larger than ``jump_rpm`` in one sample, such as the abrupt stop of Fig. 4)."""
         ref = self.reference_rpm(motor)
@@ -78,16 +82,23 @@ class DriveResult:
         for k in range(self.n_motors):
             err = self.reference_rpm(k) - self.speed_rpm(k)
             tracking = self.tracking_mask(k)
-            per_motor.append({
-                "speed_rms_error_rpm": float(np.sqrt(np.mean(err[tracking] ** 2))),
-                "speed_max_abs_error_rpm": float(np.max(np.abs(err))),
-                "peak_rotor_current_a": float(np.max(self.peak("i_r_mag", k))),
-                "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
-                "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
-                "limit_events": self.events(k),
-            })
-        return {"scenario": self.name, **per_motor[0], "motors": per_motor,
-                "duration_s": float(self.t[-1] + self.sample_time), "wall_time_s": self.wall_time}
+            per_motor.append(
+                {
+                    "speed_rms_error_rpm": float(np.sqrt(np.mean(err[tracking] ** 2))),
+                    "speed_max_abs_error_rpm": float(np.max(np.abs(err))),
+                    "peak_rotor_current_a": float(np.max(self.peak("i_r_mag", k))),
+                    "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
+                    "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
+                    "limit_events": self.events(k),
+                }
+            )
+        return {
+            "scenario": self.name,
+            **per_motor[0],
+            "motors": per_motor,
+            "duration_s": float(self.t[-1] + self.sample_time),
+            "wall_time_s": self.wall_time,
+        }
 
     def to_dataframe(self):
         """A pandas DataFrame with column ``t`` and one column per signal (``name`` for a single

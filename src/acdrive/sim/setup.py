@@ -17,7 +17,15 @@ from acdrive.control.speed import SpeedPIGains
 from acdrive.errors import InputError
 from acdrive.machines.dfim import DFIMParams, machine_vector
 from acdrive.plant.converter import max_voltage_magnitude
-from acdrive.plant.dfim_bus import PSI_R_IM, PSI_R_RE, PSI_S_IM, PSI_S_RE, OMEGA, STATES_PER_MOTOR, n_states
+from acdrive.plant.dfim_bus import (
+    PSI_R_IM,
+    PSI_R_RE,
+    PSI_S_IM,
+    PSI_S_RE,
+    OMEGA,
+    STATES_PER_MOTOR,
+    n_states,
+)
 from acdrive.plant.profiles import pad_profiles
 from acdrive.sim import engine
 from acdrive.sim.result import DriveResult
@@ -54,7 +62,7 @@ class DFIMController:
     speed_filter_tau: float = 0.0
     frequency_filter_tau: float = 0.01
     min_stator_voltage_pk: float = 1.0
-    params: DFIMParams | None = None   # controller's parameter estimates (default: the true ones)
+    params: DFIMParams | None = None  # controller's parameter estimates (default: the true ones)
 
 
 @dataclass(frozen=True)
@@ -63,7 +71,7 @@ class MotorSetup:
 
     machine: DFIMParams
     controller: DFIMController
-    speed_reference: Profile           # rad/s (mechanical) vs s
+    speed_reference: Profile  # rad/s (mechanical) vs s
     load_torque: Profile = field(default_factory=lambda: constant(0.0))
     dc_link_voltage: float = 30.0
     encoder_counts_per_rev: float = 0.0
@@ -155,9 +163,19 @@ def build_arrays(setup: DriveSetup) -> dict:
     s = setup.supply
     supply = tuple(np.ascontiguousarray(a, dtype=float) for a in (*s.voltage_pk, *s.frequency_hz))
     return dict(
-        x=x, machines=machines, bus=np.array([s.resistance, s.inductance]), supply=supply,
-        load_t=load_t, load_tau=load_tau, sensors=sensors, p_est=p_est, cp=cp, cs=cs,
-        ref_t=ref_t, ref_w=ref_w, closed=np.ones(n, dtype=np.bool_),
+        x=x,
+        machines=machines,
+        bus=np.array([s.resistance, s.inductance]),
+        supply=supply,
+        load_t=load_t,
+        load_tau=load_tau,
+        sensors=sensors,
+        p_est=p_est,
+        cp=cp,
+        cs=cs,
+        ref_t=ref_t,
+        ref_w=ref_w,
+        closed=np.ones(n, dtype=np.bool_),
     )
 
 
@@ -172,16 +190,32 @@ def simulate(setup: DriveSetup) -> DriveResult:
     """
     arrays = build_arrays(setup)
     steps = n_steps(setup)
-    log = np.zeros((steps // setup.log_every + (steps % setup.log_every > 0), len(setup.motors), engine.N_LOG))
+    log = np.zeros(
+        (steps // setup.log_every + (steps % setup.log_every > 0), len(setup.motors), engine.N_LOG)
+    )
     start = time.perf_counter()
-    done, status = engine.run_drive(**arrays, T_s=setup.sample_time, n_sub=setup.substeps,
-                                    n_steps=steps, log_every=setup.log_every, log=log)
+    done, status = engine.run_drive(
+        **arrays,
+        T_s=setup.sample_time,
+        n_sub=setup.substeps,
+        n_steps=steps,
+        log_every=setup.log_every,
+        log=log,
+    )
     elapsed = time.perf_counter() - start
     if status != engine.STATUS_OK:
-        raise RuntimeError(f"simulation '{setup.name}' diverged (non-finite state) at t = {done * setup.sample_time:.6f} s")
+        raise RuntimeError(
+            f"simulation '{setup.name}' diverged (non-finite state) at t = {done * setup.sample_time:.6f} s"
+        )
     t = np.arange(log.shape[0]) * setup.sample_time * setup.log_every
-    return DriveResult(name=setup.name, t=t, signals=log, sample_time=setup.sample_time,
-                       final_state=arrays["x"], wall_time=elapsed)
+    return DriveResult(
+        name=setup.name,
+        t=t,
+        signals=log,
+        sample_time=setup.sample_time,
+        final_state=arrays["x"],
+        wall_time=elapsed,
+    )
 
 
 def check_setup(setup: DriveSetup) -> None:
@@ -190,7 +224,9 @@ def check_setup(setup: DriveSetup) -> None:
         limit = max_speed(motor, setup.supply)
         ref = motor.speed_reference[1]
         if np.max(np.abs(ref)) > limit:
-            raise InputError(f"motor[{k}].speed_reference_rpm",
-                             f"must stay within +-{limit * 30 / np.pi:.0f} rpm (the converter's rotor-voltage limit)")
+            raise InputError(
+                f"motor[{k}].speed_reference_rpm",
+                f"must stay within +-{limit * 30 / np.pi:.0f} rpm (the converter's rotor-voltage limit)",
+            )
     if setup.substeps < 1:
         raise InputError("simulation.substeps", "must be an integer >= 1")

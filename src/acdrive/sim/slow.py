@@ -28,12 +28,19 @@ class CompiledVoltageController:
         self.p_est, self.cp, self.cs = arrays["p_est"], arrays["cp"], arrays["cs"]
 
     def step(self, k, t, v_s, v_g, theta_meas, w_ref):
-        v_r, _ = ctl.voltage_command_step(self.p_est[k], self.cp[k], self.cs[k], v_s, v_g, theta_meas, w_ref)
+        v_r, _ = ctl.voltage_command_step(
+            self.p_est[k], self.cp[k], self.cs[k], v_s, v_g, theta_meas, w_ref
+        )
         return v_r
 
 
-def simulate_slow(setup: DriveSetup, controller=None, integrator: str = "rk4", rtol: float = 1e-10,
-                  atol: float = 1e-12) -> DriveResult:
+def simulate_slow(
+    setup: DriveSetup,
+    controller=None,
+    integrator: str = "rk4",
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+) -> DriveResult:
     """Run ``setup`` with a Python loop; ``integrator`` is "rk4" (engine steps) or "radau"."""
     a = build_arrays(setup)
     controller = controller or CompiledVoltageController(a)
@@ -49,13 +56,26 @@ def simulate_slow(setup: DriveSetup, controller=None, integrator: str = "rk4", r
         v_g = plant_derivatives(t, x, dx, *args, v_r, a["closed"], v_term)
         for k in range(n):
             o = STATES_PER_MOTOR * k
-            theta_meas = encoder_angle(x[o + THETA], a["sensors"][k, engine.SN_ENC_OFFSET],
-                                       a["sensors"][k, engine.SN_ENC_CPR])
+            theta_meas = encoder_angle(
+                x[o + THETA],
+                a["sensors"][k, engine.SN_ENC_OFFSET],
+                a["sensors"][k, engine.SN_ENC_CPR],
+            )
             w_ref = profile_at(a["ref_t"][k], a["ref_w"][k], t)
             command = controller.step(k, t, v_term[k], v_g, theta_meas, w_ref)
             v_r[k], _ = converter_output(command, a["sensors"][k, engine.SN_V_R_MAX])
-            engine.log_sample(log[step, k], a["machines"][k], x, o, a["closed"][k], v_term[k], v_r[k],
-                              w_ref, a["cs"][k, ctl.CS_TAU_COM], 0)
+            engine.log_sample(
+                log[step, k],
+                a["machines"][k],
+                x,
+                o,
+                a["closed"][k],
+                v_term[k],
+                v_r[k],
+                w_ref,
+                a["cs"][k, ctl.CS_TAU_COM],
+                0,
+            )
         if integrator == "rk4":
             work = np.empty((5, x.size))
             engine.advance_plant(t, x, T_s, setup.substeps, *args, v_r, a["closed"], work, v_term)
@@ -73,4 +93,6 @@ def simulate_slow(setup: DriveSetup, controller=None, integrator: str = "rk4", r
             raise ValueError(f"integrator must be 'rk4' or 'radau', got {integrator!r}")
         if not np.all(np.isfinite(x)):
             raise RuntimeError(f"simulation diverged at t = {t + T_s:.6f} s")
-    return DriveResult(name=setup.name, t=np.arange(steps) * T_s, signals=log, sample_time=T_s, final_state=x)
+    return DriveResult(
+        name=setup.name, t=np.arange(steps) * T_s, signals=log, sample_time=T_s, final_state=x
+    )
