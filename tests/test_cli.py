@@ -10,7 +10,9 @@ from acdrive.cli import main
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "acdrive.cli", *args], capture_output=True, text=True)
+    return subprocess.run(
+        [sys.executable, "-m", "acdrive.cli", *args], capture_output=True, text=True
+    )
 
 
 def test_limits_json_gives_paper_example():
@@ -43,24 +45,47 @@ speed_bandwidth = 100.0
     assert out.returncode == 0, out.stderr
     folder = tmp_path / "out" / "short"
     summary = json.loads((folder / "summary.json").read_text())
-    for key in ("speed_rms_error_rpm", "peak_rotor_current_a", "peak_stator_current_a", "limit_events"):
+    for key in (
+        "speed_rms_error_rpm",
+        "peak_rotor_current_a",
+        "peak_stator_current_a",
+        "limit_events",
+    ):
         assert key in summary
     assert (folder / "data.parquet").exists() and (folder / "fig4_speed.png").exists()
     import pandas as pd
+
     frame = pd.read_parquet(folder / "data.parquet")
     assert len(frame) == 1500 and {"t", "w", "i_r_mag"} <= set(frame.columns)
 
 
 BAD = {
-    "unknown key": ('[[motor]]\nspeed_reference_rpm = [[0, 0]]\ncolour = "red"\n', "motor[0].colour: unknown key"),
-    "negative resistance": ('[[motor]]\nspeed_reference_rpm = [[0, 0]]\n[motor.params]\nR_s = -1\nR_r = 1\nL_s = 0.01\nL_r = 0.01\nM = 0.009\nn_p = 2\nJ = 0.001\n',
-                            "motor[0].params.R_s: must be > 0"),
-    "wrong type": ('[simulation]\nduration = "long"\n[[motor]]\nspeed_reference_rpm = [[0, 0]]\n', "simulation.duration: must be a number"),
-    "nan": ('[supply]\nvoltage_pk = nan\n[[motor]]\nspeed_reference_rpm = [[0, 0]]\n', "supply.voltage_pk: must be finite"),
-    "out of range": ('[[motor]]\nspeed_reference_rpm = [[0, 0], [1, 9000]]\n', "motor[0].speed_reference_rpm: must stay within"),
-    "bad bandwidth": ('[[motor]]\nspeed_reference_rpm = [[0, 0]]\n[motor.controller]\nspeed_bandwidth = -5\n', "motor[0].controller.speed_bandwidth: must be > 0"),
+    "unknown key": (
+        '[[motor]]\nspeed_reference_rpm = [[0, 0]]\ncolour = "red"\n',
+        "motor[0].colour: unknown key",
+    ),
+    "negative resistance": (
+        "[[motor]]\nspeed_reference_rpm = [[0, 0]]\n[motor.params]\nR_s = -1\nR_r = 1\nL_s = 0.01\nL_r = 0.01\nM = 0.009\nn_p = 2\nJ = 0.001\n",
+        "motor[0].params.R_s: must be > 0",
+    ),
+    "wrong type": (
+        '[simulation]\nduration = "long"\n[[motor]]\nspeed_reference_rpm = [[0, 0]]\n',
+        "simulation.duration: must be a number",
+    ),
+    "nan": (
+        "[supply]\nvoltage_pk = nan\n[[motor]]\nspeed_reference_rpm = [[0, 0]]\n",
+        "supply.voltage_pk: must be finite",
+    ),
+    "out of range": (
+        "[[motor]]\nspeed_reference_rpm = [[0, 0], [1, 9000]]\n",
+        "motor[0].speed_reference_rpm: must stay within",
+    ),
+    "bad bandwidth": (
+        "[[motor]]\nspeed_reference_rpm = [[0, 0]]\n[motor.controller]\nspeed_bandwidth = -5\n",
+        "motor[0].controller.speed_bandwidth: must be > 0",
+    ),
     "no motor": ('name = "x"\n', "motor: at least one"),
-    "bad toml": ('[[motor]\n', "not valid TOML"),
+    "bad toml": ("[[motor]\n", "not valid TOML"),
 }
 
 
@@ -73,11 +98,18 @@ def test_bad_scenarios_fail_with_one_line(tmp_path, case):
     assert out.returncode == 2
     assert out.stderr.count("\n") == 1 and message in out.stderr
     assert "Traceback" not in out.stderr
-    assert not (tmp_path / "out").exists()   # no half-written output folder
+    assert not (tmp_path / "out").exists()  # no half-written output folder
 
 
-@pytest.mark.parametrize("args", [["run", "no-such-scenario"], ["limits", "--voltage-pk", "-3"],
-                                  ["limits", "--frequency", "abc"], ["frobnicate"]])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["run", "no-such-scenario"],
+        ["limits", "--voltage-pk", "-3"],
+        ["limits", "--frequency", "abc"],
+        ["frobnicate"],
+    ],
+)
 def test_bad_arguments_fail_with_one_line(args):
     out = run_cli(*args)
     assert out.returncode == 2

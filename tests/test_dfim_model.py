@@ -9,10 +9,20 @@ from hypothesis import strategies as st
 
 from acdrive.errors import InputError
 from acdrive.machines.dfim import (
-    BODSON_DFIM, DFIMParams, electrical_poles, electromagnetic_torque, machine_vector,
-    rotor_current_for, rotor_voltage_for, shifted_delta_z_coefficients, stator_current_command,
-    steady_state_currents, stator_current_per_rotor_voltage, delta_z_coefficients,
-    torque_limit_case2, torque_limits_case1,
+    BODSON_DFIM,
+    DFIMParams,
+    delta_z_coefficients,
+    electrical_poles,
+    electromagnetic_torque,
+    machine_vector,
+    rotor_current_for,
+    rotor_voltage_for,
+    shifted_delta_z_coefficients,
+    stator_current_command,
+    stator_current_per_rotor_voltage,
+    steady_state_currents,
+    torque_limit_case2,
+    torque_limits_case1,
 )
 
 P = machine_vector(BODSON_DFIM)
@@ -45,7 +55,9 @@ def test_steady_state_power_balance(tau, w_m):
     i_s, i_r = steady_state_currents(P, W_E, w_m, V_S, v_r)
     p_in = (V_S * np.conj(i_s)).real + (v_r * np.conj(i_r)).real
     losses = BODSON_DFIM.R_s * abs(i_s) ** 2 + BODSON_DFIM.R_r * abs(i_r) ** 2
-    assert p_in == pytest.approx(losses + electromagnetic_torque(P, i_s, i_r) * w_m, rel=1e-9, abs=1e-9)
+    assert p_in == pytest.approx(
+        losses + electromagnetic_torque(P, i_s, i_r) * w_m, rel=1e-9, abs=1e-9
+    )
 
 
 def test_torque_limits_match_paper_example():
@@ -62,7 +74,9 @@ def test_limits_are_where_the_constraints_bind(v_pk, f):
     w_e, v_s = 2 * math.pi * f, math.sqrt(1.5) * v_pk
     t1, t2, t3, m2, m3, _ = torque_limits_case1(P, w_e, v_s, I_MAX, I_MAX)
     i_s1, limited = stator_current_command(P, w_e, v_s, t1 * (1 - 1e-12), 0.0)
-    assert i_s1.real == pytest.approx(v_s / (2 * BODSON_DFIM.R_s), rel=1e-4)   # radicand of (24) -> 0
+    assert i_s1.real == pytest.approx(
+        v_s / (2 * BODSON_DFIM.R_s), rel=1e-4
+    )  # radicand of (24) -> 0
     for tau, bound in ((t2, "s"), (m2, "s"), (t3, "r"), (m3, "r")):
         if bound == "r" and abs(tau) >= t1:
             continue
@@ -79,12 +93,15 @@ def test_case2_limits_satisfy_constraints_40_42():
     for Q in (-5.0, 0.0, 5.0, V_S**2 / (W_E * machine.L_s)):
         t2, t3 = torque_limit_case2(p, W_E, V_S, Q, I_MAX, I_MAX)
         for tau, bound in ((t2, "s"), (t3, "r")):
-            i_s = W_E * tau / (V_S * 2) - 1j * Q / V_S          # (38)
+            i_s = W_E * tau / (V_S * 2) - 1j * Q / V_S  # (38)
             current = abs(i_s) if bound == "s" else abs(rotor_current_for(p, W_E, V_S, i_s))
             assert current == pytest.approx(I_MAX, rel=1e-6)
     # the rotor-limited torque is largest at Q = v_s^2 / (w_e L_s)
     best = V_S**2 / (W_E * machine.L_s)
-    assert torque_limit_case2(p, W_E, V_S, best, I_MAX, I_MAX)[1] >= torque_limit_case2(p, W_E, V_S, 0.0, I_MAX, I_MAX)[1]
+    assert (
+        torque_limit_case2(p, W_E, V_S, best, I_MAX, I_MAX)[1]
+        >= torque_limit_case2(p, W_E, V_S, 0.0, I_MAX, I_MAX)[1]
+    )
 
 
 @settings(max_examples=50, deadline=None)
@@ -104,13 +121,21 @@ def test_transfer_function_14_matches_matrix_inverse():
         w_slip = W_E - 2 * 100.0
         Z_R, Z_MR = BODSON_DFIM.R_r + 1j * w_slip * BODSON_DFIM.L_r, 1j * w_slip * BODSON_DFIM.M
         m = BODSON_DFIM.M
-        A = np.array([[s * BODSON_DFIM.L_s + Z_S, s * m + Z_MS], [s * m + Z_MR, s * BODSON_DFIM.L_r + Z_R]])
+        A = np.array(
+            [[s * BODSON_DFIM.L_s + Z_S, s * m + Z_MS], [s * m + Z_MR, s * BODSON_DFIM.L_r + Z_R]]
+        )
         expected = np.linalg.solve(A, np.array([0.0, 1.0]))[0]
-        assert stator_current_per_rotor_voltage(BODSON_DFIM, W_E, 100.0, s) == pytest.approx(expected)
-        assert np.polyval(delta_z_coefficients(BODSON_DFIM, W_E, 100.0), s) == pytest.approx(np.linalg.det(A))
+        assert stator_current_per_rotor_voltage(BODSON_DFIM, W_E, 100.0, s) == pytest.approx(
+            expected
+        )
+        assert np.polyval(delta_z_coefficients(BODSON_DFIM, W_E, 100.0), s) == pytest.approx(
+            np.linalg.det(A)
+        )
 
 
-@pytest.mark.parametrize("field, value", [("R_s", -1.0), ("L_r", 0.0), ("J", float("nan")), ("n_p", 2.5)])
+@pytest.mark.parametrize(
+    "field, value", [("R_s", -1.0), ("L_r", 0.0), ("J", float("nan")), ("n_p", 2.5)]
+)
 def test_invalid_parameters_name_the_field(field, value):
     kwargs = dict(R_s=0.66, R_r=0.94, L_s=13.1e-3, L_r=9.8e-3, M=9.7e-3, n_p=2, J=3.5e-4)
     kwargs[field] = value

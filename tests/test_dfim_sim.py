@@ -26,8 +26,14 @@ def relative_error(a, b):
 def test_engine_matches_radau_reference():
     """RK4 between samples agrees with solve_ivp(Radau, rtol 1e-10) to 1e-6 relative."""
     setup = dataclasses.replace(load_scenario("bodson-ramp"), duration=0.12)
-    setup = dataclasses.replace(setup, motors=(dataclasses.replace(
-        setup.motors[0], speed_reference=(np.array([0.0, 0.12]), np.array([0.0, 40.0]))),))
+    setup = dataclasses.replace(
+        setup,
+        motors=(
+            dataclasses.replace(
+                setup.motors[0], speed_reference=(np.array([0.0, 0.12]), np.array([0.0, 40.0]))
+            ),
+        ),
+    )
     fast = simulate(setup)
     reference = simulate_slow(setup, integrator="radau")
     for name in ("w", "i_s_mag", "i_r_mag", "i_rx", "i_ry"):
@@ -40,7 +46,14 @@ class PlainPythonController:
 
     def __init__(self, params, gains, i_max, T_s, w_e):
         from acdrive.machines.dfim import machine_vector
-        self.p, self.g, self.i_max, self.T_s, self.w_e = machine_vector(params), gains, i_max, T_s, w_e
+
+        self.p, self.g, self.i_max, self.T_s, self.w_e = (
+            machine_vector(params),
+            gains,
+            i_max,
+            T_s,
+            w_e,
+        )
         self.e_int, self.theta_prev, self.w = 0.0, None, 0.0
 
     def step(self, k, t, v_s, v_g, theta_meas, w_ref):
@@ -49,7 +62,9 @@ class PlainPythonController:
         self.theta_prev = theta_meas
         v = abs(v_s)
         lo, hi, _ = torque_window(self.p, self.w_e, v, self.i_max, self.i_max)
-        tau, self.e_int, _ = speed_pi(self.g.K_P, self.g.K_I, self.g.K_F, self.e_int, w_ref, self.w, lo, hi, self.T_s)
+        tau, self.e_int, _ = speed_pi(
+            self.g.K_P, self.g.K_I, self.g.K_F, self.e_int, w_ref, self.w, lo, hi, self.T_s
+        )
         i_s, _ = stator_current_command(self.p, self.w_e, v, tau, 0.0)
         v_r = rotor_voltage_for(self.p, self.w_e, self.w, v, i_s)
         return v_r * (v_s / v) * np.exp(-1j * self.p[N_P] * theta_meas)
@@ -58,8 +73,13 @@ class PlainPythonController:
 def test_plain_python_controller_gives_the_compiled_result():
     setup = short_ramp(0.1)
     motor = setup.motors[0]
-    ctrl = PlainPythonController(motor.machine, motor.controller.gains, math.sqrt(1.5) * 6.0,
-                                 setup.sample_time, 2 * math.pi * 60)
+    ctrl = PlainPythonController(
+        motor.machine,
+        motor.controller.gains,
+        math.sqrt(1.5) * 6.0,
+        setup.sample_time,
+        2 * math.pi * 60,
+    )
     slow = simulate_slow(setup, controller=ctrl)
     fast = simulate(setup)
     for name in ("w", "i_s_mag", "i_r_mag", "i_rx"):
@@ -68,9 +88,15 @@ def test_plain_python_controller_gives_the_compiled_result():
 
 def scenario(**motor_extra):
     data = {
-        "name": "test", "simulation": {"duration": 3.0},
-        "motor": [{"speed_reference_rpm": [[0, 0], [0.2, 0], [1.2, 600], [3.0, 600]],
-                   "controller": {"speed_bandwidth": 60.0}, **motor_extra}],
+        "name": "test",
+        "simulation": {"duration": 3.0},
+        "motor": [
+            {
+                "speed_reference_rpm": [[0, 0], [0.2, 0], [1.2, 600], [3.0, 600]],
+                "controller": {"speed_bandwidth": 60.0},
+                **motor_extra,
+            }
+        ],
     }
     return build_setup(data)
 
@@ -92,21 +118,32 @@ def test_tracks_reference_and_torque_balances_load():
 
 def test_rotor_sequence_reverses_above_synchronous_speed():
     """Below synchronous speed the rotor currents are in forward sequence, above it in reverse."""
+
     def sequence(rpm):
-        data = {"simulation": {"duration": 1.5}, "motor": [{
-            "speed_reference_rpm": [[0, rpm], [1.5, rpm]], "initial_speed_rpm": rpm,
-            "controller": {"speed_bandwidth": 60.0}}]}
+        data = {
+            "simulation": {"duration": 1.5},
+            "motor": [
+                {
+                    "speed_reference_rpm": [[0, rpm], [1.5, rpm]],
+                    "initial_speed_rpm": rpm,
+                    "controller": {"speed_bandwidth": 60.0},
+                }
+            ],
+        }
         r = simulate(build_setup(data))
         i_x, i_y = r.signal("i_rx")[-2000:], r.signal("i_ry")[-2000:]
-        vector = i_x + 1j * (i_x + 2 * i_y) / np.sqrt(3)          # (3) with theta_e = 0, scaled
+        vector = i_x + 1j * (i_x + 2 * i_y) / np.sqrt(3)  # (3) with theta_e = 0, scaled
         return np.sign(np.mean(np.diff(np.unwrap(np.angle(vector)))))
+
     assert sequence(1500) > 0 and sequence(2100) < 0
 
 
 def test_supply_collapse_holds_output_and_records_event():
-    data = {"simulation": {"duration": 0.3},
-            "supply": {"voltage_pk_profile": [[0, 11.1], [0.1, 11.1], [0.12, 0.0], [0.3, 0.0]]},
-            "motor": [{"speed_reference_rpm": [[0, 0], [0.3, 0]]}]}
+    data = {
+        "simulation": {"duration": 0.3},
+        "supply": {"voltage_pk_profile": [[0, 11.1], [0.1, 11.1], [0.12, 0.0], [0.3, 0.0]]},
+        "motor": [{"speed_reference_rpm": [[0, 0], [0.3, 0]]}],
+    }
     result = simulate(build_setup(data))
     assert np.all(np.isfinite(result.signals))
     assert result.events()["supply_lost"] > 0
@@ -114,28 +151,49 @@ def test_supply_collapse_holds_output_and_records_event():
 
 
 def test_step_beyond_limits_records_limit_events_without_nan():
-    data = {"simulation": {"duration": 0.5},
-            "motor": [{"speed_reference_rpm": [[0, 0], [0.05, 0], [0.05, 1500], [0.5, 1500]]}]}
+    data = {
+        "simulation": {"duration": 0.5},
+        "motor": [{"speed_reference_rpm": [[0, 0], [0.05, 0], [0.05, 1500], [0.5, 1500]]}],
+    }
     result = simulate(build_setup(data))
     assert np.all(np.isfinite(result.signals))
     assert result.events()["torque_limit"] > 0
     tau = result.signal("tau_com")
-    assert np.max(tau) <= 0.2741 + 1e-9   # the on-line case-1 limit (37)
+    assert np.max(tau) <= 0.2741 + 1e-9  # the on-line case-1 limit (37)
 
 
 def test_batch_axis_runs_variants_in_parallel():
     from acdrive.sim import engine
     from acdrive.sim.setup import build_arrays, n_steps
+
     setups = [scenario(load_torque=tl) for tl in (0.0, 0.03, 0.06)]
     arrays = [build_arrays(s) for s in setups]
     stack = {k: np.stack([a[k] for a in arrays]) for k in arrays[0] if k != "supply"}
     steps = n_steps(setups[0])
     logs = np.zeros((3, steps, 1, engine.N_LOG))
     done, status = np.zeros(3, dtype=np.int64), np.zeros(3, dtype=np.int64)
-    engine.run_batch(stack["x"], stack["machines"], stack["bus"], arrays[0]["supply"], stack["load_t"],
-                     stack["load_tau"], stack["sensors"], stack["p_est"], stack["cp"], stack["cs"],
-                     stack["ref_t"], stack["ref_w"], stack["closed"], setups[0].sample_time,
-                     setups[0].substeps, steps, 1, logs, done, status)
+    engine.run_batch(
+        stack["x"],
+        stack["machines"],
+        stack["bus"],
+        arrays[0]["supply"],
+        stack["load_t"],
+        stack["load_tau"],
+        stack["sensors"],
+        stack["p_est"],
+        stack["cp"],
+        stack["cs"],
+        stack["ref_t"],
+        stack["ref_w"],
+        stack["closed"],
+        setups[0].sample_time,
+        setups[0].substeps,
+        steps,
+        1,
+        logs,
+        done,
+        status,
+    )
     for b, s in enumerate(setups):
         single = simulate(s)
         assert np.allclose(logs[b], single.signals, rtol=0, atol=1e-12)

@@ -10,9 +10,9 @@ converter holds until the next sample. Parameters and state are float arrays wit
 from __future__ import annotations
 
 import numpy as np
-from acdrive.jit import jit
 
 from acdrive.control.speed import speed_pi
+from acdrive.jit import jit
 from acdrive.machines.dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
 
 # --- controller parameters (per motor) -------------------------------------------------------

@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from acdrive.jit import jit
-
 from acdrive.errors import require_positive
+from acdrive.jit import jit
 
 
 @dataclass(frozen=True)
@@ -18,7 +17,7 @@ class SpeedPIGains:
     K_F: float
 
     @classmethod
-    def design(cls, J: float, bandwidth: float, K_F: float = 2.0 / 3.0) -> "SpeedPIGains":
+    def design(cls, J: float, bandwidth: float, K_F: float = 2.0 / 3.0) -> SpeedPIGains:
         """Both roots of J s^2 + K_P s + K_I (27) at s = -a_D,VEL: K_P = 2 a J, K_I = a^2 J.
 
         ``bandwidth`` is a_D,VEL in rad/s; K_F = 2/3 is the paper's no-overshoot choice.

@@ -11,9 +11,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from acdrive.jit import jit
 
 from acdrive.errors import InputError, require_nonnegative, require_positive
+from acdrive.jit import jit
 
 
 @dataclass(frozen=True)

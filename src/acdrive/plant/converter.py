@@ -9,6 +9,7 @@ beyond it is scaled back along its own direction.
 from __future__ import annotations
 
 import numpy as np
+
 from acdrive.jit import jit
 
 

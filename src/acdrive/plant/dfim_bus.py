@@ -23,8 +23,8 @@ the last entry is the supply angle theta_g (d theta_g/dt = 2 pi f(t)).
 from __future__ import annotations
 
 import numpy as np
-from acdrive.jit import jit
 
+from acdrive.jit import jit
 from acdrive.machines.dfim import (
     B_VISCOUS,
     J_INERTIA,
@@ -106,11 +106,9 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
             sum_b += (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) * inv_det
         # mechanics (26) with load and friction
         w = x[o + OMEGA]
-        tau_l = (
-            profile_at(load_t[k], load_tau[k], t)
-            + p[B_VISCOUS] * w
-            + p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
-        )
+        tau_l = profile_at(load_t[k], load_tau[k], t) + p[B_VISCOUS] * w
+        if p[TAU_COULOMB] != 0.0:
+            tau_l += p[TAU_COULOMB] * np.tanh(w / W_COULOMB)
         dx[o + OMEGA] = (electromagnetic_torque(p, i_s, i_r) - tau_l) / p[J_INERTIA]
         dx[o + THETA] = w
     v_bus = (v_g - bus[BUS_R] * sum_i_s - bus[BUS_L] * sum_b) * (1.0 / (1.0 + bus[BUS_L] * sum_a))

@@ -7,6 +7,7 @@ before the first and after the last point. Compiled code evaluates them with ``p
 from __future__ import annotations
 
 import numpy as np
+
 from acdrive.jit import jit
 
 

@@ -34,16 +34,30 @@ def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: floa
     paths = []
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for k in range(result.n_motors):
-        ax.plot(t, result.reference_rpm(k), "--", lw=1, label=f"reference {k + 1}" if result.n_motors > 1 else "reference")
-        ax.plot(t, result.speed_rpm(k), lw=1, label=f"speed {k + 1}" if result.n_motors > 1 else "speed")
-    ax.set(xlabel="time (s)", ylabel="speed (rpm)", title=f"{result.name}: speed (cf. Bodson Fig. 4)")
+        ax.plot(
+            t,
+            result.reference_rpm(k),
+            "--",
+            lw=1,
+            label=f"reference {k + 1}" if result.n_motors > 1 else "reference",
+        )
+        ax.plot(
+            t, result.speed_rpm(k), lw=1, label=f"speed {k + 1}" if result.n_motors > 1 else "speed"
+        )
+    ax.set(
+        xlabel="time (s)", ylabel="speed (rpm)", title=f"{result.name}: speed (cf. Bodson Fig. 4)"
+    )
     ax.legend()
     paths.append(_save(fig, folder / "fig4_speed.png"))
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.plot(t, result.peak("v_s_mag"), lw=1, label="stator")
     ax.plot(t, result.peak("v_r_mag"), lw=1, label="rotor")
-    ax.set(xlabel="time (s)", ylabel="peak phase voltage (V)", title="peak stator and rotor voltages (cf. Fig. 5)")
+    ax.set(
+        xlabel="time (s)",
+        ylabel="peak phase voltage (V)",
+        title="peak stator and rotor voltages (cf. Fig. 5)",
+    )
     ax.legend()
     paths.append(_save(fig, folder / "fig5_voltages.png"))
 
@@ -51,7 +65,11 @@ def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: floa
     ax.plot(t, result.peak("i_s_mag"), lw=1, label="stator")
     ax.plot(t, result.peak("i_r_mag"), lw=1, label="rotor")
     ax.axhline(6.0, color="k", ls=":", lw=1, label="6 A limit")
-    ax.set(xlabel="time (s)", ylabel="peak phase current (A)", title="peak stator and rotor currents (cf. Fig. 6)")
+    ax.set(
+        xlabel="time (s)",
+        ylabel="peak phase current (A)",
+        title="peak stator and rotor currents (cf. Fig. 6)",
+    )
     ax.legend()
     paths.append(_save(fig, folder / "fig6_currents.png"))
 
@@ -62,8 +80,11 @@ def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: floa
         ax.plot(t[window], result.signal("i_rx")[window], lw=1, label="phase X")
         ax.plot(t[window], result.signal("i_ry")[window], lw=1, label="phase Y")
         ax.axvline(t_sync, color="k", ls=":", lw=1, label="synchronous speed")
-        ax.set(xlabel="time (s)", ylabel="rotor current (A)",
-               title="rotor currents X, Y around synchronous speed (cf. Fig. 7)")
+        ax.set(
+            xlabel="time (s)",
+            ylabel="rotor current (A)",
+            title="rotor currents X, Y around synchronous speed (cf. Fig. 7)",
+        )
         ax.legend()
         paths.append(_save(fig, folder / "fig7_rotor_currents.png"))
 

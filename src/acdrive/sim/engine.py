@@ -12,8 +12,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from acdrive.jit import jit
-
 from acdrive.control.dfim import (
     CS_TAU_COM,
     CS_VR_IM,
@@ -21,6 +19,7 @@ from acdrive.control.dfim import (
     FLAG_CONVERTER_SAT,
     voltage_command_step,
 )
+from acdrive.jit import jit
 from acdrive.machines.dfim import N_P, electromagnetic_torque
 from acdrive.plant.converter import converter_output
 from acdrive.plant.dfim_bus import OMEGA, STATES_PER_MOTOR, THETA, motor_currents, plant_derivatives

@@ -18,11 +18,11 @@ from acdrive.errors import InputError
 from acdrive.machines.dfim import DFIMParams, machine_vector
 from acdrive.plant.converter import max_voltage_magnitude
 from acdrive.plant.dfim_bus import (
+    OMEGA,
     PSI_R_IM,
     PSI_R_RE,
     PSI_S_IM,
     PSI_S_RE,
-    OMEGA,
     STATES_PER_MOTOR,
     n_states,
 )

@@ -82,7 +82,7 @@ def simulate_slow(
         elif integrator == "radau":
             held = v_r.copy()
 
-            def rhs(tt, xx):
+            def rhs(tt, xx, held=held):
                 out = np.empty_like(xx)
                 plant_derivatives(tt, xx, out, *args, held, a["closed"], np.zeros(n, dtype=complex))
                 return out
