@@ -1,13 +1,18 @@
 """Batched frequency responses from state-space data, and SISO LTI controllers.
 
 ``evaluate_ss`` computes G(s) = C (s I - A)^-1 B + D for stacks of state-space models (a leading
-batch axis, e.g. rotor speed or parameter set) at many complex points s at once. The default
-path diagonalises each A once (A = V diag(lambda) V^-1), after which every point costs one small
-matrix product: G(s) = (C V) diag(1/(s - lambda)) (V^-1 B) + D. Models whose eigenvector matrix
-is ill-conditioned (defective or nearly defective A) fall back to one batched linear solve per
-point, and so do single points where the modal terms cancel by more than ``CANCEL_LIMIT`` (an
-element of high relative degree far above its poles). No transfer-function polynomials are
-formed.
+batch axis, e.g. rotor speed or parameter set) at many complex points s at once, with compiled
+(numba) loops over points and no transfer-function polynomials:
+
+- modal path: A = V diag(lambda) V^-1 once per model, then G(s) = D + sum_i R_i / (s - lambda_i)
+  with residues R_i = (C V)[:, i] (V^-1 B)[i, :]: a handful of operations per point;
+- Hessenberg path: H = Q^T A Q once per model, then one Hessenberg solve (s I - H) X = Q^T B per
+  point (pivoting between adjacent rows) and G = (C Q) X + D.
+
+The modal path is used when the eigenvector matrix is well conditioned; points where its terms
+cancel (the sum of their sizes exceeds ``CANCEL_LIMIT`` times the size of the result, e.g. an
+element of high relative degree far above its poles) and models with ill-conditioned V (defective
+or nearly defective A) are evaluated by the Hessenberg path, which is as accurate as a dense solve.
 """
 
 from __future__ import annotations
@@ -15,31 +20,103 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
+from numba import njit
 
 from acdrive.errors import InputError, require_finite
 
-#: Eigenvector matrices with a condition number above this use the linear-solve path (the
-#: eigen path loses about cond(V) * eps of relative accuracy).
+#: Models whose eigenvector matrix has a larger condition number use the Hessenberg path.
 EIG_COND_LIMIT = 1e5
-#: Points where the modal sum cancels by more than this factor are recomputed by a solve.
+#: Points whose modal terms cancel by more than this factor use the Hessenberg path.
 CANCEL_LIMIT = 1e6
 
 
-def _solve_points(A, B, C, D, s) -> np.ndarray:
-    """G(s) of one model by a batched linear solve per point (inf where s is a pole)."""
-    n, m = B.shape
-    M = s[:, None, None] * np.eye(n) - A  # (k, n, n)
-    rhs = np.broadcast_to(B, (s.size, n, m)).astype(complex)
-    try:
-        X = np.linalg.solve(M, rhs)
-    except np.linalg.LinAlgError:  # some s is an eigenvalue: G is infinite there
-        X = np.full((s.size, n, m), np.inf, dtype=complex)
-        for idx in range(s.size):
-            try:
-                X[idx] = np.linalg.solve(M[idx], rhs[idx])
-            except np.linalg.LinAlgError:
-                pass
-    return C @ X + D
+@njit(cache=True, error_model="numpy")
+def _modal_sum(s, lam, R, D, limit, out, lost):
+    """out[b, k, c] = D[b, c] + sum_i R[b, i, c] / (s[k] - lam[b, i]) (c: flattened entry);
+    lost[b, k] flags points where, for some entry, the summed size (|re| + |im|) of the terms
+    exceeds ``limit`` times the size of their sum."""
+    nb, n, q = R.shape
+    total = np.empty(q)
+    for b in range(nb):
+        for k in range(s.size):
+            for c in range(q):
+                out[b, k, c] = 0.0
+                total[c] = 0.0
+            for i in range(n):
+                inv = 1.0 / (s[k] - lam[b, i])
+                for c in range(q):
+                    term = inv * R[b, i, c]
+                    out[b, k, c] += term
+                    total[c] += abs(term.real) + abs(term.imag)
+            flag = False
+            for c in range(q):
+                v = out[b, k, c]
+                if total[c] > limit * (abs(v.real) + abs(v.imag)):
+                    flag = True
+                out[b, k, c] = v + D[b, c]
+            lost[b, k] = flag
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _hessenberg_solve(s, H, QB, CQ, D, out):
+    """out[b, k] = CQ[b] (s[k] I - H[b])^-1 QB[b] + D[b] for upper Hessenberg H[b].
+
+    Singular points (s on an eigenvalue) give inf/nan entries.
+    """
+    nb, n, _ = H.shape
+    m = QB.shape[2]
+    p = CQ.shape[1]
+    M = np.empty((n, n), dtype=np.complex128)
+    X = np.empty((n, m), dtype=np.complex128)
+    for b in range(nb):
+        for k in range(s.size):
+            for i in range(n):
+                for j in range(n):
+                    M[i, j] = -H[b, i, j]
+                M[i, i] += s[k]
+                for c in range(m):
+                    X[i, c] = QB[b, i, c]
+            for i in range(n - 1):  # eliminate the subdiagonal entry M[i+1, i]
+                if abs(M[i + 1, i]) > abs(M[i, i]):
+                    for j in range(i, n):
+                        M[i, j], M[i + 1, j] = M[i + 1, j], M[i, j]
+                    for c in range(m):
+                        X[i, c], X[i + 1, c] = X[i + 1, c], X[i, c]
+                f = M[i + 1, i] / M[i, i]
+                for j in range(i + 1, n):
+                    M[i + 1, j] -= f * M[i, j]
+                for c in range(m):
+                    X[i + 1, c] -= f * X[i, c]
+            for i in range(n - 1, -1, -1):  # back substitution
+                for c in range(m):
+                    acc = X[i, c]
+                    for j in range(i + 1, n):
+                        acc -= M[i, j] * X[j, c]
+                    X[i, c] = acc / M[i, i]
+            for r in range(p):
+                for c in range(m):
+                    acc = D[b, r, c] + 0j
+                    for j in range(n):
+                        acc += CQ[b, r, j] * X[j, c]
+                    out[b, k, r, c] = acc
+    return out
+
+
+def _hessenberg_points(A, B, C, D, s) -> np.ndarray:
+    """G(s) of one model at points s by the Hessenberg path, shape (k, p, m)."""
+    H, Q = scipy.linalg.hessenberg(A, calc_q=True)
+    out = np.empty((1, s.size) + D.shape, dtype=complex)
+    _hessenberg_solve(
+        s,
+        np.ascontiguousarray(H)[None],
+        (Q.T @ B).astype(complex)[None],
+        (C @ Q).astype(complex)[None],
+        np.ascontiguousarray(D, dtype=float)[None],
+        out,
+    )
+    return out[0]
 
 
 def evaluate_ss(A, B, C, D, s) -> np.ndarray:
@@ -52,7 +129,7 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
     B = np.asarray(B, dtype=float)
     C = np.asarray(C, dtype=float)
     D = np.asarray(D, dtype=float)
-    s = np.atleast_1d(np.asarray(s, dtype=complex))
+    s = np.ascontiguousarray(np.atleast_1d(np.asarray(s, dtype=complex)))
     batch = A.shape[:-2]
     n = A.shape[-1]
     p, m = D.shape[-2:]
@@ -63,29 +140,27 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
     nb = A2.shape[0]
     B2 = np.broadcast_to(B, batch + (n, m)).reshape(nb, n, m)
     C2 = np.broadcast_to(C, batch + (p, n)).reshape(nb, p, n)
-    D2 = np.broadcast_to(D, batch + (p, m)).reshape(nb, p, m)
+    D2 = np.ascontiguousarray(np.broadcast_to(D, batch + (p, m)).reshape(nb, p, m))
+    G = np.empty((nb, s.size, p, m), dtype=complex)
     lam, V = np.linalg.eig(A2)
     cond = np.linalg.cond(V)
     good = np.isfinite(cond) & (cond < EIG_COND_LIMIT)
-    G = np.empty((nb, s.size, p, m), dtype=complex)
     if np.any(good):
         Vg = V[good]
         CV = C2[good] @ Vg  # (b, p, n)
         VB = np.linalg.solve(Vg, B2[good].astype(complex))  # (b, n, m)
-        # residue matrices R_k = (C V)[:, k] (V^-1 B)[k, :], flattened to (b, n, p*m)
         R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(-1, n, p * m)
-        with np.errstate(divide="ignore", invalid="ignore"):  # s on a pole gives inf
-            inv = 1.0 / (s[None, :, None] - lam[good][:, None, :])  # (b, k, n)
-            modal = inv @ R  # (b, k, p*m)
-            # cancellation among the modal terms (high relative degree far above the poles)
-            loss = (np.abs(inv) @ np.abs(R)) / np.abs(modal)
-        G[good] = modal.reshape(-1, s.size, p, m) + D2[good][:, None]
+        modal = np.empty((R.shape[0], s.size, p * m), dtype=complex)
+        lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
+        Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
+        _modal_sum(s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost)
+        G[good] = modal.reshape(-1, s.size, p, m)
         for gb, b in enumerate(np.flatnonzero(good)):
-            pts = np.flatnonzero(np.any(loss[gb] > CANCEL_LIMIT, axis=-1))
+            pts = np.flatnonzero(lost[gb])
             if pts.size:
-                G[b, pts] = _solve_points(A2[b], B2[b], C2[b], D2[b], s[pts])
+                G[b, pts] = _hessenberg_points(A2[b], B2[b], C2[b], D2[b], s[pts])
     for b in np.flatnonzero(~good):
-        G[b] = _solve_points(A2[b], B2[b], C2[b], D2[b], s)
+        G[b] = _hessenberg_points(A2[b], B2[b], C2[b], D2[b], s)
     return G.reshape(out_shape)
 
 

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+from numba import njit
 
 from acdrive.analysis.freqresp import LTI, check_frequency_grid, evaluate_ss
 from acdrive.analysis.margins import (
@@ -65,35 +66,49 @@ INFINITE_EIG = 1e8  # generalised eigenvalues above this times the pencil norm a
 # batched frequency data
 
 
+@njit(cache=True, error_model="numpy")
+def _icad_kernel(G, k1, k2, gamma, kg, h, gamma_h, c, S, T, coupling):
+    """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring."""
+    for idx in range(k1.size):
+        g11, g12, g21, g22 = G[idx, 0, 0], G[idx, 0, 1], G[idx, 1, 0], G[idx, 1, 1]
+        det = g11 * g22 - g12 * g21
+        kg1, kg2 = k1[idx] * g11, k2[idx] * g22
+        r1, r2 = 1.0 / (1.0 + kg1), 1.0 / (1.0 + kg2)  # 1 / (1 + k_i g_ii)
+        gam = (g12 * g21) / (g11 * g22)
+        c1 = k1[idx] * (g11 + k2[idx] * det) * r2
+        c2 = k2[idx] * (g22 + k1[idx] * det) * r1
+        s1, s2 = 1.0 / (1.0 + c1), 1.0 / (1.0 + c2)
+        gamma[idx] = gam
+        kg[idx, 0], kg[idx, 1] = kg1, kg2
+        h[idx, 0], h[idx, 1] = kg1 * r1, kg2 * r2
+        gamma_h[idx, 0], gamma_h[idx, 1] = gam * kg2 * r2, gam * kg1 * r1
+        c[idx, 0], c[idx, 1] = c1, c2
+        S[idx, 0], S[idx, 1] = s1, s2
+        T[idx, 0], T[idx, 1] = c1 * s1, c2 * s2
+        coupling[idx, 0] = s1 * g12 * k2[idx] * r2
+        coupling[idx, 1] = s2 * g21 * k1[idx] * r1
+
+
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
     """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...).
 
-    Returns arrays with the shape of k1 (channel arrays stacked on a last axis of length 2):
+    Returns arrays with the shape of G[..., 0, 0] (channel arrays with a last axis of length 2):
     gamma, kg (k_i g_ii), h (h_i), gamma_h (gamma h_j for channel i), c (c_i), S (1/(1+c_i)),
     coupling (y_i / r_j), T (c_i/(1+c_i)).
     """
-    g11, g12, g21, g22 = G[..., 0, 0], G[..., 0, 1], G[..., 1, 0], G[..., 1, 1]
-    det = g11 * g22 - g12 * g21
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gamma = (g12 * g21) / (g11 * g22)
-        kg1, kg2 = k1 * g11, k2 * g22
-        h1, h2 = kg1 / (1.0 + kg1), kg2 / (1.0 + kg2)
-        c1 = k1 * (g11 + k2 * det) / (1.0 + kg2)
-        c2 = k2 * (g22 + k1 * det) / (1.0 + kg1)
-        S1, S2 = 1.0 / (1.0 + c1), 1.0 / (1.0 + c2)
-        y1_r2 = S1 * g12 * k2 / (1.0 + kg2)
-        y2_r1 = S2 * g21 * k1 / (1.0 + kg1)
-    stack = np.stack
-    return {
-        "gamma": gamma,
-        "kg": stack([kg1, kg2], axis=-1),
-        "h": stack([h1, h2], axis=-1),
-        "gamma_h": stack([gamma * h2, gamma * h1], axis=-1),
-        "c": stack([c1, c2], axis=-1),
-        "S": stack([S1, S2], axis=-1),
-        "T": stack([c1 * S1, c2 * S2], axis=-1),
-        "coupling": stack([y1_r2, y2_r1], axis=-1),
-    }
+    G = np.asarray(G, dtype=complex)
+    shape = G.shape[:-2]
+    N = int(np.prod(shape))
+    k1 = np.ascontiguousarray(np.broadcast_to(k1, shape), dtype=complex).reshape(N)
+    k2 = np.ascontiguousarray(np.broadcast_to(k2, shape), dtype=complex).reshape(N)
+    out = {"gamma": np.empty(N, dtype=complex)}
+    for key in ("kg", "h", "gamma_h", "c", "S", "T", "coupling"):
+        out[key] = np.empty((N, 2), dtype=complex)
+    _icad_kernel(
+        np.ascontiguousarray(G).reshape(N, 2, 2), k1, k2, out["gamma"], out["kg"], out["h"],
+        out["gamma_h"], out["c"], out["S"], out["T"], out["coupling"],
+    )  # fmt: skip
+    return {key: val.reshape(shape if key == "gamma" else shape + (2,)) for key, val in out.items()}
 
 
 @dataclass(frozen=True)
