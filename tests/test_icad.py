@@ -19,6 +19,7 @@ from acdrive.analysis.icad import (
     im_msf_at_rotor_speed,
     im_msf_closed_form,
     im_msf_magnitude_at_rotor_speed,
+    im_msf_positive_crossing,
     imc_pi,
     pmsg_msf,
     structure_conditions,
@@ -185,6 +186,16 @@ def test_gm_min_is_the_high_speed_limit_of_18(params):
     # (19) is the square of L_m^2 / (L_m^2 + 2 sigma L_s L_r)
     expected = (params.L_m**2 / (params.L_m**2 + 2 * params.sigma * params.L_s * params.L_r)) ** 2
     assert gm_min(params) == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("w_r", [50.0, 375.0, -900.0, 1e4])
+def test_structural_crossing_matches_corrected_ugalde_73(w_r):
+    """The positive-real-axis crossing of gamma is at the (corrected) F(3) of Ugalde-Loo (73)."""
+    a = analyse(plant_from_params(DELORENZO_IM_13, w_r), K20, K20, verify=False)
+    w, x = im_msf_positive_crossing(DELORENZO_IM_13, w_r)
+    assert a.structural.crossing_rad_s == pytest.approx(w, rel=1e-8)
+    assert a.structural.crossing == pytest.approx(x, rel=1e-8)
+    assert 0 < x < gm_min(DELORENZO_IM_13)  # (19) bounds the crossing at every speed
 
 
 def test_gm_min_of_matrix_13_is_the_printed_075():

@@ -818,6 +818,25 @@ def im_msf_magnitude_at_rotor_speed(p: IMParams, w_r: float) -> float:
     return Lr**2 * Lm**4 * w_r**4 / math.sqrt((re**2 - im**2) ** 2 + 4 * re**2 * im**2)
 
 
+def im_msf_positive_crossing(p: IMParams, w_r: float) -> tuple[float, float]:
+    """(w, gamma(j w)) where the IM's MSF crosses the positive real axis (w_r != 0).
+
+    Ugalde-Loo (61), (72)-(73): gamma(jw) = num / d^2 with d = re + j im is real positive where
+    im = 0, w != 0. Solving im = 0 gives w^2 = [Psi (w_r^2 L_r^2 + R_r^2) + Upsilon]/(Psi L_r^2)
+    with Psi = sigma L_s L_r, Upsilon = 2 L_r^2 R_s R_r + L_m^2 R_r^2. The printed F(3) of (73)
+    divides by Psi^2 instead of Psi L_r and has 2 L_r R_s R_r in Upsilon; both are dimensionally
+    inconsistent misprints (the printed F(2), where re = 0, is right).
+    """
+    w_r = require_finite("w_r", w_r)
+    if w_r == 0.0:
+        raise InputError("w_r", "gamma is identically zero at standstill (no crossing)")
+    sig, Ls, Lr, Lm, Rs, Rr = p.sigma, p.L_s, p.L_r, p.L_m, p.R_s, p.R_r
+    psi = sig * Ls * Lr
+    upsilon = 2 * Lr**2 * Rs * Rr + Lm**2 * Rr**2
+    w = math.sqrt(psi * (psi * (w_r**2 * Lr**2 + Rr**2) + upsilon)) / (psi * Lr)
+    return w, float(im_msf_closed_form(p, w_r, np.array([w]))[0].real)
+
+
 def gm_min(p: IMParams) -> float:
     """Structural gain-margin lower bound G_M,min of the IM, Amezquita-Brooks et al. (19)."""
     sig, Ls, Lr, Lm = p.sigma, p.L_s, p.L_r, p.L_m
