@@ -56,7 +56,7 @@ class PlainPythonController:
         )
         self.e_int, self.theta_prev, self.w = 0.0, None, 0.0
 
-    def step(self, k, t, v_s, v_g, theta_meas, w_ref):
+    def step(self, k, t, v_s, v_g, theta_meas, w_ref, i_s=None, i_r_rotor=None):
         if self.theta_prev is not None:
             self.w = (theta_meas - self.theta_prev) / self.T_s
         self.theta_prev = theta_meas

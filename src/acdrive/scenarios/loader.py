@@ -11,10 +11,13 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   viscous_friction, coulomb_friction, load_torque | load_torque_profile,
                   speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
                   encoder_counts_per_rev, encoder_offset
-    [motor.controller]  mode ("voltage"), speed_bandwidth, design_inertia (J used in (27),
+                  current_sensor_fault_time (s; current measurements fail from then on)
+    [motor.controller]  mode ("voltage" | "current"), current_bandwidth, R_T,
+                  reactive_power_kp, reactive_power_ki, speed_bandwidth, design_inertia (J used in (27),
                   default: the machine's J), K_F, reactive_power,
                   stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
                   speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk
+    [motor.controller.sync]  enabled, gain, tolerance_magnitude, tolerance_phase_deg, hold_time
 """
 
 from __future__ import annotations
@@ -30,7 +33,15 @@ import numpy as np
 from acdrive.control.speed import SpeedPIGains
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
-from acdrive.sim.setup import DFIMController, DriveSetup, MotorSetup, Supply, check_setup, constant
+from acdrive.sim.setup import (
+    DFIMController,
+    DriveSetup,
+    MotorSetup,
+    Supply,
+    Synchroniser,
+    check_setup,
+    constant,
+)
 
 MACHINES = {"bodson-dfim": BODSON_DFIM}
 RAD_S_PER_RPM = math.pi / 30.0
@@ -97,6 +108,12 @@ class _Section:
             raise InputError(self.field(key), f"must be an integer >= {minimum}")
         return value
 
+    def boolean(self, key, default):
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise InputError(self.field(key), "must be true or false")
+        return value
+
     def text(self, key, default=None, choices=None):
         value = self.get(key, default)
         if not isinstance(value, str):
@@ -157,15 +174,34 @@ def _machine(section: _Section, index: int) -> DFIMParams:
     return dataclasses.replace(machine, B=B, tau_c=tau_c)
 
 
+def _sync(section: _Section) -> Synchroniser:
+    sync = Synchroniser(
+        enabled=section.boolean("enabled", False),
+        gain=section.number("gain", 40.0, require_positive),
+        tolerance_magnitude=section.number("tolerance_magnitude", 0.02, require_positive),
+        tolerance_phase=section.number("tolerance_phase_deg", 2.0, require_positive)
+        * math.pi
+        / 180,
+        hold_time=section.number("hold_time", 0.02, require_nonnegative),
+    )
+    section.done()
+    return sync
+
+
 def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
-    section.text("mode", "voltage", choices=("voltage",))
+    mode = section.text("mode", "voltage", choices=("voltage", "current"))
     bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
     K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
     design_inertia = section.number("design_inertia", machine.J, require_positive)
     gains = dataclasses.replace(SpeedPIGains.design(design_inertia, bandwidth), K_F=K_F)
     controller = DFIMController(
         gains=gains,
+        mode=mode,
+        current_bandwidth=section.number("current_bandwidth", 3142.0, require_positive),
+        R_T=section.number("R_T", 1.0, require_nonnegative),
         reactive_power=section.number("reactive_power", 0.0),
+        reactive_power_kp=section.number("reactive_power_kp", 0.0, require_nonnegative),
+        reactive_power_ki=section.number("reactive_power_ki", 0.0, require_nonnegative),
         stator_current_limit_pk=section.number("stator_current_limit_pk", 6.0, require_positive),
         rotor_current_limit_pk=section.number("rotor_current_limit_pk", 6.0, require_positive),
         theta_adj=section.number("theta_adj", 0.0),
@@ -173,6 +209,7 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         speed_filter_tau=section.number("speed_filter_tau", 0.0, require_nonnegative),
         frequency_filter_tau=section.number("frequency_filter_tau", 0.01, require_nonnegative),
         min_stator_voltage_pk=section.number("min_stator_voltage_pk", 1.0, require_positive),
+        sync=_sync(_Section(section.get("sync", {}), section.field("sync"))),
     )
     section.done()
     return controller
@@ -223,6 +260,11 @@ def build_setup(data: dict) -> DriveSetup:
             encoder_counts_per_rev=float(sec.integer("encoder_counts_per_rev", 0, minimum=0)),
             encoder_offset=sec.number("encoder_offset", 0.0),
             initial_speed=sec.number("initial_speed_rpm", 0.0) * RAD_S_PER_RPM,
+            current_sensor_fault_time=sec.number(
+                "current_sensor_fault_time", math.inf, require_nonnegative
+            )
+            if sec.has("current_sensor_fault_time")
+            else math.inf,
         )
         sec.done()
         motors.append(motor)

@@ -1,10 +1,11 @@
 """The compiled fixed-step engine: plant, sensors, converters and controllers in one loop.
 
 Sampled-data structure (GUIDE: a hard boundary between plant and controller):
-at each sample t_k = k T_s the sensors read the plant, each controller computes its rotor voltage,
-the converter holds it (zero-order hold) and the plant is integrated over [t_k, t_k + T_s] with
-``n_sub`` classical Runge-Kutta (RK4) steps. Nothing calls back into Python inside the loop.
-``run_batch`` runs many independent variants in parallel over a leading batch axis.
+at each sample t_k = k T_s the sensors read the plant, each controller computes its rotor voltage
+(and may ask its relay to close), the converter holds the voltage (zero-order hold) and the plant
+is integrated over [t_k, t_k + T_s] with ``n_sub`` classical Runge-Kutta (RK4) steps. Nothing calls
+back into Python inside the loop. ``run_batch`` runs independent variants in parallel over a
+leading batch axis.
 """
 
 from __future__ import annotations
@@ -13,11 +14,16 @@ import numpy as np
 from numba import njit, prange
 
 from acdrive.control.dfim import (
+    CS_I_R_COM,
+    CS_M_ADJ,
+    CS_MODE,
+    CS_PHASE,
     CS_TAU_COM,
+    CS_THETA_ADJ,
     CS_VR_IM,
     CS_VR_RE,
     FLAG_CONVERTER_SAT,
-    voltage_command_step,
+    controller_step,
 )
 from acdrive.jit import jit
 from acdrive.machines.dfim import N_P, electromagnetic_torque
@@ -26,38 +32,20 @@ from acdrive.plant.dfim_bus import OMEGA, STATES_PER_MOTOR, THETA, motor_current
 from acdrive.plant.profiles import profile_at
 from acdrive.plant.sensors import encoder_angle
 
+# fmt: off
 # --- logged signals, per motor and per logged sample -----------------------------------------
-(
-    LOG_W,
-    LOG_W_REF,
-    LOG_TAU_COM,
-    LOG_TAU_E,
-    LOG_V_S,
-    LOG_V_R,
-    LOG_I_S,
-    LOG_I_R,
-    LOG_I_RX,
-    LOG_I_RY,
-    LOG_FLAGS,
-) = range(11)
-N_LOG = 11
-LOG_NAMES = (
-    "w",
-    "w_ref",
-    "tau_com",
-    "tau_e",
-    "v_s_mag",
-    "v_r_mag",
-    "i_s_mag",
-    "i_r_mag",
-    "i_rx",
-    "i_ry",
-    "flags",
-)
+LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
+             "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
+             "mode", "relay_closed")
+(LOG_W, LOG_W_REF, LOG_TAU_COM, LOG_TAU_E, LOG_V_S, LOG_V_R, LOG_I_S, LOG_I_R, LOG_I_RX,
+ LOG_I_RY, LOG_FLAGS, LOG_I_R_COM, LOG_Q_S, LOG_V_MISMATCH, LOG_THETA_ADJ, LOG_M_ADJ, LOG_PHASE,
+ LOG_MODE, LOG_RELAY) = range(len(LOG_NAMES))
+N_LOG = len(LOG_NAMES)
 
 # --- per-motor sensor and converter data -----------------------------------------------------
-SN_ENC_OFFSET, SN_ENC_CPR, SN_V_R_MAX = range(3)
-N_SENSOR = 3
+SN_ENC_OFFSET, SN_ENC_CPR, SN_V_R_MAX, SN_CURRENT_FAULT_T = range(4)
+N_SENSOR = 4
+# fmt: on
 
 STATUS_OK, STATUS_NONFINITE = 0, 1
 SQRT_2_3 = np.sqrt(2.0 / 3.0)
@@ -98,55 +86,51 @@ def advance_plant(
 
 
 @jit
-def log_sample(log_row, p, x, o, closed, v_s, v_r_rotor, w_ref, tau_com, flags):
-    """Fill one row of logged signals for one motor from the true plant state."""
+def measured_currents(p, x, o, closed):
+    """(i_s in the stationary frame, i_r in rotor coordinates) from the plant state."""
     i_s, i_r = motor_currents(p, complex(x[o], x[o + 1]), complex(x[o + 2], x[o + 3]), closed)
-    i_r_rotor = i_r * np.exp(-1j * p[N_P] * x[o + THETA])
-    log_row[LOG_W] = x[o + OMEGA]
-    log_row[LOG_W_REF] = w_ref
-    log_row[LOG_TAU_COM] = tau_com
-    log_row[LOG_TAU_E] = electromagnetic_torque(p, i_s, i_r)
-    log_row[LOG_V_S] = np.abs(v_s)
-    log_row[LOG_V_R] = np.abs(v_r_rotor)
-    log_row[LOG_I_S] = np.abs(i_s)
-    log_row[LOG_I_R] = np.abs(i_r)
-    # rotor phase currents X and Y from the inverse transform (4) in rotor coordinates
-    log_row[LOG_I_RX] = SQRT_2_3 * i_r_rotor.real
-    log_row[LOG_I_RY] = SQRT_2_3 * (-0.5 * i_r_rotor.real + 0.5 * np.sqrt(3.0) * i_r_rotor.imag)
-    log_row[LOG_FLAGS] = flags
+    angle = -p[N_P] * x[o + THETA]
+    return i_s, i_r * complex(np.cos(angle), np.sin(angle))
 
 
 @jit
-def run_drive(
-    x,
-    machines,
-    bus,
-    supply,
-    load_t,
-    load_tau,
-    sensors,
-    p_est,
-    cp,
-    cs,
-    ref_t,
-    ref_w,
-    closed,
-    T_s,
-    n_sub,
-    n_steps,
-    log_every,
-    log,
-):
-    """Run ``n_steps`` control samples from state ``x`` (modified in place).
+def log_sample(row, p, x, o, closed, v_s, v_g, v_r_rotor, w_ref, cs, flags):
+    """Fill one row of logged signals for one motor from the true plant state."""
+    i_s, i_r_rotor = measured_currents(p, x, o, closed)
+    row[LOG_W] = x[o + OMEGA]
+    row[LOG_W_REF] = w_ref
+    row[LOG_TAU_COM] = cs[CS_TAU_COM]
+    row[LOG_TAU_E] = electromagnetic_torque(p, i_s, i_r_rotor * np.exp(1j * p[N_P] * x[o + THETA]))
+    row[LOG_V_S] = np.abs(v_s)
+    row[LOG_V_R] = np.abs(v_r_rotor)
+    row[LOG_I_S] = np.abs(i_s)
+    row[LOG_I_R] = np.abs(i_r_rotor)
+    # rotor phase currents X and Y from the inverse transform (4) in rotor coordinates
+    row[LOG_I_RX] = SQRT_2_3 * i_r_rotor.real
+    row[LOG_I_RY] = SQRT_2_3 * (-0.5 * i_r_rotor.real + 0.5 * np.sqrt(3.0) * i_r_rotor.imag)
+    row[LOG_FLAGS] = flags
+    row[LOG_I_R_COM] = cs[CS_I_R_COM]
+    row[LOG_Q_S] = (v_s * np.conj(i_s)).imag  # (5)
+    row[LOG_V_MISMATCH] = np.abs(v_s - v_g) / max(np.abs(v_g), 1e-12)
+    row[LOG_THETA_ADJ] = cs[CS_THETA_ADJ]
+    row[LOG_M_ADJ] = cs[CS_M_ADJ]
+    row[LOG_PHASE] = cs[CS_PHASE]
+    row[LOG_MODE] = cs[CS_MODE]
+    row[LOG_RELAY] = 1.0 if closed else 0.0
 
-    Returns (steps done, status). ``log`` has shape (n_steps // log_every, n_motors, N_LOG).
+
+@jit
+def run_drive(x, machines, bus, supply, load_t, load_tau, sensors, p_est, cp, cs, ref_t, ref_w,
+              closed, T_s, n_sub, n_steps, log_every, log):  # fmt: skip
+    """Run ``n_steps`` control samples from state ``x`` (``x``, ``cs``, ``closed`` modified in place).
+
+    Returns (steps done, status). ``log`` has shape (ceil(n_steps / log_every), n_motors, N_LOG).
     Stops early with STATUS_NONFINITE if the state stops being finite (never returns NaN silently).
     """
     n = machines.shape[0]
     work = np.empty((5, x.shape[0]))
     v_term = np.zeros(n, dtype=np.complex128)
     v_r = np.zeros(n, dtype=np.complex128)
-    flags = np.zeros(n, dtype=np.int64)
     for k in range(n):
         v_r[k] = complex(cs[k, CS_VR_RE], cs[k, CS_VR_IM])  # output held from a previous run
     for step in range(n_steps):
@@ -160,26 +144,21 @@ def run_drive(
             theta_meas = encoder_angle(
                 x[o + THETA], sensors[k, SN_ENC_OFFSET], sensors[k, SN_ENC_CPR]
             )
+            i_s, i_r_rotor = measured_currents(machines[k], x, o, closed[k])
+            if t >= sensors[k, SN_CURRENT_FAULT_T]:
+                i_s, i_r_rotor = complex(np.nan, np.nan), complex(np.nan, np.nan)
             w_ref = profile_at(ref_t[k], ref_w[k], t)
-            command, flags[k] = voltage_command_step(
-                p_est[k], cp[k], cs[k], v_term[k], v_g, theta_meas, w_ref
+            command, flags, close = controller_step(
+                p_est[k], cp[k], cs[k], v_term[k], v_g, i_s, i_r_rotor, theta_meas, w_ref
             )
             v_r[k], saturated = converter_output(command, sensors[k, SN_V_R_MAX])
             if saturated:
-                flags[k] |= FLAG_CONVERTER_SAT
-            if step % log_every == 0 and step // log_every < log.shape[0]:
-                log_sample(
-                    log[step // log_every, k],
-                    machines[k],
-                    x,
-                    o,
-                    closed[k],
-                    v_term[k],
-                    v_r[k],
-                    w_ref,
-                    cs[k, CS_TAU_COM],
-                    flags[k],
-                )
+                flags |= FLAG_CONVERTER_SAT
+            if step % log_every == 0:
+                log_sample(log[step // log_every, k], machines[k], x, o, closed[k], v_term[k], v_g,
+                           v_r[k], w_ref, cs[k], flags)  # fmt: skip
+            if close:
+                closed[k] = True
         advance_plant(
             t, x, T_s, n_sub, machines, bus, supply, load_t, load_tau, v_r, closed, work, v_term
         )
@@ -190,47 +169,11 @@ def run_drive(
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def run_batch(
-    xs,
-    machines,
-    bus,
-    supply,
-    load_t,
-    load_tau,
-    sensors,
-    p_est,
-    cp,
-    cs,
-    ref_t,
-    ref_w,
-    closed,
-    T_s,
-    n_sub,
-    n_steps,
-    log_every,
-    logs,
-    steps_done,
-    status,
-):
+def run_batch(xs, machines, bus, supply, load_t, load_tau, sensors, p_est, cp, cs, ref_t, ref_w,
+              closed, T_s, n_sub, n_steps, log_every, logs, steps_done, status):  # fmt: skip
     """``run_drive`` over a leading batch axis of every per-variant array, in parallel."""
     for b in prange(xs.shape[0]):
         steps_done[b], status[b] = run_drive(
-            xs[b],
-            machines[b],
-            bus[b],
-            supply,
-            load_t[b],
-            load_tau[b],
-            sensors[b],
-            p_est[b],
-            cp[b],
-            cs[b],
-            ref_t[b],
-            ref_w[b],
-            closed[b],
-            T_s,
-            n_sub,
-            n_steps,
-            log_every,
-            logs[b],
-        )
+            xs[b], machines[b], bus[b], supply, load_t[b], load_tau[b], sensors[b], p_est[b], cp[b],
+            cs[b], ref_t[b], ref_w[b], closed[b], T_s, n_sub, n_steps, log_every, logs[b],
+        )  # fmt: skip

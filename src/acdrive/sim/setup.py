@@ -50,11 +50,27 @@ class Supply:
 
 
 @dataclass(frozen=True)
+class Synchroniser:
+    """Grid synchronisation settings (Bodson (28), IV-A): the stator starts open when enabled."""
+
+    enabled: bool = False
+    gain: float = 40.0  # rate of the theta_adj / ln m_adj adjustments [1/s]
+    tolerance_magnitude: float = 0.02  # |rho - 1| to close
+    tolerance_phase: float = 0.035  # |phi| to close [rad] (2 degrees)
+    hold_time: float = 0.02  # both tolerances met this long before closing [s]
+
+
+@dataclass(frozen=True)
 class DFIMController:
-    """Voltage-command controller settings (Bodson III-A, III-B, III-D, IV-A)."""
+    """Controller settings (Bodson III-A to III-E, IV-A)."""
 
     gains: SpeedPIGains
+    mode: str = "voltage"  # "voltage" or "current"
+    current_bandwidth: float = 3142.0  # a_D,CUR [rad/s]
+    R_T: float = 1.0  # [ohm], (47)
     reactive_power: float = 0.0
+    reactive_power_kp: float = 0.0
+    reactive_power_ki: float = 0.0
     stator_current_limit_pk: float = 6.0
     rotor_current_limit_pk: float = 6.0
     theta_adj: float = 0.0
@@ -62,7 +78,13 @@ class DFIMController:
     speed_filter_tau: float = 0.0
     frequency_filter_tau: float = 0.01
     min_stator_voltage_pk: float = 1.0
+    sync: Synchroniser = field(default_factory=Synchroniser)
     params: DFIMParams | None = None  # controller's parameter estimates (default: the true ones)
+
+    def current_gains(self, machine: DFIMParams) -> tuple[float, float]:
+        """(K_P,C, K_I,C) of (49) from the controller's parameter estimates."""
+        p = self.params or machine
+        return ctl.current_loop_gains(p.sigma, p.L_r, self.R_T, self.current_bandwidth)
 
 
 @dataclass(frozen=True)
@@ -77,6 +99,7 @@ class MotorSetup:
     encoder_counts_per_rev: float = 0.0
     encoder_offset: float = 0.0
     initial_speed: float = 0.0
+    current_sensor_fault_time: float = np.inf  # current measurements fail from this time on
 
 
 @dataclass(frozen=True)
@@ -110,6 +133,7 @@ def _controller_arrays(motor: MotorSetup, supply: Supply, T_s: float) -> np.ndar
     cp = np.zeros(ctl.N_CTRL_PARAMS)
     cp[ctl.CP_KP], cp[ctl.CP_KI], cp[ctl.CP_KF] = c.gains.K_P, c.gains.K_I, c.gains.K_F
     cp[ctl.CP_Q_REF] = c.reactive_power
+    cp[ctl.CP_Q_KP], cp[ctl.CP_Q_KI] = c.reactive_power_kp, c.reactive_power_ki
     cp[ctl.CP_I_S_MAX] = SQRT_3_2 * c.stator_current_limit_pk
     cp[ctl.CP_I_R_MAX] = SQRT_3_2 * c.rotor_current_limit_pk
     cp[ctl.CP_THETA_ADJ], cp[ctl.CP_M_ADJ] = c.theta_adj, c.m_adj
@@ -117,14 +141,27 @@ def _controller_arrays(motor: MotorSetup, supply: Supply, T_s: float) -> np.ndar
     cp[ctl.CP_SPEED_TAU], cp[ctl.CP_FREQ_TAU] = c.speed_filter_tau, c.frequency_filter_tau
     cp[ctl.CP_V_MIN] = SQRT_3_2 * c.min_stator_voltage_pk
     cp[ctl.CP_T_S] = T_s
+    cp[ctl.CP_MODE] = ctl.MODE_CURRENT if c.mode == "current" else ctl.MODE_VOLTAGE
+    cp[ctl.CP_KPC], cp[ctl.CP_KIC] = c.current_gains(motor.machine)
+    cp[ctl.CP_R_T] = c.R_T
+    cp[ctl.CP_V_R_MAX] = max_voltage_magnitude(motor.dc_link_voltage)
+    cp[ctl.CP_SYNC] = 1.0 if c.sync.enabled else 0.0
+    cp[ctl.CP_SYNC_GAIN] = c.sync.gain
+    cp[ctl.CP_SYNC_TOL_MAG], cp[ctl.CP_SYNC_TOL_PHASE] = (
+        c.sync.tolerance_magnitude,
+        c.sync.tolerance_phase,
+    )
+    cp[ctl.CP_SYNC_HOLD] = c.sync.hold_time
     return cp
 
 
 def initial_state(setup: DriveSetup) -> tuple[np.ndarray, np.ndarray]:
-    """Plant state and held rotor voltages for a zero-torque steady state at t = 0.
+    """Plant state and held rotor voltages at t = 0.
 
-    With i_s = 0 the stator voltage is Z_MS i_r (19), so i_r = v_s / (j w_e M) and the rotor
-    voltage is Z_R i_r; at t = 0 the supply angle is zero, so v_s is real in the stationary frame.
+    A connected motor starts in its zero-torque steady state: with i_s = 0 the stator voltage is
+    Z_MS i_r (19), so i_r = v_s / (j w_e M) and the rotor voltage is Z_R i_r (at t = 0 the supply
+    angle is zero, so v_s is real in the stationary frame). A motor that synchronises first starts
+    de-energised, with its stator open and the converter at zero.
     """
     x = np.zeros(n_states(len(setup.motors)))
     v_r_rotor = np.zeros(len(setup.motors), dtype=complex)
@@ -133,7 +170,8 @@ def initial_state(setup: DriveSetup) -> tuple[np.ndarray, np.ndarray]:
     for k, motor in enumerate(setup.motors):
         m, o = motor.machine, STATES_PER_MOTOR * k
         w_slip = w_e - m.n_p * motor.initial_speed
-        i_r = v_s / (1j * w_e * m.M) if w_e > 0 else 0.0j
+        energised = w_e > 0 and not motor.controller.sync.enabled
+        i_r = v_s / (1j * w_e * m.M) if energised else 0.0j
         psi_s, psi_r = m.M * i_r, m.L_r * i_r
         x[o + PSI_S_RE], x[o + PSI_S_IM] = psi_s.real, psi_s.imag
         x[o + PSI_R_RE], x[o + PSI_R_IM] = psi_r.real, psi_r.imag
@@ -158,6 +196,7 @@ def build_arrays(setup: DriveSetup) -> dict:
         sensors[k, engine.SN_ENC_OFFSET] = m.encoder_offset
         sensors[k, engine.SN_ENC_CPR] = m.encoder_counts_per_rev
         sensors[k, engine.SN_V_R_MAX] = max_voltage_magnitude(m.dc_link_voltage)
+        sensors[k, engine.SN_CURRENT_FAULT_T] = m.current_sensor_fault_time
         cp[k] = _controller_arrays(m, setup.supply, setup.sample_time)
         cs[k, ctl.CS_VR_RE], cs[k, ctl.CS_VR_IM] = v_r0[k].real, v_r0[k].imag
     s = setup.supply
@@ -175,7 +214,7 @@ def build_arrays(setup: DriveSetup) -> dict:
         cs=cs,
         ref_t=ref_t,
         ref_w=ref_w,
-        closed=np.ones(n, dtype=np.bool_),
+        closed=np.array([not m.controller.sync.enabled for m in motors], dtype=np.bool_),
     )
 
 
@@ -227,6 +266,15 @@ def check_setup(setup: DriveSetup) -> None:
             raise InputError(
                 f"motor[{k}].speed_reference_rpm",
                 f"must stay within +-{limit * 30 / np.pi:.0f} rpm (the converter's rotor-voltage limit)",
+            )
+        # the rotor must be able to carry the magnetising current v_s / (w_e M) at zero torque (33)
+        v_pk = float(np.max(setup.supply.voltage_pk[1]))
+        f_min = float(np.min(setup.supply.frequency_hz[1]))
+        magnetising_pk = v_pk / (2.0 * np.pi * f_min * motor.machine.M)
+        if motor.controller.rotor_current_limit_pk <= magnetising_pk:
+            raise InputError(
+                f"motor[{k}].controller.rotor_current_limit_pk",
+                f"must exceed the magnetising current the stator supply needs ({magnetising_pk:.2f} A peak)",
             )
     if setup.substeps < 1:
         raise InputError("simulation.substeps", "must be an integer >= 1")

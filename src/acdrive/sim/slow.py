@@ -1,7 +1,8 @@
 """The slow path: the same sampled-data loop driven from Python.
 
-Any Python controller can be plugged in (an object with ``step(k, t, v_s, v_g, theta_meas, w_ref)``
-returning the rotor voltage in rotor coordinates for motor k), and the plant can be integrated
+Any Python controller can be plugged in (an object with
+``step(k, t, v_s, v_g, theta_meas, w_ref, i_s, i_r_rotor)`` returning the rotor voltage in rotor
+coordinates for motor k; an attribute ``close`` set True asks for the relay to close), and the plant can be integrated
 either by the engine's RK4 or by ``scipy.integrate.solve_ivp`` (Radau) between samples, which is
 how the compiled engine's accuracy is checked. Meant for prototyping and verification, not speed.
 """
@@ -21,15 +22,15 @@ from acdrive.sim.result import DriveResult
 from acdrive.sim.setup import DriveSetup, build_arrays, n_steps
 
 
-class CompiledVoltageController:
-    """The engine's own voltage-command law, called sample by sample from Python."""
+class CompiledController:
+    """The engine's own controller, called sample by sample from Python."""
 
     def __init__(self, arrays: dict):
         self.p_est, self.cp, self.cs = arrays["p_est"], arrays["cp"], arrays["cs"]
 
-    def step(self, k, t, v_s, v_g, theta_meas, w_ref):
-        v_r, _ = ctl.voltage_command_step(
-            self.p_est[k], self.cp[k], self.cs[k], v_s, v_g, theta_meas, w_ref
+    def step(self, k, t, v_s, v_g, theta_meas, w_ref, i_s=0j, i_r_rotor=0j):
+        v_r, _, self.close = ctl.controller_step(
+            self.p_est[k], self.cp[k], self.cs[k], v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref
         )
         return v_r
 
@@ -43,7 +44,7 @@ def simulate_slow(
 ) -> DriveResult:
     """Run ``setup`` with a Python loop; ``integrator`` is "rk4" (engine steps) or "radau"."""
     a = build_arrays(setup)
-    controller = controller or CompiledVoltageController(a)
+    controller = controller or CompiledController(a)
     x, T_s, n = a["x"], setup.sample_time, len(setup.motors)
     args = (a["machines"], a["bus"], a["supply"], a["load_t"], a["load_tau"])
     v_term = np.zeros(n, dtype=complex)
@@ -62,20 +63,13 @@ def simulate_slow(
                 a["sensors"][k, engine.SN_ENC_CPR],
             )
             w_ref = profile_at(a["ref_t"][k], a["ref_w"][k], t)
-            command = controller.step(k, t, v_term[k], v_g, theta_meas, w_ref)
+            i_s, i_r_rotor = engine.measured_currents(a["machines"][k], x, o, a["closed"][k])
+            command = controller.step(k, t, v_term[k], v_g, theta_meas, w_ref, i_s, i_r_rotor)
             v_r[k], _ = converter_output(command, a["sensors"][k, engine.SN_V_R_MAX])
-            engine.log_sample(
-                log[step, k],
-                a["machines"][k],
-                x,
-                o,
-                a["closed"][k],
-                v_term[k],
-                v_r[k],
-                w_ref,
-                a["cs"][k, ctl.CS_TAU_COM],
-                0,
-            )
+            engine.log_sample(log[step, k], a["machines"][k], x, o, a["closed"][k], v_term[k], v_g,
+                              v_r[k], w_ref, a["cs"][k], 0)  # fmt: skip
+            if getattr(controller, "close", False):
+                a["closed"][k] = True
         if integrator == "rk4":
             work = np.empty((5, x.size))
             engine.advance_plant(t, x, T_s, setup.substeps, *args, v_r, a["closed"], work, v_term)
