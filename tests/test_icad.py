@@ -160,6 +160,11 @@ def test_icad_quantities_scalar_identity():
     q = icad_quantities(G, K20.freqresp(W), K20.freqresp(W))
     det = np.linalg.det(G)
     np.testing.assert_allclose(1 - q["gamma"], det / (G[:, 0, 0] * G[:, 1, 1]), rtol=1e-8)
+    # plant and controller values broadcast together (e.g. several controllers at once)
+    ks = np.stack([K20.freqresp(W), LTI.pi(360.0, 9000.0).freqresp(W)])[:, None, :]
+    qb = icad_quantities(G[None, None], ks, ks)
+    assert qb["c"].shape == (2, 1, W.size, 2)
+    np.testing.assert_allclose(qb["c"][0, 0], q["c"], rtol=1e-12)
 
 
 # --- closed forms ------------------------------------------------------------------------------

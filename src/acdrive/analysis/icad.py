@@ -92,15 +92,18 @@ def _icad_kernel(G, k1, k2, gamma, kg, h, gamma_h, c, S, T, coupling):
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
     """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...).
 
-    Returns arrays with the shape of G[..., 0, 0] (channel arrays with a last axis of length 2):
+    G[..., 0, 0], k1 and k2 are broadcast together; the results have that broadcast shape
+    (channel arrays with a further last axis of length 2):
     gamma, kg (k_i g_ii), h (h_i), gamma_h (gamma h_j for channel i), c (c_i), S (1/(1+c_i)),
     coupling (y_i / r_j), T (c_i/(1+c_i)).
     """
     G = np.asarray(G, dtype=complex)
-    shape = G.shape[:-2]
+    k1, k2 = np.asarray(k1, dtype=complex), np.asarray(k2, dtype=complex)
+    shape = np.broadcast_shapes(G.shape[:-2], k1.shape, k2.shape)
     N = int(np.prod(shape))
-    k1 = np.ascontiguousarray(np.broadcast_to(k1, shape), dtype=complex).reshape(N)
-    k2 = np.ascontiguousarray(np.broadcast_to(k2, shape), dtype=complex).reshape(N)
+    G = np.broadcast_to(G, shape + (2, 2))
+    k1 = np.ascontiguousarray(np.broadcast_to(k1, shape)).reshape(N)
+    k2 = np.ascontiguousarray(np.broadcast_to(k2, shape)).reshape(N)
     out = {"gamma": np.empty(N, dtype=complex)}
     for key in ("kg", "h", "gamma_h", "c", "S", "T", "coupling"):
         out[key] = np.empty((N, 2), dtype=complex)
