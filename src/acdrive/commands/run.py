@@ -28,53 +28,48 @@ def register(subparsers):
 
 
 def run(args) -> int:
-    from acdrive.report.dfim_figures import write_drive_figures
     from acdrive.scenarios.loader import load_scenario
-    from acdrive.sim.setup import simulate
+    from acdrive.sim.outcome import run_scenario
 
     setup = load_scenario(args.scenario)  # validates everything before any output exists
     out_root = Path(args.out)
     if out_root.exists() and not out_root.is_dir():
         raise InputError("--out", f"'{out_root}' exists and is not a folder")
-    result = simulate(setup)
-    summary = result.summary()
-    motor = setup.motors[0]
-    sync_rpm = 60.0 * float(setup.supply.frequency_hz[1][0]) / motor.machine.n_p
-    summary["gains"] = {
-        "K_P": motor.controller.gains.K_P,
-        "K_I": motor.controller.gains.K_I,
-        "K_F": motor.controller.gains.K_F,
-    }
+    outcome = run_scenario(setup)
+    summary = outcome.summary
     # write into a temporary folder beside the target, then move it in place: never half-written
     out_root.mkdir(parents=True, exist_ok=True)
     target = out_root / setup.name
     staging = Path(tempfile.mkdtemp(prefix=f".{setup.name}-", dir=out_root))
     try:
-        result.save(staging)
-        if not args.no_figures:
-            write_drive_figures(result, staging, sync_rpm)
-        (staging / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        outcome.write(staging, figures=not args.no_figures)
         if target.exists():
             shutil.rmtree(target)
         staging.rename(target)
     finally:
         if staging.exists():
             shutil.rmtree(staging)
-    print(
-        f"scenario {setup.name}: {setup.duration:g} s simulated in {result.wall_time:.2f} s "
-        f"({len(setup.motors)} motor{'s' if len(setup.motors) > 1 else ''})"
-    )
+    wall = sum(r.wall_time for r in outcome.results.values())
+    n = len(setup.motors)
+    print(f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s ({n} motor{'s' * (n > 1)})")
     rows = [
         ("speed RMS tracking error", f"{summary['speed_rms_error_rpm']:.2f} rpm"),
         ("max |speed error|", f"{summary['speed_max_abs_error_rpm']:.1f} rpm"),
         ("peak rotor current", f"{summary['peak_rotor_current_a']:.2f} A (limit 6 A)"),
         ("peak stator current", f"{summary['peak_stator_current_a']:.2f} A"),
-        (
-            "limit events (samples)",
-            ", ".join(f"{k} {v}" for k, v in summary["limit_events"].items() if v) or "none",
-        ),
     ]
+    for key in ("peak_rotor_current_vc_a", "peak_rotor_current_cc_a"):
+        if key in summary:
+            rows.append((key.replace("_", " ").replace(" a", " (A)"), f"{summary[key]:.2f}"))
+    if "synchronisation" in summary and summary["synchronisation"].get("relay_closed"):
+        sync = summary["synchronisation"]
+        rows.append(("relay closed at", f"{sync['closing_time_s']:.3f} s, stator current peak "
+                     f"{sync['closing_stator_current_peak_a']:.2f} A"))
+    events = ", ".join(f"{k} {v}" for k, v in summary["limit_events"].items() if v) or "none"
+    rows.append(("events (samples)", events))
     for label, value in rows:
         print(f"  {label:<26} {value}")
+    if "finding" in summary:
+        print(f"  note: {summary['finding']}")
     print(f"wrote {target}/ (data.csv, data.parquet, summary.json, figures)")
     return 0

@@ -95,3 +95,43 @@ def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: floa
     ax.legend()
     paths.append(_save(fig, folder / "torque_commands.png"))
     return paths
+
+
+def write_comparison_figures(results: dict, folder: Path) -> list[Path]:
+    """Voltage vs current command on one figure: speed with reference (Bodson Figs. 8 and 10) and
+    peak rotor current against the 6 A limit (Figs. 9 and 11)."""
+    folder = Path(folder)
+    labels = {"voltage": "VC", "current": "CC"}
+    first = next(iter(results.values()))
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.plot(first.t, first.reference_rpm(), "k--", lw=1, label="reference")
+    for mode, result in results.items():
+        ax.plot(result.t, result.speed_rpm(), lw=1, label=labels.get(mode, mode))
+    ax.set(xlabel="time (s)", ylabel="speed (rpm)", title="speed, voltage vs current command (cf. Figs. 8, 10)")
+    ax.legend()
+    paths = [_save(fig, folder / "fig8_speed_vc_cc.png")]
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for mode, result in results.items():
+        ax.plot(result.t, result.peak("i_r_mag"), lw=1, label=labels.get(mode, mode))
+    ax.axhline(6.0, color="k", ls=":", lw=1, label="6 A limit")
+    ax.set(xlabel="time (s)", ylabel="peak rotor current (A)", title="peak rotor current (cf. Figs. 9, 11)")
+    ax.legend()
+    paths.append(_save(fig, folder / "fig9_rotor_current_vc_cc.png"))
+    return paths
+
+
+def write_sync_figure(result: DriveResult, folder: Path) -> Path:
+    """Synchronisation (Bodson (28)): voltage mismatch, theta_adj, m_adj, relay and stator current."""
+    t = result.t
+    fig, axes = plt.subplots(4, 1, figsize=(7, 7), sharex=True)
+    axes[0].plot(t, result.signal("v_mismatch"), lw=1)
+    axes[0].set(ylabel="|v_S - v_G| / |v_G|", yscale="log")
+    axes[1].plot(t, result.signal("theta_adj"), lw=1, label="theta_adj (rad)")
+    axes[1].plot(t, result.signal("m_adj"), lw=1, label="m_adj")
+    axes[1].legend()
+    axes[2].plot(t, result.signal("relay_closed"), lw=1)
+    axes[2].set(ylabel="relay closed")
+    axes[3].plot(t, result.peak("i_s_mag"), lw=1)
+    axes[3].set(ylabel="peak stator current (A)", xlabel="time (s)")
+    axes[0].set_title("grid synchronisation with an unaligned encoder")
+    return _save(fig, Path(folder) / "sync.png")

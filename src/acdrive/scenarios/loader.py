@@ -3,7 +3,7 @@
 Every field is checked on load; a bad one raises ``InputError("<path.to.field>", "<rule>")``.
 Schema (all tables optional except [[motor]]; units in the key names where not SI):
 
-    name, description
+    name, description, compare_modes (e.g. ["voltage", "current"]: one run per mode)
     [simulation]  duration, sample_time, substeps, log_every
     [supply]      voltage_pk | voltage_pk_profile = [[t, V], ...], frequency_hz |
                   frequency_hz_profile, resistance, inductance
@@ -220,6 +220,9 @@ def build_setup(data: dict) -> DriveSetup:
     top = _Section(data, "")
     name = top.text("name", "custom")
     top.text("description", "")
+    compare = top.get("compare_modes", [])
+    if not isinstance(compare, list) or any(m not in ("voltage", "current") for m in compare):
+        raise InputError("compare_modes", 'must be a list of "voltage" / "current"')
     sim = _Section(top.get("simulation", {}), "simulation")
     duration = sim.number("duration", 1.0, require_positive)
     sample_time = sim.number("sample_time", 200e-6, require_positive)
@@ -277,6 +280,7 @@ def build_setup(data: dict) -> DriveSetup:
         substeps=substeps,
         log_every=log_every,
         name=name,
+        compare_modes=tuple(compare),
     )
     check_setup(setup)
     return setup

@@ -7,6 +7,7 @@ loop, returning a ``DriveResult``.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -113,6 +114,15 @@ class DriveSetup:
     substeps: int = 4
     log_every: int = 1
     name: str = "custom"
+    compare_modes: tuple[str, ...] = ()  # run once per controller mode (Bodson Figs. 8-11)
+
+    def with_mode(self, mode: str) -> DriveSetup:
+        """The same drive with every controller in ``mode`` ("voltage" or "current")."""
+        motors = tuple(
+            dataclasses.replace(m, controller=dataclasses.replace(m.controller, mode=mode))
+            for m in self.motors
+        )
+        return dataclasses.replace(self, motors=motors, compare_modes=())
 
 
 def max_speed(motor: MotorSetup, supply: Supply) -> float:

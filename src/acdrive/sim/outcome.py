@@ -1,0 +1,113 @@
+"""Running a scenario: one or several simulations, their headline figures and their files.
+
+``run_scenario`` runs a ``DriveSetup`` (once, or once per controller mode for comparisons) and
+returns a ``ScenarioOutcome``: the results, the summary (summary.json) and a ``write`` method that
+saves data and figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.sim.result import DriveResult
+from acdrive.sim.setup import DriveSetup, simulate
+
+MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
+
+
+def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict | None:
+    """Relay closing time, stator current transient after closing, and the encoder alignment.
+
+    The transient is the largest peak stator phase current within 0.1 s of closing (Bodson (8)),
+    also given as a fraction of the stator current limit.
+    """
+    closed = result.signal("relay_closed", motor)
+    m = setup.motors[motor]
+    if not m.controller.sync.enabled:
+        return None
+    if not closed.any():
+        return {"relay_closed": False}
+    i = int(np.argmax(closed > 0))
+    after = (result.t >= result.t[i]) & (result.t < result.t[i] + 0.1)
+    peak = float(np.max(result.peak("i_s_mag", motor)[after]))
+    expected = math.remainder(m.machine.n_p * m.encoder_offset, 2 * math.pi)
+    return {
+        "relay_closed": True,
+        "closing_time_s": float(result.t[i]),
+        "closing_stator_current_peak_a": peak,
+        "closing_current_fraction_of_limit": peak / m.controller.stator_current_limit_pk,
+        "voltage_mismatch_at_closing": float(result.signal("v_mismatch", motor)[max(i - 1, 0)]),
+        "theta_adj_rad": float(result.signal("theta_adj", motor)[i]),
+        "encoder_offset_electrical_rad": expected,
+        "m_adj": float(result.signal("m_adj", motor)[i]),
+    }
+
+
+@dataclass
+class ScenarioOutcome:
+    setup: DriveSetup
+    results: dict[str, DriveResult]  # label -> result ("main", or one per compared mode)
+    summary: dict = field(default_factory=dict)
+
+    @property
+    def main(self) -> DriveResult:
+        return next(iter(self.results.values()))
+
+    def write(self, folder: Path, figures: bool = True) -> None:
+        from acdrive.report.dfim_figures import write_comparison_figures, write_drive_figures, write_sync_figure
+
+        folder = Path(folder)
+        for label, result in self.results.items():
+            sub = folder if len(self.results) == 1 else folder / label
+            sub.mkdir(parents=True, exist_ok=True)
+            result.save(sub)
+            if figures:
+                write_drive_figures(result, sub, synchronous_rpm(self.setup))
+                if self.setup.motors[0].controller.sync.enabled:
+                    write_sync_figure(result, sub)
+        if figures and len(self.results) > 1:
+            write_comparison_figures(self.results, folder)
+        (folder / "summary.json").write_text(json.dumps(self.summary, indent=2) + "\n")
+
+
+def synchronous_rpm(setup: DriveSetup) -> float:
+    return 60.0 * float(setup.supply.frequency_hz[1][0]) / setup.motors[0].machine.n_p
+
+
+def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
+    """Simulate ``setup`` (once per mode if it compares modes) and summarise."""
+    if setup.compare_modes:
+        results = {mode: simulate(setup.with_mode(mode)) for mode in setup.compare_modes}
+    else:
+        results = {setup.motors[0].controller.mode: simulate(setup)}
+    first_mode, first = next(iter(results.items()))
+    summary = first.summary()
+    motor = setup.motors[0]
+    summary["mode"] = first_mode
+    summary["gains"] = {
+        "K_P": motor.controller.gains.K_P,
+        "K_I": motor.controller.gains.K_I,
+        "K_F": motor.controller.gains.K_F,
+        "K_PC": motor.controller.current_gains(motor.machine)[0],
+        "K_IC": motor.controller.current_gains(motor.machine)[1],
+        "R_T": motor.controller.R_T,
+    }
+    for mode, result in results.items():
+        if len(results) > 1:
+            s = result.summary()
+            suffix = MODE_SUFFIX[mode]
+            summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
+            summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
+            summary[f"limit_events_{suffix}"] = s["limit_events"]
+    sync = synchronisation_summary(first, setup)
+    if sync is not None:
+        summary["synchronisation"] = sync
+    fallback = first.first_event_time("sensor_fallback")
+    if fallback is not None:
+        summary["sensor_fallback_time_s"] = fallback
+    return ScenarioOutcome(setup=setup, results=results, summary=summary)
