@@ -1,0 +1,848 @@
+"""Small-signal stability of the whole DFIM speed drive at an operating point (shaft speed, load).
+
+The closed loop of Bodson's drive is linearised around its equilibrium: machine (9) with the
+mechanics (26) (load torque, viscous friction, the true inertia J), the supply behind its optional
+series R-L impedance (the test bench's transformer), the speed PI (25) with its integrator and
+gains from (27), and the torque controller in either mode:
+
+* ``voltage``: stator current command (22) and the rotor voltage of the steady-state law (20),
+  evaluated with the measured speed and the measured stator voltage (Bodson III-A, Fig. 2);
+* ``current``: rotor current command (43) from the same stator current command, and the rotor
+  current loop (45)-(47) with its integrator and the gains (49) (Bodson III-E).
+
+Two linearisations are offered, clearly apart:
+
+``continuous``  the controller as the continuous-time law of the paper. The plant is the
+                simulator's own right-hand side (``acdrive.plant.dfim_bus.plant_derivatives``),
+                evaluated in the frame that rotates with the supply (the stator-voltage frame when
+                the supply has no impedance), with the flux linkages psi_s, psi_r as states. The
+                Jacobian is taken by central differences around the equilibrium found by Newton.
+``sampled``     the sampled-data loop exactly as the compiled simulator runs it: at every sample
+                the controller of ``acdrive.control.dfim`` reads the stator voltage and the encoder,
+                its rotor-voltage command is held in rotor coordinates (zero-order hold) and the
+                plant is advanced over one sample period by the engine's RK4 substeps; optionally
+                the command is applied one sample later (computation delay). The result is the
+                Jacobian of this one-sample map at its fixed point; its eigenvalues z are reported
+                also as s = ln(z) / T_s for comparison with the continuous model.
+
+Units: SI (speeds in rad/s unless the name ends in ``_rpm``); complex space vectors in the
+power-invariant scaling of Bodson (1)-(8).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acdrive.control import dfim as ctl
+from acdrive.control.speed import SpeedPIGains, speed_pi
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.machines.dfim import (
+    BODSON_DFIM,
+    DFIMParams,
+    machine_vector,
+    rotor_current_for,
+    rotor_voltage_for,
+    stator_current_command,
+    torque_window,
+)
+from acdrive.plant.dfim_bus import (
+    OMEGA,
+    PSI_R_IM,
+    PSI_R_RE,
+    PSI_S_IM,
+    PSI_S_RE,
+    THETA,
+    n_states,
+    plant_derivatives,
+)
+from acdrive.sim import engine
+from acdrive.sim.setup import (
+    DFIMController,
+    DriveSetup,
+    MotorSetup,
+    Supply,
+    build_arrays,
+    constant,
+    max_speed,
+)
+
+SQRT_3_2 = math.sqrt(1.5)
+RAD_S_PER_RPM = math.pi / 30.0
+MODES = ("voltage", "current")
+KINDS = ("continuous", "sampled")
+SPEED_LOOPS = ("closed", "open", "frozen")
+#: |z| below this is a structural zero of the sampled map (a state overwritten every sample)
+Z_ZERO = 1e-9
+
+
+@dataclass(frozen=True)
+class DriveModel:
+    """The drive being linearised: machine, supply, controller mode, gains and bench effects.
+
+    machine: the true machine (its J and viscous friction B enter the mechanics (26));
+    controller_params: the controller's estimates (default: the true values);
+    speed_bandwidth: a_D,VEL of (27) [rad/s]; design_inertia: the J used in (27) (default:
+    machine.J, so a larger true J than designed is machine.J > design_inertia); K_F: (25);
+    current_bandwidth, R_T: a_D,CUR and R_T of (49); supply_*: peak line-neutral voltage,
+    frequency and the series R-L impedance in front of the stator (the controller then sees the
+    measured stator terminal voltage); speed_filter_tau: first-order filter on the measured speed;
+    current_limit_pk: stator and rotor current limits (peak) for the torque window (30)-(37);
+    speed_loop: "closed" (PI (25) active), "open" (torque command held at its equilibrium value,
+    mechanics free) or "frozen" (torque command held and speed constant: electrical loop only);
+    sample_time, substeps, delay_samples: the sampled model (engine sample period, RK4 substeps per
+    period, 0 or 1 sample of computation delay).
+    """
+
+    mode: str = "voltage"
+    machine: DFIMParams = BODSON_DFIM
+    controller_params: DFIMParams | None = None
+    speed_bandwidth: float = 314.0
+    design_inertia: float | None = None
+    K_F: float = 2.0 / 3.0
+    current_bandwidth: float = 3142.0
+    R_T: float = 1.0
+    supply_voltage_pk: float = 11.1
+    supply_frequency_hz: float = 60.0
+    supply_resistance: float = 0.0
+    supply_inductance: float = 0.0
+    speed_filter_tau: float = 0.0
+    current_limit_pk: float = 6.0
+    speed_loop: str = "closed"
+    sample_time: float = 200e-6
+    substeps: int = 4
+    delay_samples: int = 0
+
+    def __post_init__(self):
+        if self.mode not in MODES:
+            raise InputError("mode", f"must be one of {', '.join(MODES)}")
+        if self.speed_loop not in SPEED_LOOPS:
+            raise InputError("speed_loop", f"must be one of {', '.join(SPEED_LOOPS)}")
+        for name in (
+            "speed_bandwidth",
+            "current_bandwidth",
+            "R_T",
+            "supply_voltage_pk",
+            "supply_frequency_hz",
+            "current_limit_pk",
+            "sample_time",
+        ):
+            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
+        for name in ("K_F", "supply_resistance", "supply_inductance", "speed_filter_tau"):
+            object.__setattr__(self, name, require_nonnegative(name, getattr(self, name)))
+        if self.design_inertia is not None:
+            object.__setattr__(
+                self, "design_inertia", require_positive("design_inertia", self.design_inertia)
+            )
+        if self.delay_samples not in (0, 1):
+            raise InputError("delay_samples", "must be 0 or 1")
+        if (
+            isinstance(self.substeps, bool)
+            or not isinstance(self.substeps, int)
+            or self.substeps < 1
+        ):
+            raise InputError("substeps", "must be an integer >= 1")
+
+    # --- derived quantities ------------------------------------------------------------------
+    @property
+    def gains(self) -> SpeedPIGains:
+        """K_P = 2 a J, K_I = a^2 J (27) with the design inertia, and K_F."""
+        J = self.design_inertia or self.machine.J
+        return dataclasses.replace(SpeedPIGains.design(J, self.speed_bandwidth), K_F=self.K_F)
+
+    @property
+    def current_gains(self) -> tuple[float, float]:
+        """(K_P,C, K_I,C) of Bodson (49) from the controller's estimates."""
+        est = self.controller_params or self.machine
+        return ctl.current_loop_gains(est.sigma, est.L_r, self.R_T, self.current_bandwidth)
+
+    @property
+    def w_e(self) -> float:
+        return 2.0 * math.pi * self.supply_frequency_hz
+
+    @property
+    def v_g(self) -> float:
+        """Grid space-vector magnitude sqrt(3/2) V_pk (Bodson (8))."""
+        return SQRT_3_2 * self.supply_voltage_pk
+
+    @property
+    def i_max(self) -> float:
+        return SQRT_3_2 * self.current_limit_pk
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Shaft speed [rad/s] and load torque [N m] (the non-inertial load of (26), friction apart)."""
+
+    speed: float
+    load_torque: float = 0.0
+
+    @property
+    def speed_rpm(self) -> float:
+        return self.speed / RAD_S_PER_RPM
+
+
+@dataclass(frozen=True)
+class StabilityResult:
+    """Eigenvalues of the linearised closed loop at one operating point.
+
+    eigenvalues: s-plane values [rad/s] (for ``sampled``: ln(z) / T_s of the non-zero z);
+    z_eigenvalues: the eigenvalues of the one-sample map (``sampled`` only, else empty);
+    max_real_part: largest real part of ``eigenvalues`` [1/s]; stable: all strictly in the open
+    left half plane (continuous) or inside the unit circle (sampled);
+    torque_command: tau_COM at the equilibrium; within_limits: tau_COM inside the on-line torque
+    window (30)-(37) (outside it the real controller would be clipping and the linearisation does
+    not describe it); state: the equilibrium state vector; state_names: its entries.
+    """
+
+    model: DriveModel
+    point: OperatingPoint
+    kind: str
+    eigenvalues: np.ndarray
+    z_eigenvalues: np.ndarray
+    max_real_part: float
+    stable: bool
+    torque_command: float
+    within_limits: bool
+    state: np.ndarray = field(repr=False)
+    state_names: tuple[str, ...] = field(repr=False)
+    jacobian: np.ndarray = field(repr=False)
+
+    @property
+    def dominant(self) -> complex:
+        """The eigenvalue with the largest real part (s-plane), upper half plane if a pair."""
+        re = self.eigenvalues.real
+        top = self.eigenvalues[np.isclose(re, re.max(), rtol=1e-9, atol=1e-9)]
+        return complex(top[np.argmax(top.imag)])
+
+
+# ---------------------------------------------------------------------------------------------
+# validation of an operating point
+# ---------------------------------------------------------------------------------------------
+
+
+def speed_range(model: DriveModel) -> float:
+    """Largest |speed| [rad/s] the drive can hold (converter rotor-voltage limit, sim.setup)."""
+    return max_speed(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
+
+
+def check_point(model: DriveModel, point: OperatingPoint) -> None:
+    """Raise InputError unless ``point`` is finite, inside the speed range, with a load torque
+    (plus friction) inside the torque window of the controller (30)-(37)."""
+    w = require_finite("speed", point.speed)
+    tau_l = require_finite("load_torque", point.load_torque)
+    limit = speed_range(model)
+    if abs(w) > limit:
+        raise InputError("speed", f"must stay within +-{limit / RAD_S_PER_RPM:.0f} rpm")
+    lo, hi = _torque_window(model, model.v_g)
+    need = tau_l + model.machine.B * w
+    if not lo < need < hi:
+        raise InputError(
+            "load_torque",
+            f"load plus friction {need:.3f} N m is outside the torque window [{lo:.3f}, {hi:.3f}] N m",
+        )
+
+
+def _torque_window(model: DriveModel, v_s: float) -> tuple[float, float]:
+    p_est = machine_vector(model.controller_params or model.machine)
+    lo, hi, _ = torque_window(p_est, model.w_e, v_s, model.i_max, model.i_max)
+    return lo, hi
+
+
+# ---------------------------------------------------------------------------------------------
+# the plant of the simulator, one motor, evaluated in the frame rotating with the supply
+# ---------------------------------------------------------------------------------------------
+
+
+def _supply(model: DriveModel) -> Supply:
+    return Supply(
+        voltage_pk=constant(model.supply_voltage_pk),
+        frequency_hz=constant(model.supply_frequency_hz),
+        resistance=model.supply_resistance,
+        inductance=model.supply_inductance,
+    )
+
+
+def _motor_setup(model: DriveModel, point: OperatingPoint) -> MotorSetup:
+    return MotorSetup(
+        machine=model.machine,
+        controller=DFIMController(
+            gains=model.gains,
+            mode=model.mode,
+            current_bandwidth=model.current_bandwidth,
+            R_T=model.R_T,
+            stator_current_limit_pk=model.current_limit_pk,
+            rotor_current_limit_pk=model.current_limit_pk,
+            speed_filter_tau=model.speed_filter_tau,
+            params=model.controller_params,
+        ),
+        speed_reference=constant(point.speed),
+        load_torque=constant(point.load_torque),
+        initial_speed=point.speed,
+    )
+
+
+def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0) -> DriveSetup:
+    """The simulator's ``DriveSetup`` for ``model`` held at ``point`` (voltage mode)."""
+    return DriveSetup(
+        motors=(_motor_setup(model, point),),
+        supply=_supply(model),
+        duration=duration,
+        sample_time=model.sample_time,
+        substeps=model.substeps,
+        name="stability",
+    )
+
+
+class _Plant:
+    """``plant_derivatives`` of one motor at a constant supply, with the supply and shaft angles
+    set to zero at the instant of evaluation: the stationary-frame derivatives are then those of
+    the frame rotating with the supply (v_g real) apart from the -j w_e x rotation term."""
+
+    def __init__(self, model: DriveModel, point: OperatingPoint):
+        a = build_arrays(drive_setup(model, point))
+        self.machines, self.bus, self.supply = a["machines"], a["bus"], a["supply"]
+        self.load_t, self.load_tau, self.closed = a["load_t"], a["load_tau"], a["closed"]
+        self.arrays = a
+        self.x = np.zeros(n_states(1))
+        self.dx = np.empty_like(self.x)
+        self.v_term = np.zeros(1, dtype=complex)
+        self.v_r = np.zeros(1, dtype=complex)
+        self.w_e = model.w_e
+
+    def load(self, psi_s: complex, psi_r: complex, w: float) -> None:
+        x = self.x
+        x[:] = 0.0
+        x[PSI_S_RE], x[PSI_S_IM] = psi_s.real, psi_s.imag
+        x[PSI_R_RE], x[PSI_R_IM] = psi_r.real, psi_r.imag
+        x[OMEGA] = w
+
+    def evaluate(self, v_r: complex):
+        """(d psi_s/dt, d psi_r/dt, dw/dt) in the supply frame and the stator terminal voltage,
+        for the state last given to ``load`` and the rotor voltage ``v_r`` (supply frame)."""
+        self.v_r[0] = v_r
+        plant_derivatives(
+            0.0,
+            self.x,
+            self.dx,
+            self.machines,
+            self.bus,
+            self.supply,
+            self.load_t,
+            self.load_tau,
+            self.v_r,
+            self.closed,
+            self.v_term,
+        )
+        x, dx = self.x, self.dx
+        dpsi_s = complex(dx[PSI_S_RE], dx[PSI_S_IM]) - 1j * self.w_e * complex(x[0], x[1])
+        dpsi_r = complex(dx[PSI_R_RE], dx[PSI_R_IM]) - 1j * self.w_e * complex(x[2], x[3])
+        return dpsi_s, dpsi_r, dx[OMEGA], complex(self.v_term[0])
+
+    def terminal_voltage(self, v_r: complex) -> complex:
+        return self.evaluate(v_r)[3]
+
+
+def currents(params: DFIMParams, psi_s: complex, psi_r: complex) -> tuple[complex, complex]:
+    """(i_s, i_r) from the flux linkages psi_s = L_s i_s + M i_r, psi_r = M i_s + L_r i_r (9)."""
+    det = params.L_s * params.L_r - params.M**2
+    return (params.L_r * psi_s - params.M * psi_r) / det, (
+        params.L_s * psi_r - params.M * psi_s
+    ) / det
+
+
+def fluxes(params: DFIMParams, i_s: complex, i_r: complex) -> tuple[complex, complex]:
+    return params.L_s * i_s + params.M * i_r, params.M * i_s + params.L_r * i_r
+
+
+# ---------------------------------------------------------------------------------------------
+# continuous-time controller laws (Bodson (20)+(22); (22)+(43)+(45)-(47))
+# ---------------------------------------------------------------------------------------------
+
+
+def _voltage_law(p_est, w_e, w_hat, v_s_mag, tau_com):
+    """Rotor voltage (20) for the stator current command (22) with Q = 0 (stator-voltage frame)."""
+    i_s_com, _ = stator_current_command(p_est, w_e, v_s_mag, tau_com, 0.0)
+    return rotor_voltage_for(p_est, w_e, w_hat, v_s_mag, i_s_com)
+
+
+def _current_law(cp, p_est, w_e, w_hat, v_s_mag, tau_com, i_s, i_r, z):
+    """Rotor current loop (46)-(47) around the command (43), continuous time; returns
+    (v_r, d z / dt) in the stator-voltage frame, z being the integral of the current error.
+
+    The sampled controller's own ``rotor_current_loop`` is evaluated with a unit step and no
+    voltage limit (``cp`` prepared so by the caller): one forward-Euler step of length 1 then
+    returns the integrand, d z / dt = (z after the step) - z.
+    """
+    i_s_com, _ = stator_current_command(p_est, w_e, v_s_mag, tau_com, 0.0)
+    i_r_com = rotor_current_for(p_est, w_e, v_s_mag, i_s_com)
+    cs = np.zeros(ctl.N_CTRL_STATES)
+    cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM] = z.real, z.imag
+    v_r, _ = ctl.rotor_current_loop(p_est, cp, cs, w_e, w_hat, v_s_mag, i_s, i_r, i_r_com)
+    return v_r, complex(cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM]) - z
+
+
+# ---------------------------------------------------------------------------------------------
+# continuous-time closed loop
+# ---------------------------------------------------------------------------------------------
+
+
+class _Continuous:
+    """Right-hand side of the continuous closed loop in the supply frame.
+
+    State: Re/Im psi_s, Re/Im psi_r, [w], [e_I], [w_f], [Re/Im z]: speed unless frozen, speed-PI
+    integrator if the speed loop is closed, speed-filter state if speed_filter_tau > 0, rotor
+    current-loop integrator in current mode.
+    """
+
+    def __init__(self, model: DriveModel, point: OperatingPoint):
+        self.model, self.point = model, point
+        self.plant = _Plant(model, point)
+        self.p_est = self.plant.arrays["p_est"][0]
+        self.cp_unit = self.plant.arrays["cp"][0].copy()  # see _current_law
+        self.cp_unit[ctl.CP_T_S], self.cp_unit[ctl.CP_V_R_MAX] = 1.0, np.inf
+        names = ["psi_s.re", "psi_s.im", "psi_r.re", "psi_r.im"]
+        if model.speed_loop != "frozen":
+            names.append("w")
+        if model.speed_loop == "closed":
+            names.append("e_I")
+        if model.speed_filter_tau > 0.0:
+            names.append("w_f")
+        if model.mode == "current":
+            names += ["z.re", "z.im"]
+        self.names = tuple(names)
+        self.tau_hold = 0.0
+
+    def unpack(self, x):
+        s = dict(zip(self.names, x))
+        w = s.get("w", self.point.speed)
+        return (
+            complex(s["psi_s.re"], s["psi_s.im"]),
+            complex(s["psi_r.re"], s["psi_r.im"]),
+            w,
+            s.get("e_I", 0.0),
+            s.get("w_f", w),
+            complex(s.get("z.re", 0.0), s.get("z.im", 0.0)),
+        )
+
+    def torque_command(self, x) -> float:
+        _, _, _, e_I, w_f, _ = self.unpack(x)
+        if self.model.speed_loop != "closed":
+            return self.tau_hold
+        g = self.model.gains
+        return speed_pi(g.K_P, g.K_I, g.K_F, e_I, self.point.speed, w_f, -np.inf, np.inf, 1.0)[0]
+
+    def rhs(self, x) -> np.ndarray:
+        m, plant = self.model, self.plant
+        psi_s, psi_r, w, _, w_f, z = self.unpack(x)
+        i_s, i_r = currents(m.machine, psi_s, psi_r)
+        tau = self.torque_command(x)
+        plant.load(psi_s, psi_r, w)
+        # the controller uses the measured stator terminal voltage, which depends on the rotor
+        # voltage through the supply inductance: solve this algebraic loop by fixed-point iteration
+        v_s = m.v_g - m.supply_resistance * i_s
+        for _ in range(200):
+            v_r, dz = self._law(v_s, w_f, tau, i_s, i_r, z)
+            v_new = plant.terminal_voltage(v_r)
+            change = abs(v_new - v_s)
+            v_s = v_new
+            if change <= 1e-15 * m.v_g:
+                break
+        else:
+            raise RuntimeError("the measured stator voltage does not converge (supply inductance)")
+        v_r, dz = self._law(v_s, w_f, tau, i_s, i_r, z)
+        dpsi_s, dpsi_r, dw, _ = plant.evaluate(v_r)
+        self.last_dw = dw  # the torque balance (26), also when the speed is frozen
+        out = {
+            "psi_s.re": dpsi_s.real,
+            "psi_s.im": dpsi_s.imag,
+            "psi_r.re": dpsi_r.real,
+            "psi_r.im": dpsi_r.imag,
+            "w": dw,
+            "e_I": self.point.speed - w_f,
+            "w_f": (w - w_f) / m.speed_filter_tau if m.speed_filter_tau > 0 else 0.0,
+            "z.re": dz.real,
+            "z.im": dz.imag,
+        }
+        return np.array([out[n] for n in self.names])
+
+    def _law(self, v_s, w_hat, tau, i_s, i_r, z):
+        """Rotor voltage in the supply frame: the law in the measured stator-voltage frame."""
+        m = self.model
+        v_mag = abs(v_s)
+        to_supply = v_s / v_mag
+        if m.mode == "voltage":
+            return _voltage_law(self.p_est, m.w_e, w_hat, v_mag, tau) * to_supply, 0j
+        v_r, dz = _current_law(
+            self.cp_unit, self.p_est, m.w_e, w_hat, v_mag, tau, i_s / to_supply, i_r / to_supply, z
+        )
+        return v_r * to_supply, dz
+
+    def guess(self) -> np.ndarray:
+        """Equilibrium of the drive with exact controller parameters and no supply impedance."""
+        m, pt = self.model, self.point
+        p = machine_vector(m.machine)
+        tau = pt.load_torque + m.machine.B * pt.speed
+        self.tau_hold = tau
+        i_s, _ = stator_current_command(p, m.w_e, m.v_g, tau, 0.0)
+        i_r = rotor_current_for(p, m.w_e, m.v_g, i_s)
+        psi_s, psi_r = fluxes(m.machine, i_s, i_r)
+        g = m.gains
+        e_I = (tau - g.K_F * g.K_P * pt.speed + g.K_P * pt.speed) / g.K_I
+        z = m.R_T * i_r / m.current_gains[1]
+        values = {
+            "psi_s.re": psi_s.real,
+            "psi_s.im": psi_s.imag,
+            "psi_r.re": psi_r.real,
+            "psi_r.im": psi_r.imag,
+            "w": pt.speed,
+            "e_I": e_I,
+            "w_f": pt.speed,
+            "z.re": z.real,
+            "z.im": z.imag,
+        }
+        return np.array([values[n] for n in self.names])
+
+    def scales(self) -> np.ndarray:
+        m = self.model
+        psi = m.v_g / m.w_e
+        scale = {"w": 100.0, "e_I": 0.1, "w_f": 100.0}
+        return np.array([scale.get(n, psi if n.startswith("psi") else 0.01) for n in self.names])
+
+
+# ---------------------------------------------------------------------------------------------
+# sampled-data closed loop: the engine's one-sample map
+# ---------------------------------------------------------------------------------------------
+
+
+class _Sampled:
+    """One control sample of the compiled simulator, as a map of the state at the sample instant.
+
+    The frame is re-referenced at every sample (supply angle and shaft angle zero at t_k), so the
+    map is autonomous. State: Re/Im psi_s, Re/Im psi_r, w (at t_k); phi = the shaft angle travelled
+    over the last period (the encoder difference the speed estimate uses); e_I; w_est (speed
+    estimate, filter state); Re/Im of the rotor voltage applied over the last period, in rotor
+    coordinates referred to the current sample (the converter output the stator-voltage
+    measurement sees); with one sample of delay, Re/Im of the command waiting to be applied.
+    """
+
+    def __init__(self, model: DriveModel, point: OperatingPoint):
+        if model.speed_loop != "closed":
+            raise InputError("speed_loop", "the sampled-data model needs the closed speed loop")
+        self.model, self.point = model, point
+        a = build_arrays(drive_setup(model, point))
+        self.a = a
+        self.p_est, self.cp = a["p_est"][0], a["cp"][0]
+        self.cs = np.zeros(ctl.N_CTRL_STATES)
+        self.x = np.zeros_like(a["x"])
+        self.work = np.empty((5, self.x.shape[0]))
+        self.v_term = np.zeros(1, dtype=complex)
+        self.v_r = np.zeros(1, dtype=complex)
+        names = ["psi_s.re", "psi_s.im", "psi_r.re", "psi_r.im", "w", "phi", "e_I", "w_est"]
+        names += ["v_r.re", "v_r.im"]
+        if model.delay_samples:
+            names += ["v_cmd.re", "v_cmd.im"]
+        if model.mode == "current":
+            names += ["z.re", "z.im"]
+        self.names = tuple(names)
+        self.n_p = model.machine.n_p
+        self.T = model.sample_time
+
+    def load_engine(self, z):
+        """Engine state ``x`` and controller state ``cs`` for map state ``z`` (t_k = 0)."""
+        x, cs, T, w_e = self.x, self.cs, self.T, self.model.w_e
+        x[:] = 0.0
+        x[PSI_S_RE], x[PSI_S_IM], x[PSI_R_RE], x[PSI_R_IM], x[OMEGA] = z[0], z[1], z[2], z[3], z[4]
+        cs[:] = 0.0
+        cs[ctl.CS_STARTED] = 1.0
+        cs[ctl.CS_THETA_PREV] = -z[5]
+        cs[ctl.CS_E_INT], cs[ctl.CS_W_EST] = z[6], z[7]
+        cs[ctl.CS_W_E_EST] = w_e
+        cs[ctl.CS_ANGLE_G_PREV] = -w_e * T
+        cs[ctl.CS_VR_RE], cs[ctl.CS_VR_IM] = z[8], z[9]
+        cs[ctl.CS_PHASE], cs[ctl.CS_MODE] = ctl.PHASE_RUN, self.cp[ctl.CP_MODE]
+        cs[ctl.CS_THETA_ADJ], cs[ctl.CS_M_ADJ] = self.cp[ctl.CP_THETA_ADJ], self.cp[ctl.CP_M_ADJ]
+        if self.model.mode == "current":
+            cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM] = z[-2], z[-1]
+
+    def step(self, z) -> tuple[np.ndarray, float]:
+        """The state one sample later, and the torque command computed at this sample."""
+        a, T = self.a, self.T
+        self.load_engine(z)
+        x, cs = self.x, self.cs
+        held = complex(z[8], z[9])
+        self.v_r[0] = held
+        v_g = plant_derivatives(
+            0.0, x, self.work[0], a["machines"], a["bus"], a["supply"], a["load_t"],
+            a["load_tau"], self.v_r, a["closed"], self.v_term,
+        )  # fmt: skip
+        i_s, i_r_rotor = engine.measured_currents(a["machines"][0], x, 0, True)
+        command, _, _ = ctl.controller_step(
+            self.p_est, self.cp, cs, self.v_term[0], v_g, i_s, i_r_rotor, 0.0, self.point.speed
+        )
+        applied = complex(z[10], z[11]) if self.model.delay_samples else command
+        self.v_r[0] = applied
+        engine.advance_plant(
+            0.0, x, T, self.model.substeps, a["machines"], a["bus"], a["supply"], a["load_t"],
+            a["load_tau"], self.v_r, a["closed"], self.work, self.v_term,
+        )  # fmt: skip
+        phi = x[THETA]
+        back = np.exp(-1j * x[-1])  # stationary frame at t_k -> frame of the next sample
+        rotor = np.exp(1j * (self.n_p * phi - x[-1]))  # rotor coordinates, re-referenced
+        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM]) * back
+        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM]) * back
+        v_applied = applied * rotor
+        out = [psi_s.real, psi_s.imag, psi_r.real, psi_r.imag, x[OMEGA], phi]
+        out += [cs[ctl.CS_E_INT], cs[ctl.CS_W_EST], v_applied.real, v_applied.imag]
+        if self.model.delay_samples:
+            v_wait = command * rotor
+            out += [v_wait.real, v_wait.imag]
+        if self.model.mode == "current":
+            out += [cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM]]
+        return np.array(out), cs[ctl.CS_TAU_COM]
+
+    def guess(self, cont_state: np.ndarray, cont: _Continuous) -> np.ndarray:
+        psi_s, psi_r, w, e_I, _, integral = cont.unpack(cont_state)
+        m = self.model
+        tau = cont.torque_command(cont_state)
+        v_r = _voltage_law(machine_vector(m.controller_params or m.machine), m.w_e, w, m.v_g, tau)
+        z = [
+            psi_s.real,
+            psi_s.imag,
+            psi_r.real,
+            psi_r.imag,
+            w,
+            w * self.T,
+            e_I,
+            w,
+            v_r.real,
+            v_r.imag,
+        ]
+        if m.delay_samples:
+            z += [v_r.real, v_r.imag]
+        if m.mode == "current":
+            z += [integral.real, integral.imag]
+        return np.array(z)
+
+    def scales(self) -> np.ndarray:
+        m = self.model
+        psi = m.v_g / m.w_e
+        s = [psi] * 4 + [100.0, 100.0 * self.T, 0.1, 100.0, 10.0, 10.0]
+        s += [10.0, 10.0] if m.delay_samples else []
+        return np.array(s + ([0.01, 0.01] if m.mode == "current" else []))
+
+
+# ---------------------------------------------------------------------------------------------
+# numerics: Jacobian by central differences, Newton
+# ---------------------------------------------------------------------------------------------
+
+FD_STEP = 1e-6  # relative step of the central differences (truncation ~1e-12, rounding ~1e-10)
+
+
+def jacobian(f, x: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """Central-difference Jacobian of the vector function ``f`` at ``x``."""
+    cols = []
+    for i in range(x.size):
+        h = FD_STEP * max(abs(x[i]), scales[i])
+        xp, xm = x.copy(), x.copy()
+        xp[i] += h
+        xm[i] -= h
+        cols.append((f(xp) - f(xm)) / (2.0 * h))
+    return np.column_stack(cols)
+
+
+def newton(f, x0: np.ndarray, scales: np.ndarray, tol: float = 1e-10, max_iter: int = 30):
+    """Solve f(x) = 0 by Newton's method with the central-difference Jacobian."""
+    x = x0.copy()
+    for _ in range(max_iter):
+        r = f(x)
+        dx = np.linalg.solve(jacobian(f, x, scales), -r)
+        x = x + dx
+        if np.all(np.abs(dx) <= tol * np.maximum(np.abs(x), scales)):
+            return x
+    raise RuntimeError("equilibrium not found (Newton did not converge)")
+
+
+# ---------------------------------------------------------------------------------------------
+# public entry points
+# ---------------------------------------------------------------------------------------------
+
+
+def _continuous_equilibrium(model: DriveModel, point: OperatingPoint):
+    cont = _Continuous(model, point)
+    x0 = cont.guess()
+    if model.speed_loop == "closed":
+        x = newton(cont.rhs, x0, cont.scales())
+        return cont, x
+    # held torque command: solve for it (with the electrical states) so that the torque balances
+    # the load (26), the speed staying at the operating point
+    free = [i for i, n in enumerate(cont.names) if n != "w"]
+
+    def residual(v):
+        x = x0.copy()
+        x[free] = v[:-1]
+        cont.tau_hold = v[-1]
+        return np.append(cont.rhs(x)[free], cont.last_dw)
+
+    v = newton(residual, np.append(x0[free], cont.tau_hold), np.append(cont.scales()[free], 0.1))
+    x = x0.copy()
+    x[free] = v[:-1]
+    cont.tau_hold = v[-1]
+    return cont, x
+
+
+def linearize(
+    model: DriveModel, point: OperatingPoint, kind: str = "continuous"
+) -> StabilityResult:
+    """Linearise the closed loop of ``model`` at ``point`` and return its eigenvalues.
+
+    ``kind``: "continuous" (continuous-time law, Jacobian of the right-hand side) or "sampled"
+    (the simulator's sampled-data loop, Jacobian of the one-sample map; voltage mode).
+    """
+    if kind not in KINDS:
+        raise InputError("kind", f"must be one of {', '.join(KINDS)}")
+    check_point(model, point)
+    cont, x = _continuous_equilibrium(model, point)
+    tau = cont.torque_command(x)
+    if kind == "continuous":
+        A = jacobian(cont.rhs, x, cont.scales())
+        s = np.linalg.eigvals(A)
+        z_eig, state, names, jac = np.array([], dtype=complex), x, cont.names, A
+        stable = bool(np.all(s.real < 0.0))
+    else:
+        smp = _Sampled(model, point)
+        z0 = newton(lambda z: smp.step(z)[0] - z, smp.guess(x, cont), smp.scales())
+        tau = smp.step(z0)[1]
+        F = jacobian(lambda z: smp.step(z)[0], z0, smp.scales())
+        z_eig = np.linalg.eigvals(F)
+        nonzero = z_eig[np.abs(z_eig) > Z_ZERO]
+        s = np.log(nonzero.astype(complex)) / model.sample_time
+        state, names, jac = z0, smp.names, F
+        stable = bool(np.all(np.abs(z_eig) < 1.0))
+    lo, hi = _torque_window(model, model.v_g)
+    s = s[np.lexsort((-s.imag, -s.real))]
+    return StabilityResult(
+        model=model,
+        point=point,
+        kind=kind,
+        eigenvalues=s,
+        z_eigenvalues=z_eig,
+        max_real_part=float(np.max(s.real)),
+        stable=stable,
+        torque_command=float(tau),
+        within_limits=bool(lo < tau < hi),
+        state=state,
+        state_names=names,
+        jacobian=jac,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# maps over operating points and the tolerated velocity bandwidth
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StabilityMap:
+    """max_real_part[i, j] and stable[i, j] at speeds_rpm[i], loads_nm[j] for one model."""
+
+    model: DriveModel
+    kind: str
+    speeds_rpm: np.ndarray
+    loads_nm: np.ndarray
+    max_real_part: np.ndarray
+    stable: np.ndarray
+
+    @property
+    def all_stable(self) -> bool:
+        return bool(np.all(self.stable))
+
+
+def default_grid(model: DriveModel, n_speed: int = 13, n_load: int = 7):
+    """Speeds 0..2,700 rpm (the paper's experiments) and loads across 90 % of the torque window."""
+    lo, hi = _torque_window(model, model.v_g)
+    speeds = np.linspace(0.0, 2700.0, n_speed)
+    loads = np.linspace(0.9 * lo, 0.9 * hi, n_load)
+    return speeds, loads
+
+
+def stability_map(
+    model: DriveModel, speeds_rpm, loads_nm, kind: str = "continuous"
+) -> StabilityMap:
+    """Linearise at every (speed, load) of the grid."""
+    speeds_rpm = np.asarray(speeds_rpm, dtype=float)
+    loads_nm = np.asarray(loads_nm, dtype=float)
+    mrp = np.empty((speeds_rpm.size, loads_nm.size))
+    stable = np.empty(mrp.shape, dtype=bool)
+    for i, n in enumerate(speeds_rpm):
+        for j, tl in enumerate(loads_nm):
+            r = linearize(model, OperatingPoint(n * RAD_S_PER_RPM, tl), kind)
+            mrp[i, j], stable[i, j] = r.max_real_part, r.stable
+    return StabilityMap(model, kind, speeds_rpm, loads_nm, mrp, stable)
+
+
+def max_stable_bandwidth(
+    mode: str = "voltage",
+    speeds_rpm=None,
+    loads_nm=None,
+    *,
+    kind: str = "continuous",
+    lower: float = 5.0,
+    upper: float = 3000.0,
+    tol: float = 1.0,
+    **model_fields,
+) -> float:
+    """Largest a_D,VEL [rad/s] (bisection, to ``tol``) for which every grid point is stable.
+
+    Assumes stability is lost once as the bandwidth rises (checked at the two ends): returns
+    ``upper`` if the grid is stable there, and 0.0 if it is already unstable at ``lower``.
+    """
+    base = DriveModel(mode=mode, **model_fields)
+    if speeds_rpm is None or loads_nm is None:
+        speeds_rpm, loads_nm = default_grid(base)
+
+    def ok(a):
+        return stability_map(
+            dataclasses.replace(base, speed_bandwidth=a), speeds_rpm, loads_nm, kind
+        ).all_stable
+
+    if not ok(lower):
+        return 0.0
+    if ok(upper):
+        return upper
+    lo, hi = lower, upper
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo
+
+
+# ---------------------------------------------------------------------------------------------
+# nonlinear cross-check: the compiled engine started at the sampled equilibrium
+# ---------------------------------------------------------------------------------------------
+
+
+def simulate_from_equilibrium(result: StabilityResult, perturbation: np.ndarray, n_samples: int):
+    """Run the compiled engine ``n_samples`` samples from the sampled equilibrium of ``result``
+    plus ``perturbation`` (a map-state vector); returns (t, shaft speed w at every sample).
+
+    ``result`` must come from ``linearize(..., kind="sampled")`` with no computation delay
+    (the engine applies each command at once).
+    """
+    if result.kind != "sampled" or result.model.delay_samples:
+        raise InputError("result", "needs a sampled-data result without computation delay")
+    smp = _Sampled(result.model, result.point)
+    smp.load_engine(result.state + perturbation)
+    a = dict(smp.a)
+    a["x"] = smp.x.copy()
+    a["cs"] = smp.cs.copy()[None, :]
+    log = np.zeros((n_samples, 1, engine.N_LOG))
+    _, status = engine.run_drive(
+        **a, T_s=smp.T, n_sub=result.model.substeps, n_steps=n_samples, log_every=1, log=log
+    )
+    if status != engine.STATUS_OK:
+        raise RuntimeError("simulation diverged")
+    return np.arange(n_samples) * smp.T, log[:, 0, engine.LOG_W]

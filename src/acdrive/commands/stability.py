@@ -1,0 +1,197 @@
+"""``acdrive stability``: small-signal stability of the whole DFIM speed drive.
+
+``acdrive stability --mode {voltage,current} --speed-rpm S --load-nm T [--bandwidth A] --json``
+linearises the closed loop at one operating point and prints its eigenvalues;
+``acdrive stability --map [--out DIR] [--json]`` maps the stable and unstable regions over
+speed x load for both modes at the given velocity bandwidth (default: the paper's 314 rad/s),
+draws them (PNG) and reports the largest velocity bandwidth each mode tolerates on that grid.
+Method and results: docs/stability.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+
+HELP = """Linearised closed loop of Bodson's DFIM speed drive (machine (9), torque law (20)+(22)
+or rotor current loop (43)-(47), speed PI (25)-(27), mechanics (26)). --model continuous uses the
+continuous-time law; --model sampled linearises the simulator's own sampled-data loop (5 kHz,
+zero-order hold, encoder backward difference; --delay-samples 1 adds a computation delay)."""
+
+PAPER_BANDWIDTH = 314.0  # a_D,VEL of Bodson IV-A [rad/s]
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "stability", help="drive stability (eigenvalues, map)", description=HELP
+    )
+    p.add_argument("--map", action="store_true", help="map speed x load for both modes")
+    p.add_argument("--mode", choices=("voltage", "current"), default="voltage")
+    p.add_argument("--speed-rpm", type=float, default=None, help="shaft speed [rpm]")
+    p.add_argument("--load-nm", type=float, default=0.0, help="load torque [N m]")
+    p.add_argument("--bandwidth", type=float, default=PAPER_BANDWIDTH, help="a_D,VEL [rad/s] (314)")
+    p.add_argument("--model", choices=("continuous", "sampled"), default="continuous")
+    p.add_argument("--delay-samples", type=int, default=0, help="0 or 1 (sampled model)")
+    p.add_argument("--speed-filter-tau", type=float, default=0.0, help="speed filter [s]")
+    p.add_argument("--supply-resistance", type=float, default=0.0, help="supply R [ohm]")
+    p.add_argument("--supply-inductance", type=float, default=0.0, help="supply L [H]")
+    p.add_argument("--viscous-friction", type=float, default=0.0, help="B [N m s/rad]")
+    p.add_argument("--inertia", type=float, default=None, help="true J [kg m^2] (design: 3.5e-4)")
+    p.add_argument("--out", default="stability-map", help="figure directory for --map")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(handler=run)
+
+
+def _model(args, mode: str):
+    from acdrive.analysis.drive_stability import DriveModel
+    from acdrive.machines.dfim import BODSON_DFIM
+
+    bandwidth = require_positive("--bandwidth", args.bandwidth)
+    B = require_nonnegative("--viscous-friction", args.viscous_friction)
+    machine = dataclasses.replace(BODSON_DFIM, B=B)
+    if args.inertia is not None:
+        machine = dataclasses.replace(machine, J=require_positive("--inertia", args.inertia))
+    if args.delay_samples not in (0, 1):
+        raise InputError("--delay-samples", "must be 0 or 1")
+    return DriveModel(
+        mode=mode,
+        machine=machine,
+        design_inertia=BODSON_DFIM.J,
+        speed_bandwidth=bandwidth,
+        supply_resistance=require_nonnegative("--supply-resistance", args.supply_resistance),
+        supply_inductance=require_nonnegative("--supply-inductance", args.supply_inductance),
+        speed_filter_tau=require_nonnegative("--speed-filter-tau", args.speed_filter_tau),
+        delay_samples=args.delay_samples,
+    )
+
+
+def _pairs(values) -> list[list[float]]:
+    return [[float(v.real), float(v.imag)] for v in values]
+
+
+def run(args) -> int:
+    if args.map:
+        return _map(args)
+    from acdrive.analysis.drive_stability import (
+        RAD_S_PER_RPM,
+        OperatingPoint,
+        check_point,
+        linearize,
+    )
+
+    if args.speed_rpm is None:
+        raise InputError("--speed-rpm", "is required (or give --map)")
+    model = _model(args, args.mode)
+    speed = require_finite("--speed-rpm", args.speed_rpm) * RAD_S_PER_RPM
+    load = require_finite("--load-nm", args.load_nm)
+    point = OperatingPoint(speed, load)
+    try:
+        check_point(model, point)
+    except InputError as exc:
+        name = {"speed": "--speed-rpm", "load_torque": "--load-nm"}.get(exc.field, exc.field)
+        raise InputError(name, exc.rule) from None
+    r = linearize(model, point, args.model)
+    out = {
+        "mode": args.mode,
+        "model": args.model,
+        "speed_rpm": args.speed_rpm,
+        "load_nm": load,
+        "bandwidth_rad_s": model.speed_bandwidth,
+        "max_real_part": r.max_real_part,
+        "stable": r.stable,
+        "dominant": [r.dominant.real, r.dominant.imag],
+        "torque_command_nm": r.torque_command,
+        "within_torque_limits": r.within_limits,
+        "eigenvalues": _pairs(r.eigenvalues),
+    }
+    if args.json:
+        print(json.dumps(out))
+    else:
+        for key in ("mode", "model", "speed_rpm", "load_nm", "bandwidth_rad_s"):
+            print(f"{key:22s} {out[key]}")
+        print(f"{'stable':22s} {r.stable}")
+        print(f"{'max_real_part':22s} {r.max_real_part:.3f} 1/s")
+        print("eigenvalues [1/s]:")
+        for s in r.eigenvalues:
+            print(f"  {s.real:12.3f} {s.imag:+12.3f}j")
+    return 0
+
+
+def _map(args) -> int:
+    from acdrive.analysis.drive_stability import default_grid, max_stable_bandwidth, stability_map
+
+    maps, report = {}, {}
+    for mode in ("voltage", "current"):
+        model = _model(args, mode)
+        speeds, loads = default_grid(model)
+        m = stability_map(model, speeds, loads, args.model)
+        maps[mode] = m
+        fields = {f.name: getattr(model, f.name) for f in dataclasses.fields(model)}
+        fields = {k: v for k, v in fields.items() if k not in ("mode", "speed_bandwidth")}
+        tolerated = max_stable_bandwidth(mode, speeds, loads, kind=args.model, **fields)
+        worst = np.unravel_index(np.argmax(m.max_real_part), m.max_real_part.shape)
+        report[mode] = {
+            "stable_everywhere": m.all_stable,
+            "unstable_points": int(np.count_nonzero(~m.stable)),
+            "points": int(m.stable.size),
+            "worst_max_real_part": float(m.max_real_part[worst]),
+            "worst_speed_rpm": float(speeds[worst[0]]),
+            "worst_load_nm": float(loads[worst[1]]),
+            "max_stable_bandwidth_rad_s": tolerated,
+        }
+    path = _draw(maps, Path(args.out), args)
+    out = {
+        "bandwidth_rad_s": args.bandwidth,
+        "model": args.model,
+        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
+        "modes": report,
+        "figure": str(path),
+    }
+    if args.json:
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
+        for mode, r in report.items():
+            print(
+                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
+                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
+                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
+                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s"
+            )
+    return 0
+
+
+def _draw(maps, out: Path, args) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
+    limit = max(float(np.max(np.abs(m.max_real_part))) for m in maps.values())
+    limit = max(limit, 1.0)
+    for ax, (mode, m) in zip(axes, maps.items()):
+        X, Y = np.meshgrid(m.loads_nm, m.speeds_rpm)
+        pc = ax.pcolormesh(
+            X, Y, m.max_real_part, cmap="RdBu_r", vmin=-limit, vmax=limit, shading="nearest"
+        )
+        if np.any(m.stable) and np.any(~m.stable):
+            ax.contour(X, Y, m.max_real_part, levels=[0.0], colors="k", linewidths=1.5)
+        ax.plot(X[~m.stable], Y[~m.stable], "kx", ms=4, label="unstable")
+        ax.plot(X[m.stable], Y[m.stable], "k.", ms=3, label="stable")
+        ax.set_title(f"{mode} command, a_D,VEL = {args.bandwidth:g} rad/s ({args.model})")
+        ax.set_xlabel("load torque [N m]")
+        ax.legend(loc="upper right", fontsize=8)
+    axes[0].set_ylabel("speed [rpm]")
+    fig.colorbar(pc, ax=axes, label="max Re(s) [1/s]")
+    path = out / f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
