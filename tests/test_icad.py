@@ -23,6 +23,7 @@ from acdrive.analysis.icad import (
     imc_pi,
     pmsg_msf,
     structure_conditions,
+    worst,
 )
 from acdrive.analysis.plants import Plant2x2, plant_for, plant_from_params, plants_for
 from acdrive.errors import InputError
@@ -100,6 +101,13 @@ def test_lti_constructors_match_transfer_functions():
     assert LTI.zpk([], [-1.0], 1.0).is_stable
     with pytest.raises(InputError, match="improper"):
         LTI.zpk([-1.0, -2.0], [-3.0], 1.0)
+    tf = control.tf([2.0, 3.0], [1.0, 4.0, 0.0])
+    np.testing.assert_allclose(LTI.from_control(tf).freqresp(W), (2 * s + 3) / (s**2 + 4 * s))
+
+
+def test_worst_case_never_skips_undefined_figures():
+    assert worst([3.0, 1.0, 2.0]) == 1.0 and worst([3.0, 1.0], max) == 3.0
+    assert math.isnan(worst([1.0, math.nan, 0.5]))
 
 
 @settings(max_examples=30, deadline=None)

@@ -570,7 +570,7 @@ class ICADAnalysis:
 
     @property
     def coupling_peak_db(self) -> float:
-        return max(ch.coupling_peak_db for ch in self.channels)
+        return worst((ch.coupling_peak_db for ch in self.channels), max)
 
 
 def check_controller(k: LTI, name: str) -> LTI:
@@ -747,6 +747,12 @@ class SweepSummary:
     coupling_peak_db: float  # max coupling
 
 
+def worst(values, fn=min) -> float:
+    """min (or ``fn``) of figures; nan if any is nan (an undefined figure is never skipped)."""
+    arr = np.asarray(list(values), dtype=float)
+    return math.nan if np.isnan(arr).any() else float(fn(arr))
+
+
 def summarize(analyses: Sequence[ICADAnalysis]) -> SweepSummary:
     """Worst-case figures over a sequence of analyses."""
     if not analyses:
@@ -759,15 +765,15 @@ def summarize(analyses: Sequence[ICADAnalysis]) -> SweepSummary:
             for a in analyses
         ),
         closed_loop_stable=all(a.closed_loop_stable for a in analyses),
-        structural_gm_db=min(a.structural.gm_db for a in analyses),
-        structural_gm_h_db=min(ch.structural.gm_db for ch in chans),
-        pm_deg=min(ch.margins.pm_deg for ch in chans),
-        gm_db=min(ch.margins.gm_db for ch in chans),
-        kg_pm_deg=min(ch.kg_margins.pm_deg for ch in chans),
-        kg_gm_db=min(ch.kg_margins.gm_db for ch in chans),
-        bandwidth_rad_s=min(ch.bandwidth_rad_s for ch in chans),
-        crossover_rad_s=min(ch.margins.crossover_rad_s for ch in chans),
-        coupling_peak_db=max(ch.coupling_peak_db for ch in chans),
+        structural_gm_db=worst(a.structural.gm_db for a in analyses),
+        structural_gm_h_db=worst(ch.structural.gm_db for ch in chans),
+        pm_deg=worst(ch.margins.pm_deg for ch in chans),
+        gm_db=worst(ch.margins.gm_db for ch in chans),
+        kg_pm_deg=worst(ch.kg_margins.pm_deg for ch in chans),
+        kg_gm_db=worst(ch.kg_margins.gm_db for ch in chans),
+        bandwidth_rad_s=worst(ch.bandwidth_rad_s for ch in chans),
+        crossover_rad_s=worst(ch.margins.crossover_rad_s for ch in chans),
+        coupling_peak_db=worst((ch.coupling_peak_db for ch in chans), max),
     )
 
 

@@ -21,6 +21,7 @@ from acdrive.analysis.icad import (
     icad_response,
     im_msf_magnitude_at_rotor_speed,
     summarize,
+    worst,
 )
 from acdrive.analysis.plants import MACHINES, machine_params, plant_for
 from acdrive.errors import InputError, require_finite
@@ -76,15 +77,15 @@ def single_report(machine: str, speed: float, controller: str, analysis) -> dict
         "msf_at_wr_db": _num(20 * math.log10(im_msf_magnitude_at_rotor_speed(params, speed)))
         if is_im and speed != 0.0
         else None,
-        "crossover_rad_s": _num(min(ch.margins.crossover_rad_s for ch in chans)),
-        "pm_deg": _num(min(ch.margins.pm_deg for ch in chans)),
-        "gm_db": _num(min(ch.margins.gm_db for ch in chans)),
-        "gm_reduction_db": _num(max(ch.margins.gm_reduction_db for ch in chans)),
-        "bandwidth_rad_s": _num(min(ch.bandwidth_rad_s for ch in chans)),
-        "kg_pm_deg": _num(min(ch.kg_margins.pm_deg for ch in chans)),
-        "kg_gm_db": _num(min(ch.kg_margins.gm_db for ch in chans)),
+        "crossover_rad_s": _num(worst(ch.margins.crossover_rad_s for ch in chans)),
+        "pm_deg": _num(worst(ch.margins.pm_deg for ch in chans)),
+        "gm_db": _num(worst(ch.margins.gm_db for ch in chans)),
+        "gm_reduction_db": _num(worst((ch.margins.gm_reduction_db for ch in chans), max)),
+        "bandwidth_rad_s": _num(worst(ch.bandwidth_rad_s for ch in chans)),
+        "kg_pm_deg": _num(worst(ch.kg_margins.pm_deg for ch in chans)),
+        "kg_gm_db": _num(worst(ch.kg_margins.gm_db for ch in chans)),
         "structural_gm_db": _num(analysis.structural.gm_db),
-        "structural_gm_h_db": _num(min(ch.structural.gm_db for ch in chans)),
+        "structural_gm_h_db": _num(worst(ch.structural.gm_db for ch in chans)),
         "coupling_peak_db": _num(analysis.coupling_peak_db),
         "closed_loop_stable": analysis.closed_loop_stable,
         "b1": analysis.b1,
