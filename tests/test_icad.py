@@ -261,19 +261,20 @@ def test_pmsg_satisfies_conditions_i_to_iv(Rs, Ld, Lq, w_r):
 # --- exact counts vs closed-loop eigenvalues ---------------------------------------------------
 
 
-def random_plant(rng, n=3):
+def random_plant(rng, n=3, feedthrough=False):
     A = rng.normal(size=(n, n)) - 2.5 * np.eye(n)
     while np.max(np.linalg.eigvals(A).real) > -0.1:
         A -= 0.5 * np.eye(n)
-    return Plant2x2(A, rng.normal(size=(n, 2)), rng.normal(size=(2, n)), np.zeros((2, 2)))
+    D = 0.3 * rng.normal(size=(2, 2)) if feedthrough else np.zeros((2, 2))
+    return Plant2x2(A, rng.normal(size=(n, 2)), rng.normal(size=(2, n)), D)
 
 
 def test_counts_agree_with_closed_loop_and_transmission_zeros():
     """Z = N + P for gamma (Z: RHP zeros of 1 - gamma) and for the channels (Z: MIMO poles)."""
     rng = np.random.default_rng(7)
     nonzero_gamma = nonzero_channel = 0
-    for trial in range(14):
-        plant = random_plant(rng)
+    for trial in range(16):
+        plant = random_plant(rng, feedthrough=trial % 4 == 3)
         gain = 10 ** rng.uniform(-1, 1.5) * rng.choice([-1.0, 1.0])
         k1 = LTI.pi(gain, abs(gain) * rng.uniform(0.1, 3.0) * np.sign(gain))
         k2 = LTI.zpk([-rng.uniform(0.5, 5)], [0.0, -rng.uniform(5, 20)], 10 * gain)
