@@ -47,9 +47,9 @@ N_CTRL_PARAMS = 25
 # --- controller state (per motor) ------------------------------------------------------------
 (CS_E_INT, CS_THETA_PREV, CS_W_EST, CS_W_E_EST, CS_ANGLE_G_PREV, CS_VR_RE, CS_VR_IM, CS_TAU_COM,
  CS_STARTED, CS_PHASE, CS_THETA_ADJ, CS_M_ADJ, CS_SYNC_OK_TIME, CS_IR_INT_RE, CS_IR_INT_IM,
- CS_Q_INT, CS_MODE, CS_I_R_COM, CS_Q_MEAS,
- ) = range(19)
-N_CTRL_STATES = 19
+ CS_Q_INT, CS_MODE, CS_I_R_COM, CS_Q_MEAS, CS_I_R_COM_RE, CS_I_R_COM_IM, CS_I_R_F_RE, CS_I_R_F_IM,
+ ) = range(23)
+N_CTRL_STATES = 23
 # fmt: on
 
 MODE_VOLTAGE, MODE_CURRENT = 0.0, 1.0
@@ -252,6 +252,9 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
             rotor_current_for(p_est, w_e, v_s_mag, i_s_com), cp[CP_I_R_MAX]
         )
         cs[CS_I_R_COM] = np.abs(i_r_com)
+        cs[CS_I_R_COM_RE], cs[CS_I_R_COM_IM] = i_r_com.real, i_r_com.imag
+        if currents_valid:  # a failed measurement leaves the last valid value
+            cs[CS_I_R_F_RE], cs[CS_I_R_F_IM] = i_r_f.real, i_r_f.imag
         if cs[CS_MODE] == MODE_CURRENT:
             if limited:
                 flags |= FLAG_CURRENT_LIMIT

@@ -15,6 +15,10 @@ from numba import njit, prange
 
 from acdrive.control.dfim import (
     CS_I_R_COM,
+    CS_I_R_COM_IM,
+    CS_I_R_COM_RE,
+    CS_I_R_F_IM,
+    CS_I_R_F_RE,
     CS_M_ADJ,
     CS_MODE,
     CS_PHASE,
@@ -36,10 +40,10 @@ from acdrive.plant.sensors import encoder_angle
 # --- logged signals, per motor and per logged sample -----------------------------------------
 LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
              "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
-             "mode", "relay_closed")
+             "mode", "relay_closed", "i_r_com_d", "i_r_com_q", "i_r_d", "i_r_q")
 (LOG_W, LOG_W_REF, LOG_TAU_COM, LOG_TAU_E, LOG_V_S, LOG_V_R, LOG_I_S, LOG_I_R, LOG_I_RX,
  LOG_I_RY, LOG_FLAGS, LOG_I_R_COM, LOG_Q_S, LOG_V_MISMATCH, LOG_THETA_ADJ, LOG_M_ADJ, LOG_PHASE,
- LOG_MODE, LOG_RELAY) = range(len(LOG_NAMES))
+ LOG_MODE, LOG_RELAY, LOG_I_R_COM_D, LOG_I_R_COM_Q, LOG_I_R_D, LOG_I_R_Q) = range(len(LOG_NAMES))
 N_LOG = len(LOG_NAMES)
 
 # --- per-motor sensor and converter data -----------------------------------------------------
@@ -117,6 +121,9 @@ def log_sample(row, p, x, o, closed, v_s, v_g, v_r_rotor, w_ref, cs, flags):
     row[LOG_PHASE] = cs[CS_PHASE]
     row[LOG_MODE] = cs[CS_MODE]
     row[LOG_RELAY] = 1.0 if closed else 0.0
+    # rotor current command (43) and measured rotor current in the controller's stator-voltage frame
+    row[LOG_I_R_COM_D], row[LOG_I_R_COM_Q] = cs[CS_I_R_COM_RE], cs[CS_I_R_COM_IM]
+    row[LOG_I_R_D], row[LOG_I_R_Q] = cs[CS_I_R_F_RE], cs[CS_I_R_F_IM]
 
 
 @jit
