@@ -1,0 +1,44 @@
+"""``acdrive reproduce PAPER [--out DIR]``: regenerate a paper's reproduction report.
+
+Each paper maps to a module ``acdrive.report.<name>_reproduction`` exposing
+``write_report(out_dir) -> Path``; a paper whose module does not exist yet is a one-line error
+with exit code 2.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+#: Paper name -> report module (written by its owner; may not exist yet).
+REPORTS = {
+    "icad": "acdrive.report.icad_reproduction",
+    "bodson": "acdrive.report.bodson_reproduction",
+}
+
+HELP = """Recompute every number and figure of a paper's analysis and write a Markdown report
+(DIR/<paper>.md, figures in DIR/<paper>/) with the printed value beside acdrive's and the reason
+for each difference. Papers: icad (Ugalde-Loo et al. and Amezquita-Brooks et al.), bodson."""
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser(
+        "reproduce", help="regenerate a reproduction report", description=HELP
+    )
+    parser.add_argument("paper", choices=sorted(REPORTS), help="which paper(s)")
+    parser.add_argument("--out", default="docs/reproduction", help="output directory")
+    parser.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    module_name = REPORTS[args.paper]
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name != module_name:
+            raise
+        sys.stderr.write(f"acdrive: error: reproduce {args.paper}: report not available yet\n")
+        return 2
+    path = module.write_report(args.out)
+    print(path)
+    return 0
