@@ -394,3 +394,21 @@ def test_bad_inputs_raise_input_error():
         analyse((-np.eye(2), np.eye(2), np.eye(3, 2), np.zeros((3, 2))), K20, K20)
     with pytest.raises(InputError, match="controller"):
         controller_for("nonsense")
+
+
+def test_loop_margins_of_textbook_loops():
+    """K/(s(s+1)): PM = 90 - atan(w_c) deg; K/(s(s+1)(s+2)): GM = 6/K at w = sqrt(2)."""
+    from acdrive.analysis.margins import loop_margins
+
+    w = np.logspace(-3, 3, 2000)
+    K = 4.0
+    m = loop_margins(lambda x: K / (1j * x * (1j * x + 1)), w)
+    wc = math.sqrt((-1 + math.sqrt(1 + 4 * K**2)) / 2)  # wc^2 (1 + wc^2) = K^2
+    assert m.crossover_rad_s == pytest.approx(wc, rel=1e-9)
+    assert m.pm_deg == pytest.approx(90 - math.degrees(math.atan(wc)), rel=1e-9)
+    m3 = loop_margins(lambda x: 1.5 / (1j * x * (1j * x + 1) * (1j * x + 2)), w)
+    assert m3.gm_db == pytest.approx(20 * math.log10(6 / 1.5), rel=1e-9)
+    assert m3.gm_rad_s == pytest.approx(math.sqrt(2), rel=1e-9)
+    # a crossover with phase lead (+30 deg) is 150 deg away from -1, not -150 deg
+    lead = loop_margins(lambda x: np.exp(1j * np.pi / 6) * 10 / x, w)
+    assert lead.pm_deg == pytest.approx(150.0, rel=1e-9)

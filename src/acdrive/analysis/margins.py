@@ -3,8 +3,10 @@
 Definitions (see docs/icad.md for the reasons):
 
 - gain crossover: a frequency where |L(jw)| = 1; ``crossover`` is the highest one;
-- phase margin: at each gain crossover, the angle from -1 to L(jw), wrapped to (-180, 180]
-  degrees; the reported margin is the smallest over all crossovers;
+- phase margin: at each gain crossover, the angle between L(jw) and -1 on the unit circle,
+  in [0, 180] degrees (180 + phase for a phase in (-360, 0]); the reported margin is the
+  smallest over all crossovers. It measures distance only: stability itself is decided by the
+  exact encirclement counts, not by the sign of a margin;
 - gain margins: at each phase crossover (Im L = 0, Re L < 0) the factor 1/|L| that would put
   L on -1. Crossings inside the unit circle give upward margins (> 0 dB, ``gm_db`` is the
   smallest); crossings outside it give gain-reduction margins (< 0 dB) of a conditionally
@@ -64,10 +66,7 @@ def loop_margins(L: Response, w: np.ndarray) -> LoopMargins:
         crossings.append(
             _refine(lambda x: float(np.log(np.abs(L(np.array([x]))[0]))), w[k], w[k + 1])
         )
-    pms = [
-        math.degrees((np.angle(L(np.array([wc]))[0]) + math.pi + math.pi) % (2 * math.pi) - math.pi)
-        for wc in crossings
-    ]
+    pms = [180.0 - abs(math.degrees(np.angle(L(np.array([wc]))[0]))) for wc in crossings]
     up, down, up_w = [], [], []
     phase_crossings = []
     for k in _sign_changes(vals.imag):
