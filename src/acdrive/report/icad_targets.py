@@ -34,7 +34,7 @@ class Printed:
 
 #: 2 MW PMSG, Ugalde-Loo section 3.5 (J printed as "416, 633"; read as 416 633 kg m^2).
 PMSG_2MW_PRINTED = {
-    "J": Printed(UGALDE, "sec. 3.5", 416633.0, "kg m^2"),
+    "J": Printed(UGALDE, "sec. 3.5", 416633.0, "kg m^2", "printed '416, 633'; read as 416 633"),
     "n_p": Printed(UGALDE, "sec. 3.5", 2, ""),
     "f": Printed(UGALDE, "sec. 3.5", 50.0, "Hz"),
     "R_s": Printed(UGALDE, "sec. 3.5", 4.523e-3, "ohm"),
