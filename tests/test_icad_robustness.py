@@ -154,3 +154,19 @@ def test_random_perturbation_sweep_keeps_structure():
 def test_bad_sweep_input_raises(call):
     with pytest.raises(InputError):
         call()
+
+
+@pytest.mark.parametrize("params", [DELORENZO_IM_13, PAPER_PERTURBATION.apply(DELORENZO_IM_13)])
+def test_gm_min_bounds_the_gamma_crossing_and_is_approached(params):
+    # Amezquita-Brooks (19): the positive-real-axis crossing of gamma stays below G_M,min and
+    # tends to it as w_r grows (the crossing is near w = w_r, at F(3) of Ugalde-Loo (73)).
+    bound = gm_min(params)
+    crossings = []
+    for w_r in (100.0, 375.0, 1000.0, 5000.0):
+        w = np.logspace(math.log10(0.3 * w_r), math.log10(3.0 * w_r), 20000)
+        g = _gamma(plant_from_params(params, w_r), w)
+        idx = np.flatnonzero((np.sign(g.imag[:-1]) != np.sign(g.imag[1:])) & (g.real[:-1] > 0))
+        crossings.append(max(g.real[idx]))
+    assert all(x < bound for x in crossings)
+    assert np.all(np.diff(crossings) > 0)
+    assert crossings[-1] > 0.99 * bound
