@@ -49,12 +49,14 @@ from acdrive.machines.dfim import (
     stator_current_command,
     torque_window,
 )
+from acdrive.plant import dfim_bus
 from acdrive.plant.dfim_bus import (
     OMEGA,
     PSI_R_IM,
     PSI_R_RE,
     PSI_S_IM,
     PSI_S_RE,
+    STATES_PER_MOTOR,
     THETA,
     n_states,
     plant_derivatives,
@@ -75,6 +77,8 @@ RAD_S_PER_RPM = math.pi / 30.0
 MODES = ("voltage", "current")
 KINDS = ("continuous", "sampled")
 SPEED_LOOPS = ("closed", "open", "frozen")
+#: index of the supply angle theta_g in the plant state of one motor
+SUPPLY_ANGLE = STATES_PER_MOTOR + getattr(dfim_bus, "THETA_G", 0)
 #: |z| below this is a structural zero of the sampled map (a state overwritten every sample)
 Z_ZERO = 1e-9
 
@@ -285,6 +289,17 @@ def _motor_setup(model: DriveModel, point: OperatingPoint) -> MotorSetup:
     )
 
 
+def _plant_state(x, machines, psi_s: complex, psi_r: complex, w: float) -> None:
+    """Fill the simulator's plant state of one motor: fluxes and speed given, shaft and supply
+    angles zero (and the plant's rotation phasors, where it carries them, set to match)."""
+    x[:] = 0.0
+    x[PSI_S_RE], x[PSI_S_IM] = psi_s.real, psi_s.imag
+    x[PSI_R_RE], x[PSI_R_IM] = psi_r.real, psi_r.imag
+    x[OMEGA] = w
+    if hasattr(dfim_bus, "project_phasors"):
+        dfim_bus.project_phasors(x, machines)
+
+
 def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0) -> DriveSetup:
     """The simulator's ``DriveSetup`` for ``model`` held at ``point`` (voltage mode)."""
     return DriveSetup(
@@ -314,11 +329,7 @@ class _Plant:
         self.w_e = model.w_e
 
     def load(self, psi_s: complex, psi_r: complex, w: float) -> None:
-        x = self.x
-        x[:] = 0.0
-        x[PSI_S_RE], x[PSI_S_IM] = psi_s.real, psi_s.imag
-        x[PSI_R_RE], x[PSI_R_IM] = psi_r.real, psi_r.imag
-        x[OMEGA] = w
+        _plant_state(self.x, self.machines, psi_s, psi_r, w)
 
     def evaluate(self, v_r: complex):
         """(d psi_s/dt, d psi_r/dt, dw/dt) in the supply frame and the stator terminal voltage,
@@ -338,8 +349,10 @@ class _Plant:
             self.v_term,
         )
         x, dx = self.x, self.dx
-        dpsi_s = complex(dx[PSI_S_RE], dx[PSI_S_IM]) - 1j * self.w_e * complex(x[0], x[1])
-        dpsi_r = complex(dx[PSI_R_RE], dx[PSI_R_IM]) - 1j * self.w_e * complex(x[2], x[3])
+        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM])
+        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM])
+        dpsi_s = complex(dx[PSI_S_RE], dx[PSI_S_IM]) - 1j * self.w_e * psi_s
+        dpsi_r = complex(dx[PSI_R_RE], dx[PSI_R_IM]) - 1j * self.w_e * psi_r
         return dpsi_s, dpsi_r, dx[OMEGA], complex(self.v_term[0])
 
     def terminal_voltage(self, v_r: complex) -> complex:
@@ -456,6 +469,7 @@ class _Continuous:
         v_r, dz = self._law(v_s, w_f, tau, i_s, i_r, z)
         dpsi_s, dpsi_r, dw, _ = plant.evaluate(v_r)
         self.last_dw = dw  # the torque balance (26), also when the speed is frozen
+        self.last_v_s = v_s
         out = {
             "psi_s.re": dpsi_s.real,
             "psi_s.im": dpsi_s.imag,
@@ -554,8 +568,7 @@ class _Sampled:
     def load_engine(self, z):
         """Engine state ``x`` and controller state ``cs`` for map state ``z`` (t_k = 0)."""
         x, cs, T, w_e = self.x, self.cs, self.T, self.model.w_e
-        x[:] = 0.0
-        x[PSI_S_RE], x[PSI_S_IM], x[PSI_R_RE], x[PSI_R_IM], x[OMEGA] = z[0], z[1], z[2], z[3], z[4]
+        _plant_state(x, self.a["machines"], complex(z[0], z[1]), complex(z[2], z[3]), z[4])
         cs[:] = 0.0
         cs[ctl.CS_STARTED] = 1.0
         cs[ctl.CS_THETA_PREV] = -z[5]
@@ -590,8 +603,9 @@ class _Sampled:
             a["load_tau"], self.v_r, a["closed"], self.work, self.v_term,
         )  # fmt: skip
         phi = x[THETA]
-        back = np.exp(-1j * x[-1])  # stationary frame at t_k -> frame of the next sample
-        rotor = np.exp(1j * (self.n_p * phi - x[-1]))  # rotor coordinates, re-referenced
+        theta_g = x[SUPPLY_ANGLE]
+        back = np.exp(-1j * theta_g)  # stationary frame at t_k -> frame of the next sample
+        rotor = np.exp(1j * (self.n_p * phi - theta_g))  # rotor coordinates, re-referenced
         psi_s = complex(x[PSI_S_RE], x[PSI_S_IM]) * back
         psi_r = complex(x[PSI_R_RE], x[PSI_R_IM]) * back
         v_applied = applied * rotor
@@ -659,6 +673,8 @@ def newton(f, x0: np.ndarray, scales: np.ndarray, tol: float = 1e-10, max_iter: 
     x = x0.copy()
     for _ in range(max_iter):
         r = f(x)
+        if np.all(np.abs(r) <= 1e-14 * scales):
+            return x
         dx = np.linalg.solve(jacobian(f, x, scales), -r)
         x = x + dx
         if np.all(np.abs(dx) <= tol * np.maximum(np.abs(x), scales)):
@@ -705,8 +721,15 @@ def linearize(
     if kind not in KINDS:
         raise InputError("kind", f"must be one of {', '.join(KINDS)}")
     check_point(model, point)
-    cont, x = _continuous_equilibrium(model, point)
+    try:
+        cont, x = _continuous_equilibrium(model, point)
+    except (RuntimeError, np.linalg.LinAlgError):
+        raise InputError(
+            "load_torque", "no equilibrium: the drive cannot hold this load at this speed"
+        ) from None
     tau = cont.torque_command(x)
+    cont.rhs(x)
+    v_s = abs(cont.last_v_s)  # the measured stator voltage the torque window is computed from
     if kind == "continuous":
         A = jacobian(cont.rhs, x, cont.scales())
         s = np.linalg.eigvals(A)
@@ -714,7 +737,12 @@ def linearize(
         stable = bool(np.all(s.real < 0.0))
     else:
         smp = _Sampled(model, point)
-        z0 = newton(lambda z: smp.step(z)[0] - z, smp.guess(x, cont), smp.scales())
+        try:
+            z0 = newton(lambda z: smp.step(z)[0] - z, smp.guess(x, cont), smp.scales())
+        except (RuntimeError, np.linalg.LinAlgError):
+            raise InputError(
+                "load_torque", "no sampled-data equilibrium inside the controller's limits"
+            ) from None
         tau = smp.step(z0)[1]
         F = jacobian(lambda z: smp.step(z)[0], z0, smp.scales())
         z_eig = np.linalg.eigvals(F)
@@ -722,7 +750,7 @@ def linearize(
         s = np.log(nonzero.astype(complex)) / model.sample_time
         state, names, jac = z0, smp.names, F
         stable = bool(np.all(np.abs(z_eig) < 1.0))
-    lo, hi = _torque_window(model, model.v_g)
+    lo, hi = _torque_window(model, v_s)
     s = s[np.lexsort((-s.imag, -s.real))]
     return StabilityResult(
         model=model,
@@ -747,7 +775,11 @@ def linearize(
 
 @dataclass(frozen=True)
 class StabilityMap:
-    """max_real_part[i, j] and stable[i, j] at speeds_rpm[i], loads_nm[j] for one model."""
+    """max_real_part[i, j] and stable[i, j] at speeds_rpm[i], loads_nm[j] for one model.
+
+    feasible[i, j] is False where the drive has no equilibrium inside its limits (max_real_part
+    is then NaN and stable False); ``all_stable`` looks at the feasible points only.
+    """
 
     model: DriveModel
     kind: str
@@ -755,10 +787,11 @@ class StabilityMap:
     loads_nm: np.ndarray
     max_real_part: np.ndarray
     stable: np.ndarray
+    feasible: np.ndarray
 
     @property
     def all_stable(self) -> bool:
-        return bool(np.all(self.stable))
+        return bool(np.all(self.stable[self.feasible]))
 
 
 def default_grid(model: DriveModel, n_speed: int = 13, n_load: int = 7):
@@ -776,12 +809,18 @@ def stability_map(
     speeds_rpm = np.asarray(speeds_rpm, dtype=float)
     loads_nm = np.asarray(loads_nm, dtype=float)
     mrp = np.empty((speeds_rpm.size, loads_nm.size))
-    stable = np.empty(mrp.shape, dtype=bool)
+    stable = np.zeros(mrp.shape, dtype=bool)
+    feasible = np.ones(mrp.shape, dtype=bool)
     for i, n in enumerate(speeds_rpm):
         for j, tl in enumerate(loads_nm):
-            r = linearize(model, OperatingPoint(n * RAD_S_PER_RPM, tl), kind)
+            try:
+                r = linearize(model, OperatingPoint(n * RAD_S_PER_RPM, tl), kind)
+            except InputError:
+                mrp[i, j], feasible[i, j] = np.nan, False
+                continue
+            feasible[i, j] = r.within_limits
             mrp[i, j], stable[i, j] = r.max_real_part, r.stable
-    return StabilityMap(model, kind, speeds_rpm, loads_nm, mrp, stable)
+    return StabilityMap(model, kind, speeds_rpm, loads_nm, mrp, stable, feasible)
 
 
 def max_stable_bandwidth(

@@ -44,6 +44,10 @@ def register(subparsers) -> None:
     p.add_argument("--viscous-friction", type=float, default=0.0, help="B [N m s/rad]")
     p.add_argument("--inertia", type=float, default=None, help="true J [kg m^2] (design: 3.5e-4)")
     p.add_argument("--out", default="stability-map", help="figure directory for --map")
+    p.add_argument(
+        "--grid", type=int, nargs=2, default=(13, 7), metavar=("N_SPEED", "N_LOAD"),
+        help="map grid: speeds 0..2700 rpm, loads over 90%% of the torque window",
+    )  # fmt: skip
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(handler=run)
 
@@ -126,20 +130,24 @@ def run(args) -> int:
 def _map(args) -> int:
     from acdrive.analysis.drive_stability import default_grid, max_stable_bandwidth, stability_map
 
+    n_speed, n_load = args.grid
+    if n_speed < 1 or n_load < 1:
+        raise InputError("--grid", "needs at least one speed and one load")
     maps, report = {}, {}
     for mode in ("voltage", "current"):
         model = _model(args, mode)
-        speeds, loads = default_grid(model)
+        speeds, loads = default_grid(model, n_speed, n_load)
         m = stability_map(model, speeds, loads, args.model)
         maps[mode] = m
         fields = {f.name: getattr(model, f.name) for f in dataclasses.fields(model)}
         fields = {k: v for k, v in fields.items() if k not in ("mode", "speed_bandwidth")}
         tolerated = max_stable_bandwidth(mode, speeds, loads, kind=args.model, **fields)
-        worst = np.unravel_index(np.argmax(m.max_real_part), m.max_real_part.shape)
+        graded = np.where(m.feasible, m.max_real_part, -np.inf)
+        worst = np.unravel_index(np.argmax(graded), graded.shape)
         report[mode] = {
             "stable_everywhere": m.all_stable,
-            "unstable_points": int(np.count_nonzero(~m.stable)),
-            "points": int(m.stable.size),
+            "unstable_points": int(np.count_nonzero(~m.stable & m.feasible)),
+            "points": int(np.count_nonzero(m.feasible)),
             "worst_max_real_part": float(m.max_real_part[worst]),
             "worst_speed_rpm": float(speeds[worst[0]]),
             "worst_load_nm": float(loads[worst[1]]),
@@ -184,8 +192,11 @@ def _draw(maps, out: Path, args) -> Path:
         )
         if np.any(m.stable) and np.any(~m.stable):
             ax.contour(X, Y, m.max_real_part, levels=[0.0], colors="k", linewidths=1.5)
-        ax.plot(X[~m.stable], Y[~m.stable], "kx", ms=4, label="unstable")
-        ax.plot(X[m.stable], Y[m.stable], "k.", ms=3, label="stable")
+        ax.plot(X[~m.stable & m.feasible], Y[~m.stable & m.feasible], "kx", ms=4, label="unstable")
+        ax.plot(X[m.stable & m.feasible], Y[m.stable & m.feasible], "k.", ms=3, label="stable")
+        if not np.all(m.feasible):
+            ax.plot(X[~m.feasible], Y[~m.feasible], "s", mfc="none", mec="0.5", ms=5,
+                    label="outside limits")  # fmt: skip
         ax.set_title(f"{mode} command, a_D,VEL = {args.bandwidth:g} rad/s ({args.model})")
         ax.set_xlabel("load torque [N m]")
         ax.legend(loc="upper right", fontsize=8)
