@@ -8,7 +8,7 @@ import pytest
 
 from acdrive.errors import InputError
 from acdrive.machines.dfim import BODSON_DFIM, L_R, M_SR, machine_vector
-from acdrive.plant.dfim_bus import n_states, plant_derivatives
+from acdrive.plant.dfim_bus import STATES_PER_MOTOR, n_states, plant_derivatives
 from acdrive.scenarios.loader import build_setup
 from acdrive.sim.outcome import run_scenario
 from acdrive.sim.setup import build_arrays, simulate
@@ -191,8 +191,9 @@ def test_bus_voltage_solves_shared_impedance_equation():
     L_s_, det = p[2], p[2] * p[L_R] - p[M_SR] ** 2
     sum_i, sum_di = 0j, 0j
     for k in range(3):
-        psi_s, psi_r = complex(x[6 * k], x[6 * k + 1]), complex(x[6 * k + 2], x[6 * k + 3])
-        dpsi_s, dpsi_r = complex(dx[6 * k], dx[6 * k + 1]), complex(dx[6 * k + 2], dx[6 * k + 3])
+        o = STATES_PER_MOTOR * k
+        psi_s, psi_r = complex(x[o], x[o + 1]), complex(x[o + 2], x[o + 3])
+        dpsi_s, dpsi_r = complex(dx[o], dx[o + 1]), complex(dx[o + 2], dx[o + 3])
         sum_i += (p[L_R] * psi_s - p[M_SR] * psi_r) / det
         sum_di += (p[L_R] * dpsi_s - p[M_SR] * dpsi_r) / det
     assert L_s_ > 0

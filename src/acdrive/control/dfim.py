@@ -211,7 +211,7 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
     if cs[CS_PHASE] == PHASE_SYNC:
         if np.abs(v_g) < cp[CP_V_MIN] or w_e < MIN_SUPPLY_FREQUENCY:
             return held, FLAG_SUPPLY_LOST, False
-        frame = v_g / np.abs(v_g)
+        frame = v_g * (1.0 / np.abs(v_g))
         v_r, close = synchronise(p_est, cp, cs, v_s, v_g, w_e, w)
         if close:
             cs[CS_PHASE] = PHASE_RUN
@@ -222,7 +222,7 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
         v_s_mag = np.abs(v_s)
         if v_s_mag < cp[CP_V_MIN] or w_e < MIN_SUPPLY_FREQUENCY:
             return held, FLAG_SUPPLY_LOST, False
-        frame = v_s / v_s_mag
+        frame = v_s * (1.0 / v_s_mag)
         currents_valid = np.isfinite(i_s.real + i_s.imag + i_r_rotor.real + i_r_rotor.imag)
         if cs[CS_MODE] == MODE_CURRENT and not currents_valid:
             cs[CS_MODE] = MODE_VOLTAGE
@@ -265,10 +265,9 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
                 flags |= FLAG_CONVERTER_SAT
             v_r = v_r * _unit(cs[CS_THETA_ADJ])
         else:
-            # (20) is linear in (v_s, i_s): the magnitude adjustment of (28) scales the v_s term
-            v_r = _unit(cs[CS_THETA_ADJ]) * (
-                rotor_voltage_for(p_est, w_e, w, cs[CS_M_ADJ] * v_s_mag, 0.0)
-                + rotor_voltage_for(p_est, w_e, w, 0.0, i_s_com)
+            # (20) with the adjustments of (28): m_adj scales the v_s term, theta_adj rotates both
+            v_r = _unit(cs[CS_THETA_ADJ]) * rotor_voltage_for(
+                p_est, w_e, w, cs[CS_M_ADJ] * v_s_mag, i_s_com
             )
     # voltage frame -> stationary (frame) -> rotor coordinates (e^{-j n_p theta})
     v_r_rotor = v_r * frame * _unit(-p_est[N_P] * theta_meas)

@@ -101,7 +101,7 @@ def impedances(p, w_e, w_m):
 def rotor_voltage_for(p, w_e, w_m, v_s, i_s):
     """Steady-state rotor voltage that gives stator current ``i_s`` (Bodson (20))."""
     Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
-    return Z_R / Z_MS * v_s - (Z_S * Z_R - Z_MS * Z_MR) / Z_MS * i_s
+    return (Z_R * v_s - (Z_S * Z_R - Z_MS * Z_MR) * i_s) / Z_MS
 
 
 @jit

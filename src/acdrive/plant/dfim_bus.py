@@ -16,8 +16,13 @@ which is linear in v_bus because each d i_s/dt is, so it is solved exactly at ev
 An open relay forces i_s = 0: the stator flux is then M i_r and the stator terminal voltage is
 d psi_s/dt = (M / L_r) d psi_r/dt (the voltage the synchroniser matches to the grid).
 
-State vector layout: for motor k, x[6k : 6k+6] = (Re psi_s, Im psi_s, Re psi_r, Im psi_r, theta, w);
-the last entry is the supply angle theta_g (d theta_g/dt = 2 pi f(t)).
+Rotations without trigonometry: the rotor phasor u_r = e^{j n_p theta} and the supply phasor
+u_g = e^{j theta_g} are carried as states, du_r/dt = j n_p w u_r and du_g/dt = j w_g u_g, so the
+right-hand side needs no sine or cosine; ``project_phasors`` resets them from the angles at every
+sample, so they never drift from the unit circle.
+
+State vector layout: for motor k, x[8k : 8k+8] = (Re psi_s, Im psi_s, Re psi_r, Im psi_r, theta, w,
+Re u_r, Im u_r); then the supply angle theta_g (d theta_g/dt = 2 pi f(t)) and Re u_g, Im u_g.
 """
 
 from __future__ import annotations
@@ -39,8 +44,10 @@ from acdrive.machines.dfim import (
 )
 from acdrive.plant.profiles import profile_at
 
-STATES_PER_MOTOR = 6
-PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA = range(STATES_PER_MOTOR)
+STATES_PER_MOTOR = 8
+PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA, ROT_RE, ROT_IM = range(STATES_PER_MOTOR)
+# supply states after the motors' (offsets from STATES_PER_MOTOR * n_motors)
+THETA_G, SUP_RE, SUP_IM = range(3)
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
 SQRT_3_2 = np.sqrt(1.5)
@@ -50,7 +57,19 @@ BUS_R, BUS_L = 0, 1
 
 
 def n_states(n_motors: int) -> int:
-    return STATES_PER_MOTOR * n_motors + 1
+    return STATES_PER_MOTOR * n_motors + 3
+
+
+@jit
+def project_phasors(x, machines):
+    """Set the rotor and supply phasor states to e^{j n_p theta} and e^{j theta_g} exactly."""
+    n = machines.shape[0]
+    for k in range(n):
+        o = STATES_PER_MOTOR * k
+        angle = machines[k, N_P] * x[o + THETA]
+        x[o + ROT_RE], x[o + ROT_IM] = np.cos(angle), np.sin(angle)
+    g = STATES_PER_MOTOR * n
+    x[g + SUP_RE], x[g + SUP_IM] = np.cos(x[g + THETA_G]), np.sin(x[g + THETA_G])
 
 
 @jit
@@ -65,15 +84,9 @@ def motor_currents(p, psi_s, psi_r, closed):
 
 
 @jit
-def unit_phasor(angle):
-    """e^{j angle}, computed as cos + j sin (cheaper than the general complex exponential)."""
-    return complex(np.cos(angle), np.sin(angle))
-
-
-@jit
-def supply_voltage(theta_g, t, supply_V_t, supply_V):
-    """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g} (Bodson (8))."""
-    return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * unit_phasor(theta_g)
+def supply_voltage(u_g, t, supply_V_t, supply_V):
+    """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g}, with u_g = e^{j theta_g} (Bodson (8))."""
+    return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * u_g
 
 
 @jit
@@ -84,8 +97,9 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
     v_r_rotor[k]: rotor voltage of motor k in rotor coordinates (held by the converter).
     """
     n = machines.shape[0]
-    theta_g = x[STATES_PER_MOTOR * n]
-    v_g = supply_voltage(theta_g, t, supply[0], supply[1])
+    g = STATES_PER_MOTOR * n
+    u_g = complex(x[g + SUP_RE], x[g + SUP_IM])
+    v_g = supply_voltage(u_g, t, supply[0], supply[1])
     # First pass: currents, rotor-flux derivatives, and the terms of the bus equation.
     sum_i_s = 0.0 + 0.0j
     sum_a = 0.0  # sum of d(di_s/dt)/d v_bus
@@ -96,8 +110,11 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
         psi_s = complex(x[o + PSI_S_RE], x[o + PSI_S_IM])
         psi_r = complex(x[o + PSI_R_RE], x[o + PSI_R_IM])
         i_s, i_r = motor_currents(p, psi_s, psi_r, closed[k])
-        v_r = v_r_rotor[k] * unit_phasor(p[N_P] * x[o + THETA])
-        dpsi_r = v_r - p[R_R] * i_r + 1j * p[N_P] * x[o + OMEGA] * psi_r
+        u_r = complex(x[o + ROT_RE], x[o + ROT_IM])
+        w_el = p[N_P] * x[o + OMEGA]  # electrical rotor speed
+        dpsi_r = v_r_rotor[k] * u_r - p[R_R] * i_r + 1j * w_el * psi_r
+        du_r = 1j * w_el * u_r
+        dx[o + ROT_RE], dx[o + ROT_IM] = du_r.real, du_r.imag
         dx[o + PSI_R_RE], dx[o + PSI_R_IM] = dpsi_r.real, dpsi_r.imag
         if closed[k]:
             inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
@@ -126,5 +143,7 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
             dpsi_s = (p[M_SR] / p[L_R]) * complex(dx[o + PSI_R_RE], dx[o + PSI_R_IM])
             v_term[k] = dpsi_s
         dx[o + PSI_S_RE], dx[o + PSI_S_IM] = dpsi_s.real, dpsi_s.imag
-    dx[STATES_PER_MOTOR * n] = 2.0 * np.pi * profile_at(supply[2], supply[3], t)
+    w_g = 2.0 * np.pi * profile_at(supply[2], supply[3], t)
+    du_g = 1j * w_g * u_g
+    dx[g + THETA_G], dx[g + SUP_RE], dx[g + SUP_IM] = w_g, du_g.real, du_g.imag
     return v_g

@@ -32,7 +32,16 @@ from acdrive.control.dfim import (
 from acdrive.jit import jit
 from acdrive.machines.dfim import N_P, electromagnetic_torque
 from acdrive.plant.converter import converter_output
-from acdrive.plant.dfim_bus import OMEGA, STATES_PER_MOTOR, THETA, motor_currents, plant_derivatives
+from acdrive.plant.dfim_bus import (
+    OMEGA,
+    ROT_IM,
+    ROT_RE,
+    STATES_PER_MOTOR,
+    THETA,
+    motor_currents,
+    plant_derivatives,
+    project_phasors,
+)
 from acdrive.plant.profiles import profile_at
 from acdrive.plant.sensors import encoder_angle
 
@@ -93,8 +102,7 @@ def advance_plant(
 def measured_currents(p, x, o, closed):
     """(i_s in the stationary frame, i_r in rotor coordinates) from the plant state."""
     i_s, i_r = motor_currents(p, complex(x[o], x[o + 1]), complex(x[o + 2], x[o + 3]), closed)
-    angle = -p[N_P] * x[o + THETA]
-    return i_s, i_r * complex(np.cos(angle), np.sin(angle))
+    return i_s, i_r * complex(x[o + ROT_RE], -x[o + ROT_IM])  # e^{-j n_p theta}
 
 
 @jit
@@ -104,7 +112,9 @@ def log_sample(row, p, x, o, closed, v_s, v_g, v_r_rotor, w_ref, cs, flags):
     row[LOG_W] = x[o + OMEGA]
     row[LOG_W_REF] = w_ref
     row[LOG_TAU_COM] = cs[CS_TAU_COM]
-    row[LOG_TAU_E] = electromagnetic_torque(p, i_s, i_r_rotor * np.exp(1j * p[N_P] * x[o + THETA]))
+    row[LOG_TAU_E] = electromagnetic_torque(
+        p, i_s, i_r_rotor * complex(x[o + ROT_RE], x[o + ROT_IM])
+    )
     row[LOG_V_S] = np.abs(v_s)
     row[LOG_V_R] = np.abs(v_r_rotor)
     row[LOG_I_S] = np.abs(i_s)
@@ -142,6 +152,7 @@ def run_drive(x, machines, bus, supply, load_t, load_tau, sensors, p_est, cp, cs
         v_r[k] = complex(cs[k, CS_VR_RE], cs[k, CS_VR_IM])  # output held from a previous run
     for step in range(n_steps):
         t = step * T_s
+        project_phasors(x, machines)
         # sample: sensors read the plant with the inputs held from the previous period
         v_g = plant_derivatives(
             t, x, work[0], machines, bus, supply, load_t, load_tau, v_r, closed, v_term

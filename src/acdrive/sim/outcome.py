@@ -59,7 +59,11 @@ class ScenarioOutcome:
         return next(iter(self.results.values()))
 
     def write(self, folder: Path, figures: bool = True) -> None:
-        from acdrive.report.dfim_figures import write_comparison_figures, write_drive_figures, write_sync_figure
+        from acdrive.report.dfim_figures import (
+            write_comparison_figures,
+            write_drive_figures,
+            write_sync_figure,
+        )
 
         folder = Path(folder)
         for label, result in self.results.items():

@@ -26,6 +26,7 @@ from acdrive.plant.dfim_bus import (
     PSI_S_RE,
     STATES_PER_MOTOR,
     n_states,
+    project_phasors,
 )
 from acdrive.plant.profiles import pad_profiles
 from acdrive.sim import engine
@@ -187,6 +188,7 @@ def initial_state(setup: DriveSetup) -> tuple[np.ndarray, np.ndarray]:
         x[o + PSI_R_RE], x[o + PSI_R_IM] = psi_r.real, psi_r.imag
         x[o + OMEGA] = motor.initial_speed
         v_r_rotor[k] = (m.R_r + 1j * w_slip * m.L_r) * i_r
+    project_phasors(x, np.array([machine_vector(mo.machine) for mo in setup.motors]))
     return x, v_r_rotor
 
 

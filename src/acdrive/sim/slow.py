@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 
 from acdrive.control import dfim as ctl
 from acdrive.plant.converter import converter_output
-from acdrive.plant.dfim_bus import STATES_PER_MOTOR, THETA, plant_derivatives
+from acdrive.plant.dfim_bus import STATES_PER_MOTOR, THETA, plant_derivatives, project_phasors
 from acdrive.plant.profiles import profile_at
 from acdrive.plant.sensors import encoder_angle
 from acdrive.sim import engine
@@ -54,6 +54,7 @@ def simulate_slow(
     dx = np.empty_like(x)
     for step in range(steps):
         t = step * T_s
+        project_phasors(x, a["machines"])
         v_g = plant_derivatives(t, x, dx, *args, v_r, a["closed"], v_term)
         for k in range(n):
             o = STATES_PER_MOTOR * k
