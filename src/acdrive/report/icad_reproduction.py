@@ -1516,6 +1516,44 @@ def section_design(k20: LTI) -> Section:
     return s
 
 
+#: Which generated file shows each figure of the papers (``icad_targets.FIGURES``).
+FIGURE_FILES = {
+    (T.UGALDE, "Fig. 4"): "s001_pmsg_nyquist.png",
+    (T.UGALDE, "Fig. 6"): "s001_im_poles.png",
+    (T.UGALDE, "Fig. 7"): "s001_im_poles.png",
+    (T.UGALDE, "Fig. 8"): "s001_im_nyquist.png",
+    (T.AMEZQUITA, "Fig. 3"): "s002_nyquist_gamma.png",
+    (T.AMEZQUITA, "Fig. 4"): "s002_design_models.png",
+    (T.AMEZQUITA, "Fig. 5"): "s002_bode_channels.png",
+    (T.AMEZQUITA, "Fig. 6"): "s002_bode_kg.png",
+    (T.AMEZQUITA, "Fig. 7"): "s002_nyquist_gamma_h.png",
+    (T.AMEZQUITA, "Fig. 8"): "s002_coupling.png",
+    (T.AMEZQUITA, "Fig. 9"): "s002_perturbed_nyquist.png",
+    (T.AMEZQUITA, "Fig. 15"): "s002_pi_vs_20.png",
+    (T.AMEZQUITA, "Fig. 17"): "s002_pi_family.png",
+    (T.AMEZQUITA, "Fig. 19"): "s002_pi_vs_20.png",
+    (T.AMEZQUITA, "Fig. 21"): "s002_perturbed_nyquist.png",
+    (T.AMEZQUITA, "Fig. 22"): "s002_perturbed_bode.png",
+}
+
+
+def figure_index(fig_rel: str) -> str:
+    lines = [
+        "## Figure index",
+        "",
+        "| paper | figure | shows | acdrive file |",
+        "|---|---|---|---|",
+    ]
+    for (paper, fig), what in T.FIGURES.items():
+        name = FIGURE_FILES[(paper, fig)]
+        lines.append(f"| {paper} | {fig} | {what} | [{name}]({fig_rel}/{name}) |")
+    lines.append(
+        f"| {T.AMEZQUITA} | Figs. 18, 20 | step responses (linear, w_r = 375) | "
+        f"[s002_steps.png]({fig_rel}/s002_steps.png) |"
+    )
+    return "\n".join(lines) + "\n"
+
+
 NOT_REPRODUCED = """## Not reproduced
 
 - Experiments (seed 002 Figs. 11, 13, 14, 16) and the nonlinear VSI simulation (Fig. 23): they
@@ -1574,6 +1612,7 @@ def render(sections: list[Section], fig_rel: str) -> str:
             out += [sec.after, ""]
         for name, cap in sec.figures:
             out += [f"![{cap}]({fig_rel}/{name})", "", f"*{cap}*", ""]
+    out.append(figure_index(fig_rel))
     out.append(NOT_REPRODUCED)
     return "\n".join(out)
 
