@@ -5,7 +5,12 @@ acdrive's own slow path (the same loop driven from Python), and, when a peer vir
 available (``--peer-python``, default benchmarks/.peer-venv or /tmp/peer), motulator and
 gym-electric-motor (see benchmarks/peers/README.md).
 
-    python benchmarks/bench_dfim.py [--scenario bodson-ramp] [--repeats 3] [--peer-python PATH]
+    python benchmarks/bench_dfim.py [--scenarios bodson-ramp bodson-two-motors] [--repeats 3]
+                                    [--peer-python PATH]
+
+Several motors on one supply advance together: one control step counts all of them. Peers run in
+their own virtualenv: python -m venv benchmarks/.peer-venv &&
+benchmarks/.peer-venv/bin/pip install -r benchmarks/peers/requirements.txt
 """
 
 from __future__ import annotations
@@ -63,7 +68,7 @@ def run_peer(python: str, script: str, seconds: float) -> dict | None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenario", default="bodson-ramp")
+    parser.add_argument("--scenarios", nargs="+", default=["bodson-ramp", "bodson-two-motors"])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--peer-python", default=None)
     parser.add_argument("--peer-seconds", type=float, default=1.0)
@@ -73,35 +78,35 @@ def main() -> int:
     from acdrive.sim.setup import n_steps, simulate
     from acdrive.sim.slow import simulate_slow
 
-    report: dict = {
-        "benchmark": "dfim-drive",
-        "scenario": args.scenario,
-        "python": sys.version.split()[0],
-    }
+    report: dict = {"benchmark": "dfim-drive", "python": sys.version.split()[0]}
     with tempfile.TemporaryDirectory() as cache:
-        imp, cold = first_run_seconds(args.scenario, cache)
-        _, cached = first_run_seconds(args.scenario, cache)
+        imp, cold = first_run_seconds(args.scenarios[0], cache)
+        _, cached = first_run_seconds(args.scenarios[0], cache)
     report["compile_s"] = cold
     report["second_process_first_run_s"] = cached
     report["import_s"] = imp
 
-    setup = load_scenario(args.scenario)
-    steps = n_steps(setup)
-    simulate(setup)  # warm-up
-    walls = [simulate(setup).wall_time for _ in range(args.repeats)]
-    best = min(walls)
-    report["control_steps"] = steps
-    report["motors"] = len(setup.motors)
-    report["substeps_per_control_step"] = setup.substeps
-    report["control_steps_per_s"] = steps / best
-    report["realtime_factor"] = setup.duration / best
+    runs = {}
+    for name in args.scenarios:
+        setup = load_scenario(name)
+        steps = n_steps(setup)
+        simulate(setup)  # warm-up
+        best = min(simulate(setup).wall_time for _ in range(args.repeats))
+        runs[name] = {
+            "motors": len(setup.motors),
+            "control_steps": steps,
+            "substeps_per_control_step": setup.substeps,
+            "control_steps_per_s": steps / best,
+            "realtime_factor": setup.duration / best,
+        }
+    report["scenarios"] = runs
+    first = runs[args.scenarios[0]]
 
-    short = dataclasses.replace(setup, duration=0.2)
+    # peers, measured in the same run; speedups are against the first scenario (one motor)
+    short = dataclasses.replace(load_scenario(args.scenarios[0]), duration=0.2)
     t0 = time.perf_counter()
     simulate_slow(short)
-    slow = n_steps(short) / (time.perf_counter() - t0)
-    peers = {"acdrive-slow-path": {"steps_per_s": slow}}
-
+    peers = {"acdrive-slow-path": {"steps_per_s": n_steps(short) / (time.perf_counter() - t0)}}
     peer_python = args.peer_python
     for candidate in (HERE / ".peer-venv" / "bin" / "python", Path("/tmp/peer/bin/python")):
         if peer_python is None and candidate.exists():
@@ -115,7 +120,7 @@ def main() -> int:
                 peers[name] = run_peer(peer_python, script, args.peer_seconds)
     for peer in peers.values():
         if peer and "steps_per_s" in peer:
-            peer["acdrive_speedup"] = report["control_steps_per_s"] / peer["steps_per_s"]
+            peer["acdrive_speedup"] = first["control_steps_per_s"] / peer["steps_per_s"]
     report["peers"] = peers
     print(json.dumps(report, indent=2))
     return 0

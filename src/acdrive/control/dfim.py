@@ -45,11 +45,12 @@ from acdrive.machines.dfim import (
 N_CTRL_PARAMS = 25
 
 # --- controller state (per motor) ------------------------------------------------------------
-(CS_E_INT, CS_THETA_PREV, CS_W_EST, CS_W_E_EST, CS_ANGLE_G_PREV, CS_VR_RE, CS_VR_IM, CS_TAU_COM,
+(CS_E_INT, CS_THETA_PREV, CS_W_EST, CS_W_E_EST, CS_V_G_PREV_RE, CS_VR_RE, CS_VR_IM, CS_TAU_COM,
  CS_STARTED, CS_PHASE, CS_THETA_ADJ, CS_M_ADJ, CS_SYNC_OK_TIME, CS_IR_INT_RE, CS_IR_INT_IM,
  CS_Q_INT, CS_MODE, CS_I_R_COM, CS_Q_MEAS, CS_I_R_COM_RE, CS_I_R_COM_IM, CS_I_R_F_RE, CS_I_R_F_IM,
- ) = range(23)
-N_CTRL_STATES = 23
+ CS_V_G_PREV_IM, CS_ADJ_RE, CS_ADJ_IM,
+ ) = range(26)
+N_CTRL_STATES = 26
 # fmt: on
 
 MODE_VOLTAGE, MODE_CURRENT = 0.0, 1.0
@@ -97,6 +98,18 @@ def _unit(angle):
 
 
 @jit
+def _set_theta_adj(cs, theta_adj):
+    """Store theta_adj and its phasor e^{j theta_adj} (computed once per change, not per use)."""
+    cs[CS_THETA_ADJ] = theta_adj
+    cs[CS_ADJ_RE], cs[CS_ADJ_IM] = np.cos(theta_adj), np.sin(theta_adj)
+
+
+@jit
+def _adjustment(cs):
+    return complex(cs[CS_ADJ_RE], cs[CS_ADJ_IM])
+
+
+@jit
 def _clip_magnitude(x, limit):
     magnitude = np.abs(x)
     if magnitude <= limit:
@@ -117,10 +130,10 @@ def estimate_speeds(cp, cs, theta_meas, v_g):
         cs[CS_THETA_PREV] = theta_meas
         cs[CS_W_EST] = 0.0
         cs[CS_W_E_EST] = cp[CP_W_E_NOM]
-        cs[CS_ANGLE_G_PREV] = np.angle(v_g)
+        cs[CS_V_G_PREV_RE], cs[CS_V_G_PREV_IM] = v_g.real, v_g.imag
         cs[CS_STARTED] = 1.0
         cs[CS_PHASE] = PHASE_SYNC if cp[CP_SYNC] != 0.0 else PHASE_RUN
-        cs[CS_THETA_ADJ] = cp[CP_THETA_ADJ]
+        _set_theta_adj(cs, cp[CP_THETA_ADJ])
         cs[CS_M_ADJ] = cp[CP_M_ADJ]
         cs[CS_MODE] = cp[CP_MODE]
         return False
@@ -128,10 +141,10 @@ def estimate_speeds(cp, cs, theta_meas, v_g):
     cs[CS_THETA_PREV] = theta_meas
     cs[CS_W_EST] += T_s / (cp[CP_SPEED_TAU] + T_s) * (w_raw - cs[CS_W_EST])
     if np.abs(v_g) > cp[CP_V_MIN]:
-        angle_g = np.angle(v_g)
-        w_e_raw = _wrap(angle_g - cs[CS_ANGLE_G_PREV]) / T_s
-        cs[CS_ANGLE_G_PREV] = angle_g
+        # phase advance of the grid voltage over one sample: angle of v_g(k) v_g(k-1)*
+        w_e_raw = np.angle(v_g * complex(cs[CS_V_G_PREV_RE], -cs[CS_V_G_PREV_IM])) / T_s
         cs[CS_W_E_EST] += T_s / (cp[CP_FREQ_TAU] + T_s) * (w_e_raw - cs[CS_W_E_EST])
+    cs[CS_V_G_PREV_RE], cs[CS_V_G_PREV_IM] = v_g.real, v_g.imag
     return True
 
 
@@ -151,14 +164,14 @@ def synchronise(p_est, cp, cs, v_s, v_g, w_e, w):
     if np.abs(v_s) > cp[CP_V_MIN]:
         ratio = v_s / v_g
         rho, phi = np.abs(ratio), np.angle(ratio)
-        cs[CS_THETA_ADJ] = _wrap(cs[CS_THETA_ADJ] - gain * T_s * phi)
+        _set_theta_adj(cs, _wrap(cs[CS_THETA_ADJ] - gain * T_s * phi))
         cs[CS_M_ADJ] *= np.exp(-gain * T_s * np.log(rho))
         if np.abs(rho - 1.0) < cp[CP_SYNC_TOL_MAG] and np.abs(phi) < cp[CP_SYNC_TOL_PHASE]:
             cs[CS_SYNC_OK_TIME] += T_s
         else:
             cs[CS_SYNC_OK_TIME] = 0.0
         close = cs[CS_SYNC_OK_TIME] >= cp[CP_SYNC_HOLD]
-    v_r = cs[CS_M_ADJ] * _unit(cs[CS_THETA_ADJ]) * rotor_voltage_for(p_est, w_e, w, v_g_mag, 0.0)
+    v_r = cs[CS_M_ADJ] * _adjustment(cs) * rotor_voltage_for(p_est, w_e, w, v_g_mag, 0.0)
     return v_r, close
 
 
@@ -206,6 +219,7 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
     if not estimate_speeds(cp, cs, theta_meas, v_g):
         return held, 0, False
     w_e, w = cs[CS_W_E_EST], cs[CS_W_EST]
+    rotor_angle = _unit(p_est[N_P] * theta_meas)  # e^{j n_p theta} as measured
     flags = 0
     close = False
     if cs[CS_PHASE] == PHASE_SYNC:
@@ -229,7 +243,7 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
         if cs[CS_MODE] == MODE_VOLTAGE and cp[CP_MODE] == MODE_CURRENT:
             flags |= FLAG_SENSOR_FALLBACK
         # measured currents in the stator-voltage frame; theta_adj corrects the encoder offset
-        rotor_to_stator = _unit(p_est[N_P] * theta_meas - cs[CS_THETA_ADJ])
+        rotor_to_stator = rotor_angle * np.conj(_adjustment(cs))
         i_s_f = i_s * np.conj(frame)
         i_r_f = i_r_rotor * rotor_to_stator * np.conj(frame)
 
@@ -263,13 +277,13 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
             )
             if saturated:
                 flags |= FLAG_CONVERTER_SAT
-            v_r = v_r * _unit(cs[CS_THETA_ADJ])
+            v_r = v_r * _adjustment(cs)
         else:
             # (20) with the adjustments of (28): m_adj scales the v_s term, theta_adj rotates both
-            v_r = _unit(cs[CS_THETA_ADJ]) * rotor_voltage_for(
+            v_r = _adjustment(cs) * rotor_voltage_for(
                 p_est, w_e, w, cs[CS_M_ADJ] * v_s_mag, i_s_com
             )
     # voltage frame -> stationary (frame) -> rotor coordinates (e^{-j n_p theta})
-    v_r_rotor = v_r * frame * _unit(-p_est[N_P] * theta_meas)
+    v_r_rotor = v_r * frame * np.conj(rotor_angle)
     cs[CS_VR_RE], cs[CS_VR_IM] = v_r_rotor.real, v_r_rotor.imag
     return v_r_rotor, flags, close

@@ -30,7 +30,7 @@ from acdrive.control.dfim import (
     controller_step,
 )
 from acdrive.jit import jit
-from acdrive.machines.dfim import N_P, electromagnetic_torque
+from acdrive.machines.dfim import electromagnetic_torque
 from acdrive.plant.converter import converter_output
 from acdrive.plant.dfim_bus import (
     OMEGA,
