@@ -150,11 +150,17 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
         CV = C2[good] @ Vg  # (b, p, n)
         VB = np.linalg.solve(Vg, B2[good].astype(complex))  # (b, n, m)
         R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(-1, n, p * m)
-        modal = np.empty((R.shape[0], s.size, p * m), dtype=complex)
+        all_good = bool(np.all(good))  # then write straight into G (no copy)
+        modal = (
+            G.reshape(nb, s.size, p * m)
+            if all_good
+            else np.empty((R.shape[0], s.size, p * m), complex)
+        )
         lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
         Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
         _modal_sum(s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost)
-        G[good] = modal.reshape(-1, s.size, p, m)
+        if not all_good:
+            G[good] = modal.reshape(-1, s.size, p, m)
         for gb, b in enumerate(np.flatnonzero(good)):
             pts = np.flatnonzero(lost[gb])
             if pts.size:

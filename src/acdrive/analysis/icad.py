@@ -67,26 +67,56 @@ INFINITE_EIG = 1e8  # generalised eigenvalues above this times the pencil norm a
 
 
 @njit(cache=True, error_model="numpy")
-def _icad_kernel(G, k1, k2, gamma, kg, h, gamma_h, c, S, T, coupling):
+def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
     """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring."""
     for idx in range(k1.size):
         g11, g12, g21, g22 = G[idx, 0, 0], G[idx, 0, 1], G[idx, 1, 0], G[idx, 1, 1]
         det = g11 * g22 - g12 * g21
         kg1, kg2 = k1[idx] * g11, k2[idx] * g22
         r1, r2 = 1.0 / (1.0 + kg1), 1.0 / (1.0 + kg2)  # 1 / (1 + k_i g_ii)
-        gam = (g12 * g21) / (g11 * g22)
         c1 = k1[idx] * (g11 + k2[idx] * det) * r2
         c2 = k2[idx] * (g22 + k1[idx] * det) * r1
-        s1, s2 = 1.0 / (1.0 + c1), 1.0 / (1.0 + c2)
-        gamma[idx] = gam
-        kg[idx, 0], kg[idx, 1] = kg1, kg2
+        gamma[idx] = (g12 * g21) / (g11 * g22)
         h[idx, 0], h[idx, 1] = kg1 * r1, kg2 * r2
-        gamma_h[idx, 0], gamma_h[idx, 1] = gam * kg2 * r2, gam * kg1 * r1
         c[idx, 0], c[idx, 1] = c1, c2
-        S[idx, 0], S[idx, 1] = s1, s2
-        T[idx, 0], T[idx, 1] = c1 * s1, c2 * s2
-        coupling[idx, 0] = s1 * g12 * k2[idx] * r2
-        coupling[idx, 1] = s2 * g21 * k1[idx] * r1
+        coupling[idx, 0] = g12 * k2[idx] * r2 / (1.0 + c1)
+        coupling[idx, 1] = g21 * k1[idx] * r1 / (1.0 + c2)
+
+
+def _derived(key: str, G, k1, k2, gamma, h, c) -> np.ndarray:
+    """The ICAD quantities that follow from the kernel's: kg, gamma_h, S, T (last axis: i)."""
+    if key == "kg":
+        return np.stack([k1 * G[..., 0, 0], k2 * G[..., 1, 1]], axis=-1)
+    if key == "gamma_h":  # gamma h_j for channel i
+        return gamma[..., None] * h[..., ::-1]
+    if key == "S":
+        return 1.0 / (1.0 + c)
+    if key == "T":
+        return c / (1.0 + c)
+    raise KeyError(key)
+
+
+DERIVED = ("kg", "gamma_h", "S", "T")
+
+
+def _kernel_outputs(G, k1, k2):
+    """Run the kernel on broadcast inputs; returns (G, k1, k2, gamma, h, c, coupling)."""
+    G = np.asarray(G, dtype=complex)
+    k1, k2 = np.asarray(k1, dtype=complex), np.asarray(k2, dtype=complex)
+    shape = np.broadcast_shapes(G.shape[:-2], k1.shape, k2.shape)
+    N = int(np.prod(shape))
+    G = np.broadcast_to(G, shape + (2, 2))
+    k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
+    gamma = np.empty(N, dtype=complex)
+    h, c, coupling = (np.empty((N, 2), dtype=complex) for _ in range(3))
+    _icad_kernel(
+        np.ascontiguousarray(G).reshape(N, 2, 2),
+        np.ascontiguousarray(k1).reshape(N),
+        np.ascontiguousarray(k2).reshape(N),
+        gamma, h, c, coupling,
+    )  # fmt: skip
+    two = shape + (2,)
+    return G, k1, k2, gamma.reshape(shape), h.reshape(two), c.reshape(two), coupling.reshape(two)
 
 
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
@@ -97,21 +127,11 @@ def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, 
     gamma, kg (k_i g_ii), h (h_i), gamma_h (gamma h_j for channel i), c (c_i), S (1/(1+c_i)),
     coupling (y_i / r_j), T (c_i/(1+c_i)).
     """
-    G = np.asarray(G, dtype=complex)
-    k1, k2 = np.asarray(k1, dtype=complex), np.asarray(k2, dtype=complex)
-    shape = np.broadcast_shapes(G.shape[:-2], k1.shape, k2.shape)
-    N = int(np.prod(shape))
-    G = np.broadcast_to(G, shape + (2, 2))
-    k1 = np.ascontiguousarray(np.broadcast_to(k1, shape)).reshape(N)
-    k2 = np.ascontiguousarray(np.broadcast_to(k2, shape)).reshape(N)
-    out = {"gamma": np.empty(N, dtype=complex)}
-    for key in ("kg", "h", "gamma_h", "c", "S", "T", "coupling"):
-        out[key] = np.empty((N, 2), dtype=complex)
-    _icad_kernel(
-        np.ascontiguousarray(G).reshape(N, 2, 2), k1, k2, out["gamma"], out["kg"], out["h"],
-        out["gamma_h"], out["c"], out["S"], out["T"], out["coupling"],
-    )  # fmt: skip
-    return {key: val.reshape(shape if key == "gamma" else shape + (2,)) for key, val in out.items()}
+    G, k1, k2, gamma, h, c, coupling = _kernel_outputs(G, k1, k2)
+    out = {"gamma": gamma, "h": h, "c": c, "coupling": coupling}
+    for key in DERIVED:
+        out[key] = _derived(key, G, k1, k2, gamma, h, c)
+    return out
 
 
 @dataclass(frozen=True)
@@ -119,8 +139,9 @@ class ICADResponse:
     """ICAD frequency data over a (plant, frequency) grid.
 
     Shapes: w (nw,); speeds (ns,) (nan for plants without a speed); G (ns, nw, 2, 2);
-    k (2, nw); gamma (ns, nw); kg, h, gamma_h, c, S, T, coupling (ns, nw, 2), where index i of the
-    last axis is channel i+1 (gamma_h[..., i] = gamma h_j with j != i; coupling[..., i] = y_i/r_j).
+    k (2, nw); gamma (ns, nw); h, c, coupling and the derived kg, gamma_h, S, T (ns, nw, 2),
+    where index i of the last axis is channel i+1 (gamma_h[..., i] = gamma h_j with j != i;
+    coupling[..., i] = y_i/r_j). kg, gamma_h, S and T are computed on first access.
     """
 
     w: np.ndarray
@@ -128,13 +149,31 @@ class ICADResponse:
     G: np.ndarray
     k: np.ndarray
     gamma: np.ndarray
-    kg: np.ndarray
     h: np.ndarray
-    gamma_h: np.ndarray
     c: np.ndarray
-    S: np.ndarray
-    T: np.ndarray
     coupling: np.ndarray
+
+    def _get(self, key: str) -> np.ndarray:
+        cache = self.__dict__.setdefault("_derived_cache", {})
+        if key not in cache:
+            cache[key] = _derived(key, self.G, self.k[0], self.k[1], self.gamma, self.h, self.c)
+        return cache[key]
+
+    @property
+    def kg(self) -> np.ndarray:
+        return self._get("kg")
+
+    @property
+    def gamma_h(self) -> np.ndarray:
+        return self._get("gamma_h")
+
+    @property
+    def S(self) -> np.ndarray:
+        return self._get("S")
+
+    @property
+    def T(self) -> np.ndarray:
+        return self._get("T")
 
 
 def stack_plants(plants) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -164,10 +203,10 @@ def icad_response_arrays(A, B, C, D, k1: LTI, k2: LTI, w, speeds=None) -> ICADRe
     if G.shape[-2:] != (2, 2):
         raise InputError("plant", f"must be 2x2, got {G.shape[-2]}x{G.shape[-1]}")
     kv = np.stack([k1.freqresp(w), k2.freqresp(w)])
-    q = icad_quantities(G, kv[0], kv[1])
+    _, _, _, gamma, h, c, coupling = _kernel_outputs(G, kv[0], kv[1])
     ns = G.shape[0]
     speeds = np.full(ns, np.nan) if speeds is None else np.asarray(speeds, dtype=float)
-    return ICADResponse(w=w, speeds=speeds, G=G, k=kv, **q)
+    return ICADResponse(w=w, speeds=speeds, G=G, k=kv, gamma=gamma, h=h, c=c, coupling=coupling)
 
 
 def icad_response(plants, k1: LTI, k2: LTI, w) -> ICADResponse:
