@@ -412,3 +412,17 @@ def test_loop_margins_of_textbook_loops():
     # a crossover with phase lead (+30 deg) is 150 deg away from -1, not -150 deg
     lead = loop_margins(lambda x: np.exp(1j * np.pi / 6) * 10 / x, w)
     assert lead.pm_deg == pytest.approx(150.0, rel=1e-9)
+
+
+def test_resonant_controller_poles_on_the_axis_are_indented():
+    """k = 360 + K_R s/(s^2 + w0^2) (poles at +-j w0): counts agree with the closed loop."""
+    w0, K_R = 300.0, 5e4
+    k = LTI.zpk(np.roots([1.0, K_R / 360.0, w0**2]), [1j * w0, -1j * w0], 360.0)
+    plant = plant_for("delorenzo-im-13", 300.0)
+    a = analyse(plant, k, k)
+    z_cl = rhp(closed_loop_poles_control(plant, k, k))
+    for ch in a.channels:
+        cc = ch.channel_count
+        assert any(abs(p - 1j * w0) < 1e-6 * w0 for p in cc.axis_poles)
+        assert cc.winding + cc.rhp_poles == z_cl
+    assert a.closed_loop_stable == (z_cl == 0)
