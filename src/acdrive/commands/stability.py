@@ -4,7 +4,9 @@
 linearises the closed loop at one operating point and prints its eigenvalues;
 ``acdrive stability --map [--out DIR] [--json]`` maps the stable and unstable regions over
 speed x load for both modes at the given velocity bandwidth (default: the paper's 314 rad/s),
-draws them (PNG) and reports the largest velocity bandwidth each mode tolerates on that grid.
+draws them (PNG) and reports the largest velocity bandwidth each mode tolerates on that grid;
+``acdrive stability --bench [--json]`` evaluates the effects the paper's test bench may have had
+(voltage command) and how large each must be to remove the instability.
 Method and results: docs/stability.md.
 """
 
@@ -31,7 +33,9 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "stability", help="drive stability (eigenvalues, map)", description=HELP
     )
-    p.add_argument("--map", action="store_true", help="map speed x load for both modes")
+    task = p.add_mutually_exclusive_group()
+    task.add_argument("--map", action="store_true", help="map speed x load for both modes")
+    task.add_argument("--bench", action="store_true", help="test-bench candidates (voltage mode)")
     p.add_argument("--mode", choices=("voltage", "current"), default="voltage")
     p.add_argument("--speed-rpm", type=float, default=None, help="shaft speed [rpm]")
     p.add_argument("--load-nm", type=float, default=0.0, help="load torque [N m]")
@@ -43,6 +47,12 @@ def register(subparsers) -> None:
     p.add_argument("--supply-inductance", type=float, default=0.0, help="supply L [H]")
     p.add_argument("--viscous-friction", type=float, default=0.0, help="B [N m s/rad]")
     p.add_argument("--inertia", type=float, default=None, help="true J [kg m^2] (design: 3.5e-4)")
+    p.add_argument(
+        "--rotor-resistance", type=float, default=None, help="true R_r [ohm] (controller: 0.94)"
+    )
+    p.add_argument(
+        "--converter-loss", type=float, default=0.0, help="converter voltage loss [V] (continuous)"
+    )
     p.add_argument("--out", default="stability-map", help="figure directory for --map")
     p.add_argument(
         "--grid", type=int, nargs=2, default=(13, 7), metavar=("N_SPEED", "N_LOAD"),
@@ -61,17 +71,22 @@ def _model(args, mode: str):
     machine = dataclasses.replace(BODSON_DFIM, B=B)
     if args.inertia is not None:
         machine = dataclasses.replace(machine, J=require_positive("--inertia", args.inertia))
+    if args.rotor_resistance is not None:
+        R_r = require_positive("--rotor-resistance", args.rotor_resistance)
+        machine = dataclasses.replace(machine, R_r=R_r)
     if args.delay_samples not in (0, 1):
         raise InputError("--delay-samples", "must be 0 or 1")
     return DriveModel(
         mode=mode,
         machine=machine,
+        controller_params=BODSON_DFIM,
         design_inertia=BODSON_DFIM.J,
         speed_bandwidth=bandwidth,
         supply_resistance=require_nonnegative("--supply-resistance", args.supply_resistance),
         supply_inductance=require_nonnegative("--supply-inductance", args.supply_inductance),
         speed_filter_tau=require_nonnegative("--speed-filter-tau", args.speed_filter_tau),
         delay_samples=args.delay_samples,
+        converter_loss=require_nonnegative("--converter-loss", args.converter_loss),
     )
 
 
@@ -82,6 +97,8 @@ def _pairs(values) -> list[list[float]]:
 def run(args) -> int:
     if args.map:
         return _map(args)
+    if args.bench:
+        return _bench(args)
     from acdrive.analysis.drive_stability import (
         RAD_S_PER_RPM,
         OperatingPoint,
@@ -172,6 +189,55 @@ def _map(args) -> int:
                 f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
                 f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s"
             )
+    return 0
+
+
+def _bench(args) -> int:
+    from acdrive.analysis.drive_stability import (
+        bench_candidates,
+        evaluate_candidate,
+        stabilising_thresholds,
+    )
+
+    bandwidth = require_positive("--bandwidth", args.bandwidth)
+    results = [evaluate_candidate(c) for c in bench_candidates(bandwidth)]
+    thresholds = stabilising_thresholds(bandwidth)
+
+    def num(x):
+        return float(x) if math.isfinite(x) else None
+
+    out = {
+        "bandwidth_rad_s": bandwidth,
+        "candidates": [
+            {
+                "name": r.candidate.name,
+                "model": r.candidate.kind,
+                "max_real_part_900rpm_0nm": r.max_real_part_900,
+                "worst_zero_load": r.worst_zero_load,
+                "worst_grid": r.worst_grid,
+                "stable_zero_load": r.stable_zero_load,
+                "stable_grid": r.stable_grid,
+            }
+            for r in results
+        ],
+        "thresholds": [
+            {"name": t.name, "unit": t.unit, "zero_load": num(t.zero_load), "grid": num(t.grid)}
+            for t in thresholds
+        ],
+    }
+    if args.json:
+        print(json.dumps(out, indent=2))
+        return 0
+    print(f"voltage command, a_D,VEL = {bandwidth:g} rad/s: max Re(s) [1/s]")
+    print(f"{'candidate':58s} {'900rpm':>8s} {'no load':>8s} {'grid':>8s}")
+    for r in results:
+        print(
+            f"{r.candidate.name:58s} {r.max_real_part_900:8.1f} {r.worst_zero_load:8.1f} "
+            f"{r.worst_grid:8.1f}"
+        )
+    print("smallest value that makes the drive stable (no load / grid):")
+    for t in thresholds:
+        print(f"  {t.name:28s} {t.zero_load:10.4g} / {t.grid:10.4g} {t.unit}")
     return 0
 
 
