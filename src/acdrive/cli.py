@@ -14,6 +14,7 @@ import sys
 
 from acdrive.errors import InputError
 
+DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
 COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce")
 
 
@@ -26,7 +27,7 @@ class _OneLineParser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _OneLineParser(prog="acdrive", description=__doc__.splitlines()[0])
+    parser = _OneLineParser(prog="acdrive", description=DESCRIPTION)
     sub = parser.add_subparsers(dest="command", parser_class=_OneLineParser, required=True)
     for name in COMMAND_MODULES:
         try:
