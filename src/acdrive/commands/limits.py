@@ -31,7 +31,8 @@ def run(args) -> int:
     v_pk = require_positive("--voltage-pk", args.voltage_pk)
     f = require_positive("--frequency", args.frequency)
     i_pk = require_positive("--current-limit-pk", args.current_limit_pk)
-    scale = math.sqrt(1.5)  # Bodson (8)
+    from acdrive.frames import K_PEAK as scale  # Bodson (8)
+
     t1, t2, t3, m2, m3, feasible = torque_limits_case1(
         machine_vector(BODSON_DFIM), 2 * math.pi * f, scale * v_pk, scale * i_pk, scale * i_pk
     )

@@ -50,7 +50,7 @@ PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA, ROT_RE, ROT_IM = range(STA
 THETA_G, SUP_RE, SUP_IM = range(3)
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
-SQRT_3_2 = np.sqrt(1.5)
+from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
 
 # supply / bus parameters
 BUS_R, BUS_L = 0, 1

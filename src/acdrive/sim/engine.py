@@ -29,6 +29,7 @@ from acdrive.control.dfim import (
     FLAG_CONVERTER_SAT,
     controller_step,
 )
+from acdrive.frames import complex_to_abc_nb
 from acdrive.jit import jit
 from acdrive.machines.dfim import electromagnetic_torque
 from acdrive.plant.converter import converter_output
@@ -61,7 +62,6 @@ N_SENSOR = 4
 # fmt: on
 
 STATUS_OK, STATUS_NONFINITE = 0, 1
-SQRT_2_3 = np.sqrt(2.0 / 3.0)
 
 
 @jit
@@ -120,8 +120,7 @@ def log_sample(row, p, x, o, closed, v_s, v_g, v_r_rotor, w_ref, cs, flags):
     row[LOG_I_S] = np.abs(i_s)
     row[LOG_I_R] = np.abs(i_r_rotor)
     # rotor phase currents X and Y from the inverse transform (4) in rotor coordinates
-    row[LOG_I_RX] = SQRT_2_3 * i_r_rotor.real
-    row[LOG_I_RY] = SQRT_2_3 * (-0.5 * i_r_rotor.real + 0.5 * np.sqrt(3.0) * i_r_rotor.imag)
+    row[LOG_I_RX], row[LOG_I_RY], _ = complex_to_abc_nb(i_r_rotor, 0.0)
     row[LOG_FLAGS] = flags
     row[LOG_I_R_COM] = cs[CS_I_R_COM]
     row[LOG_Q_S] = (v_s * np.conj(i_s)).imag  # (5)

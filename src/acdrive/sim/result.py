@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.control.dfim import EVENT_NAMES
+from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
 from acdrive.sim.engine import LOG_NAMES
 
-SQRT_3_2 = np.sqrt(1.5)
 RPM_PER_RAD_S = 30.0 / np.pi
 
 

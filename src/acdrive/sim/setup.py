@@ -16,6 +16,7 @@ import numpy as np
 from acdrive.control import dfim as ctl
 from acdrive.control.speed import SpeedPIGains
 from acdrive.errors import InputError
+from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive.machines.dfim import DFIMParams, machine_vector
 from acdrive.plant.converter import max_voltage_magnitude
 from acdrive.plant.dfim_bus import (
@@ -32,7 +33,6 @@ from acdrive.plant.profiles import pad_profiles
 from acdrive.sim import engine
 from acdrive.sim.result import DriveResult
 
-SQRT_3_2 = np.sqrt(1.5)
 Profile = tuple[np.ndarray, np.ndarray]
 
 
