@@ -242,3 +242,35 @@ def test_cli_map_writes_figure_and_bandwidths(tmp_path, capsys):
     assert out["modes"]["voltage"]["stable_everywhere"] is False
     assert out["modes"]["current"]["stable_everywhere"] is True
     assert out["modes"]["voltage"]["max_stable_bandwidth_rad_s"] < 314.0
+
+
+def test_stabilising_threshold_is_a_stability_boundary():
+    """The smallest true inertia that stabilises the zero-load line: stable there, unstable
+    0.05 J below; the same for an extra rotor resistance unknown to the controller."""
+    from acdrive.analysis.drive_stability import stabilising_thresholds
+
+    speeds = np.linspace(0.0, 2700.0, 4)
+    th = {t.name: t for t in stabilising_thresholds(n_speed=4, n_load=3)}
+    m0 = BODSON_DFIM
+
+    def zero_load_stable(machine):
+        model = DriveModel(machine=machine, controller_params=m0, design_inertia=m0.J)
+        return stability_map(model, speeds, [0.0]).all_stable
+
+    ratio = th["true J / design J"].zero_load
+    assert 1.0 < ratio < 10.0
+    assert zero_load_stable(dataclasses.replace(m0, J=ratio * m0.J))
+    assert not zero_load_stable(dataclasses.replace(m0, J=(ratio - 0.05) * m0.J))
+    extra = th["extra rotor resistance"].zero_load
+    assert zero_load_stable(dataclasses.replace(m0, R_r=m0.R_r + extra))
+    assert not zero_load_stable(dataclasses.replace(m0, R_r=m0.R_r + extra - 0.02))
+    # a viscous load large enough to help needs more torque than the drive has (B 283 >> 0.27)
+    assert th["viscous friction B"].zero_load == math.inf
+
+
+def test_converter_loss_only_in_continuous_model():
+    model = DriveModel(converter_loss=1.0)
+    point = OperatingPoint(900 * RAD_S_PER_RPM, 0.0)
+    assert linearize(model, point).max_real_part < linearize(DriveModel(), point).max_real_part
+    with pytest.raises(InputError, match="converter_loss"):
+        linearize(model, point, "sampled")

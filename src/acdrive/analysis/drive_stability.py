@@ -855,12 +855,15 @@ def max_stable_bandwidth(
     lower: float = 5.0,
     upper: float = 3000.0,
     tol: float = 1.0,
+    ratio: float = 1.25,
     **model_fields,
 ) -> float:
-    """Largest a_D,VEL [rad/s] (bisection, to ``tol``) for which every grid point is stable.
-
-    Assumes stability is lost once as the bandwidth rises (checked at the two ends): returns
-    ``upper`` if the grid is stable there, and 0.0 if it is already unstable at ``lower``.
+    """Largest a_D,VEL [rad/s] such that every grid point is stable for every bandwidth from
+    ``lower`` up to it: the bandwidth is raised geometrically (factor ``ratio``) until a grid
+    point becomes unstable, then the boundary is bisected to ``tol``. (Stability need not be
+    monotonic in a_D,VEL: the voltage-command drive regains stability at no load in a window of
+    higher bandwidths; this function reports the first loss.) Returns ``upper`` if no loss is
+    found, 0.0 if the grid is unstable at ``lower``.
     """
     base = DriveModel(mode=mode, **model_fields)
     if speeds_rpm is None or loads_nm is None:
@@ -871,7 +874,15 @@ def max_stable_bandwidth(
             dataclasses.replace(base, speed_bandwidth=a), speeds_rpm, loads_nm, kind
         ).all_stable
 
-    return _boundary(ok, lower, upper, tol, stable_below=True)
+    if not ok(lower):
+        return 0.0
+    a = lower
+    while a < upper:
+        nxt = min(a * ratio, upper)
+        if not ok(nxt):
+            return _boundary(ok, a, nxt, tol, stable_below=True)
+        a = nxt
+    return upper
 
 
 def _boundary(ok, lower: float, upper: float, tol: float, stable_below: bool) -> float:

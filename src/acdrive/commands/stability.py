@@ -27,6 +27,7 @@ continuous-time law; --model sampled linearises the simulator's own sampled-data
 zero-order hold, encoder backward difference; --delay-samples 1 adds a computation delay)."""
 
 PAPER_BANDWIDTH = 314.0  # a_D,VEL of Bodson IV-A [rad/s]
+UPPER_BANDWIDTH = 20000.0  # search limit of the tolerated a_D,VEL [rad/s]
 
 
 def register(subparsers) -> None:
@@ -158,7 +159,12 @@ def _map(args) -> int:
         maps[mode] = m
         fields = {f.name: getattr(model, f.name) for f in dataclasses.fields(model)}
         fields = {k: v for k, v in fields.items() if k not in ("mode", "speed_bandwidth")}
-        tolerated = max_stable_bandwidth(mode, speeds, loads, kind=args.model, **fields)
+        tolerated = max_stable_bandwidth(
+            mode, speeds, loads, kind=args.model, upper=UPPER_BANDWIDTH, **fields
+        )
+        unloaded = max_stable_bandwidth(
+            mode, speeds, [0.0], kind=args.model, upper=UPPER_BANDWIDTH, **fields
+        )
         graded = np.where(m.feasible, m.max_real_part, -np.inf)
         worst = np.unravel_index(np.argmax(graded), graded.shape)
         report[mode] = {
@@ -169,6 +175,7 @@ def _map(args) -> int:
             "worst_speed_rpm": float(speeds[worst[0]]),
             "worst_load_nm": float(loads[worst[1]]),
             "max_stable_bandwidth_rad_s": tolerated,
+            "max_stable_bandwidth_zero_load_rad_s": unloaded,
         }
     path = _draw(maps, Path(args.out), args)
     out = {
@@ -187,7 +194,8 @@ def _map(args) -> int:
                 f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
                 f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
                 f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
-                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s"
+                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
+                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
             )
     return 0
 
