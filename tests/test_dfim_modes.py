@@ -255,3 +255,26 @@ def test_varying_supply_limits_follow_measured_voltage():
 def test_unworkable_settings_are_rejected(controller, field):
     with pytest.raises(InputError, match=field.replace(".", r"\.")):
         build_setup({"motor": [motor(controller=controller)]})
+
+
+def test_lossless_law_39_tracks_with_reactive_power_and_case2_limits():
+    """The R_s = 0 law (39) on the real machine: the integral action removes the R_s error, and the
+    torque command respects the case-2 window (40)-(42) at the commanded Q."""
+    from acdrive.machines.dfim import torque_limit_case2
+
+    Q = 15.0
+    data = {
+        "simulation": {"duration": 2.0},
+        "motor": [
+            motor(
+                speed_reference_rpm=[[0, 0], [0.2, 0], [0.2, 1200], [2, 1200]],
+                controller={"lossless_law": True, "reactive_power": Q, "speed_bandwidth": 60.0},
+            )
+        ],
+    }
+    r = simulate(build_setup(data))
+    assert abs(r.speed_rpm()[-1] - 1200) < 1.0
+    p, i_max, v_s = machine_vector(BODSON_DFIM), math.sqrt(1.5) * 6, math.sqrt(1.5) * 11.1
+    tau_2, tau_3 = torque_limit_case2(p, 2 * math.pi * 60, v_s, Q, i_max, i_max)
+    assert np.max(r.signal("tau_com")) <= min(tau_2, tau_3) + 1e-9
+    assert np.max(r.signal("tau_com")) >= 0.99 * min(tau_2, tau_3)  # the step reaches the limit

@@ -6,7 +6,8 @@ control in voltage-command or current-command mode.
   stator / grid voltage ratio (this also aligns an encoder with unknown offset), and the relay is
   closed once magnitude and phase agree within tolerances for a hold time.
 * Voltage command: speed PI (25) -> torque window (30), (32), (37) -> stator current (22) -> rotor
-  voltage (20) with the adjustments of (28).
+  voltage (20) with the adjustments of (28); or, for large machines, the R_s = 0 law (38)-(39) with
+  the case-2 window (40)-(42) for any reactive-power command.
 * Current command: rotor current command (43), limited to the rotor current limit, and the rotor
   current loop (45)-(47) with gains (49); conditional-integration anti-windup when the converter
   saturates. A failed current measurement makes the controller fall back to voltage command.
@@ -33,6 +34,8 @@ from acdrive.machines.dfim import (
     rotor_current_for,
     rotor_voltage_for,
     stator_current_command,
+    stator_current_lossless,
+    torque_limit_case2,
     torque_window,
 )
 
@@ -41,8 +44,9 @@ from acdrive.machines.dfim import (
 (CP_KP, CP_KI, CP_KF, CP_Q_REF, CP_I_S_MAX, CP_I_R_MAX, CP_THETA_ADJ, CP_M_ADJ, CP_W_E_NOM,
  CP_SPEED_TAU, CP_FREQ_TAU, CP_V_MIN, CP_T_S, CP_MODE, CP_KPC, CP_KIC, CP_R_T, CP_V_R_MAX,
  CP_Q_KP, CP_Q_KI, CP_SYNC, CP_SYNC_GAIN, CP_SYNC_TOL_MAG, CP_SYNC_TOL_PHASE, CP_SYNC_HOLD,
- ) = range(25)
-N_CTRL_PARAMS = 25
+ CP_LOSSLESS,
+ ) = range(26)
+N_CTRL_PARAMS = 26
 
 # --- controller state (per motor) ------------------------------------------------------------
 (CS_E_INT, CS_THETA_PREV, CS_W_EST, CS_W_E_EST, CS_V_G_PREV_RE, CS_VR_RE, CS_VR_IM, CS_TAU_COM,
@@ -247,9 +251,18 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
         i_s_f = i_s * np.conj(frame)
         i_r_f = i_r_rotor * rotor_to_stator * np.conj(frame)
 
-        tau_lo, tau_hi, feasible = torque_window(
-            p_est, w_e, v_s_mag, cp[CP_I_S_MAX], cp[CP_I_R_MAX]
-        )
+        q_com = reactive_power_command(cp, cs, v_s_mag, i_s_f, currents_valid)
+        lossless = cp[CP_LOSSLESS] != 0.0  # the R_s = 0 law (39) with the case-2 limits
+        if lossless:
+            tau_max_2, tau_max_3 = torque_limit_case2(
+                p_est, w_e, v_s_mag, q_com, cp[CP_I_S_MAX], cp[CP_I_R_MAX]
+            )
+            tau_hi = max(min(tau_max_2, tau_max_3), 0.0)
+            tau_lo, feasible = -tau_hi, min(tau_max_2, tau_max_3) >= 0.0
+        else:
+            tau_lo, tau_hi, feasible = torque_window(
+                p_est, w_e, v_s_mag, cp[CP_I_S_MAX], cp[CP_I_R_MAX]
+            )
         if not feasible:
             flags |= FLAG_NO_ROTOR_MARGIN
         tau_com, cs[CS_E_INT], clipped = speed_pi(
@@ -258,8 +271,13 @@ def controller_step(p_est, cp, cs, v_s, v_g, i_s, i_r_rotor, theta_meas, w_ref):
         if clipped:
             flags |= FLAG_TORQUE_LIMIT
         cs[CS_TAU_COM] = tau_com
-        q_com = reactive_power_command(cp, cs, v_s_mag, i_s_f, currents_valid)
-        i_s_com, sqrt_limited = stator_current_command(p_est, w_e, v_s_mag, tau_com, q_com)
+        if lossless:
+            i_s_com, sqrt_limited = (
+                stator_current_lossless(p_est, w_e, v_s_mag, tau_com, q_com),
+                False,
+            )
+        else:
+            i_s_com, sqrt_limited = stator_current_command(p_est, w_e, v_s_mag, tau_com, q_com)
         if sqrt_limited:
             flags |= FLAG_SQRT_LIMIT
         i_r_com, limited = _clip_magnitude(

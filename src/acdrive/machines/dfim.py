@@ -150,6 +150,13 @@ def stator_current_command(p, w_e, v_s, tau, Q):
 
 
 @jit
+def stator_current_lossless(p, w_e, v_s, tau, Q):
+    """Stator current for torque ``tau`` and reactive power ``Q`` when R_s = 0 (Bodson (38));
+    with (20) it gives the control law (39)."""
+    return w_e * tau / (v_s * p[N_P]) - 1j * Q / v_s
+
+
+@jit
 def _torque_at_stator_current(p, w_e, v_s, i_d):
     """Torque for a real stator current i_d (Q = 0), from (31): n_p/w_e (v_s i_d - R_s i_d^2)."""
     return p[N_P] / w_e * (v_s * i_d - p[R_S] * i_d * i_d)

@@ -12,7 +12,8 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
                   encoder_counts_per_rev, encoder_offset
                   current_sensor_fault_time (s; current measurements fail from then on)
-    [motor.controller]  mode ("voltage" | "current"), current_bandwidth, R_T,
+    [motor.controller]  mode ("voltage" | "current"), lossless_law (R_s = 0 form (39)),
+                  current_bandwidth, R_T,
                   reactive_power_kp, reactive_power_ki, speed_bandwidth, design_inertia (J used in (27),
                   default: the machine's J), K_F, reactive_power,
                   stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
@@ -210,6 +211,7 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         frequency_filter_tau=section.number("frequency_filter_tau", 0.01, require_nonnegative),
         min_stator_voltage_pk=section.number("min_stator_voltage_pk", 1.0, require_positive),
         sync=_sync(_Section(section.get("sync", {}), section.field("sync"))),
+        lossless_law=section.boolean("lossless_law", False),
     )
     section.done()
     return controller

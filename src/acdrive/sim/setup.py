@@ -81,6 +81,7 @@ class DFIMController:
     frequency_filter_tau: float = 0.01
     min_stator_voltage_pk: float = 1.0
     sync: Synchroniser = field(default_factory=Synchroniser)
+    lossless_law: bool = False  # R_s = 0 law (39) with case-2 limits (40)-(42)
     params: DFIMParams | None = None  # controller's parameter estimates (default: the true ones)
 
     def current_gains(self, machine: DFIMParams) -> tuple[float, float]:
@@ -163,6 +164,7 @@ def _controller_arrays(motor: MotorSetup, supply: Supply, T_s: float) -> np.ndar
         c.sync.tolerance_phase,
     )
     cp[ctl.CP_SYNC_HOLD] = c.sync.hold_time
+    cp[ctl.CP_LOSSLESS] = 1.0 if c.lossless_law else 0.0
     return cp
 
 
