@@ -257,8 +257,7 @@ def _draw(maps, out: Path, args) -> Path:
 
     out.mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
-    limit = max(float(np.max(np.abs(m.max_real_part))) for m in maps.values())
-    limit = max(limit, 1.0)
+    limit = max(float(np.nanmax(np.abs(m.max_real_part), initial=1.0)) for m in maps.values())
     for ax, (mode, m) in zip(axes, maps.items()):
         X, Y = np.meshgrid(m.loads_nm, m.speeds_rpm)
         pc = ax.pcolormesh(
