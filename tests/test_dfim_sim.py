@@ -197,3 +197,45 @@ def test_batch_axis_runs_variants_in_parallel():
     for b, s in enumerate(setups):
         single = simulate(s)
         assert np.allclose(logs[b], single.signals, rtol=0, atol=1e-12)
+
+
+def test_speed_oscillation_metric_recovers_a_known_sinusoid():
+    from acdrive.sim.engine import LOG_NAMES
+    from acdrive.sim.result import DriveResult
+
+    t = np.arange(20000) * 200e-6
+    signals = np.zeros((t.size, 1, len(LOG_NAMES)))
+    amplitude_rpm, f = 12.0, 47.0
+    signals[:, 0, LOG_NAMES.index("w")] = (
+        (500 + amplitude_rpm * np.sin(2 * np.pi * f * t)) * np.pi / 30
+    )
+    signals[:, 0, LOG_NAMES.index("w_ref")] = 500 * np.pi / 30 + 0.01 * t  # slow drift: out of band
+    r = DriveResult(
+        name="synthetic", t=t, signals=signals, sample_time=200e-6, final_state=np.zeros(1)
+    )
+    rms, hz = r.speed_oscillation()
+    assert rms == pytest.approx(amplitude_rpm / np.sqrt(2), rel=0.02)
+    assert hz == pytest.approx(f, abs=0.5)
+
+
+@pytest.mark.slow
+def test_paper_gains_limit_cycle_in_voltage_mode_only():
+    """The finding stated in the README: at a_D,VEL = 314 rad/s voltage command oscillates near the
+    supply frequency, current command does not, and voltage command at 100 rad/s does not."""
+
+    def oscillation(mode, bandwidth):
+        data = {
+            "simulation": {"duration": 1.5},
+            "motor": [
+                {
+                    "speed_reference_rpm": [[0, 0], [0.1, 0], [1.1, 900], [1.5, 900]],
+                    "controller": {"mode": mode, "speed_bandwidth": bandwidth},
+                }
+            ],
+        }
+        return simulate(build_setup(data)).speed_oscillation()
+
+    rms, hz = oscillation("voltage", 314.0)
+    assert rms > 2.0 and 35 < hz < 65
+    assert oscillation("current", 314.0)[0] < 0.5
+    assert oscillation("voltage", 100.0)[0] < 0.5

@@ -18,6 +18,8 @@ from acdrive.sim.result import DriveResult
 from acdrive.sim.setup import DriveSetup, simulate
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
+#: speed-error RMS in the 20-200 Hz band above which the summary states a limit-cycle finding
+OSCILLATION_FINDING_RPM = 1.0
 
 
 def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict | None:
@@ -108,6 +110,17 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
             summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
             summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
             summary[f"limit_events_{suffix}"] = s["limit_events"]
+    for mode, result in results.items():
+        worst = max(m["speed_oscillation_rms_rpm"] for m in result.summary()["motors"])
+        if worst > OSCILLATION_FINDING_RPM:
+            hz = max(result.summary()["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
+            summary["finding"] = (
+                f"{mode} command: the speed oscillates ({worst:.1f} rpm RMS at about "
+                f"{hz['speed_oscillation_hz']:.0f} Hz) at a_D,VEL = "
+                f"{setup.motors[0].controller.gains.K_P / (2 * setup.motors[0].machine.J):.0f} rad/s; "
+                "the linearised drive is unstable there (docs/stability.md, `acdrive stability --map`)"
+            )
+            break
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync

@@ -72,6 +72,21 @@ class DriveResult:
             mask[(self.t >= self.t[j]) & (self.t < self.t[j] + settle_s)] = False
         return mask
 
+    def speed_oscillation(self, motor: int = 0, band_hz=(20.0, 200.0)) -> tuple[float, float]:
+        """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz`` over the tracking
+        samples (Parseval on the FFT of the masked error): a limit cycle shows up here, a slow
+        tracking lag does not."""
+        mask = self.tracking_mask(motor)
+        if mask.sum() < 16:
+            return 0.0, 0.0
+        err = np.where(mask, self.reference_rpm(motor) - self.speed_rpm(motor), 0.0)
+        spectrum = np.fft.rfft(err - err[mask].mean() * mask)
+        freq = np.fft.rfftfreq(err.size, self.t[1] - self.t[0])
+        inside = (freq >= band_hz[0]) & (freq <= band_hz[1])
+        power = np.abs(spectrum[inside]) ** 2
+        rms = float(np.sqrt(2.0 * power.sum() / (err.size * mask.sum())))
+        return rms, float(freq[inside][np.argmax(power)]) if power.size else 0.0
+
     def summary(self) -> dict:
         """Headline metrics (motor 0 at top level, every motor under ``motors``).
 
@@ -79,6 +94,7 @@ class DriveResult:
         0.5 s); speed_max_abs_error_rpm over the whole run."""
         """Headline metrics (motor 0 at top level, every motor under ``motors``)."""
         per_motor = []
+        oscillation = [self.speed_oscillation(k) for k in range(self.n_motors)]
         for k in range(self.n_motors):
             err = self.reference_rpm(k) - self.speed_rpm(k)
             tracking = self.tracking_mask(k)
@@ -90,6 +106,8 @@ class DriveResult:
                     "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
                     "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
                     "limit_events": self.events(k),
+                    "speed_oscillation_rms_rpm": oscillation[k][0],
+                    "speed_oscillation_hz": oscillation[k][1],
                 }
             )
         return {
