@@ -89,14 +89,23 @@ def test_current_mode_rotor_loop_poles_are_those_of_50(a_cur, R_T):
     assert_same_eigs(r.eigenvalues, expected + [stator, np.conj(stator)], 1e-6)
 
 
+BENCH = {"supply_resistance": 0.3, "supply_inductance": 0.5e-3, "speed_filter_tau": 1e-3}
+
+
 @pytest.mark.parametrize("mode", ["voltage", "current"])
-def test_sampled_model_converges_to_continuous_one(mode):
+@pytest.mark.parametrize("extras", [{}, BENCH], ids=["plain", "supply-RL-filter"])
+def test_sampled_model_converges_to_continuous_one(mode, extras):
     """The sampled-data map (the simulator's controller and RK4 plant, zero-order hold) tends to
-    the continuous-time linearisation at first order in the sample time."""
+    the continuous-time linearisation at first order in the sample time, also with a supply
+    impedance (continuous model: the measured-voltage loop solved by iteration) and a speed
+    filter."""
     point = OperatingPoint(900 * RAD_S_PER_RPM, 0.05)
-    cont = linearize(DriveModel(mode=mode), point).dominant
+    cont = linearize(DriveModel(mode=mode, **extras), point).dominant
     gaps = [
-        abs(linearize(DriveModel(mode=mode, sample_time=T), point, "sampled").dominant - cont)
+        abs(
+            linearize(DriveModel(mode=mode, sample_time=T, **extras), point, "sampled").dominant
+            - cont
+        )
         for T in (40e-6, 20e-6)
     ]
     assert gaps[1] < 1e-2 * abs(cont)
