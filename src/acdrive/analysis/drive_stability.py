@@ -58,6 +58,7 @@ from acdrive.plant.dfim_bus import (
     PSI_S_RE,
     STATES_PER_MOTOR,
     THETA,
+    motor_currents,
     n_states,
     plant_derivatives,
 )
@@ -311,7 +312,8 @@ def _plant_state(x, machines, psi_s: complex, psi_r: complex, w: float) -> None:
 
 
 def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0) -> DriveSetup:
-    """The simulator's ``DriveSetup`` for ``model`` held at ``point`` (voltage mode)."""
+    """The simulator's ``DriveSetup`` for ``model`` held at ``point``: speed reference and
+    initial speed at the operating speed, constant load torque."""
     return DriveSetup(
         motors=(_motor_setup(model, point),),
         supply=_supply(model),
@@ -338,7 +340,6 @@ class _Plant:
         self.v_r = np.zeros(1, dtype=complex)
         self.w_e = model.w_e
         self.loss = model.converter_loss
-        self.machine = model.machine
 
     def load(self, psi_s: complex, psi_r: complex, w: float) -> None:
         _plant_state(self.x, self.machines, psi_s, psi_r, w)
@@ -347,12 +348,7 @@ class _Plant:
         """(d psi_s/dt, d psi_r/dt, dw/dt) in the supply frame and the stator terminal voltage,
         for the state last given to ``load`` and the rotor voltage ``v_r`` (supply frame)."""
         if self.loss > 0.0:
-            x = self.x
-            _, i_r = currents(
-                self.machine,
-                complex(x[PSI_S_RE], x[PSI_S_IM]),
-                complex(x[PSI_R_RE], x[PSI_R_IM]),
-            )
+            _, i_r = self.currents()
             v_r = v_r - self.loss * i_r / abs(i_r)
         self.v_r[0] = v_r
         plant_derivatives(
@@ -378,16 +374,16 @@ class _Plant:
     def terminal_voltage(self, v_r: complex) -> complex:
         return self.evaluate(v_r)[3]
 
-
-def currents(params: DFIMParams, psi_s: complex, psi_r: complex) -> tuple[complex, complex]:
-    """(i_s, i_r) from the flux linkages psi_s = L_s i_s + M i_r, psi_r = M i_s + L_r i_r (9)."""
-    det = params.L_s * params.L_r - params.M**2
-    return (params.L_r * psi_s - params.M * psi_r) / det, (
-        params.L_s * psi_r - params.M * psi_s
-    ) / det
+    def currents(self) -> tuple[complex, complex]:
+        """(i_s, i_r) of the loaded state, from the plant's own flux-current relation (9)."""
+        x = self.x
+        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM])
+        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM])
+        return motor_currents(self.machines[0], psi_s, psi_r, True)
 
 
 def fluxes(params: DFIMParams, i_s: complex, i_r: complex) -> tuple[complex, complex]:
+    """psi_s = L_s i_s + M i_r, psi_r = M i_s + L_r i_r (Bodson (9))."""
     return params.L_s * i_s + params.M * i_r, params.M * i_s + params.L_r * i_r
 
 
@@ -471,9 +467,9 @@ class _Continuous:
     def rhs(self, x) -> np.ndarray:
         m, plant = self.model, self.plant
         psi_s, psi_r, w, _, w_f, z = self.unpack(x)
-        i_s, i_r = currents(m.machine, psi_s, psi_r)
         tau = self.torque_command(x)
         plant.load(psi_s, psi_r, w)
+        i_s, i_r = plant.currents()
         # the controller uses the measured stator terminal voltage, which depends on the rotor
         # voltage through the supply inductance: solve this algebraic loop by fixed-point iteration
         v_s = m.v_g - m.supply_resistance * i_s
