@@ -50,6 +50,7 @@ from acdrive.machines.dfim import (
     torque_window,
 )
 from acdrive.plant import dfim_bus
+from acdrive.plant.converter import converter_output
 from acdrive.plant.dfim_bus import (
     OMEGA,
     PSI_R_IM,
@@ -614,6 +615,7 @@ class _Sampled:
         command, _, _ = ctl.controller_step(
             self.p_est, self.cp, cs, self.v_term[0], v_g, i_s, i_r_rotor, 0.0, self.point.speed
         )
+        command, _ = converter_output(command, a["sensors"][0, engine.SN_V_R_MAX])
         applied = complex(z[10], z[11]) if self.model.delay_samples else command
         self.v_r[0] = applied
         engine.advance_plant(
