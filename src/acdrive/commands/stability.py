@@ -209,13 +209,19 @@ def _bench(args) -> int:
 
     bandwidth = require_positive("--bandwidth", args.bandwidth)
     results = [evaluate_candidate(c) for c in bench_candidates(bandwidth)]
-    thresholds = stabilising_thresholds(bandwidth)
+    if args.delay_samples not in (0, 1):
+        raise InputError("--delay-samples", "must be 0 or 1")
+    thresholds = stabilising_thresholds(
+        bandwidth, kind=args.model, delay_samples=args.delay_samples
+    )
 
     def num(x):
         return float(x) if math.isfinite(x) else None
 
     out = {
         "bandwidth_rad_s": bandwidth,
+        "threshold_model": args.model,
+        "threshold_delay_samples": args.delay_samples,
         "candidates": [
             {
                 "name": r.candidate.name,
@@ -243,7 +249,10 @@ def _bench(args) -> int:
             f"{r.candidate.name:58s} {r.max_real_part_900:8.1f} {r.worst_zero_load:8.1f} "
             f"{r.worst_grid:8.1f}"
         )
-    print("smallest value that makes the drive stable (no load / grid):")
+    print(
+        f"smallest value that makes the drive stable (no load / grid; {args.model} model, "
+        f"delay {args.delay_samples}):"
+    )
     for t in thresholds:
         print(f"  {t.name:28s} {t.zero_load:10.4g} / {t.grid:10.4g} {t.unit}")
     return 0
