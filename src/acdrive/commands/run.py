@@ -51,7 +51,9 @@ def run(args) -> int:
             shutil.rmtree(staging)
     wall = sum(r.wall_time for r in outcome.results.values())
     n = len(setup.motors)
-    print(f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s ({n} motor{'s' * (n > 1)})")
+    print(
+        f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s ({n} motor{'s' * (n > 1)})"
+    )
     rows = [
         ("speed RMS tracking error", f"{summary['speed_rms_error_rpm']:.2f} rpm"),
         ("max |speed error|", f"{summary['speed_max_abs_error_rpm']:.1f} rpm"),
@@ -63,13 +65,20 @@ def run(args) -> int:
             rows.append((key.replace("_", " ").replace(" a", " (A)"), f"{summary[key]:.2f}"))
     if "synchronisation" in summary and summary["synchronisation"].get("relay_closed"):
         sync = summary["synchronisation"]
-        rows.append(("relay closed at", f"{sync['closing_time_s']:.3f} s, stator current peak "
-                     f"{sync['closing_stator_current_peak_a']:.2f} A"))
+        rows.append(
+            (
+                "relay closed at",
+                f"{sync['closing_time_s']:.3f} s, stator current peak "
+                f"{sync['closing_stator_current_peak_a']:.2f} A",
+            )
+        )
     events = ", ".join(f"{k} {v}" for k, v in summary["limit_events"].items() if v) or "none"
     rows.append(("events (samples)", events))
     for label, value in rows:
         print(f"  {label:<26} {value}")
     if "finding" in summary:
-        print(f"  note: {summary['finding']}")
+        print(f"  finding: {summary['finding']}")
+    if "note" in summary:
+        print(f"  note: {summary['note']}")
     print(f"wrote {target}/ (data.csv, data.parquet, summary.json, figures)")
     return 0

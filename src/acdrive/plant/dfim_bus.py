@@ -23,6 +23,8 @@ sample, so they never drift from the unit circle.
 
 State vector layout: for motor k, x[8k : 8k+8] = (Re psi_s, Im psi_s, Re psi_r, Im psi_r, theta, w,
 Re u_r, Im u_r); then the supply angle theta_g (d theta_g/dt = 2 pi f(t)) and Re u_g, Im u_g.
+The rotor converter may lose a fundamental voltage against the rotor current (dead time and
+device drops, first-harmonic model): v_R,applied = v_R - V_loss i_R / |i_R|.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from acdrive.machines.dfim import (
     L_R,
     L_S,
     M_SR,
+    N_MACHINE_PARAMS,
     N_P,
     R_R,
     R_S,
@@ -51,6 +54,13 @@ THETA_G, SUP_RE, SUP_IM = range(3)
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
 from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
+
+# per-motor plant data: the machine vector (acdrive.machines.dfim) followed by the converter's
+# fundamental voltage loss against the rotor current [V, space-vector magnitude]
+CONVERTER_LOSS = N_MACHINE_PARAMS
+N_MOTOR_DATA = N_MACHINE_PARAMS + 1
+#: current scale [A] below which the converter loss fades out (keeps the right-hand side smooth)
+LOSS_CURRENT_SCALE = 0.05
 
 # supply / bus parameters
 BUS_R, BUS_L = 0, 1
@@ -112,7 +122,10 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
         i_s, i_r = motor_currents(p, psi_s, psi_r, closed[k])
         u_r = complex(x[o + ROT_RE], x[o + ROT_IM])
         w_el = p[N_P] * x[o + OMEGA]  # electrical rotor speed
-        dpsi_r = v_r_rotor[k] * u_r - p[R_R] * i_r + 1j * w_el * psi_r
+        v_r = v_r_rotor[k] * u_r
+        if p[CONVERTER_LOSS] > 0.0:  # dead time and device drops oppose the rotor current
+            v_r -= p[CONVERTER_LOSS] * i_r / np.sqrt(abs(i_r) ** 2 + LOSS_CURRENT_SCALE**2)
+        dpsi_r = v_r - p[R_R] * i_r + 1j * w_el * psi_r
         du_r = 1j * w_el * u_r
         dx[o + ROT_RE], dx[o + ROT_IM] = du_r.real, du_r.imag
         dx[o + PSI_R_RE], dx[o + PSI_R_IM] = dpsi_r.real, dpsi_r.imag

@@ -3,14 +3,15 @@
 Every field is checked on load; a bad one raises ``InputError("<path.to.field>", "<rule>")``.
 Schema (all tables optional except [[motor]]; units in the key names where not SI):
 
-    name, description, compare_modes (e.g. ["voltage", "current"]: one run per mode)
+    name, description, note (copied into summary.json), compare_modes (e.g. ["voltage", "current"]: one run per mode)
     [simulation]  duration, sample_time, substeps, log_every
     [supply]      voltage_pk | voltage_pk_profile = [[t, V], ...], frequency_hz |
                   frequency_hz_profile, resistance, inductance
     [[motor]]     machine (built-in name) or [motor.params] (R_s, R_r, L_s, L_r, M, n_p, J),
                   viscous_friction, coulomb_friction, load_torque | load_torque_profile,
                   speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
-                  encoder_counts_per_rev, encoder_offset
+                  encoder_counts_per_rev, encoder_offset, converter_dead_time (s),
+                  converter_switching_frequency (Hz), converter_device_drop (V)
                   current_sensor_fault_time (s; current measurements fail from then on)
     [motor.controller]  mode ("voltage" | "current"), lossless_law (R_s = 0 form (39)),
                   current_bandwidth, R_T,
@@ -35,6 +36,7 @@ from acdrive.control.speed import SpeedPIGains
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
 from acdrive.sim.setup import (
+    ConverterLosses,
     DFIMController,
     DriveSetup,
     MotorSetup,
@@ -222,6 +224,7 @@ def build_setup(data: dict) -> DriveSetup:
     top = _Section(data, "")
     name = top.text("name", "custom")
     top.text("description", "")
+    note = top.text("note", "")
     compare = top.get("compare_modes", [])
     if not isinstance(compare, list) or any(m not in ("voltage", "current") for m in compare):
         raise InputError("compare_modes", 'must be a list of "voltage" / "current"')
@@ -262,6 +265,13 @@ def build_setup(data: dict) -> DriveSetup:
             speed_reference=sec.profile("speed_reference_rpm", RAD_S_PER_RPM),
             load_torque=sec.constant_or_profile("load_torque", 0.0),
             dc_link_voltage=sec.number("dc_link_voltage", 30.0, require_positive),
+            converter=ConverterLosses(
+                dead_time=sec.number("converter_dead_time", 0.0, require_nonnegative),
+                switching_frequency=sec.number(
+                    "converter_switching_frequency", 0.0, require_nonnegative
+                ),
+                device_drop=sec.number("converter_device_drop", 0.0, require_nonnegative),
+            ),
             encoder_counts_per_rev=float(sec.integer("encoder_counts_per_rev", 0, minimum=0)),
             encoder_offset=sec.number("encoder_offset", 0.0),
             initial_speed=sec.number("initial_speed_rpm", 0.0) * RAD_S_PER_RPM,
@@ -283,6 +293,7 @@ def build_setup(data: dict) -> DriveSetup:
         log_every=log_every,
         name=name,
         compare_modes=tuple(compare),
+        note=note,
     )
     check_setup(setup)
     return setup

@@ -121,6 +121,8 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
                 "the linearised drive is unstable there (docs/stability.md, `acdrive stability --map`)"
             )
             break
+    if setup.note:
+        summary["note"] = setup.note
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync

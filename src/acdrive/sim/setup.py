@@ -91,6 +91,22 @@ class DFIMController:
 
 
 @dataclass(frozen=True)
+class ConverterLosses:
+    """Non-ideal rotor converter: dead time t_d at switching frequency f_sw and a device voltage
+    drop V_drop each cost a phase voltage Delta V = V_dc t_d f_sw + V_drop against the sign of the
+    phase current; its fundamental is (4/pi) Delta V per phase, i.e. sqrt(3/2) (4/pi) Delta V as a
+    space vector (Bodson (8)) opposing the rotor current. All zero (ideal) by default."""
+
+    dead_time: float = 0.0
+    switching_frequency: float = 0.0
+    device_drop: float = 0.0
+
+    def fundamental_loss(self, v_dc: float) -> float:
+        delta_v = v_dc * self.dead_time * self.switching_frequency + self.device_drop
+        return SQRT_3_2 * 4.0 / np.pi * delta_v
+
+
+@dataclass(frozen=True)
 class MotorSetup:
     """One DFIM with its load, sensors, converter, controller and speed reference."""
 
@@ -99,6 +115,7 @@ class MotorSetup:
     speed_reference: Profile  # rad/s (mechanical) vs s
     load_torque: Profile = field(default_factory=lambda: constant(0.0))
     dc_link_voltage: float = 30.0
+    converter: ConverterLosses = field(default_factory=lambda: ConverterLosses())
     encoder_counts_per_rev: float = 0.0
     encoder_offset: float = 0.0
     initial_speed: float = 0.0
@@ -117,6 +134,7 @@ class DriveSetup:
     log_every: int = 1
     name: str = "custom"
     compare_modes: tuple[str, ...] = ()  # run once per controller mode (Bodson Figs. 8-11)
+    note: str = ""  # the scenario's own explanation, copied into the summary
 
     def with_mode(self, mode: str) -> DriveSetup:
         """The same drive with every controller in ``mode`` ("voltage" or "current")."""
@@ -194,11 +212,17 @@ def initial_state(setup: DriveSetup) -> tuple[np.ndarray, np.ndarray]:
     return x, v_r_rotor
 
 
+def motor_data(motor: MotorSetup) -> np.ndarray:
+    """The plant's per-motor vector: machine parameters, then the converter loss (dfim_bus)."""
+    loss = motor.converter.fundamental_loss(motor.dc_link_voltage)
+    return np.append(machine_vector(motor.machine), loss)
+
+
 def build_arrays(setup: DriveSetup) -> dict:
     """All engine inputs for one variant, as a dict of arrays named after ``engine.run_drive``."""
     motors = setup.motors
     n = len(motors)
-    machines = np.array([machine_vector(m.machine) for m in motors])
+    machines = np.array([motor_data(m) for m in motors])
     p_est = np.array([machine_vector(m.controller.params or m.machine) for m in motors])
     load_t, load_tau = pad_profiles([m.load_torque for m in motors])
     ref_t, ref_w = pad_profiles([m.speed_reference for m in motors])
