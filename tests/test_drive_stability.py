@@ -89,16 +89,21 @@ def test_current_mode_rotor_loop_poles_are_those_of_50(a_cur, R_T):
     assert_same_eigs(r.eigenvalues, expected + [stator, np.conj(stator)], 1e-6)
 
 
-BENCH = {"supply_resistance": 0.3, "supply_inductance": 0.5e-3, "speed_filter_tau": 1e-3}
+BENCH = {
+    "supply_resistance": 0.3,
+    "supply_inductance": 0.5e-3,
+    "speed_filter_tau": 1e-3,
+    "converter_loss": 1.0,
+}
 
 
 @pytest.mark.parametrize("mode", ["voltage", "current"])
-@pytest.mark.parametrize("extras", [{}, BENCH], ids=["plain", "supply-RL-filter"])
+@pytest.mark.parametrize("extras", [{}, BENCH], ids=["plain", "bench-effects"])
 def test_sampled_model_converges_to_continuous_one(mode, extras):
     """The sampled-data map (the simulator's controller and RK4 plant, zero-order hold) tends to
     the continuous-time linearisation at first order in the sample time, also with a supply
-    impedance (continuous model: the measured-voltage loop solved by iteration) and a speed
-    filter."""
+    impedance (continuous model: the measured-voltage loop solved by iteration), a speed filter
+    and a converter loss."""
     point = OperatingPoint(900 * RAD_S_PER_RPM, 0.05)
     cont = linearize(DriveModel(mode=mode, **extras), point).dominant
     gaps = [
@@ -277,9 +282,11 @@ def test_stabilising_threshold_is_a_stability_boundary():
     assert th["viscous friction B"].zero_load == math.inf
 
 
-def test_converter_loss_only_in_continuous_model():
-    model = DriveModel(converter_loss=1.0)
+def test_converter_loss_damps_the_drive_in_both_models():
+    """The simulator's converter loss (a voltage against the rotor current) enters both models
+    through the plant; it damps the unstable pair."""
     point = OperatingPoint(900 * RAD_S_PER_RPM, 0.0)
-    assert linearize(model, point).max_real_part < linearize(DriveModel(), point).max_real_part
-    with pytest.raises(InputError, match="converter_loss"):
-        linearize(model, point, "sampled")
+    for kind in ("continuous", "sampled"):
+        ideal = linearize(DriveModel(), point, kind).max_real_part
+        lossy = linearize(DriveModel(converter_loss=1.5), point, kind).max_real_part
+        assert lossy < ideal - 10.0
