@@ -211,8 +211,9 @@ class StabilityResult:
     max_real_part: largest real part of ``eigenvalues`` [1/s]; stable: all strictly in the open
     left half plane (continuous) or inside the unit circle (sampled);
     torque_command: tau_COM at the equilibrium; within_limits: tau_COM inside the on-line torque
-    window (30)-(37) (outside it the real controller would be clipping and the linearisation does
-    not describe it); state: the equilibrium state vector; state_names: its entries.
+    window (30)-(37), rotor current inside its limit and rotor voltage inside the converter's
+    range (otherwise the real controller would be clipping and the linearisation does not
+    describe it); state: the equilibrium state vector; state_names: its entries.
     """
 
     model: DriveModel
@@ -491,7 +492,7 @@ class _Continuous:
         v_r, dz = self._law(v_s, w_f, tau, i_s, i_r, z)
         dpsi_s, dpsi_r, dw, _ = plant.evaluate(v_r)
         self.last_dw = dw  # the torque balance (26), also when the speed is frozen
-        self.last_v_s = v_s
+        self.last_v_s, self.last_v_r = v_s, v_r
         out = {
             "psi_s.re": dpsi_s.real,
             "psi_s.im": dpsi_s.imag,
@@ -753,6 +754,8 @@ def linearize(
     tau = cont.torque_command(x)
     cont.rhs(x)
     v_s = abs(cont.last_v_s)  # the measured stator voltage the torque window is computed from
+    v_r = abs(cont.last_v_r)
+    i_r = abs(cont.plant.currents()[1])
     if kind == "continuous":
         A = jacobian(cont.rhs, x, cont.scales())
         s = np.linalg.eigvals(A)
@@ -773,7 +776,12 @@ def linearize(
         s = np.log(nonzero.astype(complex)) / model.sample_time
         state, names, jac = z0, smp.names, F
         stable = bool(np.all(np.abs(z_eig) < 1.0))
+        v_r = abs(complex(z0[8], z0[9]))
     lo, hi = _torque_window(model, v_s)
+    v_max = cont.plant.arrays["sensors"][0, engine.SN_V_R_MAX]
+    # the linearisation describes the unclipped controller: torque inside the window (30)-(37),
+    # rotor current inside its limit (43), converter inside its voltage range
+    inside = lo < tau < hi and v_r < v_max and i_r <= model.i_max * (1.0 + 1e-9)
     s = s[np.lexsort((-s.imag, -s.real))]
     return StabilityResult(
         model=model,
@@ -784,7 +792,7 @@ def linearize(
         max_real_part=float(np.max(s.real)),
         stable=stable,
         torque_command=float(tau),
-        within_limits=bool(lo < tau < hi),
+        within_limits=bool(inside),
         state=state,
         state_names=names,
         jacobian=jac,
@@ -913,6 +921,20 @@ def _boundary(ok, lower: float, upper: float, tol: float, stable_below: bool) ->
     return lo if stable_below else hi
 
 
+def _first_stable(ok, lower: float, upper: float, step: float, tol: float) -> float:
+    """Smallest value in [lower, upper] where ``ok`` holds: scan by ``step``, then bisect the
+    last step to ``tol`` (inf if ``ok`` never holds on the scan)."""
+    if ok(lower):
+        return lower
+    v = lower
+    while v < upper:
+        nxt = min(v + step, upper)
+        if ok(nxt):
+            return _boundary(ok, v, nxt, tol, stable_below=False)
+        v = nxt
+    return math.inf
+
+
 # ---------------------------------------------------------------------------------------------
 # why the test bench did not oscillate: candidate effects, each in the linear model
 # ---------------------------------------------------------------------------------------------
@@ -1036,12 +1058,13 @@ def stabilising_thresholds(
     **model_fields,
 ) -> list[Threshold]:
     """How large the true inertia, an extra rotor-circuit resistance unknown to the controller,
-    or a viscous load must be for the drive to be stable at ``bandwidth`` (bisection).
+    a viscous load or a converter voltage loss must be for the drive to be stable at
+    ``bandwidth``: the smallest such value (scan, then bisection).
 
     "zero load": speeds 0..2,700 rpm without load; "grid": the same speeds with loads across 90 %
     of the torque window, judged at the points where the drive keeps an equilibrium inside its
-    limits (for the viscous load, whose torque is itself a load, a point it pushes outside the
-    limits counts as a failure). ``model_fields`` go to the DriveModel (e.g. delay_samples=1);
+    limits (for the viscous load and the converter loss, which themselves cost torque or rotor
+    voltage, a point they push outside the limits counts as a failure). ``model_fields`` go to the DriveModel (e.g. delay_samples=1);
     """
     m0 = BODSON_DFIM
     base = DriveModel(
@@ -1052,14 +1075,14 @@ def stabilising_thresholds(
     def true(**changes):
         return dataclasses.replace(base, machine=dataclasses.replace(m0, **changes))
 
-    makers = (  # name, unit, model for value v, search range, tolerance, strict
-        ("true J / design J", "-", lambda v: true(J=v * m0.J), 1.0, 10.0, 0.01, False),
-        ("extra rotor resistance", "ohm", lambda v: true(R_r=m0.R_r + v), 0.0, 5.0, 0.005, False),
-        ("viscous friction B", "N m s/rad", lambda v: true(B=v), 0.0, 0.05, 1e-5, True),
-        ("converter voltage loss", "V", lambda v: dataclasses.replace(base, converter_loss=v), 0.0, 10.0, 0.01, False),
+    makers = (  # name, unit, model for value v, scan range and step, tolerance, strict
+        ("true J / design J", "-", lambda v: true(J=v * m0.J), 1.0, 10.0, 0.25, 0.01, False),
+        ("extra rotor resistance", "ohm", lambda v: true(R_r=m0.R_r + v), 0.0, 3.0, 0.1, 0.005, False),
+        ("viscous friction B", "N m s/rad", lambda v: true(B=v), 0.0, 0.02, 5e-4, 1e-5, True),
+        ("converter voltage loss", "V", lambda v: dataclasses.replace(base, converter_loss=v), 0.0, 6.0, 0.25, 0.01, True),
     )  # fmt: skip
     out = []
-    for name, unit, make, lo, hi, tol, strict in makers:
+    for name, unit, make, lo, hi, step, tol, strict in makers:
         verdicts = []
         for grid in ("zero", "full"):
 
@@ -1070,7 +1093,7 @@ def stabilising_thresholds(
                 # the friction is itself a load: a point it pushes outside the limits fails
                 return bool(np.all(m.stable)) if strict else m.all_stable
 
-            verdicts.append(_boundary(ok, lo, hi, tol, stable_below=False))
+            verdicts.append(_first_stable(ok, lo, hi, step, tol))
         out.append(Threshold(name, unit, *verdicts))
     return out
 
