@@ -286,3 +286,17 @@ def test_converter_loss_opposes_rotor_current():
     i_r = a["x"][2:4] / a["machines"][0, 3]  # open circuit at t = 0: i_s = 0, i_r = psi_r / L_r
     direction = complex(*i_r) / abs(complex(*i_r))
     assert derivatives[1] - derivatives[0] == pytest.approx(-expected * direction, rel=1e-3)
+
+
+def test_numerical_blow_up_is_an_error_not_nan():
+    """An integration step beyond the stability limit of RK4 (h |lambda| > 2.8 for the fast electrical
+    pole, here h = 10 ms) makes the state blow up; the engine stops and says so instead of
+    returning NaN."""
+    data = {
+        "simulation": {"duration": 2.0, "sample_time": 1e-2, "substeps": 1},
+        "motor": [
+            {"speed_reference_rpm": [[0, 0], [2, 0]], "controller": {"speed_bandwidth": 10.0}}
+        ],
+    }
+    with pytest.raises(RuntimeError, match="diverged"):
+        simulate(build_setup(data))

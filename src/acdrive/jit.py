@@ -8,3 +8,7 @@ nothing non-finite goes unnoticed. ``cache=True``: a second run does not pay the
 from numba import njit
 
 jit = njit(cache=True, error_model="numpy")
+
+#: the plant's right-hand side and its integrator: also fast-math (reassociation, fused
+#: multiply-add, no NaN/inf special cases inside); the engine checks finiteness outside it.
+jit_fast = njit(cache=True, error_model="numpy", fastmath=True)

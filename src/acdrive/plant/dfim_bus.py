@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive.jit import jit
+from acdrive.jit import jit_fast
 from acdrive.machines.dfim import (
     B_VISCOUS,
     J_INERTIA,
@@ -70,7 +70,7 @@ def n_states(n_motors: int) -> int:
     return STATES_PER_MOTOR * n_motors + 3
 
 
-@jit
+@jit_fast
 def project_phasors(x, machines):
     """Set the rotor and supply phasor states to e^{j n_p theta} and e^{j theta_g} exactly."""
     n = machines.shape[0]
@@ -82,7 +82,7 @@ def project_phasors(x, machines):
     x[g + SUP_RE], x[g + SUP_IM] = np.cos(x[g + THETA_G]), np.sin(x[g + THETA_G])
 
 
-@jit
+@jit_fast
 def motor_currents(p, psi_s, psi_r, closed):
     """(i_s, i_r) from the flux linkages; i_s = 0 and psi_s irrelevant when the relay is open."""
     if closed:
@@ -93,13 +93,13 @@ def motor_currents(p, psi_s, psi_r, closed):
     return 0.0 + 0.0j, psi_r * (1.0 / p[L_R])
 
 
-@jit
+@jit_fast
 def supply_voltage(u_g, t, supply_V_t, supply_V):
     """Grid space vector sqrt(3/2) V_pk(t) e^{j theta_g}, with u_g = e^{j theta_g} (Bodson (8))."""
     return SQRT_3_2 * profile_at(supply_V_t, supply_V, t) * u_g
 
 
-@jit
+@jit_fast
 def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rotor, closed, v_term):
     """Write dx/dt into ``dx`` and the stator terminal voltages into ``v_term``; return v_g.
 
@@ -124,7 +124,8 @@ def plant_derivatives(t, x, dx, machines, bus, supply, load_t, load_tau, v_r_rot
         w_el = p[N_P] * x[o + OMEGA]  # electrical rotor speed
         v_r = v_r_rotor[k] * u_r
         if p[CONVERTER_LOSS] > 0.0:  # dead time and device drops oppose the rotor current
-            v_r -= p[CONVERTER_LOSS] * i_r / np.sqrt(abs(i_r) ** 2 + LOSS_CURRENT_SCALE**2)
+            squared = i_r.real * i_r.real + i_r.imag * i_r.imag + LOSS_CURRENT_SCALE**2
+            v_r -= p[CONVERTER_LOSS] / np.sqrt(squared) * i_r
         dpsi_r = v_r - p[R_R] * i_r + 1j * w_el * psi_r
         du_r = 1j * w_el * u_r
         dx[o + ROT_RE], dx[o + ROT_IM] = du_r.real, du_r.imag

@@ -30,7 +30,7 @@ from acdrive.control.dfim import (
     controller_step,
 )
 from acdrive.frames import complex_to_abc_nb
-from acdrive.jit import jit
+from acdrive.jit import jit, jit_fast
 from acdrive.machines.dfim import electromagnetic_torque
 from acdrive.plant.converter import converter_output
 from acdrive.plant.dfim_bus import (
@@ -64,7 +64,7 @@ N_SENSOR = 4
 STATUS_OK, STATUS_NONFINITE = 0, 1
 
 
-@jit
+@jit_fast
 def rk4_step(t, x, h, machines, bus, supply, load_t, load_tau, v_r, closed, work, v_term):
     """Advance ``x`` in place by one RK4 step of length h with held inputs."""
     k1, k2, k3, k4, xt = work[0], work[1], work[2], work[3], work[4]
@@ -86,7 +86,7 @@ def rk4_step(t, x, h, machines, bus, supply, load_t, load_tau, v_r, closed, work
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
-@jit
+@jit_fast
 def advance_plant(
     t, x, T_s, n_sub, machines, bus, supply, load_t, load_tau, v_r, closed, work, v_term
 ):
