@@ -52,7 +52,7 @@ def register(subparsers) -> None:
         "--rotor-resistance", type=float, default=None, help="true R_r [ohm] (controller: 0.94)"
     )
     p.add_argument(
-        "--converter-loss", type=float, default=0.0, help="converter voltage loss [V] (continuous)"
+        "--converter-loss", type=float, default=0.0, help="converter fundamental voltage loss [V]"
     )
     p.add_argument("--out", default="stability-map", help="figure directory for --map")
     p.add_argument(
