@@ -26,74 +26,57 @@ def first_crossing(result: DriveResult, speed_rpm: float, motor: int = 0) -> flo
     return float(result.t[hits[0]]) if hits.size else None
 
 
+def _line_figure(path: Path, curves, ylabel: str, title: str, limit: float | None = None,
+                 marker: float | None = None) -> Path:  # fmt: skip
+    """One time plot: ``curves`` is a list of (t, y, label[, style]); optional horizontal limit
+    line and vertical marker."""
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for t, y, label, *style in curves:
+        ax.plot(t, y, *style, lw=1, label=label)
+    if limit is not None:
+        ax.axhline(limit, color="k", ls=":", lw=1, label=f"{limit:g} A limit")
+    if marker is not None:
+        ax.axvline(marker, color="k", ls=":", lw=1, label="synchronous speed")
+    ax.set(xlabel="time (s)", ylabel=ylabel, title=title)
+    ax.legend()
+    return _save(fig, path)
+
+
 def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: float) -> list[Path]:
     """Speed (Fig. 4), peak voltages (Fig. 5), peak currents (Fig. 6), rotor phase currents X and Y
     around synchronous speed (Fig. 7); for several motors, speeds and torque commands (Figs. 12-13)."""
-    folder = Path(folder)
-    t = result.t
-    paths = []
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for k in range(result.n_motors):
-        ax.plot(
-            t,
-            result.reference_rpm(k),
-            "--",
-            lw=1,
-            label=f"reference {k + 1}" if result.n_motors > 1 else "reference",
-        )
-        ax.plot(
-            t, result.speed_rpm(k), lw=1, label=f"speed {k + 1}" if result.n_motors > 1 else "speed"
-        )
-    ax.set(
-        xlabel="time (s)", ylabel="speed (rpm)", title=f"{result.name}: speed (cf. Bodson Fig. 4)"
-    )
-    ax.legend()
-    paths.append(_save(fig, folder / "fig4_speed.png"))
+    folder, t, n = Path(folder), result.t, result.n_motors
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(t, result.peak("v_s_mag"), lw=1, label="stator")
-    ax.plot(t, result.peak("v_r_mag"), lw=1, label="rotor")
-    ax.set(
-        xlabel="time (s)",
-        ylabel="peak phase voltage (V)",
-        title="peak stator and rotor voltages (cf. Fig. 5)",
-    )
-    ax.legend()
-    paths.append(_save(fig, folder / "fig5_voltages.png"))
+    def named(label, k):
+        return f"{label} {k + 1}" if n > 1 else label
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(t, result.peak("i_s_mag"), lw=1, label="stator")
-    ax.plot(t, result.peak("i_r_mag"), lw=1, label="rotor")
-    ax.axhline(6.0, color="k", ls=":", lw=1, label="6 A limit")
-    ax.set(
-        xlabel="time (s)",
-        ylabel="peak phase current (A)",
-        title="peak stator and rotor currents (cf. Fig. 6)",
-    )
-    ax.legend()
-    paths.append(_save(fig, folder / "fig6_currents.png"))
-
+    speeds = []
+    for k in range(n):
+        speeds += [(t, result.reference_rpm(k), named("reference", k), "--"),
+                   (t, result.speed_rpm(k), named("speed", k))]  # fmt: skip
+    paths = [
+        _line_figure(folder / "fig4_speed.png", speeds, "speed (rpm)",
+                     f"{result.name}: speed (cf. Bodson Figs. 4, 12)"),
+        _line_figure(folder / "fig5_voltages.png",
+                     [(t, result.peak("v_s_mag"), "stator"), (t, result.peak("v_r_mag"), "rotor")],
+                     "peak phase voltage (V)", "peak stator and rotor voltages (cf. Fig. 5)"),
+        _line_figure(folder / "fig6_currents.png",
+                     [(t, result.peak("i_s_mag"), "stator"), (t, result.peak("i_r_mag"), "rotor")],
+                     "peak phase current (A)", "peak stator and rotor currents (cf. Fig. 6)", limit=6.0),
+        _line_figure(folder / "torque_commands.png",
+                     [(t, result.signal("tau_com", k), f"motor {k + 1}") for k in range(n)],
+                     "torque command (N m)", "torque commands (cf. Fig. 13)"),
+    ]  # fmt: skip
     t_sync = first_crossing(result, synchronous_rpm)
     if t_sync is not None:
-        window = (t > t_sync - 0.6) & (t < t_sync + 0.6)
-        fig, ax = plt.subplots(figsize=(7, 3.5))
-        ax.plot(t[window], result.signal("i_rx")[window], lw=1, label="phase X")
-        ax.plot(t[window], result.signal("i_ry")[window], lw=1, label="phase Y")
-        ax.axvline(t_sync, color="k", ls=":", lw=1, label="synchronous speed")
-        ax.set(
-            xlabel="time (s)",
-            ylabel="rotor current (A)",
-            title="rotor currents X, Y around synchronous speed (cf. Fig. 7)",
-        )
-        ax.legend()
-        paths.append(_save(fig, folder / "fig7_rotor_currents.png"))
-
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for k in range(result.n_motors):
-        ax.plot(t, result.signal("tau_com", k), lw=1, label=f"motor {k + 1}")
-    ax.set(xlabel="time (s)", ylabel="torque command (N m)", title="torque commands (cf. Fig. 13)")
-    ax.legend()
-    paths.append(_save(fig, folder / "torque_commands.png"))
+        w = (t > t_sync - 0.6) & (t < t_sync + 0.6)
+        curves = [
+            (t[w], result.signal("i_rx")[w], "phase X"),
+            (t[w], result.signal("i_ry")[w], "phase Y"),
+        ]
+        paths.append(_line_figure(folder / "fig7_rotor_currents.png", curves, "rotor current (A)",
+                                  "rotor currents X, Y around synchronous speed (cf. Fig. 7)",
+                                  marker=t_sync))  # fmt: skip
     return paths
 
 
@@ -103,21 +86,15 @@ def write_comparison_figures(results: dict, folder: Path) -> list[Path]:
     folder = Path(folder)
     labels = {"voltage": "VC", "current": "CC"}
     first = next(iter(results.values()))
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(first.t, first.reference_rpm(), "k--", lw=1, label="reference")
-    for mode, result in results.items():
-        ax.plot(result.t, result.speed_rpm(), lw=1, label=labels.get(mode, mode))
-    ax.set(xlabel="time (s)", ylabel="speed (rpm)", title="speed, voltage vs current command (cf. Figs. 8, 10)")
-    ax.legend()
-    paths = [_save(fig, folder / "fig8_speed_vc_cc.png")]
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for mode, result in results.items():
-        ax.plot(result.t, result.peak("i_r_mag"), lw=1, label=labels.get(mode, mode))
-    ax.axhline(6.0, color="k", ls=":", lw=1, label="6 A limit")
-    ax.set(xlabel="time (s)", ylabel="peak rotor current (A)", title="peak rotor current (cf. Figs. 9, 11)")
-    ax.legend()
-    paths.append(_save(fig, folder / "fig9_rotor_current_vc_cc.png"))
-    return paths
+    speeds = [(first.t, first.reference_rpm(), "reference", "k--")]
+    speeds += [(r.t, r.speed_rpm(), labels.get(m, m)) for m, r in results.items()]
+    currents = [(r.t, r.peak("i_r_mag"), labels.get(m, m)) for m, r in results.items()]
+    return [
+        _line_figure(folder / "fig8_speed_vc_cc.png", speeds, "speed (rpm)",
+                     "speed, voltage vs current command (cf. Figs. 8, 10)"),
+        _line_figure(folder / "fig9_rotor_current_vc_cc.png", currents, "peak rotor current (A)",
+                     "peak rotor current (cf. Figs. 9, 11)", limit=6.0),
+    ]  # fmt: skip
 
 
 def write_sync_figure(result: DriveResult, folder: Path) -> Path:
