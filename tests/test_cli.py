@@ -11,7 +11,7 @@ from acdrive.cli import main
 
 def run_cli(*args):
     return subprocess.run(
-        [sys.executable, "-m", "acdrive.cli", *args], capture_output=True, text=True
+        [sys.executable, "-m", "acdrive.cli", *args], check=False, capture_output=True, text=True
     )
 
 

@@ -137,7 +137,15 @@ def test_transfer_function_14_matches_matrix_inverse():
     "field, value", [("R_s", -1.0), ("L_r", 0.0), ("J", float("nan")), ("n_p", 2.5)]
 )
 def test_invalid_parameters_name_the_field(field, value):
-    kwargs = dict(R_s=0.66, R_r=0.94, L_s=13.1e-3, L_r=9.8e-3, M=9.7e-3, n_p=2, J=3.5e-4)
+    kwargs = {
+        "R_s": 0.66,
+        "R_r": 0.94,
+        "L_s": 13.1e-3,
+        "L_r": 9.8e-3,
+        "M": 9.7e-3,
+        "n_p": 2,
+        "J": 3.5e-4,
+    }
     kwargs[field] = value
     with pytest.raises(InputError, match=field):
         DFIMParams(**kwargs)

@@ -152,6 +152,7 @@ def test_reactive_power_loop_removes_model_error():
         }
         setup = build_setup(data)
         import dataclasses
+
         from acdrive.machines.dfim import DFIMParams
 
         m = setup.motors[0]

@@ -22,7 +22,7 @@ COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce
 class _OneLineParser(argparse.ArgumentParser):
     """ArgumentParser whose errors are a single line on stderr with exit code 2."""
 
-    def error(self, message: str):  # noqa: D401 - argparse API
+    def error(self, message: str):
         sys.stderr.write(f"acdrive: error: {message}\n")
         raise SystemExit(2)
 

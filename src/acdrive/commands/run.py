@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import shutil
 import tempfile
 from pathlib import Path
@@ -68,8 +67,10 @@ def run(args) -> int:
         rows.append(
             (
                 "relay closed at",
-                f"{sync['closing_time_s']:.3f} s, stator current peak "
-                f"{sync['closing_stator_current_peak_a']:.2f} A",
+                (
+                    f"{sync['closing_time_s']:.3f} s, stator current peak "
+                    f"{sync['closing_stator_current_peak_a']:.2f} A"
+                ),
             )
         )
     events = ", ".join(f"{k} {v}" for k, v in summary["limit_events"].items() if v) or "none"

@@ -189,8 +189,10 @@ def write_report(out_dir: str | Path) -> Path:
         (
             "bodson-ramp",
             "Figs. 4-7",
-            "speed tracks a slow ramp through synchronous speed; rotor "
-            "voltage minimal near 1,800 rpm; rotor currents reverse sequence above synchronous speed",
+            (
+                "speed tracks a slow ramp through synchronous speed; rotor "
+                "voltage minimal near 1,800 rpm; rotor currents reverse sequence above synchronous speed"
+            ),
         ),
         (
             "bodson-ramp-ideal",
@@ -215,8 +217,10 @@ def write_report(out_dir: str | Path) -> Path:
         (
             "bodson-three-motors",
             "section IV-C (three motors)",
-            "mentioned only: three motors in "
-            "parallel with a reactive-power loop, tested at NASA Glenn",
+            (
+                "mentioned only: three motors in "
+                "parallel with a reactive-power loop, tested at NASA Glenn"
+            ),
         ),
         ("bodson-sync", "section IV-A", "relay closes with minimal transients"),
     ]

@@ -25,6 +25,7 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import tomllib
 from importlib import resources
@@ -137,7 +138,7 @@ class _Section:
                 raise InputError(f"{name}[{i}]", "must be a [time_s, value] pair")
             times.append(require_nonnegative(f"{name}[{i}][0]", pair[0]))
             values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
-        if any(b < a for a, b in zip(times, times[1:])):
+        if any(b < a for a, b in itertools.pairwise(times)):
             raise InputError(name, "times must be non-decreasing")
         return np.array(times), np.array(values)
 

@@ -239,25 +239,25 @@ def build_arrays(setup: DriveSetup) -> dict:
         cs[k, ctl.CS_VR_RE], cs[k, ctl.CS_VR_IM] = v_r0[k].real, v_r0[k].imag
     s = setup.supply
     supply = tuple(np.ascontiguousarray(a, dtype=float) for a in (*s.voltage_pk, *s.frequency_hz))
-    return dict(
-        x=x,
-        machines=machines,
-        bus=np.array([s.resistance, s.inductance]),
-        supply=supply,
-        load_t=load_t,
-        load_tau=load_tau,
-        sensors=sensors,
-        p_est=p_est,
-        cp=cp,
-        cs=cs,
-        ref_t=ref_t,
-        ref_w=ref_w,
-        closed=np.array([not m.controller.sync.enabled for m in motors], dtype=np.bool_),
-    )
+    return {
+        "x": x,
+        "machines": machines,
+        "bus": np.array([s.resistance, s.inductance]),
+        "supply": supply,
+        "load_t": load_t,
+        "load_tau": load_tau,
+        "sensors": sensors,
+        "p_est": p_est,
+        "cp": cp,
+        "cs": cs,
+        "ref_t": ref_t,
+        "ref_w": ref_w,
+        "closed": np.array([not m.controller.sync.enabled for m in motors], dtype=np.bool_),
+    }
 
 
 def n_steps(setup: DriveSetup) -> int:
-    return int(round(setup.duration / setup.sample_time))
+    return round(setup.duration / setup.sample_time)
 
 
 def simulate(setup: DriveSetup) -> DriveResult:
