@@ -1,3 +1,36 @@
 """acdrive: AC-machine drives -- models, controller design and analysis, compiled simulation."""
 
 __version__ = "0.1.0"
+
+
+def _configure_numba_cache() -> None:
+    """Give numba's on-disk cache a folder keyed by the hash of acdrive's own sources.
+
+    Numba keys a cached function by its own file only; a compiled caller keeps the machine code of
+    a callee from another file even after that file changes. Keying the whole cache folder by the
+    content of every acdrive source file makes a stale mix impossible (after an edit or an upgrade
+    the first run compiles again). A NUMBA_CACHE_DIR set by the user is left alone.
+    """
+    import hashlib
+    import os
+    from pathlib import Path
+
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    package = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode())
+        digest.update(path.read_bytes())
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    folder = base / "acdrive" / f"numba-{digest.hexdigest()[:16]}"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return  # read-only home: numba falls back to its default locations
+    import numba
+
+    numba.config.CACHE_DIR = str(folder)
+
+
+_configure_numba_cache()
