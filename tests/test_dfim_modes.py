@@ -135,18 +135,14 @@ def test_reactive_power_loop_removes_model_error():
         "J": 3.5e-4,
     }
 
-    def q_after(ki):
+    def q_after(ki, key="reactive_power_ki"):
         data = {
             "simulation": {"duration": 1.5},
             "motor": [
                 motor(
                     speed_reference_rpm=[[0, 300], [2, 300]],
                     initial_speed_rpm=300,
-                    controller={
-                        "speed_bandwidth": 60.0,
-                        "reactive_power": 20.0,
-                        "reactive_power_ki": ki,
-                    },
+                    controller={"speed_bandwidth": 60.0, "reactive_power": 20.0, key: ki},
                 )
             ],
         }
@@ -164,6 +160,8 @@ def test_reactive_power_loop_removes_model_error():
 
     assert abs(q_after(0.0) - 20.0) > 2.0  # the model error is visible open loop
     assert q_after(30.0) == pytest.approx(20.0, abs=0.3)
+    # gains from a bandwidth with a unity plant assumed (Bodson III-B): K_I = a_Q
+    assert q_after(30.0, "reactive_power_bandwidth") == pytest.approx(20.0, abs=0.3)
 
 
 def test_bus_voltage_solves_shared_impedance_equation():

@@ -15,7 +15,7 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   current_sensor_fault_time (s; current measurements fail from then on)
     [motor.controller]  mode ("voltage" | "current"), lossless_law (R_s = 0 form (39)),
                   current_bandwidth, R_T,
-                  reactive_power_kp, reactive_power_ki, speed_bandwidth, design_inertia (J used in (27),
+                  reactive_power_kp, reactive_power_ki | reactive_power_bandwidth, speed_bandwidth, design_inertia (J used in (27),
                   default: the machine's J), K_F, reactive_power,
                   stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
                   speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk
@@ -192,11 +192,24 @@ def _sync(section: _Section) -> Synchroniser:
     return sync
 
 
+def _reactive_power_gains(section: _Section) -> tuple[float, float]:
+    """Q-loop gains: given directly, or from a bandwidth a_Q assuming a unity plant from Q command
+    to Q (Bodson III-B): an integrator K_I = a_Q gives the closed loop a_Q / (s + a_Q)."""
+    if section.has("reactive_power_bandwidth"):
+        if section.has("reactive_power_kp") or section.has("reactive_power_ki"):
+            raise InputError(section.field("reactive_power_bandwidth"),
+                             "give either the bandwidth or reactive_power_kp / _ki, not both")  # fmt: skip
+        return 0.0, section.number("reactive_power_bandwidth", 0.0, require_positive)
+    return (section.number("reactive_power_kp", 0.0, require_nonnegative),
+            section.number("reactive_power_ki", 0.0, require_nonnegative))  # fmt: skip
+
+
 def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     mode = section.text("mode", "voltage", choices=("voltage", "current"))
     bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
     K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
     design_inertia = section.number("design_inertia", machine.J, require_positive)
+    q_kp, q_ki = _reactive_power_gains(section)
     gains = dataclasses.replace(SpeedPIGains.design(design_inertia, bandwidth), K_F=K_F)
     controller = DFIMController(
         gains=gains,
@@ -204,8 +217,8 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         current_bandwidth=section.number("current_bandwidth", 3142.0, require_positive),
         R_T=section.number("R_T", 1.0, require_nonnegative),
         reactive_power=section.number("reactive_power", 0.0),
-        reactive_power_kp=section.number("reactive_power_kp", 0.0, require_nonnegative),
-        reactive_power_ki=section.number("reactive_power_ki", 0.0, require_nonnegative),
+        reactive_power_kp=q_kp,
+        reactive_power_ki=q_ki,
         stator_current_limit_pk=section.number("stator_current_limit_pk", 6.0, require_positive),
         rotor_current_limit_pk=section.number("rotor_current_limit_pk", 6.0, require_positive),
         theta_adj=section.number("theta_adj", 0.0),
