@@ -81,7 +81,7 @@ MODES = ("voltage", "current")
 KINDS = ("continuous", "sampled")
 SPEED_LOOPS = ("closed", "open", "frozen")
 #: index of the supply angle theta_g in the plant state of one motor
-SUPPLY_ANGLE = STATES_PER_MOTOR + getattr(dfim_bus, "THETA_G", 0)
+SUPPLY_ANGLE = STATES_PER_MOTOR + dfim_bus.THETA_G
 #: |z| below this is a structural zero of the sampled map (a state overwritten every sample)
 Z_ZERO = 1e-9
 
@@ -313,13 +313,12 @@ def converter_losses(fundamental_loss: float) -> ConverterLosses:
 
 def _plant_state(x, machines, psi_s: complex, psi_r: complex, w: float) -> None:
     """Fill the simulator's plant state of one motor: fluxes and speed given, shaft and supply
-    angles zero (and the plant's rotation phasors, where it carries them, set to match)."""
+    angles zero, and the plant's rotation phasors set to match."""
     x[:] = 0.0
     x[PSI_S_RE], x[PSI_S_IM] = psi_s.real, psi_s.imag
     x[PSI_R_RE], x[PSI_R_IM] = psi_r.real, psi_r.imag
     x[OMEGA] = w
-    if hasattr(dfim_bus, "project_phasors"):
-        dfim_bus.project_phasors(x, machines)
+    dfim_bus.project_phasors(x, machines)
 
 
 def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0) -> DriveSetup:
