@@ -91,33 +91,33 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
         results = {mode: simulate(setup.with_mode(mode)) for mode in setup.compare_modes}
     else:
         results = {setup.motors[0].controller.mode: simulate(setup)}
+    summaries = {mode: result.summary() for mode, result in results.items()}  # once each
     first_mode, first = next(iter(results.items()))
-    summary = first.summary()
+    summary = dict(summaries[first_mode])
     motor = setup.motors[0]
+    K_PC, K_IC = motor.controller.current_gains(motor.machine)
     summary["mode"] = first_mode
     summary["gains"] = {
         "K_P": motor.controller.gains.K_P,
         "K_I": motor.controller.gains.K_I,
         "K_F": motor.controller.gains.K_F,
-        "K_PC": motor.controller.current_gains(motor.machine)[0],
-        "K_IC": motor.controller.current_gains(motor.machine)[1],
+        "K_PC": K_PC,
+        "K_IC": K_IC,
         "R_T": motor.controller.R_T,
     }
-    for mode, result in results.items():
-        if len(results) > 1:
-            s = result.summary()
+    if len(results) > 1:
+        for mode, s in summaries.items():
             suffix = MODE_SUFFIX[mode]
             summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
             summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
             summary[f"limit_events_{suffix}"] = s["limit_events"]
-    for mode, result in results.items():
-        worst = max(m["speed_oscillation_rms_rpm"] for m in result.summary()["motors"])
-        if worst > OSCILLATION_FINDING_RPM:
-            hz = max(result.summary()["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
+    for mode, s in summaries.items():
+        worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
+        if worst["speed_oscillation_rms_rpm"] > OSCILLATION_FINDING_RPM:
             summary["finding"] = (
-                f"{mode} command: the speed oscillates ({worst:.1f} rpm RMS at about "
-                f"{hz['speed_oscillation_hz']:.0f} Hz) at a_D,VEL = "
-                f"{setup.motors[0].controller.gains.K_P / (2 * setup.motors[0].machine.J):.0f} rad/s; "
+                f"{mode} command: the speed oscillates ({worst['speed_oscillation_rms_rpm']:.1f} rpm "
+                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz) at a_D,VEL = "
+                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; "
                 "the linearised drive is unstable there (docs/stability.md, `acdrive stability --map`)"
             )
             break
