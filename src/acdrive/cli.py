@@ -29,6 +29,9 @@ class _OneLineParser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     parser = _OneLineParser(prog="acdrive", description=DESCRIPTION)
+    parser.add_argument(
+        "--debug", action="store_true", help="show the full traceback of a failure (for developers)"
+    )
     sub = parser.add_subparsers(dest="command", parser_class=_OneLineParser, required=True)
     for name in COMMAND_MODULES:
         try:
@@ -41,16 +44,54 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM turned into an exception, so cleanup (``finally``, output staging) runs."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run the command; every failure is one line on stderr with a conventional exit code.
+
+    2 invalid input (field and rule), 74 an input/output failure, 130 interrupted (SIGINT),
+    143 terminated (SIGTERM). ``--debug`` (first argument) re-raises with the traceback.
+    """
     if hasattr(signal, "SIGPIPE"):  # `acdrive ... | head` ends quietly, as shell tools do
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
+    if debug:
+        argv.remove("--debug")
+    previous_term = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
         return int(args.handler(args) or 0)
     except InputError as exc:
+        if debug:
+            raise
         sys.stderr.write(f"acdrive: error: {exc}\n")
         return 2
+    except KeyboardInterrupt:
+        if debug:
+            raise
+        sys.stderr.write("acdrive: interrupted (SIGINT)\n")
+        return 130
+    except Terminated:
+        if debug:
+            raise
+        sys.stderr.write("acdrive: terminated (SIGTERM)\n")
+        return 143
+    except OSError as exc:
+        if debug:
+            raise
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        sys.stderr.write(f"acdrive: error: input/output failure{where}: {exc.strerror or exc}\n")
+        return 74
+    finally:
+        signal.signal(signal.SIGTERM, previous_term)
 
 
 if __name__ == "__main__":  # pragma: no cover

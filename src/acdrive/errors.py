@@ -1,5 +1,7 @@
 """Input errors: one line naming the field and the rule it breaks."""
 
+import re
+
 
 class InputError(ValueError):
     """Invalid user input (parameter, scenario field or CLI argument).
@@ -38,4 +40,21 @@ def require_nonnegative(field: str, value) -> float:
     value = require_finite(field, value)
     if value < 0.0:
         raise InputError(field, f"must be >= 0, got {value:g}")
+    return value
+
+
+#: one path component: starts with a letter or digit; letters, digits, '.', '_', '-'; at most 100
+_SAFE_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
+
+
+def require_safe_name(field: str, value) -> str:
+    """Return ``value`` if it is usable as one file or folder name, else raise InputError."""
+    if not isinstance(value, str):
+        raise InputError(field, "must be a string")
+    if not _SAFE_NAME.fullmatch(value):
+        raise InputError(
+            field,
+            f"must be one file name of 1-100 letters, digits, '.', '_' or '-' starting with a "
+            f"letter or digit (no '/', '.', '..' or leading dot), got {value!r}",
+        )
     return value

@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-from pathlib import Path
-
-from acdrive.errors import InputError
+from acdrive.output import OutputFolder
 
 DEFAULT_SCENARIO = "bodson-ramp"
 
@@ -31,32 +27,21 @@ def run(args) -> int:
     from acdrive.sim.outcome import run_scenario
 
     setup = load_scenario(args.scenario)  # validates everything before any output exists
-    out_root = Path(args.out)
-    if out_root.exists() and not out_root.is_dir():
-        raise InputError("--out", f"'{out_root}' exists and is not a folder")
-    outcome = run_scenario(setup)
-    summary = outcome.summary
-    # write into a temporary folder beside the target, then move it in place: never half-written
-    out_root.mkdir(parents=True, exist_ok=True)
-    target = out_root / setup.name
-    staging = Path(tempfile.mkdtemp(prefix=f".{setup.name}-", dir=out_root))
-    try:
-        outcome.write(staging, figures=not args.no_figures)
-        if target.exists():
-            shutil.rmtree(target)
-        staging.rename(target)
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
+    with OutputFolder(args.out, setup.name) as output:  # --out checked before the simulation
+        outcome = run_scenario(setup)
+        summary = outcome.summary
+        outcome.write(output.staging, figures=not args.no_figures)
+        target = output.publish()
     wall = sum(r.wall_time for r in outcome.results.values())
     n = len(setup.motors)
     print(
         f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s ({n} motor{'s' * (n > 1)})"
     )
+    rotor_limit = max(m.controller.rotor_current_limit_pk for m in setup.motors)
     rows = [
         ("speed RMS tracking error", f"{summary['speed_rms_error_rpm']:.2f} rpm"),
         ("max |speed error|", f"{summary['speed_max_abs_error_rpm']:.1f} rpm"),
-        ("peak rotor current", f"{summary['peak_rotor_current_a']:.2f} A (limit 6 A)"),
+        ("peak rotor current", f"{summary['peak_rotor_current_a']:.2f} A (limit {rotor_limit:g} A)"),
         ("peak stator current", f"{summary['peak_stator_current_a']:.2f} A"),
     ]
     for key in ("peak_rotor_current_vc_a", "peak_rotor_current_cc_a"):

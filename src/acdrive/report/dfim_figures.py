@@ -80,9 +80,9 @@ def write_drive_figures(result: DriveResult, folder: Path, synchronous_rpm: floa
     return paths
 
 
-def write_comparison_figures(results: dict, folder: Path) -> list[Path]:
+def write_comparison_figures(results: dict, folder: Path, rotor_limit_pk: float) -> list[Path]:
     """Voltage vs current command on one figure: speed with reference (Bodson Figs. 8 and 10) and
-    peak rotor current against the 6 A limit (Figs. 9 and 11)."""
+    peak rotor current against the scenario's rotor current limit (Figs. 9 and 11)."""
     folder = Path(folder)
     labels = {"voltage": "VC", "current": "CC"}
     first = next(iter(results.values()))
@@ -93,7 +93,7 @@ def write_comparison_figures(results: dict, folder: Path) -> list[Path]:
         _line_figure(folder / "fig8_speed_vc_cc.png", speeds, "speed (rpm)",
                      "speed, voltage vs current command (cf. Figs. 8, 10)"),
         _line_figure(folder / "fig9_rotor_current_vc_cc.png", currents, "peak rotor current (A)",
-                     "peak rotor current (cf. Figs. 9, 11)", limit=6.0),
+                     "peak rotor current (cf. Figs. 9, 11)", limit=rotor_limit_pk),
     ]  # fmt: skip
 
 

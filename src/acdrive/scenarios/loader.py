@@ -34,7 +34,13 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.control.speed import SpeedPIGains
-from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.errors import (
+    InputError,
+    require_finite,
+    require_nonnegative,
+    require_positive,
+    require_safe_name,
+)
 from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
 from acdrive.sim.setup import (
     ConverterLosses,
@@ -72,7 +78,12 @@ def read_scenario(source: str | Path) -> dict:
                 "scenario",
                 f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file",
             )
-        text, origin = path.read_text(), str(path)
+        try:
+            text, origin = path.read_text(encoding="utf-8"), str(path)
+        except UnicodeDecodeError:
+            raise InputError("scenario", f"{path} is not a UTF-8 text file") from None
+        except OSError as exc:
+            raise InputError("scenario", f"cannot read {path} ({exc.strerror})") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -236,7 +247,7 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
 def build_setup(data: dict) -> DriveSetup:
     """Validate a parsed scenario and build its ``DriveSetup``."""
     top = _Section(data, "")
-    name = top.text("name", "custom")
+    name = require_safe_name("name", top.get("name", "custom"))  # becomes an output folder
     top.text("description", "")
     note = top.text("note", "")
     compare = top.get("compare_modes", [])

@@ -77,7 +77,8 @@ class ScenarioOutcome:
                 if self.setup.motors[0].controller.sync.enabled:
                     write_sync_figure(result, sub)
         if figures and len(self.results) > 1:
-            write_comparison_figures(self.results, folder)
+            limit = self.setup.motors[0].controller.rotor_current_limit_pk
+            write_comparison_figures(self.results, folder, limit)
         (folder / "summary.json").write_text(json.dumps(self.summary, indent=2) + "\n")
 
 
