@@ -17,6 +17,8 @@ Nothing outside ``out`` is ever deleted or overwritten.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import shutil
 import signal
@@ -24,6 +26,27 @@ import tempfile
 from pathlib import Path
 
 from acdrive.errors import InputError, require_safe_name
+
+
+def finite_or_null(value):
+    """``value`` with every non-finite float (NaN, +-infinity) replaced by None, recursively
+    through dicts, lists and tuples; numpy scalars and arrays become plain Python values."""
+    if isinstance(value, dict):
+        return {k: finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_or_null(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):  # numpy scalar / array
+        return finite_or_null(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def strict_json(value, **kwargs) -> str:
+    """JSON text that every parser accepts: non-finite numbers are written as null (RFC 8259
+    has no NaN or Infinity)."""
+    return json.dumps(finite_or_null(value), allow_nan=False, **kwargs)
+
 
 def _block_interrupts():
     if hasattr(signal, "pthread_sigmask"):
@@ -99,7 +122,7 @@ class OutputFolder:
         finally:
             _restore_interrupts(previous)
 
-    def __enter__(self) -> OutputFolder:
+    def __enter__(self):
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:

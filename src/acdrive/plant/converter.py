@@ -25,3 +25,43 @@ def converter_output(v_command, v_max):
     if magnitude <= v_max:
         return v_command, False
     return v_command * (v_max / magnitude), True
+
+
+# --- the averaged converter as a modulator part -----------------------------------------------
+from acdrive.core.signals import Layout, cplx, real
+from acdrive.sim.parts import Modulator
+
+AVERAGED_PARAMS = Layout(real("V_dc", "V", "DC-link voltage"))
+AVERAGED_INPUTS = Layout(cplx("v_ref", "V", "commanded voltage space vector"))
+AVERAGED_OUTPUTS = Layout(cplx("v", "V", "applied voltage space vector, held over the sample"))
+_V_DC = AVERAGED_PARAMS.slot("V_dc")
+_V_REF = AVERAGED_INPUTS.slot("v_ref")
+_V_OUT = AVERAGED_OUTPUTS.slot("v")
+EVENT_SATURATED = 1
+
+
+@jit
+def averaged_segments(T_s, u, p, s, dt, v):
+    """One segment over the whole sample: the command, limited to V_dc / sqrt(2) (ZOH)."""
+    applied, saturated = converter_output(
+        complex(u[_V_REF], u[_V_REF + 1]), p[_V_DC] / np.sqrt(2.0)
+    )
+    dt[0] = T_s
+    v[0, _V_OUT], v[0, _V_OUT + 1] = applied.real, applied.imag
+    return 1, EVENT_SATURATED if saturated else 0
+
+
+class AveragedConverter(Modulator):
+    """Averaged voltage-source converter: the sampled command held over the sample (ZOH) within
+    the linear range of space-vector modulation, |v| <= V_dc / sqrt(2) (module docstring)."""
+
+    PARAMS, INPUTS, OUTPUTS = AVERAGED_PARAMS, AVERAGED_INPUTS, AVERAGED_OUTPUTS
+    EVENTS = ("saturated",)
+    MAX_SEGMENTS = 1
+    segments = averaged_segments
+
+    def check(self):
+        from acdrive.errors import InputError
+
+        if self.values["V_dc"] <= 0:
+            raise InputError(f"{self.name}.V_dc", f"must be > 0, got {self.values['V_dc']:g}")

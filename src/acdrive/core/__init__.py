@@ -1,0 +1,1 @@
+"""Foundations shared by every layer: signal declarations and compiled table lookup."""

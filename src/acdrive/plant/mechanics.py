@@ -1,0 +1,106 @@
+"""Shaft parts: a free shaft with load and friction, or a speed prescribed as a profile.
+
+Free shaft (Bodson (26), Amezquita-Brooks et al. (2) in mechanical speed):
+
+    J dw/dt = tau_e - tau_L(t) - B w - tau_c tanh(w / W_COULOMB),   d theta/dt = w
+
+B w is also the passive eddy-current brake (torque proportional to speed); the Coulomb friction
+is smoothed over W_COULOMB so the right-hand side stays smooth for the integrator.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from acdrive.core.signals import Layout, real, table
+from acdrive.core.tables import table_at
+from acdrive.errors import InputError
+from acdrive.jit import jit_fast
+from acdrive.sim.parts import ContinuousPart
+
+#: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
+W_COULOMB = 0.5
+
+SHAFT_PARAMS = Layout(
+    real("J", "kg m^2", "inertia of rotor and load"),
+    real("B", "N m s/rad", "viscous friction and eddy-current brake coefficient"),
+    real("tau_c", "N m", "Coulomb friction torque"),
+    table("load", "N m", "active load torque profile, opposing positive speed"),
+)
+SHAFT_STATES = Layout(
+    real("w", "rad/s", "mechanical speed"),
+    real("theta", "rad", "mechanical angle"),
+)
+SHAFT_INPUTS = Layout(real("tau_e", "N m", "electromagnetic torque"))
+SHAFT_OUTPUTS = Layout(
+    real("w", "rad/s", "mechanical speed"),
+    real("theta", "rad", "mechanical angle"),
+)
+_J, _B, _TAU_C = (SHAFT_PARAMS.slot(n) for n in ("J", "B", "tau_c"))
+_LOAD = SHAFT_PARAMS.table_start
+_W, _THETA = SHAFT_STATES.slot("w"), SHAFT_STATES.slot("theta")
+_TAU_E = SHAFT_INPUTS.slot("tau_e")
+_Y_W, _Y_THETA = SHAFT_OUTPUTS.slot("w"), SHAFT_OUTPUTS.slot("theta")
+
+
+@jit_fast
+def load_torque(p, w, t):
+    """tau_L(t) + B w + tau_c tanh(w / W_COULOMB): everything that opposes the motor."""
+    tau = table_at(p, _LOAD, t) + p[_B] * w
+    if p[_TAU_C] != 0.0:
+        tau += p[_TAU_C] * np.tanh(w / W_COULOMB)
+    return tau
+
+
+@jit_fast
+def shaft_state_outputs(t, x, p, y):
+    y[_Y_W], y[_Y_THETA] = x[_W], x[_THETA]
+
+
+@jit_fast
+def shaft_rhs(t, x, u, p, dx):
+    dx[_W] = (u[_TAU_E] - load_torque(p, x[_W], t)) / p[_J]
+    dx[_THETA] = x[_W]
+
+
+class Shaft(ContinuousPart):
+    """Free shaft with inertia, viscous and Coulomb friction and a load-torque profile."""
+
+    PARAMS, STATES, INPUTS, OUTPUTS = SHAFT_PARAMS, SHAFT_STATES, SHAFT_INPUTS, SHAFT_OUTPUTS
+    DEFAULTS: ClassVar[dict] = {"B": 0.0, "tau_c": 0.0, "load": 0.0}
+    state_outputs = shaft_state_outputs
+    rhs = shaft_rhs
+
+    def check(self):
+        if self.values["J"] <= 0:
+            raise InputError(f"{self.name}.J", f"must be > 0, got {self.values['J']:g}")
+        for key in ("B", "tau_c"):
+            if self.values[key] < 0:
+                raise InputError(f"{self.name}.{key}", f"must be >= 0, got {self.values[key]:g}")
+
+
+SPEED_PARAMS = Layout(table("w", "rad/s", "prescribed mechanical speed profile"))
+SPEED_STATES = Layout(real("theta", "rad", "mechanical angle"))
+_P_W = SPEED_PARAMS.table_start
+_S_THETA = SPEED_STATES.slot("theta")
+
+
+@jit_fast
+def speed_state_outputs(t, x, p, y):
+    y[_Y_W] = table_at(p, _P_W, t)
+    y[_Y_THETA] = x[_S_THETA]
+
+
+@jit_fast
+def speed_rhs(t, x, u, p, dx):
+    dx[_S_THETA] = table_at(p, _P_W, t)
+
+
+class PrescribedSpeed(ContinuousPart):
+    """Shaft held at a speed profile (a dynamometer): outputs w(t) and its angle."""
+
+    PARAMS, STATES, OUTPUTS = SPEED_PARAMS, SPEED_STATES, SHAFT_OUTPUTS
+    state_outputs = speed_state_outputs
+    rhs = speed_rhs

@@ -1,0 +1,66 @@
+"""Generate, cache and load the compiled loop of one system topology.
+
+The loop is written as Python source whose globals are the parts' kernels and whose slot offsets
+are literal constants taken from the parts' declarations; numba compiles it once and caches the
+machine code on disk. The file name is the hash of the source (which names every kernel and every
+offset), kept in the numba cache folder that ``acdrive/__init__.py`` keys by acdrive's own sources,
+so a second process loads the compiled loop instead of compiling it, and an edit of any acdrive
+source or of the topology gives a new file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numba
+
+_LOADED: dict[str, object] = {}
+
+
+def _folder() -> Path:
+    base = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else None
+    for candidate in (base, Path(tempfile.gettempdir()) / "acdrive-systems"):
+        if candidate is None:
+            continue
+        folder = candidate / "systems"
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            return folder
+        except OSError:
+            continue
+    raise OSError("no writable folder for the compiled system")
+
+
+def load_module(source: str):
+    """Import the generated ``source`` as a module, writing it once to the cache folder."""
+    digest = hashlib.sha256(source.encode()).hexdigest()[:20]
+    if digest in _LOADED:
+        return _LOADED[digest]
+    name = f"acdrive_system_{digest}"
+    path = _folder() / f"{name}.py"
+    if not path.exists():  # written once: a rewrite would change mtime and void numba's cache
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        with os.fdopen(fd, "w") as handle:
+            handle.write(source)
+        os.replace(tmp, path)
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    _LOADED[digest] = module
+    return module
+
+
+def kernel_import(function, alias: str) -> str:
+    """``from <module> import <name> as <alias>`` for a module-level numba function."""
+    py = getattr(function, "py_func", None)
+    if py is None:
+        raise TypeError(f"{function!r} is not a numba-compiled function")
+    if py.__qualname__ != py.__name__:
+        raise TypeError(f"kernel {py.__qualname__} must be defined at module level")
+    return f"from {py.__module__} import {py.__name__} as {alias}"

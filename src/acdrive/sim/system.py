@@ -1,0 +1,652 @@
+"""A system: parts wired output-to-input, compiled into one sampled-data loop.
+
+Per control sample t_k = t_0 + k T_s (the structure of Bodson's bench and of every digital drive):
+
+1. redundant plant states are re-normalised (``project`` kernels);
+2. the plant outputs are evaluated at t_k with the inputs held from the previous period: the
+   sensors' view of the plant;
+3. the sampled parts run in wiring order (sensors, estimators, controllers), then each modulator
+   turns its command into piecewise-constant segments over [t_k, t_k + T_s];
+4. the selected signals are logged (every ``log_every`` samples) and the event bits counted;
+5. the plant is integrated over the segments of all modulators (their boundaries merged), each
+   segment by ``substeps`` classical Runge-Kutta steps with its inputs held;
+6. a state that stops being finite stops the run with the time at which it happened.
+
+Every slot is derived from the parts' declarations (``core.signals``); a wiring mistake (unknown
+port, output to output, kind or unit mismatch, an input wired twice or not at all, an algebraic
+loop) is an ``InputError`` at construction naming both ends. ``System.compile`` generates the loop
+for this topology (``sim.codegen``), cached on disk. The compiled system offers ``run``,
+``run_batch`` (a leading batch axis over variants, on all cores), the held-input right-hand side
+``derivatives`` and the one-sample map ``step``; the slow path and the linearisation use those.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acdrive.errors import InputError
+from acdrive.sim import codegen
+from acdrive.sim.parts import ContinuousPart, Modulator, Part, Port, SampledPart
+
+STATUS_OK, STATUS_NONFINITE = 0, 1
+
+
+@dataclass(frozen=True)
+class _Slots:
+    """Where one part lives in the system's flat arrays: (start, stop) per array."""
+
+    p: tuple[int, int]
+    x: tuple[int, int]  # continuous states (continuous parts)
+    s: tuple[int, int]  # discrete states (sampled parts and modulators)
+    u: tuple[int, int]
+    y: tuple[int, int]
+
+
+def _wire_error(src: Port, dst: Port, rule: str) -> InputError:
+    return InputError(f"wire {src.path} -> {dst.path}", rule)
+
+
+class System:
+    """Parts and the wires between them, validated at construction.
+
+    ``wires`` is a sequence of ``(output port, input port)`` pairs, e.g.
+    ``(supply.out.v_s, machine.inp.v_s)``.
+    """
+
+    def __init__(self, parts, wires):
+        self.parts: tuple[Part, ...] = tuple(parts)
+        names = [p.name for p in self.parts]
+        for p in self.parts:
+            if not isinstance(p, (ContinuousPart, SampledPart, Modulator)):
+                raise InputError(f"{getattr(p, 'name', p)}", "is not a part")
+            if names.count(p.name) > 1:
+                raise InputError(p.name, "two parts have this name; names must be unique")
+        self.source_of: dict[tuple[str, str], Port] = {}
+        members = {id(p) for p in self.parts}
+        for pair in wires:
+            if not (isinstance(pair, tuple) and len(pair) == 2):
+                raise InputError("wires", "each wire must be a pair (output port, input port)")
+            src, dst = pair
+            if not (isinstance(src, Port) and isinstance(dst, Port)):
+                raise InputError("wires", f"a wire joins two ports, got {src!r} -> {dst!r}")
+            if src.direction != "out" or dst.direction != "in":
+                raise _wire_error(src, dst, "must go from an output to an input")
+            for port in (src, dst):
+                if id(port.part) not in members:
+                    raise _wire_error(src, dst, f"part {port.part.name} is not in the system")
+            if src.var.kind != dst.var.kind:
+                raise _wire_error(src, dst, f"kind mismatch ({src.var.kind} -> {dst.var.kind})")
+            if src.var.unit != dst.var.unit:
+                raise _wire_error(
+                    src, dst, f"unit mismatch ({src.var.unit or '-'} -> {dst.var.unit or '-'})"
+                )
+            key = (dst.part.name, dst.var.name)
+            if key in self.source_of:
+                raise _wire_error(src, dst, f"input already wired from {self.source_of[key].path}")
+            self.source_of[key] = src
+        for p in self.parts:
+            for v in p.INPUTS:
+                if (p.name, v.name) not in self.source_of:
+                    raise InputError(f"{p.name}.{v.name}", "input is not wired to any output")
+        self.continuous = [p for p in self.parts if isinstance(p, ContinuousPart)]
+        self.modulators = [p for p in self.parts if isinstance(p, Modulator)]
+        self.sampled = self._sampled_order()
+        self.direct = self._direct_order()
+        self._allocate()
+
+    # --- ordering ---------------------------------------------------------------------------
+    def _toposort(self, nodes, depends_on, what: str):
+        order, state = [], {}
+
+        def visit(node, chain):
+            mark = state.get(node.name)
+            if mark == "done":
+                return
+            if mark == "active":
+                loop = " -> ".join([*chain, node.name])
+                raise InputError("wires", f"algebraic loop among {what}: {loop}")
+            state[node.name] = "active"
+            for dep in depends_on(node):
+                visit(dep, [*chain, node.name])
+            state[node.name] = "done"
+            order.append(node)
+
+        for node in nodes:
+            visit(node, [])
+        return order
+
+    def _sampled_order(self):
+        sampled = [p for p in self.parts if isinstance(p, SampledPart)]
+
+        def deps(part):
+            found = []
+            for v in part.INPUTS:
+                src = self.source_of[(part.name, v.name)].part
+                if isinstance(src, SampledPart) and src is not part:
+                    found.append(src)
+            return found
+
+        return self._toposort(sampled, deps, "sampled parts")
+
+    def _direct_order(self):
+        direct = [p for p in self.continuous if p.DIRECT_OUTPUTS]
+
+        def deps(part):
+            found = []
+            for name in part.DIRECT_FROM:
+                src_port = self.source_of[(part.name, name)]
+                src = src_port.part
+                if isinstance(src, ContinuousPart) and src_port.var.name in src.DIRECT_OUTPUTS:
+                    found.append(src)
+            return found
+
+        return self._toposort(direct, deps, "continuous parts with direct feedthrough")
+
+    # --- slots ------------------------------------------------------------------------------
+    def _allocate(self):
+        counters = {"p": 0, "x": 0, "s": 0, "u": 0, "y": 0}
+        self.slots: dict[str, _Slots] = {}
+
+        def take(key, n):
+            start = counters[key]
+            counters[key] += n
+            return start, start + n
+
+        for part in self.parts:
+            continuous = isinstance(part, ContinuousPart)
+            n_state = part.STATES.size()
+            self.slots[part.name] = _Slots(
+                p=take("p", part.p.size),
+                x=take("x", n_state if continuous else 0),
+                s=take("s", 0 if continuous else n_state),
+                u=take("u", part.INPUTS.size()),
+                y=take("y", part.OUTPUTS.size()),
+            )
+        self.sizes = dict(counters)
+
+    def output_slot(self, port: Port) -> int:
+        return self.slots[port.part.name].y[0] + port.part.OUTPUTS.slot(port.var.name)
+
+    def _copies(self, part: Part, only=None) -> list[str]:
+        """Generated statements copying ``part``'s inputs from the outputs wired to them."""
+        lines = []
+        base = self.slots[part.name].u[0]
+        for v in part.INPUTS:
+            if only is not None and v.name not in only:
+                continue
+            src = self.source_of[(part.name, v.name)]
+            d = base + part.INPUTS.slot(v.name)
+            s = self.output_slot(src)
+            for i in range(v.width):
+                lines.append(f"U[{d + i}] = Y[{s + i}]")
+        return lines
+
+    # --- code generation --------------------------------------------------------------------
+    def source(self) -> str:
+        """The generated module of this topology (every offset a literal from the declarations)."""
+        imports, aliases = [], {}
+        for k, part in enumerate(self.parts):
+            for role, fn in part.kernels().items():
+                if fn is None:
+                    raise TypeError(f"{type(part).__name__} has no {role} kernel")
+                alias = f"k{k}_{role}"
+                aliases[(part.name, role)] = alias
+                imports.append(codegen.kernel_import(fn, alias))
+
+        def sl(part, key):
+            a, b = getattr(self.slots[part.name], key)
+            return f"{a}:{b}"
+
+        L: list[str] = []
+        emit = L.append
+        emit('"""Generated by acdrive.sim.system for one topology; do not edit."""')
+        emit("import numpy as np")
+        emit("from numba import njit, prange")
+        L.extend(sorted(set(imports)))
+        emit("")
+        emit('_jit = njit(cache=True, error_model="numpy")')
+        emit(
+            f"N_X, N_P, N_S, N_U, N_Y = {self.sizes['x']}, {self.sizes['p']}, {self.sizes['s']}, {self.sizes['u']}, {self.sizes['y']}"
+        )
+        n_mod = len(self.modulators)
+        max_seg = max([m.MAX_SEGMENTS for m in self.modulators], default=1)
+        max_w = max([m.OUTPUTS.size() for m in self.modulators], default=1)
+        emit(f"N_EVENTS = {len(self.sampled) + n_mod}")
+        emit(f"N_MOD, MAX_SEG, MAX_W = {max(n_mod, 1)}, {max_seg}, {max(max_w, 1)}")
+        emit("")
+        # project
+        emit("@_jit")
+        emit("def project(X, P):")
+        body = [
+            f"    {aliases[(p.name, 'project')]}(X[{sl(p, 'x')}], P[{sl(p, 'p')}])"
+            for p in self.continuous
+            if (p.name, "project") in aliases
+        ]
+        L.extend(body or ["    pass"])
+        emit("")
+        # plant outputs
+        emit("@_jit")
+        emit("def plant_outputs(t, X, P, Y, U):")
+        body = []
+        for p in self.continuous:
+            body.append(
+                f"    {aliases[(p.name, 'state_outputs')]}(t, X[{sl(p, 'x')}], P[{sl(p, 'p')}], Y[{sl(p, 'y')}])"
+            )
+        for p in self.direct:
+            body += ["    " + c for c in self._copies(p, only=p.DIRECT_FROM)]
+            body.append(
+                f"    {aliases[(p.name, 'direct_outputs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], Y[{sl(p, 'y')}])"
+            )
+        L.extend(body or ["    pass"])
+        emit("")
+        # derivatives
+        emit("@_jit")
+        emit("def derivatives(t, X, P, Y, U, dX):")
+        emit("    plant_outputs(t, X, P, Y, U)")
+        for p in self.continuous:
+            L.extend("    " + c for c in self._copies(p))
+            emit(
+                f"    {aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], dX[{sl(p, 'x')}])"
+            )
+        emit("")
+        emit("@_jit")
+        emit("def rk4_step(t, X, h, P, Y, U, W):")
+        emit("    k1, k2, k3, k4, xt = W[0], W[1], W[2], W[3], W[4]")
+        emit("    derivatives(t, X, P, Y, U, k1)")
+        emit("    for i in range(N_X):")
+        emit("        xt[i] = X[i] + 0.5 * h * k1[i]")
+        emit("    derivatives(t + 0.5 * h, xt, P, Y, U, k2)")
+        emit("    for i in range(N_X):")
+        emit("        xt[i] = X[i] + 0.5 * h * k2[i]")
+        emit("    derivatives(t + 0.5 * h, xt, P, Y, U, k3)")
+        emit("    for i in range(N_X):")
+        emit("        xt[i] = X[i] + h * k3[i]")
+        emit("    derivatives(t + h, xt, P, Y, U, k4)")
+        emit("    for i in range(N_X):")
+        emit("        X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])")
+        emit("")
+        # sampled parts and modulators
+        emit("@_jit")
+        emit("def sample(t, T_s, P, S, Y, U, E, DT, V, NSEG):")
+        body = []
+        for i, p in enumerate(self.sampled):
+            body += ["    " + c for c in self._copies(p)]
+            body.append(
+                f"    E[{i}] = {aliases[(p.name, 'step')]}(t, U[{sl(p, 'u')}], P[{sl(p, 'p')}], S[{sl(p, 's')}], Y[{sl(p, 'y')}])"
+            )
+        for m, p in enumerate(self.modulators):
+            a, b = self.slots[p.name].y
+            body += ["    " + c for c in self._copies(p)]
+            body.append(
+                f"    NSEG[{m}], E[{len(self.sampled) + m}] = {aliases[(p.name, 'segments')]}(T_s, U[{sl(p, 'u')}], P[{sl(p, 'p')}], S[{sl(p, 's')}], DT[{m}], V[{m}])"
+            )
+            body.append(f"    Y[{a}:{b}] = V[{m}, 0, 0:{b - a}]")
+        L.extend(body or ["    pass"])
+        emit("")
+        # integration over merged segments
+        emit("@_jit")
+        emit("def integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG):")
+        if not self.modulators:
+            emit("    h = T_s / n_sub")
+            emit("    for j in range(n_sub):")
+            emit("        rk4_step(t + j * h, X, h, P, Y, U, W)")
+        else:
+            emit("    index = np.zeros(N_MOD, dtype=np.int64)")
+            emit("    left = np.empty(N_MOD)")
+            emit("    for m in range(N_MOD):")
+            emit("        left[m] = DT[m, 0] if NSEG[m] > 0 else np.inf")
+            emit("    tk = t")
+            emit("    while True:")
+            for m, p in enumerate(self.modulators):
+                a, b = self.slots[p.name].y
+                emit(f"        if index[{m}] < NSEG[{m}]:")
+                emit(f"            Y[{a}:{b}] = V[{m}, index[{m}], 0:{b - a}]")
+            emit("        span = np.inf")
+            emit("        for m in range(N_MOD):")
+            emit("            if left[m] < span:")
+            emit("                span = left[m]")
+            emit("        if span == np.inf:")
+            emit("            break")
+            emit("        if span > 0.0:")
+            emit("            h = span / n_sub")
+            emit("            for j in range(n_sub):")
+            emit("                rk4_step(tk + j * h, X, h, P, Y, U, W)")
+            emit("            tk += span")
+            emit("        for m in range(N_MOD):")
+            emit("            left[m] -= span")
+            emit("            if left[m] <= 1e-12 * T_s:")
+            emit("                index[m] += 1")
+            emit("                left[m] = DT[m, index[m]] if index[m] < NSEG[m] else np.inf")
+        emit("")
+        emit("@_jit")
+        emit("def step(t, T_s, n_sub, X, P, S, Y, U, E, W, DT, V, NSEG):")
+        emit(
+            '    """One control sample: project, read the plant, run the sampled parts, integrate."""'
+        )
+        emit("    project(X, P)")
+        emit("    plant_outputs(t, X, P, Y, U)")
+        emit("    sample(t, T_s, P, S, Y, U, E, DT, V, NSEG)")
+        emit("    integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG)")
+        emit("")
+        emit("@_jit")
+        emit(
+            "def run(X, P, S, Y, U, t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG, ELOG, ECOUNT):"
+        )
+        emit('    """Run n_steps samples in place; returns (samples done, status)."""')
+        emit("    W = np.empty((5, N_X))")
+        emit("    DT = np.zeros((N_MOD, MAX_SEG))")
+        emit("    V = np.zeros((N_MOD, MAX_SEG, MAX_W))")
+        emit("    NSEG = np.zeros(N_MOD, dtype=np.int64)")
+        emit("    E = np.zeros(N_EVENTS, dtype=np.int64)")
+        emit("    for k in range(n_steps):")
+        emit("        t = t0 + k * T_s")
+        emit("        project(X, P)")
+        emit("        plant_outputs(t, X, P, Y, U)")
+        emit("        sample(t, T_s, P, S, Y, U, E, DT, V, NSEG)")
+        emit("        for i in range(N_EVENTS):")
+        emit("            bits = E[i]")
+        emit("            b = 0")
+        emit("            while bits:")
+        emit("                if bits & 1:")
+        emit("                    ECOUNT[i, b] += 1")
+        emit("                bits >>= 1")
+        emit("                b += 1")
+        emit("        if k % log_every == 0:")
+        emit("            row = k // log_every")
+        emit("            for j in range(LOG_IDX.shape[0]):")
+        emit("                LOG[row, j] = Y[LOG_IDX[j]]")
+        emit("            for i in range(N_EVENTS):")
+        emit("                ELOG[row, i] = E[i]")
+        emit("        integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG)")
+        emit("        for i in range(N_X):")
+        emit("            if not np.isfinite(X[i]):")
+        emit(f"                return k + 1, {STATUS_NONFINITE}")
+        emit(f"    return n_steps, {STATUS_OK}")
+        emit("")
+        emit('@njit(cache=True, parallel=True, error_model="numpy")')
+        emit(
+            "def run_batch(X, P, S, Y, U, t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG, ELOG, ECOUNT, DONE, STATUS):"
+        )
+        emit("    for b in prange(X.shape[0]):")
+        emit(
+            "        DONE[b], STATUS[b] = run(X[b], P[b], S[b], Y[b], U[b], t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG[b], ELOG[b], ECOUNT[b])"
+        )
+        return "\n".join(L) + "\n"
+
+    def compile(self) -> CompiledSystem:
+        return CompiledSystem(self, codegen.load_module(self.source()))
+
+    # --- arrays -----------------------------------------------------------------------------
+    def part(self, name: str) -> Part:
+        for p in self.parts:
+            if p.name == name:
+                return p
+        raise InputError(name, f"no part of this name ({', '.join(q.name for q in self.parts)})")
+
+    def pack_params(self, parts=None) -> np.ndarray:
+        P = np.empty(self.sizes["p"])
+        for p in parts or self.parts:
+            a, b = self.slots[p.name].p
+            if p.p.size != b - a:
+                raise InputError(
+                    p.name,
+                    f"parameter tables changed size ({p.p.size} floats, the system has {b - a})",
+                )
+            P[a:b] = p.p
+        return P
+
+    def pack_initial(self, initial: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(X, S) from each part's ``INITIAL`` defaults and ``initial[part name] = {state: value}``."""
+        initial = dict(initial or {})
+        X, S = np.zeros(self.sizes["x"]), np.zeros(self.sizes["s"])
+        for p in self.parts:
+            values = initial.pop(p.name, {})
+            packed = p.initial_state(**values)
+            key = "x" if isinstance(p, ContinuousPart) else "s"
+            a, b = getattr(self.slots[p.name], key)
+            (X if key == "x" else S)[a:b] = packed
+        if initial:
+            raise InputError(f"initial.{next(iter(initial))}", "no part of this name")
+        return X, S
+
+    def log_columns(self, ports=None) -> list[tuple[str, str, int]]:
+        """(column name, unit, slot in Y) of the logged outputs (all outputs if ``ports`` is None)."""
+        out = []
+        chosen = ports if ports is not None else [port for p in self.parts for port in p.out]
+        for port in chosen:
+            if not isinstance(port, Port) or port.direction != "out":
+                raise InputError("log", f"must list output ports, got {port!r}")
+            base = self.output_slot(port)
+            if port.var.kind == "complex":
+                out += [
+                    (f"{port.path}.re", port.var.unit, base),
+                    (f"{port.path}.im", port.var.unit, base + 1),
+                ]
+            else:
+                out.append((port.path, port.var.unit, base))
+        return out
+
+    def event_names(self) -> list[tuple[str, tuple[str, ...]]]:
+        return [(p.name, p.EVENTS) for p in (*self.sampled, *self.modulators)]
+
+
+#: most samples one run may take, and most floats its log may hold (refused before starting)
+MAX_STEPS = 2_000_000_000
+MAX_LOG_FLOATS = 250_000_000
+
+
+@dataclass
+class SystemResult:
+    """Logged signals of one run: ``data[i, j]`` is column j at time ``t[i]``."""
+
+    t: np.ndarray
+    data: np.ndarray
+    columns: list[str]
+    units: dict[str, str]
+    events: dict[str, dict[str, int]]  # part -> event name -> samples on which it was raised
+    event_log: np.ndarray
+    final_state: np.ndarray
+    wall_time: float = 0.0
+    steps: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def signal(self, name) -> np.ndarray:
+        """A logged output by port or ``"part.output"``; complex outputs come back complex."""
+        key = name.path if isinstance(name, Port) else str(name)
+        if key in self.columns:
+            return self.data[:, self.columns.index(key)]
+        if f"{key}.re" in self.columns:
+            return (
+                self.data[:, self.columns.index(f"{key}.re")]
+                + 1j * self.data[:, self.columns.index(f"{key}.im")]
+            )
+        raise KeyError(f"{key} was not logged (logged: {', '.join(self.columns)})")
+
+    def to_dataframe(self):
+        """pandas DataFrame with a ``t`` column; units in ``frame.attrs['units']``."""
+        import pandas as pd
+
+        frame = pd.DataFrame(self.data, columns=self.columns)
+        frame.insert(0, "t", self.t)
+        frame.attrs["units"] = {"t": "s", **self.units}
+        return frame
+
+
+class CompiledSystem:
+    """A system with its compiled loop: run once or over a batch of variants."""
+
+    def __init__(self, system: System, module):
+        self.system = system
+        self.module = module
+
+    def _log_setup(self, log, n_steps, log_every):
+        if isinstance(log_every, bool) or not isinstance(log_every, int) or log_every < 1:
+            raise InputError("log_every", "must be an integer >= 1")
+        if log_every > n_steps:
+            raise InputError(
+                "log_every", f"must not exceed the number of samples in the run ({n_steps})"
+            )
+        columns = self.system.log_columns(log)
+        rows = n_steps // log_every + (n_steps % log_every > 0)
+        return columns, rows
+
+    def _steps(self, duration, sample_time, substeps):
+        for field_name, value in (("duration", duration), ("sample_time", sample_time)):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not np.isfinite(value)
+                or value <= 0
+            ):
+                raise InputError(field_name, "must be a finite number > 0")
+        if isinstance(substeps, bool) or not isinstance(substeps, int) or not 1 <= substeps <= 1000:
+            raise InputError("substeps", "must be an integer from 1 to 1000")
+        n = round(duration / sample_time)
+        if n < 1:
+            raise InputError("duration", "must be at least one sample time")
+        if n > MAX_STEPS:
+            raise InputError("duration", f"needs {n:.3g} samples; at most {MAX_STEPS:.0e}")
+        return n
+
+    def run(self, duration: float, sample_time: float, substeps: int = 4, initial=None,
+            log=None, log_every: int = 1, t0: float = 0.0, parts=None) -> SystemResult:  # fmt: skip
+        """Simulate ``duration`` seconds; ``initial[part] = {state: value}``; ``log`` lists the
+        output ports to record (default: all); ``parts`` replaces parts by re-parametrised copies
+        of the same shape (``part.with_params``)."""
+        sys_ = self.system
+        n_steps = self._steps(duration, sample_time, substeps)
+        columns, rows = self._log_setup(log, n_steps, log_every)
+        if rows * (len(columns) + len(sys_.event_names())) > MAX_LOG_FLOATS:
+            raise InputError(
+                "log_every",
+                f"the log would hold {rows * len(columns):.3g} values ({rows * len(columns) * 8 / 1e9:.1f} GB); log fewer signals or raise log_every",
+            )
+        P = sys_.pack_params(parts)
+        X, S = sys_.pack_initial(initial)
+        Y, U = np.zeros(sys_.sizes["y"]), np.zeros(sys_.sizes["u"])
+        LOG = np.zeros((rows, len(columns)))
+        n_ev = len(sys_.event_names())
+        ELOG = np.zeros((rows, n_ev), dtype=np.int64)
+        ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
+        idx = np.array([c[2] for c in columns], dtype=np.int64)
+        start = time.perf_counter()
+        done, status = self.module.run(X, P, S, Y, U, float(t0), float(sample_time), substeps,
+                                       n_steps, log_every, idx, LOG, ELOG, ECOUNT)  # fmt: skip
+        wall = time.perf_counter() - start
+        if status != STATUS_OK:
+            bad = [
+                name
+                for name, _, _ in self._state_columns()
+                if not np.isfinite(X[self._state_index(name)])
+            ]
+            raise FloatingPointError(
+                f"the simulation diverged at t = {t0 + done * sample_time:.6g} s: state "
+                f"{', '.join(bad[:3]) or '?'} not finite; use a shorter sample_time or more substeps"
+            )
+        return self._result(
+            t0, sample_time, log_every, rows, columns, LOG, ELOG, ECOUNT, X, wall, n_steps
+        )
+
+    def _state_columns(self):
+        out = []
+        for p in self.system.continuous:
+            a, _ = self.system.slots[p.name].x
+            for name, unit, _, s in p.STATES.columns(f"{p.name}."):
+                out.append((name, unit, a + s))
+        return out
+
+    def _state_index(self, name):
+        for n, _, i in self._state_columns():
+            if n == name:
+                return i
+        raise KeyError(name)
+
+    def _result(self, t0, T_s, log_every, rows, columns, LOG, ELOG, ECOUNT, X, wall, n_steps):
+        events = {}
+        for i, (part, names) in enumerate(self.system.event_names()):
+            events[part] = {name: int(ECOUNT[i, b]) for b, name in enumerate(names)}
+        return SystemResult(
+            t=t0 + np.arange(rows) * T_s * log_every,
+            data=LOG,
+            columns=[c[0] for c in columns],
+            units={c[0]: c[1] for c in columns},
+            events=events,
+            event_log=ELOG,
+            final_state=X.copy(),
+            wall_time=wall,
+            steps=n_steps,
+        )
+
+    def run_batch(self, variants, duration, sample_time, substeps=4, initial=None, log=None,
+                  log_every=1, t0=0.0) -> list[SystemResult]:  # fmt: skip
+        """Run many variants at once on all cores. ``variants`` is a list of dicts
+        ``{part name: {parameter: value}}``; each variant's result equals running it alone."""
+        sys_ = self.system
+        n_steps = self._steps(duration, sample_time, substeps)
+        columns, rows = self._log_setup(log, n_steps, log_every)
+        B = len(variants)
+        if B < 1:
+            raise InputError("variants", "must hold at least one variant")
+        if B * rows * len(columns) > MAX_LOG_FLOATS:
+            raise InputError(
+                "variants",
+                f"the logs would hold {B * rows * len(columns):.3g} values; log fewer signals, raise log_every or split the batch",
+            )
+        P = np.empty((B, sys_.sizes["p"]))
+        for b, changes in enumerate(variants):
+            parts = []
+            for name, params in changes.items():
+                parts.append(sys_.part(name).with_params(**params))
+            P[b] = sys_.pack_params([*parts, *(p for p in sys_.parts if p.name not in changes)])
+        X0, S0 = sys_.pack_initial(initial)
+        X, S = np.tile(X0, (B, 1)), np.tile(S0, (B, 1))
+        Y, U = np.zeros((B, sys_.sizes["y"])), np.zeros((B, sys_.sizes["u"]))
+        n_ev = len(sys_.event_names())
+        LOG = np.zeros((B, rows, len(columns)))
+        ELOG = np.zeros((B, rows, n_ev), dtype=np.int64)
+        ECOUNT = np.zeros((B, n_ev, 64), dtype=np.int64)
+        DONE = np.zeros(B, dtype=np.int64)
+        STATUS = np.zeros(B, dtype=np.int64)
+        idx = np.array([c[2] for c in columns], dtype=np.int64)
+        start = time.perf_counter()
+        self.module.run_batch(X, P, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
+                              log_every, idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+        wall = time.perf_counter() - start
+        results = []
+        for b in range(B):
+            r = self._result(
+                t0,
+                sample_time,
+                log_every,
+                rows,
+                columns,
+                LOG[b],
+                ELOG[b],
+                ECOUNT[b],
+                X[b],
+                wall / B,
+                n_steps,
+            )
+            r.extra["status"] = (
+                "ok"
+                if STATUS[b] == STATUS_OK
+                else f"diverged at t = {t0 + DONE[b] * sample_time:.6g} s"
+            )
+            results.append(r)
+        return results
+
+    # --- pieces for the slow path and the linearisation -------------------------------------
+    def derivatives(
+        self, t: float, X: np.ndarray, held: np.ndarray, P: np.ndarray | None = None
+    ) -> np.ndarray:
+        """dX/dt with every non-plant output held at ``held`` (a Y vector): the right-hand side a
+        Radau reference or a linearisation uses between two samples."""
+        P = self.system.pack_params() if P is None else P
+        Y = held.copy()
+        U = np.zeros(self.system.sizes["u"])
+        dX = np.empty_like(X)
+        self.module.derivatives(t, X, P, Y, U, dX)
+        return dX
