@@ -1,0 +1,34 @@
+"""The README's Python example for systems from parts runs as printed and does what it says."""
+
+import math
+import re
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_parts_example_runs_and_the_shorted_dfim_runs_up_to_synchronous_speed():
+    text = README.read_text()
+    section = text[text.index("## Build a system from parts") :]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    assert len(code.strip().splitlines()) <= 15
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    result, dfim = scope["result"], scope["dfim"]
+    w = result.signal("shaft.w")
+    synchronous = 2 * math.pi * 60.0 / 2  # 60 Hz, two pole pairs
+    # a shorted-rotor DFIM is a cage motor: it runs up to just below synchronous speed, no load
+    assert 0.99 * synchronous < w[-1] < synchronous
+    # near synchronous speed the rotor carries almost nothing: i_s = v_s / (R_s + j w_e L_s) (19)
+    from acdrive.machines.dfim import BODSON_DFIM as p
+
+    no_load = math.sqrt(1.5) * 11.1 / abs(p.R_s + 1j * 2 * math.pi * 60.0 * p.L_s)
+    i_s = np.abs(result.signal(dfim.out.i_s))
+    assert i_s[-100:].max() == pytest.approx(no_load, rel=0.01)
+    assert i_s[: len(i_s) // 10].max() > 2 * no_load  # the starting current
