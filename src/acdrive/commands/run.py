@@ -64,6 +64,8 @@ def run(args) -> int:
         print(f"  {label:<26} {value}")
     if "finding" in summary:
         print(f"  finding: {summary['finding']}")
+    for warning in summary.get("warnings", []):
+        print(f"  warning: {warning}")
     if "note" in summary:
         print(f"  note: {summary['note']}")
     print(f"wrote {target}/ (data.csv, data.parquet, summary.json, figures)")

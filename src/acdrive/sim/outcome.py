@@ -7,7 +7,6 @@ saves data and figures.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -79,7 +78,10 @@ class ScenarioOutcome:
         if figures and len(self.results) > 1:
             limit = self.setup.motors[0].controller.rotor_current_limit_pk
             write_comparison_figures(self.results, folder, limit)
-        (folder / "summary.json").write_text(json.dumps(self.summary, indent=2) + "\n")
+        from acdrive.output import strict_json
+
+        # strict JSON: a non-finite figure (e.g. an RMS over no samples) is written as null
+        (folder / "summary.json").write_text(strict_json(self.summary, indent=2) + "\n")
 
 
 def synchronous_rpm(setup: DriveSetup) -> float:
@@ -124,9 +126,36 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
             break
     if setup.note:
         summary["note"] = setup.note
+    warnings = []
+    summary["limit_excursions"] = {}
+    for mode, result in results.items():
+        per_motor = []
+        for k, m in enumerate(setup.motors):
+            limits = {
+                "i_r_mag": m.controller.rotor_current_limit_pk,
+                "i_s_mag": m.controller.stator_current_limit_pk,
+            }
+            excursions = result.limit_excursions(k, limits)
+            per_motor.append(excursions)
+            for name, e in excursions.items():
+                if e["samples_above"]:
+                    what = "rotor" if name == "i_r_mag" else "stator"
+                    warnings.append(
+                        f"{mode} command, motor {k + 1}: {what} current above its "
+                        f"{e['limit_a']:g} A limit on {e['samples_above']} logged samples, peak "
+                        f"{e['peak_a']:.2f} A, first at {e['first_time_s']:.3f} s"
+                    )
+        summary["limit_excursions"][mode] = per_motor
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync
+        if not sync["relay_closed"]:
+            warnings.append(
+                f"the synchroniser never closed the relay in {setup.duration:g} s: the stator "
+                "stayed open and the speed was not controlled"
+            )
+    if warnings:
+        summary["warnings"] = warnings
     fallback = first.first_event_time("sensor_fallback")
     if fallback is not None:
         summary["sensor_fallback_time_s"] = fallback

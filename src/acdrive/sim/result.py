@@ -73,26 +73,51 @@ class DriveResult:
         return mask
 
     def speed_oscillation(self, motor: int = 0, band_hz=(20.0, 200.0)) -> tuple[float, float]:
-        """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz`` over the tracking
-        samples (Parseval on the FFT of the masked error): a limit cycle shows up here, a slow
-        tracking lag does not."""
-        mask = self.tracking_mask(motor)
-        if mask.sum() < 16:
+        """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz``.
+
+        Method: the longest stretch of consecutive tracking samples (``tracking_mask``; nothing is
+        zero-filled), its linear trend removed, a Hann window w applied against leakage from slow
+        transients, then Parseval on its FFT: mean square in the band = 2 sum |X_k|^2 / (N sum w^2)
+        over the band's bins. A stretch shorter than five periods of the band's
+        lowest frequency gives (0, 0): too short to tell a limit cycle from a transient."""
+        start, stop = _longest_run(self.tracking_mask(motor))
+        dt = self.t[1] - self.t[0] if self.t.size > 1 else self.sample_time
+        n = stop - start
+        if n < 16 or n * dt < 5.0 / band_hz[0]:
             return 0.0, 0.0
-        err = np.where(mask, self.reference_rpm(motor) - self.speed_rpm(motor), 0.0)
-        spectrum = np.fft.rfft(err - err[mask].mean() * mask)
-        freq = np.fft.rfftfreq(err.size, self.t[1] - self.t[0])
-        inside = (freq >= band_hz[0]) & (freq <= band_hz[1])
+        t = self.t[start:stop]
+        err = (self.reference_rpm(motor) - self.speed_rpm(motor))[start:stop]
+        err = err - np.polyval(np.polyfit(t - t[0], err, 1), t - t[0])
+        window = np.hanning(n)
+        spectrum = np.fft.rfft(err * window)
+        freq = np.fft.rfftfreq(n, dt)
+        inside = (freq >= band_hz[0]) & (freq <= band_hz[1]) & (freq > 0) & (freq < 0.5 / dt)
         power = np.abs(spectrum[inside]) ** 2
-        rms = float(np.sqrt(2.0 * power.sum() / (err.size * mask.sum())))
-        return rms, float(freq[inside][np.argmax(power)]) if power.size else 0.0
+        if power.size == 0:
+            return 0.0, 0.0
+        rms = float(np.sqrt(2.0 * power.sum() / (n * np.sum(window**2))))
+        return rms, float(freq[inside][np.argmax(power)])
+
+    def limit_excursions(self, motor: int, limits_pk: dict[str, float]) -> dict[str, dict]:
+        """For each current signal (``i_r_mag``, ``i_s_mag``) and its peak-phase limit [A]: the
+        number of logged samples above the limit, the largest peak and the first time above."""
+        out = {}
+        for name, limit in limits_pk.items():
+            peak = self.peak(name, motor)
+            above = np.flatnonzero(peak > limit)
+            out[name] = {
+                "limit_a": float(limit),
+                "samples_above": int(above.size),
+                "peak_a": float(np.max(peak)),
+                "first_time_s": float(self.t[above[0]]) if above.size else None,
+            }
+        return out
 
     def summary(self) -> dict:
         """Headline metrics (motor 0 at top level, every motor under ``motors``).
 
         speed_rms_error_rpm is taken over ``tracking_mask`` samples (reference steps excluded for
         0.5 s); speed_max_abs_error_rpm over the whole run."""
-        """Headline metrics (motor 0 at top level, every motor under ``motors``)."""
         per_motor = []
         oscillation = [self.speed_oscillation(k) for k in range(self.n_motors)]
         for k in range(self.n_motors):
@@ -141,3 +166,14 @@ class DriveResult:
             frame.to_parquet(folder / "data.parquet", index=False)
             written.append(folder / "data.parquet")
         return written
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int]:
+    """(start, stop) of the longest stretch of True in ``mask`` ((0, 0) if there is none)."""
+    padded = np.concatenate([[False], mask.astype(bool), [False]])
+    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
+    starts, stops = edges[0::2], edges[1::2]
+    if starts.size == 0:
+        return 0, 0
+    k = int(np.argmax(stops - starts))
+    return int(starts[k]), int(stops[k])
