@@ -10,17 +10,32 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import signal
 import sys
+import warnings
 
-from acdrive.errors import InputError
+from acdrive.errors import InputError, SimulationDiverged
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
 COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce")
 
 
+#: A negative number as an option value (``--load-nm -0.1``, ``--speed -1e5``, ``-inf``):
+#: argparse's own pattern knows only plain decimals, so ``-1e5`` would be taken for an option.
+#: No acdrive option looks like a negative number, so such a token is always a value.
+NEGATIVE_NUMBER = re.compile(
+    r"^-(?:(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)$", re.IGNORECASE
+)
+
+
 class _OneLineParser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are a single line on stderr with exit code 2."""
+    """ArgumentParser whose errors are a single line on stderr with exit code 2, and which reads
+    negative numbers in any float notation as option values."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str):
         sys.stderr.write(f"acdrive: error: {message}\n")
@@ -44,6 +59,11 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(text) -> str:
+    """``text`` on one line (a message may quote a multi-line parser error or a file name)."""
+    return " ".join(str(text).splitlines())
+
+
 class Terminated(BaseException):
     """SIGTERM turned into an exception, so cleanup (``finally``, output staging) runs."""
 
@@ -55,8 +75,10 @@ def _raise_terminated(signum, frame):
 def main(argv: list[str] | None = None) -> int:
     """Run the command; every failure is one line on stderr with a conventional exit code.
 
-    2 invalid input (field and rule), 74 an input/output failure, 130 interrupted (SIGINT),
-    143 terminated (SIGTERM). ``--debug`` (first argument) re-raises with the traceback.
+    2 invalid input (field and rule), 3 a simulation that diverged (time and what to change),
+    70 an internal error (a bug; ``--debug`` shows where), 74 an input/output failure,
+    130 interrupted (SIGINT), 143 terminated (SIGTERM). ``--debug`` (anywhere in the arguments)
+    re-raises with the traceback and shows numerical warnings.
     """
     if hasattr(signal, "SIGPIPE"):  # `acdrive ... | head` ends quietly, as shell tools do
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
@@ -65,6 +87,10 @@ def main(argv: list[str] | None = None) -> int:
     if debug:
         argv.remove("--debug")
     previous_term = signal.signal(signal.SIGTERM, _raise_terminated)
+    caught = warnings.catch_warnings()
+    caught.__enter__()
+    if not debug:  # numerical warnings are for developers; results and inputs are checked
+        warnings.simplefilter("ignore", RuntimeWarning)
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -72,8 +98,13 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         if debug:
             raise
-        sys.stderr.write(f"acdrive: error: {exc}\n")
+        sys.stderr.write(f"acdrive: error: {_one_line(exc)}\n")
         return 2
+    except SimulationDiverged as exc:
+        if debug:
+            raise
+        sys.stderr.write(f"acdrive: error: {_one_line(exc)}\n")
+        return 3
     except KeyboardInterrupt:
         if debug:
             raise
@@ -90,7 +121,16 @@ def main(argv: list[str] | None = None) -> int:
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         sys.stderr.write(f"acdrive: error: input/output failure{where}: {exc.strerror or exc}\n")
         return 74
+    except Exception as exc:  # a bug: still one line, the traceback only with --debug
+        if debug:
+            raise
+        sys.stderr.write(
+            f"acdrive: error: internal error ({type(exc).__name__}: {_one_line(exc)}); please "
+            "report it with the output of the same command run with --debug\n"
+        )
+        return 70
     finally:
+        caught.__exit__(None, None, None)
         signal.signal(signal.SIGTERM, previous_term)
 
 

@@ -15,6 +15,24 @@ class InputError(ValueError):
         super().__init__(f"{field}: {rule}")
 
 
+class SimulationDiverged(RuntimeError):
+    """A simulation whose state stopped being finite at ``time`` [s].
+
+    ``hint`` says what to change in the scenario (sample time, substeps, inertia, gains). The CLI
+    prints ``simulation: diverged ... at t = <time> s; <hint>`` as one line with exit code 3.
+    """
+
+    def __init__(self, time: float, hint: str, name: str | None = None):
+        self.time = float(time)
+        self.hint = hint
+        self.name = name
+        which = f" '{name}'" if name else ""
+        super().__init__(
+            f"simulation: scenario{which} diverged (state no longer finite) at "
+            f"t = {self.time:.6g} s; {hint}"
+        )
+
+
 def require_finite(field: str, value) -> float:
     """Return ``value`` as float, or raise InputError if it is not a finite real number."""
     import math
@@ -40,6 +58,14 @@ def require_nonnegative(field: str, value) -> float:
     value = require_finite(field, value)
     if value < 0.0:
         raise InputError(field, f"must be >= 0, got {value:g}")
+    return value
+
+
+def require_between(field: str, value, low: float, high: float) -> float:
+    """Return ``value`` as float, or raise InputError unless it is finite and in [low, high]."""
+    value = require_finite(field, value)
+    if not low <= value <= high:
+        raise InputError(field, f"must be between {low:g} and {high:g}, got {value:g}")
     return value
 
 

@@ -6,7 +6,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -24,7 +23,7 @@ from acdrive.analysis.icad import (
     worst,
 )
 from acdrive.analysis.plants import MACHINES, machine_params, plant_for
-from acdrive.errors import InputError, require_finite
+from acdrive.errors import InputError, require_between, require_finite
 from acdrive.machines.induction import IMParams
 from acdrive.machines.pmsm import PMSGParams
 
@@ -39,6 +38,26 @@ infinite (no crossing) or undefined are written as null."""
 SWEEP_RANGES = {IMParams: (0.0, 375.0), PMSGParams: (0.0, 2 * math.pi * 50.0)}
 DFIM_SWEEP = (0.0, 1.5 * 2 * math.pi * 60.0)
 
+#: Accepted ranges: |speed| <= MAX_SPEED rad/s (about 160 kHz electrical) and 0 or at least
+#: MIN_SPEED (closer to 0 the plant matrices lose their structure to rounding), a bandwidth of
+#: BANDWIDTH_RANGE rad/s, at most MAX_SWEEP_POINTS speeds in a sweep.
+MAX_SPEED = 1e6
+MIN_SPEED = 1e-6
+BANDWIDTH_RANGE = (1e-6, 1e9)
+MAX_SWEEP_POINTS = 100
+
+
+def check_speed(flag: str, value) -> float:
+    """An electrical speed from the command line: finite, |w| <= MAX_SPEED, 0 or >= MIN_SPEED."""
+    value = require_finite(flag, value)
+    if abs(value) > MAX_SPEED:
+        raise InputError(flag, f"must be within +-{MAX_SPEED:g} rad/s, got {value:g}")
+    if 0.0 < abs(value) < MIN_SPEED:
+        raise InputError(
+            flag, f"must be 0 or at least {MIN_SPEED:g} rad/s in magnitude, got {value:g}"
+        )
+    return value
+
 
 def register(subparsers) -> None:
     parser = subparsers.add_parser("icad", help="individual channel analysis", description=HELP)
@@ -51,7 +70,13 @@ def register(subparsers) -> None:
         "--bandwidth", type=float, default=A_CUR_DEFAULT, help="a [rad/s] of imc-pi (3142)"
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
-    parser.add_argument("--speeds", type=float, nargs=3, metavar=("START", "STOP", "N"))
+    parser.add_argument(
+        "--speeds",
+        type=float,
+        nargs=3,
+        metavar=("START", "STOP", "N"),
+        help=f"sweep N (1 to {MAX_SWEEP_POINTS}) speeds from START to STOP rad/s",
+    )
     parser.add_argument("--out", default=None, help="figure directory (default icad-MACHINE)")
     parser.add_argument("--no-verify", action="store_true", help="skip contour cross-checks")
     parser.set_defaults(handler=run)
@@ -99,16 +124,19 @@ def single_report(machine: str, speed: float, controller: str, analysis) -> dict
 
 
 def run(args) -> int:
+    from acdrive.output import strict_json
+
     params = machine_params(args.machine)
     name = args.controller or default_controller_name(params)
-    k = controller_for(name, params, args.bandwidth)
+    bandwidth = require_between("--bandwidth", args.bandwidth, *BANDWIDTH_RANGE)
+    k = controller_for(name, params, bandwidth)
     if args.sweep:
         return _sweep(args, params, name, k)
-    speed = require_finite("speed", args.speed)
+    speed = check_speed("--speed", args.speed)
     analysis = analyse(plant_for(args.machine, speed), k, k, verify=not args.no_verify)
     report = single_report(args.machine, speed, name, analysis)
     if args.json:
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
     else:
         for key, value in report.items():
             print(f"{key:20s} {value}")
@@ -116,19 +144,27 @@ def run(args) -> int:
 
 
 def _sweep(args, params, name, k) -> int:
+    from acdrive.output import strict_json
     from acdrive.report.icad_figures import write_sweep_figures
 
     if args.speeds is not None:
         start, stop, n = args.speeds
-        for label, v in (("speeds.start", start), ("speeds.stop", stop), ("speeds.n", n)):
-            require_finite(label, v)
-        if n < 1 or n != int(n):
-            raise InputError("speeds.n", "must be a positive integer")
+        for v in (start, stop):
+            v = require_finite("--speeds", v)
+            if abs(v) > MAX_SPEED:
+                raise InputError(
+                    "--speeds", f"START and STOP must be within +-{MAX_SPEED:g} rad/s, got {v:g}"
+                )
+        if not (math.isfinite(n) and n == int(n) and 1 <= n <= MAX_SWEEP_POINTS):
+            raise InputError(
+                "--speeds", f"N must be an integer from 1 to {MAX_SWEEP_POINTS}, got {n:g}"
+            )
         lo, hi, n = start, stop, int(n)
     else:
         lo, hi = SWEEP_RANGES.get(type(params), DFIM_SWEEP)
         n = 7
     speeds = np.linspace(lo, hi, n)
+    speeds[np.abs(speeds) < MIN_SPEED] = 0.0  # rounding noise of linspace around 0
     plants = [plant_for(args.machine, float(s)) for s in speeds]
     analyses = [analyse(p, k, k, verify=not args.no_verify) for p in plants]
     w = analyses[-1].response.w
@@ -159,7 +195,7 @@ def _sweep(args, params, name, k) -> int:
         "figures": [str(p) for p in paths],
     }
     if args.json:
-        print(json.dumps(report, indent=2))
+        print(strict_json(report, indent=2))
     else:
         for key, value in report.items():
             print(f"{key:20s} {value}")

@@ -13,13 +13,13 @@ Method and results: docs/stability.md.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
-from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.errors import InputError, require_between, require_finite, require_positive
+from acdrive.output import strict_json
 
 HELP = """Linearised closed loop of Bodson's DFIM speed drive (machine (9), torque law (20)+(22)
 or rotor current loop (43)-(47), speed PI (25)-(27), mechanics (26)). --model continuous uses the
@@ -28,6 +28,29 @@ zero-order hold, encoder backward difference; --delay-samples 1 adds a computati
 
 PAPER_BANDWIDTH = 314.0  # a_D,VEL of Bodson IV-A [rad/s]
 UPPER_BANDWIDTH = 20000.0  # search limit of the tolerated a_D,VEL [rad/s]
+
+#: Accepted range of each numeric flag: generous for this 0.27 N m laboratory machine, and narrow
+#: enough that the equilibrium and the linearisation stay within float64 (so an error names the
+#: flag that is out of range, not a failed equilibrium).
+RANGES = {
+    "--bandwidth": (1e-3, 1e6),  # rad/s
+    "--load-nm": (-1e3, 1e3),  # N m
+    "--speed-filter-tau": (0.0, 10.0),  # s
+    "--supply-resistance": (0.0, 1e3),  # ohm
+    "--supply-inductance": (0.0, 10.0),  # H
+    "--viscous-friction": (0.0, 1e3),  # N m s/rad
+    "--inertia": (1e-9, 1e3),  # kg m^2
+    "--rotor-resistance": (1e-6, 1e3),  # ohm
+    "--converter-loss": (0.0, 1e3),  # V
+}
+MAX_GRID = 60  # speeds or loads of --map
+
+
+def _flag(name: str, value) -> float:
+    """``value`` of the numeric flag ``name``, checked against ``RANGES``."""
+    if name in ("--bandwidth", "--inertia", "--rotor-resistance"):
+        require_positive(name, value)
+    return require_between(name, value, *RANGES[name])
 
 
 def register(subparsers) -> None:
@@ -67,13 +90,13 @@ def _model(args, mode: str):
     from acdrive.analysis.drive_stability import DriveModel
     from acdrive.machines.dfim import BODSON_DFIM
 
-    bandwidth = require_positive("--bandwidth", args.bandwidth)
-    B = require_nonnegative("--viscous-friction", args.viscous_friction)
+    bandwidth = _flag("--bandwidth", args.bandwidth)
+    B = _flag("--viscous-friction", args.viscous_friction)
     machine = dataclasses.replace(BODSON_DFIM, B=B)
     if args.inertia is not None:
-        machine = dataclasses.replace(machine, J=require_positive("--inertia", args.inertia))
+        machine = dataclasses.replace(machine, J=_flag("--inertia", args.inertia))
     if args.rotor_resistance is not None:
-        R_r = require_positive("--rotor-resistance", args.rotor_resistance)
+        R_r = _flag("--rotor-resistance", args.rotor_resistance)
         machine = dataclasses.replace(machine, R_r=R_r)
     if args.delay_samples not in (0, 1):
         raise InputError("--delay-samples", "must be 0 or 1")
@@ -83,11 +106,11 @@ def _model(args, mode: str):
         controller_params=BODSON_DFIM,
         design_inertia=BODSON_DFIM.J,
         speed_bandwidth=bandwidth,
-        supply_resistance=require_nonnegative("--supply-resistance", args.supply_resistance),
-        supply_inductance=require_nonnegative("--supply-inductance", args.supply_inductance),
-        speed_filter_tau=require_nonnegative("--speed-filter-tau", args.speed_filter_tau),
+        supply_resistance=_flag("--supply-resistance", args.supply_resistance),
+        supply_inductance=_flag("--supply-inductance", args.supply_inductance),
+        speed_filter_tau=_flag("--speed-filter-tau", args.speed_filter_tau),
         delay_samples=args.delay_samples,
-        converter_loss=require_nonnegative("--converter-loss", args.converter_loss),
+        converter_loss=_flag("--converter-loss", args.converter_loss),
     )
 
 
@@ -111,14 +134,14 @@ def run(args) -> int:
         raise InputError("--speed-rpm", "is required (or give --map)")
     model = _model(args, args.mode)
     speed = require_finite("--speed-rpm", args.speed_rpm) * RAD_S_PER_RPM
-    load = require_finite("--load-nm", args.load_nm)
+    load = _flag("--load-nm", args.load_nm)
     point = OperatingPoint(speed, load)
     try:
         check_point(model, point)
+        r = linearize(model, point, args.model)
     except InputError as exc:
         name = {"speed": "--speed-rpm", "load_torque": "--load-nm"}.get(exc.field, exc.field)
         raise InputError(name, exc.rule) from None
-    r = linearize(model, point, args.model)
     out = {
         "mode": args.mode,
         "model": args.model,
@@ -133,7 +156,7 @@ def run(args) -> int:
         "eigenvalues": _pairs(r.eigenvalues),
     }
     if args.json:
-        print(json.dumps(out))
+        print(strict_json(out))
     else:
         for key in ("mode", "model", "speed_rpm", "load_nm", "bandwidth_rad_s"):
             print(f"{key:22s} {out[key]}")
@@ -149,8 +172,8 @@ def _map(args) -> int:
     from acdrive.analysis.drive_stability import default_grid, max_stable_bandwidth, stability_map
 
     n_speed, n_load = args.grid
-    if n_speed < 1 or n_load < 1:
-        raise InputError("--grid", "needs at least one speed and one load")
+    if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
+        raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
     maps, report = {}, {}
     for mode in ("voltage", "current"):
         model = _model(args, mode)
@@ -186,7 +209,7 @@ def _map(args) -> int:
         "figure": str(path),
     }
     if args.json:
-        print(json.dumps(out, indent=2))
+        print(strict_json(out, indent=2))
     else:
         print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
         for mode, r in report.items():
@@ -207,7 +230,7 @@ def _bench(args) -> int:
         stabilising_thresholds,
     )
 
-    bandwidth = require_positive("--bandwidth", args.bandwidth)
+    bandwidth = _flag("--bandwidth", args.bandwidth)
     results = [evaluate_candidate(c) for c in bench_candidates(bandwidth)]
     if args.delay_samples not in (0, 1):
         raise InputError("--delay-samples", "must be 0 or 1")
@@ -240,7 +263,7 @@ def _bench(args) -> int:
         ],
     }
     if args.json:
-        print(json.dumps(out, indent=2))
+        print(strict_json(out, indent=2))
         return 0
     print(f"voltage command, a_D,VEL = {bandwidth:g} rad/s: max Re(s) [1/s]")
     print(f"{'candidate':58s} {'900rpm':>8s} {'no load':>8s} {'grid':>8s}")

@@ -42,6 +42,7 @@ from acdrive.errors import (
     require_safe_name,
 )
 from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
+from acdrive.sim.engine import N_LOG
 from acdrive.sim.setup import (
     ConverterLosses,
     DFIMController,
@@ -55,6 +56,13 @@ from acdrive.sim.setup import (
 
 MACHINES = {"bodson-dfim": BODSON_DFIM}
 RAD_S_PER_RPM = math.pi / 30.0
+
+#: Size bounds of a run (every size a scenario controls).
+MAX_SUBSTEPS = 1000
+#: memory the logs of one scenario may take (rows x signals x motors x 8 bytes x runs)
+LOG_BUDGET_BYTES = 2 * 1024**3
+#: RK4 substeps x motors x runs one scenario may integrate (about 2 us each: some 30 minutes)
+MAX_WORK = 1e9
 
 
 def builtin_names() -> list[str]:
@@ -117,10 +125,12 @@ class _Section:
         value = self.get(key, default)
         return rule(self.field(key), value)
 
-    def integer(self, key, default, minimum=1):
+    def integer(self, key, default, minimum=1, maximum=None):
         value = self.get(key, default)
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise InputError(self.field(key), f"must be an integer >= {minimum}")
+        if maximum is not None and value > maximum:
+            raise InputError(self.field(key), f"must be an integer <= {maximum}, got {value}")
         return value
 
     def boolean(self, key, default):
@@ -244,6 +254,43 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     return controller
 
 
+def _check_size(duration, sample_time, substeps, log_every, n_motors, n_runs) -> None:
+    """Refuse a run whose log would not fit the memory budget or that would take hours."""
+    # name the field most likely at fault: a sample time shorter than the default, else duration
+    field = "simulation.sample_time" if sample_time < 200e-6 else "simulation.duration"
+    steps = duration / sample_time
+    what = (
+        f"{duration:g} s at a sample time of {sample_time:g} s is "
+        + (f"{steps:.3g}" if math.isfinite(steps) else "more than 1e308")
+        + " control steps"
+        + (f" x {n_motors} motors" if n_motors > 1 else "")
+        + (f" x {n_runs} runs (compare_modes)" if n_runs > 1 else "")
+    )
+    rows = math.ceil(steps / log_every) if math.isfinite(steps) else math.inf
+    log_bytes = float(rows) * N_LOG * n_motors * 8.0 * n_runs
+    if log_bytes > LOG_BUDGET_BYTES:
+        raise InputError(
+            field,
+            f"{what}; its log would need "
+            + (
+                f"about {log_bytes / 1024**3:.3g} GB"
+                if math.isfinite(log_bytes)
+                else "unbounded memory"
+            )
+            + " (limit "
+            f"{LOG_BUDGET_BYTES / 1024**3:g} GB): shorten simulation.duration, lengthen "
+            f"simulation.sample_time or raise simulation.log_every",
+        )
+    work = steps * substeps * n_motors * n_runs
+    if work > MAX_WORK:
+        raise InputError(
+            field,
+            f"{what} with {substeps} substeps: {work:.3g} integration steps (limit "
+            f"{MAX_WORK:.0e}, about half an hour): shorten simulation.duration, lengthen "
+            f"simulation.sample_time or use fewer simulation.substeps",
+        )
+
+
 def build_setup(data: dict) -> DriveSetup:
     """Validate a parsed scenario and build its ``DriveSetup``."""
     top = _Section(data, "")
@@ -258,8 +305,15 @@ def build_setup(data: dict) -> DriveSetup:
     sample_time = sim.number("sample_time", 200e-6, require_positive)
     if sample_time > duration:
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
-    substeps = sim.integer("substeps", 4)
+    substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
+    steps = duration / sample_time  # control steps (a float: may be astronomically large)
     log_every = sim.integer("log_every", 1)
+    if math.isfinite(steps) and log_every > round(steps):
+        raise InputError(
+            "simulation.log_every",
+            f"must not exceed the number of control steps of the run "
+            f"({round(steps)} = simulation.duration / simulation.sample_time)",
+        )
     sim.done()
 
     sup = _Section(top.get("supply", {}), "supply")
@@ -309,6 +363,7 @@ def build_setup(data: dict) -> DriveSetup:
         sec.done()
         motors.append(motor)
     top.done()
+    _check_size(duration, sample_time, substeps, log_every, len(motors), max(len(compare), 1))
     setup = DriveSetup(
         motors=tuple(motors),
         supply=supply,

@@ -15,7 +15,7 @@ import numpy as np
 
 from acdrive.control import dfim as ctl
 from acdrive.control.speed import SpeedPIGains
-from acdrive.errors import InputError
+from acdrive.errors import InputError, SimulationDiverged
 from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive.machines.dfim import DFIMParams, machine_vector
 from acdrive.plant.converter import max_voltage_magnitude
@@ -260,10 +260,53 @@ def n_steps(setup: DriveSetup) -> int:
     return round(setup.duration / setup.sample_time)
 
 
+#: RK4 is stable for h |lambda| below about 2.8 on the real axis; keep a margin
+RK4_STEP_LIMIT = 2.5
+
+
+def fastest_electrical_rate(setup: DriveSetup) -> float:
+    """Rough magnitude [1/s] of the fastest electrical eigenvalue over the motors: the transient
+    decay R / (sigma L) of stator or rotor plus the largest supply frequency (the rotation of the
+    flux phasors in the stationary frame)."""
+    w_e = 2.0 * np.pi * float(np.max(setup.supply.frequency_hz[1]))
+    rates = []
+    for motor in setup.motors:
+        m = motor.machine
+        rates.append(max(m.R_s / (m.sigma * m.L_s), m.R_r / (m.sigma * m.L_r)) + w_e)
+    return max(rates)
+
+
+def divergence_hint(setup: DriveSetup) -> str:
+    """What to change in a scenario whose simulation diverged."""
+    h = setup.sample_time / setup.substeps
+    rate = fastest_electrical_rate(setup)
+    if not np.isfinite(rate) or rate * setup.sample_time / RK4_STEP_LIMIT > 1e6:
+        return (
+            "the motor parameters give an electrical mode far too fast to integrate (R / (sigma L) "
+            "of stator or rotor): check motor.params R_s, R_r, L_s, L_r and M"
+        )
+    if h * rate > RK4_STEP_LIMIT:
+        need = int(np.ceil(setup.sample_time * rate / RK4_STEP_LIMIT))
+        return (
+            f"the integration step simulation.sample_time / simulation.substeps = {h:.3g} s is "
+            f"too long for the machine's fastest electrical mode (about {rate:.0f} 1/s): raise "
+            f"simulation.substeps to at least {need} or shorten simulation.sample_time"
+        )
+    j_min = min(m.machine.J for m in setup.motors)
+    return (
+        f"shorten simulation.sample_time (now {setup.sample_time:g} s) or raise "
+        f"simulation.substeps (now {setup.substeps}); if that does not help, the drive itself "
+        f"is unstable: check the motor inertia J (smallest {j_min:g} kg m^2; a tiny J makes the "
+        f"shaft too fast for the sampled controller), controller.design_inertia and the "
+        f"controller bandwidths"
+    )
+
+
 def simulate(setup: DriveSetup) -> DriveResult:
     """Run the compiled loop on ``setup`` and return its typed result.
 
-    Raises RuntimeError if the state stops being finite (a simulation never returns NaN silently).
+    Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
+    the state stops being finite (a simulation never returns NaN silently).
     """
     arrays = build_arrays(setup)
     steps = n_steps(setup)
@@ -281,9 +324,7 @@ def simulate(setup: DriveSetup) -> DriveResult:
     )
     elapsed = time.perf_counter() - start
     if status != engine.STATUS_OK:
-        raise RuntimeError(
-            f"simulation '{setup.name}' diverged (non-finite state) at t = {done * setup.sample_time:.6f} s"
-        )
+        raise SimulationDiverged(done * setup.sample_time, divergence_hint(setup), setup.name)
     t = np.arange(log.shape[0]) * setup.sample_time * setup.log_every
     return DriveResult(
         name=setup.name,
