@@ -170,3 +170,13 @@ def test_dfim_shorted_rotor_inrush_settles_to_the_steady_state_of_bodson_19():
     ratio = i_s[-50:] / v_s[-50:]
     assert np.max(np.abs(ratio - expected)) < 1e-3 * abs(expected)
     assert np.max(np.abs(i_s[:200])) > 1.2 * np.max(np.abs(i_s[-50:]))  # a visible inrush
+
+
+def test_a_diverging_system_stops_with_the_time_and_the_state():
+    from acdrive.errors import SimulationDiverged
+
+    shaft = PrescribedSpeed("shaft", w=0.0)
+    im, system = cage_drive(UGALDE_IM_300W, shaft, V_pk=300.0)
+    # one explicit RK4 step of 20 ms against electrical modes near -360 1/s and faster: unstable
+    with pytest.raises(SimulationDiverged, match=r"im\.(i_s|psi_r)\.(re|im)"):
+        system.compile().run(20.0, 0.02, 1, log=[im.out.i_s])

@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive.errors import InputError
+from acdrive.errors import InputError, SimulationDiverged
 from acdrive.sim import codegen
 from acdrive.sim.parts import ContinuousPart, Modulator, Part, Port, SampledPart
 
@@ -542,9 +542,10 @@ class CompiledSystem:
                 for name, _, _ in self._state_columns()
                 if not np.isfinite(X[self._state_index(name)])
             ]
-            raise FloatingPointError(
-                f"the simulation diverged at t = {t0 + done * sample_time:.6g} s: state "
-                f"{', '.join(bad[:3]) or '?'} not finite; use a shorter sample_time or more substeps"
+            raise SimulationDiverged(
+                t0 + done * sample_time,
+                f"state {', '.join(bad[:3]) or '?'} not finite; use a shorter sample_time or more "
+                "substeps",
             )
         return self._result(
             t0, sample_time, log_every, rows, columns, LOG, ELOG, ECOUNT, X, wall, n_steps
