@@ -84,3 +84,11 @@ def require_safe_name(field: str, value) -> str:
             f"letter or digit (no '/', '.', '..' or leading dot), got {value!r}",
         )
     return value
+
+
+def require_leakage(field: str, L_s: float, L_r: float, mutual: float) -> None:
+    """Raise InputError on ``field`` (the mutual inductance) unless the leakage factor
+    sigma = 1 - mutual^2 / (L_s L_r) is > 0 (a physical winding pair leaks)."""
+    if 1.0 - mutual * mutual / (L_s * L_r) <= 0.0:
+        symbol = field.rsplit(".", 1)[-1]
+        raise InputError(field, f"leakage factor sigma = 1 - {symbol}^2/(L_s L_r) must be > 0")

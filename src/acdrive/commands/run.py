@@ -23,6 +23,7 @@ def register(subparsers):
 
 
 def run(args) -> int:
+    from acdrive.report.drive_outputs import write_outcome
     from acdrive.scenarios.loader import load_scenario
     from acdrive.sim.outcome import run_scenario
 
@@ -30,7 +31,7 @@ def run(args) -> int:
     with OutputFolder(args.out, setup.name) as output:  # --out checked before the simulation
         outcome = run_scenario(setup)
         summary = outcome.summary
-        outcome.write(output.staging, figures=not args.no_figures)
+        write_outcome(outcome, output.staging, figures=not args.no_figures)
         target = output.publish()
     wall = sum(r.wall_time for r in outcome.results.values())
     n = len(setup.motors)

@@ -25,17 +25,26 @@ import numpy as np
 from acdrive.errors import InputError
 
 KINDS = ("real", "complex", "table")
+#: value rules a real quantity may declare, checked whenever values are packed
+RULES = {
+    "": "",
+    "positive": "must be > 0",
+    "nonnegative": "must be >= 0",
+    "count": "must be a positive integer",
+}
 
 
 @dataclass(frozen=True)
 class Var:
     """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
-    ``kind`` (real, complex or table) and a one-line ``doc``."""
+    ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity, a value
+    ``rule`` (one of ``RULES``) that packing enforces."""
 
     name: str
     unit: str
     doc: str
     kind: str = "real"
+    rule: str = ""
 
     def __post_init__(self):
         if not self.name.isidentifier():
@@ -44,6 +53,20 @@ class Var:
             raise ValueError(f"Var {self.name}: kind must be one of {', '.join(KINDS)}")
         if not self.doc:
             raise ValueError(f"Var {self.name}: a one-line doc is required")
+        if self.rule not in RULES or (self.rule and self.kind != "real"):
+            raise ValueError(f"Var {self.name}: rule must be one of {list(RULES)} on a real")
+
+    def check(self, field: str, value: float) -> float:
+        """``value`` if it obeys the declared rule, else an InputError naming ``field``."""
+        ok = {
+            "": True,
+            "positive": value > 0.0,
+            "nonnegative": value >= 0.0,
+            "count": value >= 1.0 and value == int(value),
+        }[self.rule]
+        if not ok:
+            raise InputError(field, f"{RULES[self.rule]}, got {value:g}")
+        return value
 
     @property
     def width(self) -> int:
@@ -51,8 +74,8 @@ class Var:
         return 2 if self.kind == "complex" else 1
 
 
-def real(name: str, unit: str, doc: str) -> Var:
-    return Var(name, unit, doc, "real")
+def real(name: str, unit: str, doc: str, rule: str = "") -> Var:
+    return Var(name, unit, doc, "real", rule)
 
 
 def cplx(name: str, unit: str, doc: str) -> Var:
@@ -169,7 +192,7 @@ class Layout:
                 z = _number(field, value, allow_complex=True)
                 fixed[s], fixed[s + 1] = z.real, z.imag
             else:
-                fixed[s] = _number(field, value, allow_complex=False)
+                fixed[s] = v.check(field, _number(field, value, allow_complex=False))
         return np.concatenate([fixed, *tables]) if tables else fixed
 
     def unpack(self, array: np.ndarray) -> dict:

@@ -19,16 +19,9 @@ import numpy as np
 
 from acdrive.core.signals import Layout, cplx, real
 from acdrive.jit import jit_fast
-from acdrive.sim.parts import ContinuousPart
+from acdrive.machines.windings import InductionWindings, winding_params
 
-PARAMS = Layout(
-    real("R_s", "ohm", "stator resistance"),
-    real("R_r", "ohm", "rotor resistance referred to the stator"),
-    real("L_s", "H", "stator self inductance"),
-    real("L_r", "H", "rotor self inductance"),
-    real("L_m", "H", "magnetising (mutual) inductance"),
-    real("n_p", "", "pole pairs (the paper's P/2)"),
-)
+PARAMS = winding_params("L_m", "magnetising (mutual) inductance")
 STATES = Layout(
     cplx("i_s", "A", "stator current, stationary frame"),
     cplx("psi_r", "Wb", "rotor flux linkage, stationary frame"),
@@ -82,10 +75,11 @@ def cage_rhs(t, x, u, p, dx):
     dx[_PSI_R], dx[_PSI_R + 1] = dpsi_r.real, dpsi_r.imag
 
 
-class CageInductionMachine(ContinuousPart):
+class CageInductionMachine(InductionWindings):
     """Cage induction motor, Amezquita-Brooks et al. (1)-(2); parameters as ``IMParams``."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
+    MUTUAL = "L_m"
     DEFAULTS: ClassVar[dict] = {"n_p": 1}
     state_outputs = cage_state_outputs
     rhs = cage_rhs
@@ -95,17 +89,3 @@ class CageInductionMachine(ContinuousPart):
         """From an ``acdrive.machines.induction.IMParams``."""
         return cls(name, R_s=params.R_s, R_r=params.R_r, L_s=params.L_s, L_r=params.L_r,
                    L_m=params.L_m, n_p=params.n_p)  # fmt: skip
-
-    def check(self):
-        from acdrive.errors import InputError
-
-        v = self.values
-        for key in ("R_s", "R_r", "L_s", "L_r", "L_m"):
-            if v[key] <= 0:
-                raise InputError(f"{self.name}.{key}", f"must be > 0, got {v[key]:g}")
-        if v["n_p"] < 1 or v["n_p"] != int(v["n_p"]):
-            raise InputError(f"{self.name}.n_p", "must be a positive integer")
-        if v["L_m"] ** 2 >= v["L_s"] * v["L_r"]:
-            raise InputError(
-                f"{self.name}.L_m", "leakage factor sigma = 1 - L_m^2/(L_s L_r) must be > 0"
-            )

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.errors import InputError, require_nonnegative, require_positive
-from acdrive.jit import jit
+from acdrive.errors import InputError, require_leakage, require_nonnegative, require_positive
+from acdrive.jit import jit, jit_fast
 
 
 @dataclass(frozen=True)
@@ -46,8 +46,7 @@ class DFIMParams:
         if not math.isfinite(float(n_p)) or float(n_p) != int(n_p) or int(n_p) < 1:
             raise InputError("n_p", f"must be a positive integer, got {n_p}")
         object.__setattr__(self, "n_p", int(n_p))
-        if self.sigma <= 0.0:
-            raise InputError("M", "leakage factor sigma = 1 - M^2/(L_s L_r) must be > 0")
+        require_leakage("M", self.L_s, self.L_r, self.M)
 
     @property
     def sigma(self) -> float:
@@ -84,6 +83,14 @@ def machine_vector(params: DFIMParams) -> np.ndarray:
         params.tau_c,
     )
     return p
+
+
+@jit_fast
+def currents_from_fluxes(p, psi_s, psi_r):
+    """(i_s, i_r) from the flux linkages: the inverse of psi_s = L_s i_s + M i_r,
+    psi_r = M i_s + L_r i_r (Bodson (9)), with a real determinant (no complex division)."""
+    inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
+    return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
 
 
 @jit

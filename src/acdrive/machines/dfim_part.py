@@ -16,23 +16,25 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive.core.signals import Layout, cplx, real
-from acdrive.errors import InputError
 from acdrive.jit import jit_fast
 from acdrive.machines import dfim
-from acdrive.machines.dfim import electromagnetic_torque
-from acdrive.sim.parts import ContinuousPart
+from acdrive.machines.dfim import currents_from_fluxes, electromagnetic_torque
+from acdrive.machines.windings import InductionWindings, winding_params
 
-PARAMS = Layout(
-    real("R_s", "ohm", "stator resistance"),
-    real("R_r", "ohm", "rotor resistance referred to the stator"),
-    real("L_s", "H", "stator self inductance"),
-    real("L_r", "H", "rotor self inductance"),
-    real("M", "H", "stator-rotor mutual inductance"),
-    real("n_p", "", "pole pairs"),
+PARAMS = winding_params("M", "stator-rotor mutual inductance")
+_R_S, _R_R, _L_S, _L_R, _M, _N_P = (
+    PARAMS.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p")
 )
-# the torque and steady-state functions of machines.dfim read the same slots
-assert all(PARAMS.slot(n) == s for n, s in (("R_s", dfim.R_S), ("R_r", dfim.R_R), ("L_s", dfim.L_S),
-                                            ("L_r", dfim.L_R), ("M", dfim.M_SR), ("n_p", dfim.N_P)))  # fmt: skip
+# machines.dfim's compiled torque and current functions, reused here, read the same slots
+if (_R_S, _R_R, _L_S, _L_R, _M, _N_P) != (
+    dfim.R_S,
+    dfim.R_R,
+    dfim.L_S,
+    dfim.L_R,
+    dfim.M_SR,
+    dfim.N_P,
+):
+    raise ImportError("DoublyFedMachine.PARAMS no longer matches machines.dfim's parameter slots")
 STATES = Layout(
     cplx("psi_s", "Wb", "stator flux linkage, stationary frame"),
     cplx("psi_r", "Wb", "rotor flux linkage referred to the stator, stationary frame"),
@@ -49,22 +51,14 @@ OUTPUTS = Layout(
     cplx("i_r_rotor", "A", "rotor current in rotor coordinates"),
     real("tau_e", "N m", "electromagnetic torque"),
 )
-_L_S, _L_R, _M, _R_S, _R_R, _N_P = dfim.L_S, dfim.L_R, dfim.M_SR, dfim.R_S, dfim.R_R, dfim.N_P
 _PSI_S, _PSI_R = STATES.slot("psi_s"), STATES.slot("psi_r")
 _V_S, _V_R, _W, _THETA = (INPUTS.slot(n) for n in ("v_s", "v_r", "w", "theta"))
 _Y_I_S, _Y_I_R, _Y_I_RR, _Y_TAU = (OUTPUTS.slot(n) for n in ("i_s", "i_r", "i_r_rotor", "tau_e"))
 
 
 @jit_fast
-def dfim_currents(p, psi_s, psi_r):
-    """(i_s, i_r) from the flux linkages (inverse of the inductance matrix of Bodson (9))."""
-    inv_det = 1.0 / (p[_L_S] * p[_L_R] - p[_M] * p[_M])
-    return (p[_L_R] * psi_s - p[_M] * psi_r) * inv_det, (p[_L_S] * psi_r - p[_M] * psi_s) * inv_det
-
-
-@jit_fast
 def dfim_direct_outputs(t, x, u, p, y):
-    i_s, i_r = dfim_currents(
+    i_s, i_r = currents_from_fluxes(
         p, complex(x[_PSI_S], x[_PSI_S + 1]), complex(x[_PSI_R], x[_PSI_R + 1])
     )
     angle = p[_N_P] * u[_THETA]
@@ -85,7 +79,7 @@ def dfim_rhs(t, x, u, p, dx):
     """Bodson (9) with theta_e = 0 (module docstring)."""
     psi_s = complex(x[_PSI_S], x[_PSI_S + 1])
     psi_r = complex(x[_PSI_R], x[_PSI_R + 1])
-    i_s, i_r = dfim_currents(p, psi_s, psi_r)
+    i_s, i_r = currents_from_fluxes(p, psi_s, psi_r)
     angle = p[_N_P] * u[_THETA]
     v_r = complex(u[_V_R], u[_V_R + 1]) * complex(np.cos(angle), np.sin(angle))
     dpsi_s = complex(u[_V_S], u[_V_S + 1]) - p[_R_S] * i_s
@@ -94,10 +88,11 @@ def dfim_rhs(t, x, u, p, dx):
     dx[_PSI_R], dx[_PSI_R + 1] = dpsi_r.real, dpsi_r.imag
 
 
-class DoublyFedMachine(ContinuousPart):
+class DoublyFedMachine(InductionWindings):
     """DFIM electrical model, Bodson (9); parameters as ``DFIMParams`` (mechanics separate)."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
+    MUTUAL = "M"
     DIRECT_FROM = ("theta",)
     DIRECT_OUTPUTS = ("i_s", "i_r", "i_r_rotor", "tau_e")
     state_outputs = dfim_state_outputs
@@ -109,15 +104,3 @@ class DoublyFedMachine(ContinuousPart):
         """From an ``acdrive.machines.dfim.DFIMParams`` (its J, B, tau_c go to a ``Shaft``)."""
         return cls(name, R_s=params.R_s, R_r=params.R_r, L_s=params.L_s, L_r=params.L_r,
                    M=params.M, n_p=params.n_p)  # fmt: skip
-
-    def check(self):
-        v = self.values
-        for key in ("R_s", "R_r", "L_s", "L_r", "M"):
-            if v[key] <= 0:
-                raise InputError(f"{self.name}.{key}", f"must be > 0, got {v[key]:g}")
-        if v["n_p"] < 1 or v["n_p"] != int(v["n_p"]):
-            raise InputError(f"{self.name}.n_p", "must be a positive integer")
-        if v["M"] ** 2 >= v["L_s"] * v["L_r"]:
-            raise InputError(
-                f"{self.name}.M", "leakage factor sigma = 1 - M^2/(L_s L_r) must be > 0"
-            )

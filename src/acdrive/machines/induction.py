@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.errors import InputError, require_finite, require_positive
+from acdrive.errors import InputError, require_finite, require_leakage, require_positive
 
 
 def _pole_pairs(value) -> int:
@@ -46,8 +46,7 @@ class IMParams:
         object.__setattr__(self, "n_p", _pole_pairs(self.n_p))
         if self.J is not None:
             object.__setattr__(self, "J", require_positive("J", self.J))
-        if self.sigma <= 0.0:
-            raise InputError("L_m", "leakage factor sigma = 1 - L_m^2/(L_s L_r) must be > 0")
+        require_leakage("L_m", self.L_s, self.L_r, self.L_m)
 
     @property
     def sigma(self) -> float:

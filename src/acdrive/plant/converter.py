@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from acdrive.core.parts import Modulator
+from acdrive.core.signals import Layout, cplx, real
 from acdrive.jit import jit
 
 
-def max_voltage_magnitude(v_dc: float) -> float:
+@jit
+def max_voltage_magnitude(v_dc):
     """Largest space-vector magnitude the converter applies from DC-link voltage ``v_dc``."""
     return v_dc / np.sqrt(2.0)
 
@@ -28,10 +31,8 @@ def converter_output(v_command, v_max):
 
 
 # --- the averaged converter as a modulator part -----------------------------------------------
-from acdrive.core.signals import Layout, cplx, real
-from acdrive.sim.parts import Modulator
 
-AVERAGED_PARAMS = Layout(real("V_dc", "V", "DC-link voltage"))
+AVERAGED_PARAMS = Layout(real("V_dc", "V", "DC-link voltage", "positive"))
 AVERAGED_INPUTS = Layout(cplx("v_ref", "V", "commanded voltage space vector"))
 AVERAGED_OUTPUTS = Layout(cplx("v", "V", "applied voltage space vector, held over the sample"))
 _V_DC = AVERAGED_PARAMS.slot("V_dc")
@@ -44,7 +45,7 @@ EVENT_SATURATED = 1
 def averaged_segments(T_s, u, p, s, dt, v):
     """One segment over the whole sample: the command, limited to V_dc / sqrt(2) (ZOH)."""
     applied, saturated = converter_output(
-        complex(u[_V_REF], u[_V_REF + 1]), p[_V_DC] / np.sqrt(2.0)
+        complex(u[_V_REF], u[_V_REF + 1]), max_voltage_magnitude(p[_V_DC])
     )
     dt[0] = T_s
     v[0, _V_OUT], v[0, _V_OUT + 1] = applied.real, applied.imag
@@ -59,9 +60,3 @@ class AveragedConverter(Modulator):
     EVENTS = ("saturated",)
     MAX_SEGMENTS = 1
     segments = averaged_segments
-
-    def check(self):
-        from acdrive.errors import InputError
-
-        if self.values["V_dc"] <= 0:
-            raise InputError(f"{self.name}.V_dc", f"must be > 0, got {self.values['V_dc']:g}")

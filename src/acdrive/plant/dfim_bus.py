@@ -43,6 +43,7 @@ from acdrive.machines.dfim import (
     R_R,
     R_S,
     TAU_COULOMB,
+    currents_from_fluxes,
     electromagnetic_torque,
 )
 from acdrive.plant.profiles import profile_at
@@ -86,10 +87,7 @@ def project_phasors(x, machines):
 def motor_currents(p, psi_s, psi_r, closed):
     """(i_s, i_r) from the flux linkages; i_s = 0 and psi_s irrelevant when the relay is open."""
     if closed:
-        inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])  # real: avoid complex division
-        return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (
-            p[L_S] * psi_r - p[M_SR] * psi_s
-        ) * inv_det
+        return currents_from_fluxes(p, psi_s, psi_r)
     return 0.0 + 0.0j, psi_r * (1.0 / p[L_R])
 
 

@@ -14,19 +14,18 @@ from typing import ClassVar
 
 import numpy as np
 
+from acdrive.core.parts import ContinuousPart
 from acdrive.core.signals import Layout, real, table
 from acdrive.core.tables import table_at
-from acdrive.errors import InputError
 from acdrive.jit import jit_fast
-from acdrive.sim.parts import ContinuousPart
 
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
 
 SHAFT_PARAMS = Layout(
-    real("J", "kg m^2", "inertia of rotor and load"),
-    real("B", "N m s/rad", "viscous friction and eddy-current brake coefficient"),
-    real("tau_c", "N m", "Coulomb friction torque"),
+    real("J", "kg m^2", "inertia of rotor and load", "positive"),
+    real("B", "N m s/rad", "viscous friction and eddy-current brake coefficient", "nonnegative"),
+    real("tau_c", "N m", "Coulomb friction torque", "nonnegative"),
     table("load", "N m", "active load torque profile, opposing positive speed"),
 )
 SHAFT_STATES = Layout(
@@ -72,13 +71,6 @@ class Shaft(ContinuousPart):
     DEFAULTS: ClassVar[dict] = {"B": 0.0, "tau_c": 0.0, "load": 0.0}
     state_outputs = shaft_state_outputs
     rhs = shaft_rhs
-
-    def check(self):
-        if self.values["J"] <= 0:
-            raise InputError(f"{self.name}.J", f"must be > 0, got {self.values['J']:g}")
-        for key in ("B", "tau_c"):
-            if self.values[key] < 0:
-                raise InputError(f"{self.name}.{key}", f"must be >= 0, got {self.values[key]:g}")
 
 
 SPEED_PARAMS = Layout(table("w", "rad/s", "prescribed mechanical speed profile"))

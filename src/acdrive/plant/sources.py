@@ -12,11 +12,11 @@ from typing import ClassVar
 
 import numpy as np
 
+from acdrive.core.parts import ContinuousPart
 from acdrive.core.signals import Layout, cplx, real, table
 from acdrive.core.tables import table_at, table_offset
 from acdrive.frames import K_PEAK as SQRT_3_2
 from acdrive.jit import jit_fast
-from acdrive.sim.parts import ContinuousPart
 
 PARAMS = Layout(
     table("V_pk", "V", "peak line-to-neutral voltage profile"),

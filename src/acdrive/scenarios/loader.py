@@ -53,16 +53,11 @@ from acdrive.sim.setup import (
     check_setup,
     constant,
 )
+from acdrive.sim.system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 MACHINES = {"bodson-dfim": BODSON_DFIM}
 RAD_S_PER_RPM = math.pi / 30.0
 
-#: Size bounds of a run (every size a scenario controls).
-MAX_SUBSTEPS = 1000
-#: memory the logs of one scenario may take (rows x signals x motors x 8 bytes x runs)
-LOG_BUDGET_BYTES = 2 * 1024**3
-#: RK4 substeps x motors x runs one scenario may integrate (about 2 us each: some 30 minutes)
-MAX_WORK = 1e9
 
 
 def builtin_names() -> list[str]:

@@ -1,15 +1,14 @@
 """Running a scenario: one or several simulations, their headline figures and their files.
 
 ``run_scenario`` runs a ``DriveSetup`` (once, or once per controller mode for comparisons) and
-returns a ``ScenarioOutcome``: the results, the summary (summary.json) and a ``write`` method that
-saves data and figures.
+returns a ``ScenarioOutcome``: the results and the summary (summary.json);
+``acdrive.report.drive_outputs.write_outcome`` saves data, figures and summary.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -58,30 +57,6 @@ class ScenarioOutcome:
     @property
     def main(self) -> DriveResult:
         return next(iter(self.results.values()))
-
-    def write(self, folder: Path, figures: bool = True) -> None:
-        from acdrive.report.dfim_figures import (
-            write_comparison_figures,
-            write_drive_figures,
-            write_sync_figure,
-        )
-
-        folder = Path(folder)
-        for label, result in self.results.items():
-            sub = folder if len(self.results) == 1 else folder / label
-            sub.mkdir(parents=True, exist_ok=True)
-            result.save(sub)
-            if figures:
-                write_drive_figures(result, sub, synchronous_rpm(self.setup))
-                if self.setup.motors[0].controller.sync.enabled:
-                    write_sync_figure(result, sub)
-        if figures and len(self.results) > 1:
-            limit = self.setup.motors[0].controller.rotor_current_limit_pk
-            write_comparison_figures(self.results, folder, limit)
-        from acdrive.output import strict_json
-
-        # strict JSON: a non-finite figure (e.g. an RMS over no samples) is written as null
-        (folder / "summary.json").write_text(strict_json(self.summary, indent=2) + "\n")
 
 
 def synchronous_rpm(setup: DriveSetup) -> float:

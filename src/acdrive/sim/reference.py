@@ -1,7 +1,7 @@
 """The slow path: a compiled system stepped from Python, the plant integrated by scipy.
 
-The sampled parts, the modulators and the plant's right-hand side are the compiled system's own
-pieces (``project``, ``plant_outputs``, ``sample``, ``derivatives`` of the generated module); only
+The sampled parts, the modulators, the log and the plant's right-hand side are the compiled
+system's own pieces (``sample_instant``, ``record``, ``derivatives`` of the generated module); only
 the integration between segment boundaries differs: ``scipy.integrate.solve_ivp`` (Radau by
 default) at a tight tolerance. This is the accuracy reference for the fixed-step loop: both solve
 the same held-input equations, so their difference is the integrator's error alone.
@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from acdrive.errors import SimulationDiverged
 from acdrive.sim.system import CompiledSystem, SystemResult
 
 
@@ -26,17 +27,14 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
     P = system.pack_params()
     X, S = system.pack_initial(initial)
     Y, U = np.zeros(system.sizes["y"]), np.zeros(system.sizes["u"])
-    n_mod = max(len(system.modulators), 1)
-    max_seg = max([p.MAX_SEGMENTS for p in system.modulators], default=1)
-    max_w = max([p.OUTPUTS.size() for p in system.modulators], default=1)
-    DT, V = np.zeros((n_mod, max_seg)), np.zeros((n_mod, max_seg, max(max_w, 1)))
-    NSEG = np.zeros(n_mod, dtype=np.int64)
-    n_ev = len(system.event_names())
-    E = np.zeros(max(n_ev, 1), dtype=np.int64)
+    # scratch sized by the generated module's own constants
+    DT, V = np.zeros((m.N_MOD, m.MAX_SEG)), np.zeros((m.N_MOD, m.MAX_SEG, m.MAX_W))
+    NSEG = np.zeros(m.N_MOD, dtype=np.int64)
+    E = np.zeros(m.N_EVENTS, dtype=np.int64)
     LOG = np.zeros((rows, len(columns)))
-    ELOG = np.zeros((rows, n_ev), dtype=np.int64)
-    ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
-    idx = [c[2] for c in columns]
+    ELOG = np.zeros((rows, m.N_EVENTS), dtype=np.int64)
+    ECOUNT = np.zeros((m.N_EVENTS, 64), dtype=np.int64)
+    idx = np.array([c[2] for c in columns], dtype=np.int64)
     out_slots = [system.slots[p.name].y for p in system.modulators]
 
     def rhs(t, x):
@@ -46,14 +44,8 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
 
     for k in range(n_steps):
         t = t0 + k * sample_time
-        m.project(X, P)
-        m.plant_outputs(t, X, P, Y, U)
-        m.sample(t, sample_time, P, S, Y, U, E, DT, V, NSEG)
-        for i in range(n_ev):
-            for b in range(64):
-                ECOUNT[i, b] += (int(E[i]) >> b) & 1
-        LOG[k] = Y[idx]
-        ELOG[k] = E[:n_ev]
+        m.sample_instant(t, sample_time, X, P, S, Y, U, E, DT, V, NSEG)
+        m.record(k, 1, Y, E, idx, LOG, ELOG, ECOUNT)
         boundaries = sorted(
             {sample_time}
             | {
@@ -79,7 +71,5 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
             X[:] = sol.y[:, -1]
             start = end
         if not np.all(np.isfinite(X)):
-            raise FloatingPointError(
-                f"the reference simulation diverged at t = {t + sample_time:.6g} s"
-            )
+            raise SimulationDiverged(t + sample_time, "the reference integration diverged")
     return compiled._result(t0, sample_time, 1, rows, columns, LOG, ELOG, ECOUNT, X, 0.0, n_steps)

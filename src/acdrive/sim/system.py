@@ -17,7 +17,8 @@ port, output to output, kind or unit mismatch, an input wired twice or not at al
 loop) is an ``InputError`` at construction naming both ends. ``System.compile`` generates the loop
 for this topology (``sim.codegen``), cached on disk. The compiled system offers ``run``,
 ``run_batch`` (a leading batch axis over variants, on all cores), the held-input right-hand side
-``derivatives`` and the one-sample map ``step``; the slow path and the linearisation use those.
+``derivatives`` and the pieces of one sample (``sample_instant``, ``record``, ``integrate``); the
+slow path uses those, as the linearisation will.
 """
 
 from __future__ import annotations
@@ -27,9 +28,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.core.parts import ContinuousPart, Modulator, Part, Port, SampledPart
 from acdrive.errors import InputError, SimulationDiverged
 from acdrive.sim import codegen
-from acdrive.sim.parts import ContinuousPart, Modulator, Part, Port, SampledPart
 
 STATUS_OK, STATUS_NONFINITE = 0, 1
 
@@ -170,12 +171,13 @@ class System:
     def output_slot(self, port: Port) -> int:
         return self.slots[port.part.name].y[0] + port.part.OUTPUTS.slot(port.var.name)
 
-    def _copies(self, part: Part, only=None) -> list[str]:
-        """Generated statements copying ``part``'s inputs from the outputs wired to them."""
+    def _copies(self, part: Part, only=None, skip=()) -> list[str]:
+        """Generated statements copying ``part``'s inputs (those in ``only``, if given, and not in
+        ``skip``) from the outputs wired to them."""
         lines = []
         base = self.slots[part.name].u[0]
         for v in part.INPUTS:
-            if only is not None and v.name not in only:
+            if (only is not None and v.name not in only) or v.name in skip:
                 continue
             src = self.source_of[(part.name, v.name)]
             d = base + part.INPUTS.slot(v.name)
@@ -247,7 +249,9 @@ class System:
         emit("def derivatives(t, X, P, Y, U, dX):")
         emit("    plant_outputs(t, X, P, Y, U)")
         for p in self.continuous:
-            L.extend("    " + c for c in self._copies(p))
+            # inputs a direct part reads were copied by plant_outputs, after their sources
+            copied = p.DIRECT_FROM if p in self.direct else ()
+            L.extend("    " + c for c in self._copies(p, skip=copied))
             emit(
                 f"    {aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], dX[{sl(p, 'x')}])"
             )
@@ -288,15 +292,15 @@ class System:
         emit("")
         # integration over merged segments
         emit("@_jit")
-        emit("def integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG):")
+        emit("def integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG, IDX, LEFT):")
         if not self.modulators:
             emit("    h = T_s / n_sub")
             emit("    for j in range(n_sub):")
             emit("        rk4_step(t + j * h, X, h, P, Y, U, W)")
         else:
-            emit("    index = np.zeros(N_MOD, dtype=np.int64)")
-            emit("    left = np.empty(N_MOD)")
+            emit("    index, left = IDX, LEFT  # scratch from the caller: no allocation per sample")
             emit("    for m in range(N_MOD):")
+            emit("        index[m] = 0")
             emit("        left[m] = DT[m, 0] if NSEG[m] > 0 else np.inf")
             emit("    tk = t")
             emit("    while True:")
@@ -322,14 +326,33 @@ class System:
             emit("                left[m] = DT[m, index[m]] if index[m] < NSEG[m] else np.inf")
         emit("")
         emit("@_jit")
-        emit("def step(t, T_s, n_sub, X, P, S, Y, U, E, W, DT, V, NSEG):")
+        emit("def sample_instant(t, T_s, X, P, S, Y, U, E, DT, V, NSEG):")
         emit(
-            '    """One control sample: project, read the plant, run the sampled parts, integrate."""'
+            '    """At t_k: project, read the plant with held inputs, run sampled parts and modulators."""'
         )
         emit("    project(X, P)")
         emit("    plant_outputs(t, X, P, Y, U)")
         emit("    sample(t, T_s, P, S, Y, U, E, DT, V, NSEG)")
-        emit("    integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG)")
+        emit("")
+        emit("@_jit")
+        emit("def record(k, log_every, Y, E, LOG_IDX, LOG, ELOG, ECOUNT):")
+        emit(
+            '    """Count the event bits of sample k; log the selected outputs every log_every samples."""'
+        )
+        emit("    for i in range(N_EVENTS):")
+        emit("        bits = E[i]")
+        emit("        b = 0")
+        emit("        while bits:")
+        emit("            if bits & 1:")
+        emit("                ECOUNT[i, b] += 1")
+        emit("            bits >>= 1")
+        emit("            b += 1")
+        emit("    if k % log_every == 0:")
+        emit("        row = k // log_every")
+        emit("        for j in range(LOG_IDX.shape[0]):")
+        emit("            LOG[row, j] = Y[LOG_IDX[j]]")
+        emit("        for i in range(N_EVENTS):")
+        emit("            ELOG[row, i] = E[i]")
         emit("")
         emit("@_jit")
         emit(
@@ -341,26 +364,13 @@ class System:
         emit("    V = np.zeros((N_MOD, MAX_SEG, MAX_W))")
         emit("    NSEG = np.zeros(N_MOD, dtype=np.int64)")
         emit("    E = np.zeros(N_EVENTS, dtype=np.int64)")
+        emit("    IDX = np.zeros(N_MOD, dtype=np.int64)")
+        emit("    LEFT = np.zeros(N_MOD)")
         emit("    for k in range(n_steps):")
         emit("        t = t0 + k * T_s")
-        emit("        project(X, P)")
-        emit("        plant_outputs(t, X, P, Y, U)")
-        emit("        sample(t, T_s, P, S, Y, U, E, DT, V, NSEG)")
-        emit("        for i in range(N_EVENTS):")
-        emit("            bits = E[i]")
-        emit("            b = 0")
-        emit("            while bits:")
-        emit("                if bits & 1:")
-        emit("                    ECOUNT[i, b] += 1")
-        emit("                bits >>= 1")
-        emit("                b += 1")
-        emit("        if k % log_every == 0:")
-        emit("            row = k // log_every")
-        emit("            for j in range(LOG_IDX.shape[0]):")
-        emit("                LOG[row, j] = Y[LOG_IDX[j]]")
-        emit("            for i in range(N_EVENTS):")
-        emit("                ELOG[row, i] = E[i]")
-        emit("        integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG)")
+        emit("        sample_instant(t, T_s, X, P, S, Y, U, E, DT, V, NSEG)")
+        emit("        record(k, log_every, Y, E, LOG_IDX, LOG, ELOG, ECOUNT)")
+        emit("        integrate(t, T_s, n_sub, X, P, Y, U, W, DT, V, NSEG, IDX, LEFT)")
         emit("        for i in range(N_X):")
         emit("            if not np.isfinite(X[i]):")
         emit(f"                return k + 1, {STATUS_NONFINITE}")
@@ -433,9 +443,11 @@ class System:
         return [(p.name, p.EVENTS) for p in (*self.sampled, *self.modulators)]
 
 
-#: most samples one run may take, and most floats its log may hold (refused before starting)
-MAX_STEPS = 2_000_000_000
-MAX_LOG_FLOATS = 250_000_000
+#: Size bounds of one run (also applied by the scenario loader): substeps per segment, memory
+#: for the logs, and RK4 steps (samples x substeps x variants; about 2 us each: half an hour).
+MAX_SUBSTEPS = 1000
+LOG_BUDGET_BYTES = 2 * 1024**3
+MAX_WORK = 1e9
 
 
 @dataclass
@@ -502,14 +514,34 @@ class CompiledSystem:
                 or value <= 0
             ):
                 raise InputError(field_name, "must be a finite number > 0")
-        if isinstance(substeps, bool) or not isinstance(substeps, int) or not 1 <= substeps <= 1000:
-            raise InputError("substeps", "must be an integer from 1 to 1000")
+        if (
+            isinstance(substeps, bool)
+            or not isinstance(substeps, int)
+            or not 1 <= substeps <= MAX_SUBSTEPS
+        ):
+            raise InputError("substeps", f"must be an integer from 1 to {MAX_SUBSTEPS}")
         n = round(duration / sample_time)
         if n < 1:
             raise InputError("duration", "must be at least one sample time")
-        if n > MAX_STEPS:
-            raise InputError("duration", f"needs {n:.3g} samples; at most {MAX_STEPS:.0e}")
         return n
+
+    def _check_size(self, n_steps, substeps, rows, n_columns, variants=1) -> None:
+        """Refuse, before anything is allocated, a run beyond the bounds of this module."""
+        n_values = variants * rows * (n_columns + len(self.system.event_names()))
+        if n_values * 8 > LOG_BUDGET_BYTES:
+            raise InputError(
+                "log_every",
+                f"the log would take {n_values * 8 / 1024**3:.3g} GB (limit "
+                f"{LOG_BUDGET_BYTES / 1024**3:g} GB): log fewer signals, raise log_every or split "
+                "the batch",
+            )
+        work = float(n_steps) * substeps * variants
+        if work > MAX_WORK:
+            raise InputError(
+                "duration",
+                f"needs {work:.3g} RK4 steps per segment (limit {MAX_WORK:.0e}): shorten the run, "
+                "lengthen sample_time or use fewer substeps",
+            )
 
     def run(self, duration: float, sample_time: float, substeps: int = 4, initial=None,
             log=None, log_every: int = 1, t0: float = 0.0, parts=None) -> SystemResult:  # fmt: skip
@@ -519,11 +551,7 @@ class CompiledSystem:
         sys_ = self.system
         n_steps = self._steps(duration, sample_time, substeps)
         columns, rows = self._log_setup(log, n_steps, log_every)
-        if rows * (len(columns) + len(sys_.event_names())) > MAX_LOG_FLOATS:
-            raise InputError(
-                "log_every",
-                f"the log would hold {rows * len(columns):.3g} values ({rows * len(columns) * 8 / 1e9:.1f} GB); log fewer signals or raise log_every",
-            )
+        self._check_size(n_steps, substeps, rows, len(columns))
         P = sys_.pack_params(parts)
         X, S = sys_.pack_initial(initial)
         Y, U = np.zeros(sys_.sizes["y"]), np.zeros(sys_.sizes["u"])
@@ -591,11 +619,7 @@ class CompiledSystem:
         B = len(variants)
         if B < 1:
             raise InputError("variants", "must hold at least one variant")
-        if B * rows * len(columns) > MAX_LOG_FLOATS:
-            raise InputError(
-                "variants",
-                f"the logs would hold {B * rows * len(columns):.3g} values; log fewer signals, raise log_every or split the batch",
-            )
+        self._check_size(n_steps, substeps, rows, len(columns), variants=B)
         P = np.empty((B, sys_.sizes["p"]))
         for b, changes in enumerate(variants):
             parts = []

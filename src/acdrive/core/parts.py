@@ -102,7 +102,8 @@ class Part:
         self.inp = _Ports(self, self.INPUTS, "in")
 
     def check(self) -> None:
-        """Cross-field rules on ``self.values`` (raise ``InputError`` naming ``<part>.<field>``)."""
+        """Cross-field rules on ``self.values`` (raise ``InputError`` naming ``<part>.<field>``);
+        rules on single values are declared with the parameter (``Var.rule``)."""
 
     def initial_state(self, **values) -> np.ndarray:
         """Packed initial state: ``INITIAL`` defaults, then ``values``, zero elsewhere."""

@@ -1,0 +1,33 @@
+"""The files of one scenario run: data (CSV, Parquet), figures and summary.json."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from acdrive.output import strict_json
+from acdrive.sim.outcome import ScenarioOutcome, synchronous_rpm
+
+
+def write_outcome(outcome: ScenarioOutcome, folder: Path, figures: bool = True) -> None:
+    """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``."""
+    folder = Path(folder)
+    setup = outcome.setup
+    if figures:
+        from acdrive.report.dfim_figures import (
+            write_comparison_figures,
+            write_drive_figures,
+            write_sync_figure,
+        )
+    for label, result in outcome.results.items():
+        sub = folder if len(outcome.results) == 1 else folder / label
+        sub.mkdir(parents=True, exist_ok=True)
+        result.save(sub)
+        if figures:
+            write_drive_figures(result, sub, synchronous_rpm(setup))
+            if setup.motors[0].controller.sync.enabled:
+                write_sync_figure(result, sub)
+    if figures and len(outcome.results) > 1:
+        limit = setup.motors[0].controller.rotor_current_limit_pk
+        write_comparison_figures(outcome.results, folder, limit)
+    # strict JSON: a non-finite figure (e.g. an RMS over no samples) is written as null
+    (folder / "summary.json").write_text(strict_json(outcome.summary, indent=2) + "\n")
