@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive.sim.result import DriveResult
+from acdrive.sim.result import OSCILLATION_BAND_HZ, DriveResult
 from acdrive.sim.setup import DriveSetup, simulate
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
@@ -92,11 +92,13 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
     for mode, s in summaries.items():
         worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
         if worst["speed_oscillation_rms_rpm"] > OSCILLATION_FINDING_RPM:
+            low, high = OSCILLATION_BAND_HZ
             summary["finding"] = (
                 f"{mode} command: the speed oscillates ({worst['speed_oscillation_rms_rpm']:.1f} rpm "
-                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz) at a_D,VEL = "
-                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; "
-                "the linearised drive is unstable there (docs/stability.md, `acdrive stability --map`)"
+                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
+                f"{OSCILLATION_FINDING_RPM:g} rpm threshold) at a_D,VEL = "
+                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
+                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
             )
             break
     if setup.note:

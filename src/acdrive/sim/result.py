@@ -12,6 +12,8 @@ from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
 from acdrive.sim.engine import LOG_NAMES
 
 RPM_PER_RAD_S = 30.0 / np.pi
+#: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag
+OSCILLATION_BAND_HZ = (20.0, 200.0)
 
 
 @dataclass
@@ -72,7 +74,7 @@ class DriveResult:
             mask[(self.t >= self.t[j]) & (self.t < self.t[j] + settle_s)] = False
         return mask
 
-    def speed_oscillation(self, motor: int = 0, band_hz=(20.0, 200.0)) -> tuple[float, float]:
+    def speed_oscillation(self, motor: int = 0, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float]:
         """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz``.
 
         Method: the longest stretch of consecutive tracking samples (``tracking_mask``; nothing is
