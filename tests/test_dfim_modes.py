@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from acdrive.errors import InputError
-from acdrive.machines.dfim import BODSON_DFIM, L_R, M_SR, machine_vector
-from acdrive.plant.dfim_bus import STATES_PER_MOTOR, n_states, plant_derivatives
+from acdrive.machines.dfim import BODSON_DFIM, L_R, L_S, M_SR, machine_vector
 from acdrive.scenarios.loader import build_setup
+from acdrive.sim.dfim_drive import DFIMDrive
 from acdrive.sim.outcome import run_scenario
-from acdrive.sim.setup import build_arrays, simulate
+from acdrive.sim.setup import simulate
 
 PAPER_PARAMS = {"R_s": 0.66, "R_r": 0.94, "L_s": 13.1e-3, "L_r": 9.8e-3, "M": 9.7e-3, "n_p": 2}
 
@@ -167,36 +167,28 @@ def test_reactive_power_loop_removes_model_error():
 def test_bus_voltage_solves_shared_impedance_equation():
     """v_bus = v_g - R_g sum(i_s) - L_g sum(d i_s / dt) holds exactly at an arbitrary state."""
     data = {"supply": {"resistance": 0.3, "inductance": 1e-3}, "motor": [motor(), motor(), motor()]}
-    a = build_arrays(build_setup(data))
+    drive = DFIMDrive(build_setup(data))
+    compiled, system = drive.compile(), drive.system
     rng = np.random.default_rng(1)
-    x = rng.normal(size=n_states(3)) * 0.02
-    dx = np.empty_like(x)
-    v_term = np.zeros(3, dtype=complex)
-    v_r = rng.normal(size=3) + 1j * rng.normal(size=3)
-    v_g = plant_derivatives(
-        0.01,
-        x,
-        dx,
-        a["machines"],
-        a["bus"],
-        a["supply"],
-        a["load_t"],
-        a["load_tau"],
-        v_r,
-        a["closed"],
-        v_term,
+    X = rng.normal(size=system.sizes["x"]) * 0.02
+    held = system.pack_held(
+        {f"converter{k}": {"v": complex(*rng.normal(size=2))} for k in range(3)}
     )
+    Y, dX = compiled.evaluate(0.01, X, held)
     p = machine_vector(BODSON_DFIM)
-    L_s_, det = p[2], p[2] * p[L_R] - p[M_SR] ** 2
+    det = p[L_S] * p[L_R] - p[M_SR] ** 2
     sum_i, sum_di = 0j, 0j
     for k in range(3):
-        o = STATES_PER_MOTOR * k
-        psi_s, psi_r = complex(x[o], x[o + 1]), complex(x[o + 2], x[o + 3])
-        dpsi_s, dpsi_r = complex(dx[o], dx[o + 1]), complex(dx[o + 2], dx[o + 3])
+        o = system.slots[f"dfim{k}"].x[0]
+        psi_s, psi_r = complex(X[o], X[o + 1]), complex(X[o + 2], X[o + 3])
+        dpsi_s, dpsi_r = complex(dX[o], dX[o + 1]), complex(dX[o + 2], dX[o + 3])
         sum_i += (p[L_R] * psi_s - p[M_SR] * psi_r) / det
         sum_di += (p[L_R] * dpsi_s - p[M_SR] * dpsi_r) / det
-    assert L_s_ > 0
-    assert np.allclose(v_term, v_g - 0.3 * sum_i - 1e-3 * sum_di, rtol=1e-12, atol=1e-12)
+        v_term = compiled.output(Y, drive.motors[k]["relay"].out.v)
+        assert v_term == compiled.output(Y, drive.bus.out.v)  # every relay closed
+    v_g = compiled.output(Y, drive.grid.out.v)
+    v_bus = compiled.output(Y, drive.bus.out.v)
+    assert v_bus == pytest.approx(v_g - 0.3 * sum_i - 1e-3 * sum_di, rel=1e-12, abs=1e-12)
 
 
 def test_motors_on_a_shared_supply_interact_through_the_bus():

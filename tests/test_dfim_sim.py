@@ -9,8 +9,8 @@ import pytest
 from acdrive.control.speed import speed_pi
 from acdrive.machines.dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
 from acdrive.scenarios.loader import build_setup, load_scenario
+from acdrive.sim.dfim_drive import DFIMDrive, simulate_slow
 from acdrive.sim.setup import simulate
-from acdrive.sim.slow import simulate_slow
 
 
 def short_ramp(duration=0.1, **overrides):
@@ -35,14 +35,16 @@ def test_engine_matches_radau_reference():
         ),
     )
     fast = simulate(setup)
-    reference = simulate_slow(setup, integrator="radau")
+    reference = simulate_slow(setup, method="Radau")
     for name in ("w", "i_s_mag", "i_r_mag", "i_rx", "i_ry"):
         assert relative_error(fast.signal(name), reference.signal(name)) < 1e-6, name
 
 
 class PlainPythonController:
     """A user-written voltage-command controller built from acdrive's public physics functions
-    (Bodson (20), (22), (25), limits (30)-(37)), with its own speed and frequency estimation."""
+    (Bodson (20), (22), (25), limits (30)-(37)), with its own speed estimate and the nominal
+    supply frequency, run in place of the compiled ``SpeedController`` part: same inputs and
+    outputs, read and written through that part's declarations."""
 
     def __init__(self, params, gains, i_max, T_s, w_e):
         from acdrive.machines.dfim import machine_vector
@@ -54,11 +56,19 @@ class PlainPythonController:
             T_s,
             w_e,
         )
-        self.e_int, self.theta_prev, self.w = 0.0, None, 0.0
+        self.e_int, self.theta_prev, self.w, self.started = 0.0, None, 0.0, False
 
-    def step(self, k, t, v_s, v_g, theta_meas, w_ref, i_s=None, i_r_rotor=None):
-        if self.theta_prev is not None:
-            self.w = (theta_meas - self.theta_prev) / self.T_s
+    def step(self, t, T_s, u, p, s, y):
+        from acdrive.control.bodson import SpeedController
+
+        inputs = SpeedController.INPUTS.unpack(u)
+        theta_meas, v_s, w_ref = inputs["theta"], inputs["v_s"], inputs["w_ref"]
+        v_r_slot = SpeedController.OUTPUTS.slot("v_r")
+        if not self.started:  # the loop's first sample: hold the converter's initial voltage
+            self.started, self.theta_prev = True, theta_meas
+            y[v_r_slot : v_r_slot + 2] = s[SpeedController.STATES.slot("v_r") :][:2]
+            return 0
+        self.w = (theta_meas - self.theta_prev) / self.T_s
         self.theta_prev = theta_meas
         v = abs(v_s)
         lo, hi, _ = torque_window(self.p, self.w_e, v, self.i_max, self.i_max)
@@ -67,7 +77,10 @@ class PlainPythonController:
         )
         i_s, _ = stator_current_command(self.p, self.w_e, v, tau, 0.0)
         v_r = rotor_voltage_for(self.p, self.w_e, self.w, v, i_s)
-        return v_r * (v_s / v) * np.exp(-1j * self.p[N_P] * theta_meas)
+        v_r = v_r * (v_s / v) * np.exp(-1j * self.p[N_P] * theta_meas)
+        y[v_r_slot], y[v_r_slot + 1] = v_r.real, v_r.imag
+        y[SpeedController.OUTPUTS.slot("tau_com")] = tau
+        return 0
 
 
 def test_plain_python_controller_gives_the_compiled_result():
@@ -80,10 +93,20 @@ def test_plain_python_controller_gives_the_compiled_result():
         setup.sample_time,
         2 * math.pi * 60,
     )
-    slow = simulate_slow(setup, controller=ctrl)
+    slow = simulate_slow(setup, python_steps={"controller0": ctrl.step})
     fast = simulate(setup)
-    for name in ("w", "i_s_mag", "i_r_mag", "i_rx"):
+    for name in ("w", "i_s_mag", "i_r_mag", "i_rx", "tau_com"):
         assert np.allclose(slow.signal(name), fast.signal(name), rtol=1e-7, atol=1e-9), name
+
+
+def test_slow_path_with_the_compiled_parts_is_the_fast_loop():
+    """The slow path runs the same compiled pieces: with the loop's own RK4 it gives the fast
+    loop's numbers to rounding (the fast loop's borrowed arrays are a second specialisation of
+    the fast-math plant code, whose contractions may differ in the last bit)."""
+    setup = short_ramp(0.05)
+    slow, fast = simulate_slow(setup, method="RK4"), simulate(setup)
+    scale = np.maximum(np.max(np.abs(fast.signals), axis=(0, 1)), 1e-300)
+    assert np.all(np.max(np.abs(slow.signals - fast.signals), axis=(0, 1)) <= 1e-12 * scale)
 
 
 def scenario(**motor_extra):
@@ -163,45 +186,22 @@ def test_step_beyond_limits_records_limit_events_without_nan():
 
 
 def test_batch_axis_runs_variants_in_parallel():
-    from acdrive.sim import engine
-    from acdrive.sim.setup import build_arrays, n_steps
-
-    setups = [scenario(load_torque=tl) for tl in (0.0, 0.03, 0.06)]
-    arrays = [build_arrays(s) for s in setups]
-    stack = {k: np.stack([a[k] for a in arrays]) for k in arrays[0] if k != "supply"}
-    steps = n_steps(setups[0])
-    logs = np.zeros((3, steps, 1, engine.N_LOG))
-    done, status = np.zeros(3, dtype=np.int64), np.zeros(3, dtype=np.int64)
-    engine.run_batch(
-        stack["x"],
-        stack["machines"],
-        stack["bus"],
-        arrays[0]["supply"],
-        stack["load_t"],
-        stack["load_tau"],
-        stack["sensors"],
-        stack["p_est"],
-        stack["cp"],
-        stack["cs"],
-        stack["ref_t"],
-        stack["ref_w"],
-        stack["closed"],
-        setups[0].sample_time,
-        setups[0].substeps,
-        steps,
-        1,
-        logs,
-        done,
-        status,
-    )
-    for b, s in enumerate(setups):
-        single = simulate(s)
-        assert np.allclose(logs[b], single.signals, rtol=0, atol=1e-12)
+    """Variants of one drive (load torques) in the compiled batch loop equal single runs."""
+    loads = (0.0, 0.03, 0.06)
+    setups = [scenario(load_torque=tl) for tl in loads]
+    drive = DFIMDrive(setups[0])
+    initial, held = drive.initial()
+    batch = drive.compile().run_batch(
+        [{"shaft0": {"load": tl}} for tl in loads], setups[0].duration, setups[0].sample_time,
+        setups[0].substeps, initial=initial, held=held, log=drive.log_ports(),
+    )  # fmt: skip
+    for result, s in zip(batch, setups, strict=True):
+        assert np.array_equal(drive.drive_result(result).signals, simulate(s).signals)
+    assert not np.array_equal(batch[0].data, batch[2].data)
 
 
 def test_speed_oscillation_metric_recovers_a_known_sinusoid():
-    from acdrive.sim.engine import LOG_NAMES
-    from acdrive.sim.result import DriveResult
+    from acdrive.sim.result import LOG_NAMES, DriveResult
 
     t = np.arange(20000) * 200e-6
     signals = np.zeros((t.size, 1, len(LOG_NAMES)))
@@ -252,8 +252,7 @@ def test_paper_gains_limit_cycle_in_voltage_mode_only():
 def test_converter_loss_opposes_rotor_current():
     """First-harmonic dead-time / drop model: the applied rotor voltage differs from the command by
     sqrt(3/2) (4/pi) (V_dc t_d f_sw + V_drop) along -i_R / |i_R|."""
-    from acdrive.plant.dfim_bus import plant_derivatives
-    from acdrive.sim.setup import ConverterLosses, build_arrays
+    from acdrive.sim.setup import ConverterLosses
 
     losses = ConverterLosses(dead_time=2e-6, switching_frequency=1e4, device_drop=0.5)
     expected = np.sqrt(1.5) * 4 / np.pi * (30.0 * 2e-6 * 1e4 + 0.5)
@@ -267,24 +266,17 @@ def test_converter_loss_opposes_rotor_current():
     )
     derivatives = []
     for setup in (ideal, lossy):
-        a = build_arrays(setup)
-        dx = np.empty_like(a["x"])
-        plant_derivatives(
-            0.0,
-            a["x"],
-            dx,
-            a["machines"],
-            a["bus"],
-            a["supply"],
-            a["load_t"],
-            a["load_tau"],
-            np.array([3.0 + 1j]),
-            a["closed"],
-            np.zeros(1, complex),
-        )
-        derivatives.append(complex(dx[2], dx[3]))  # d psi_r / dt
-    i_r = a["x"][2:4] / a["machines"][0, 3]  # open circuit at t = 0: i_s = 0, i_r = psi_r / L_r
-    direction = complex(*i_r) / abs(complex(*i_r))
+        drive = DFIMDrive(setup)
+        compiled, (initial, held) = drive.compile(), drive.initial()
+        X, _ = drive.system.pack_initial(initial)
+        Y = drive.system.pack_held(held)
+        a = drive.system.slots["converter0"].y[0]
+        Y[a], Y[a + 1] = 3.0, 1.0  # held rotor voltage 3 + 1j (rotor coordinates)
+        dX = compiled.derivatives(0.0, X, Y)
+        o = drive.system.slots["dfim0"].x[0] + drive.motors[0]["dfim"].STATES.slot("psi_r")
+        derivatives.append(complex(dX[o], dX[o + 1]))  # d psi_r / dt
+        i_r = complex(X[o], X[o + 1]) / setup.motors[0].machine.L_r  # i_s = 0 at t = 0
+    direction = i_r / abs(i_r)
     assert derivatives[1] - derivatives[0] == pytest.approx(-expected * direction, rel=1e-3)
 
 

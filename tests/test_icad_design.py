@@ -5,6 +5,7 @@ python-control closed loops)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -269,13 +270,16 @@ def test_reproduce_dispatches_to_the_report_module(monkeypatch, tmp_path, capsys
     module = importlib.import_module("acdrive.report.icad_reproduction")
     calls = []
 
-    def fake(out_dir):
-        calls.append(out_dir)
-        return tmp_path / "icad.md"
+    def fake(out_dir):  # writes the report's two items into the staging folder it is given
+        calls.append(Path(out_dir))
+        (Path(out_dir) / "icad.md").write_text("report\n")
+        (Path(out_dir) / "icad").mkdir()
+        return Path(out_dir) / "icad.md"
 
     monkeypatch.setattr(module, "write_report", fake)
     assert main(["reproduce", "icad", "--out", str(tmp_path)]) == 0
-    assert calls == [str(tmp_path)]
+    assert len(calls) == 1 and calls[0].parent == tmp_path  # a staging folder inside --out
+    assert (tmp_path / "icad.md").read_text() == "report\n" and (tmp_path / "icad").is_dir()
     assert str(tmp_path / "icad.md") in capsys.readouterr().out
 
 

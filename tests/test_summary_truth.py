@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 
 from acdrive.scenarios.loader import build_setup
-from acdrive.sim.engine import LOG_NAMES, N_LOG
 from acdrive.sim.outcome import run_scenario
-from acdrive.sim.result import RPM_PER_RAD_S, SQRT_3_2, DriveResult
+from acdrive.sim.result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
 
 
 def synthetic(t, w_ref, w, i_r_pk=None):

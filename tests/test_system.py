@@ -15,6 +15,7 @@ from acdrive.machines.dfim_part import DoublyFedMachine
 from acdrive.machines.induction import DELORENZO_IM, UGALDE_IM_300W
 from acdrive.plant.converter import AveragedConverter
 from acdrive.plant.mechanics import PrescribedSpeed, Shaft
+from acdrive.plant.network import RelayCommand
 from acdrive.plant.sources import ThreePhaseSource
 from acdrive.sim.reference import simulate_reference
 from acdrive.sim.system import System
@@ -160,9 +161,10 @@ def test_dfim_shorted_rotor_inrush_settles_to_the_steady_state_of_bodson_19():
     dfim = DoublyFedMachine.from_params("dfim", p)
     shaft = PrescribedSpeed("shaft", w=100.0)
     rotor = ComplexProgram("rotor")  # zero: rotor shorted
+    relay = RelayCommand("relay")  # closed from t = 0
     wires = [(grid.out.v, dfim.inp.v_s), (rotor.out.v_ref, dfim.inp.v_r),
-             (shaft.out.w, dfim.inp.w), (shaft.out.theta, dfim.inp.theta)]  # fmt: skip
-    system = System([grid, dfim, shaft, rotor], wires)
+             (shaft.out.w, dfim.inp.w), (relay.out.closed, dfim.inp.connected)]  # fmt: skip
+    system = System([grid, dfim, shaft, rotor, relay], wires)
     result = system.compile().run(1.0, 2e-4, 4, log=[dfim.out.i_s, grid.out.v])
     i_s, v_s = result.signal(dfim.out.i_s), result.signal(grid.out.v)
     # steady state: i_s / v_s constant, equal to (19) with v_r = 0 at this slip

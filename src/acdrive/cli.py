@@ -15,7 +15,7 @@ import signal
 import sys
 import warnings
 
-from acdrive.errors import InputError, SimulationDiverged
+from acdrive.errors import InputError, Notice, SimulationDiverged
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
 COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce")
@@ -72,13 +72,27 @@ def _raise_terminated(signum, frame):
     raise Terminated()
 
 
+def _show_notices(original):
+    """A ``warnings.showwarning`` that prints a :class:`Notice` as one ``acdrive: note:`` line on
+    stderr and hands every other warning to ``original``."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, Notice):
+            sys.stderr.write(f"acdrive: note: {_one_line(message)}\n")
+        else:
+            original(message, category, filename, lineno, file, line)
+
+    return show
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command; every failure is one line on stderr with a conventional exit code.
 
     2 invalid input (field and rule), 3 a simulation that diverged (time and what to change),
     70 an internal error (a bug; ``--debug`` shows where), 74 an input/output failure,
     130 interrupted (SIGINT), 143 terminated (SIGTERM). ``--debug`` (anywhere in the arguments)
-    re-raises with the traceback and shows numerical warnings.
+    re-raises with the traceback and shows numerical warnings. A decision taken for the user
+    (``acdrive.errors.Notice``, e.g. more substeps) is one ``acdrive: note:`` line on stderr.
     """
     if hasattr(signal, "SIGPIPE"):  # `acdrive ... | head` ends quietly, as shell tools do
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
@@ -91,6 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     caught.__enter__()
     if not debug:  # numerical warnings are for developers; results and inputs are checked
         warnings.simplefilter("ignore", RuntimeWarning)
+    warnings.simplefilter("always", Notice)  # every decision taken for the user is reported
+    warnings.showwarning = _show_notices(warnings.showwarning)  # restored by catch_warnings
     try:
         parser = build_parser()
         args = parser.parse_args(argv)

@@ -15,6 +15,14 @@ class InputError(ValueError):
         super().__init__(f"{field}: {rule}")
 
 
+class Notice(UserWarning):
+    """A decision the program took for the user (for example a raised number of substeps).
+
+    Raised with ``warnings.warn``; the CLI prints it as one line ``acdrive: note: <message>`` on
+    stderr and carries on. Library callers see an ordinary warning they can filter or record.
+    """
+
+
 class SimulationDiverged(RuntimeError):
     """A simulation whose state stopped being finite at ``time`` [s].
 

@@ -10,9 +10,14 @@ A command that writes results into ``<out>/<name>/`` goes through :class:`Output
 3. :meth:`OutputFolder.publish` swaps the staging folder into place with SIGINT/SIGTERM blocked,
    so an interruption at any moment leaves the complete old output or the complete new one.
    :meth:`OutputFolder.discard` (also called on any exception) removes the staging folder and the
-   ``out`` folder itself if this run created it and left it empty.
+   ``out`` folder itself (and any parent folders) if this run created it and left it empty.
 
 Nothing outside ``out`` is ever deleted or overwritten.
+
+:class:`OutputEntries` does the same for a command whose output is several named entries side by
+side in ``out`` (``acdrive reproduce`` writes ``<paper>.md`` beside the folder ``<paper>/``): they
+are staged together and swapped together, with SIGINT/SIGTERM blocked, so an interruption leaves
+all old entries or all new ones.
 """
 
 from __future__ import annotations
@@ -67,11 +72,66 @@ def _remove(path: Path) -> None:
         shutil.rmtree(path)
 
 
-class OutputFolder:
+def _make_staging(root: Path, name: str, field: str) -> tuple[Path, list[Path]]:
+    """Create ``root`` if needed and a hidden staging folder in it; return the staging folder and
+    the folders this created (``root`` first, then its new parents)."""
+    created = []
+    folder = root
+    while not folder.exists() and not folder.is_symlink() and folder != folder.parent:
+        created.append(folder)
+        folder = folder.parent
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{name}.partial-", dir=root))
+    except OSError as exc:
+        for made in created:  # undo a partly created path
+            try:
+                made.rmdir()
+            except OSError:
+                break
+        raise InputError(field, f"cannot write to '{root}' ({exc.strerror})") from None
+    return staging, created
+
+
+class _Staged:
+    """Shared clean-up of a staging folder: ``staging``, ``root``, ``_created`` (folders this
+    run created for ``root``, innermost first), ``_done``."""
+
+    staging: Path
+    root: Path
+    _created: list[Path]
+    _done: bool
+
+    def discard(self) -> None:
+        """Remove the staging folder, and the folders this run created for the root while they
+        are empty."""
+        if self._done:
+            return
+        previous = _block_interrupts()
+        try:
+            if self.staging.exists():
+                _remove(self.staging)
+            for folder in self._created:
+                try:
+                    folder.rmdir()
+                except OSError:
+                    break
+            self._done = True
+        finally:
+            _restore_interrupts(previous)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.discard()
+
+
+class OutputFolder(_Staged):
     """The folder ``<root>/<name>`` of one command's output, written via a staging sibling."""
 
-    def __init__(self, root: str | Path, name: str, field: str = "--out"):
-        self.name = require_safe_name("name", name)
+    def __init__(self, root: str | Path, name: str, field: str = "--out", name_field: str = "name"):
+        self.name = require_safe_name(name_field, name)
         self.root = Path(root)
         self.target = self.root / self.name
         if self.root.exists() and not self.root.is_dir():
@@ -80,13 +140,7 @@ class OutputFolder:
             raise InputError(
                 field, f"'{self.target}' exists and is not a folder; refusing to replace it"
             )
-        created = not self.root.exists()
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            self.staging = Path(tempfile.mkdtemp(prefix=f".{self.name}.partial-", dir=self.root))
-        except OSError as exc:
-            raise InputError(field, f"cannot write to '{self.root}' ({exc.strerror})") from None
-        self._created_root = created
+        self.staging, self._created = _make_staging(self.root, self.name, field)
         self._done = False
 
     def publish(self) -> Path:
@@ -105,25 +159,98 @@ class OutputFolder:
             _restore_interrupts(previous)
         return self.target
 
-    def discard(self) -> None:
-        """Remove the staging folder (and the root if this run created it and it is empty)."""
-        if self._done:
-            return
+
+#: kinds of entry an :class:`OutputEntries` holds
+FILE, FOLDER = "file", "folder"
+
+
+def _is_kind(path: Path, kind: str) -> bool:
+    if path.is_symlink():
+        return False
+    return path.is_dir() if kind == FOLDER else path.is_file()
+
+
+class OutputEntries(_Staged):
+    """Several named entries ``<root>/<name>`` (files or folders) written and replaced together.
+
+    ``entries`` maps each name to :data:`FILE` or :data:`FOLDER`. The checks are those of
+    :class:`OutputFolder`, made before any work: every name is one safe path component, ``root``
+    is a folder or creatable and writable, and an existing entry must be of its declared kind
+    (never a symbolic link), else it is refused rather than replaced. The caller writes the
+    entries into :attr:`staging`; :meth:`publish` requires exactly the declared entries there (a
+    writer that left one out or added another is a bug: the old output is kept) and swaps them in
+    with SIGINT/SIGTERM blocked, putting the old ones back if a rename fails. Only a hard kill
+    (SIGKILL, power loss) between two renames could leave a mix; the old entries then remain in a
+    hidden ``.<name>.old-*`` folder in ``root``.
+    """
+
+    def __init__(
+        self, root: str | Path, entries: dict[str, str], field: str = "--out",
+        name_field: str = "name",
+    ):  # fmt: skip
+        if not entries:
+            raise ValueError("OutputEntries needs at least one entry")
+        self.entries = {require_safe_name(name_field, n): kind for n, kind in entries.items()}
+        self.root = Path(root)
+        if self.root.exists() and not self.root.is_dir():
+            raise InputError(field, f"'{self.root}' exists and is not a folder")
+        for name, kind in self.entries.items():
+            target = self.root / name
+            if (target.exists() or target.is_symlink()) and not _is_kind(target, kind):
+                raise InputError(
+                    field, f"'{target}' exists and is not a {kind}; refusing to replace it"
+                )
+        self._first = next(iter(self.entries))
+        self.staging, self._created = _make_staging(self.root, self._first, field)
+        self._done = False
+
+    def target(self, staged: str | Path) -> Path:
+        """Where a path inside the staging folder ends up once published (other paths as given)."""
+        staged = Path(staged)
+        try:
+            return self.root / staged.relative_to(self.staging)
+        except ValueError:
+            return staged
+
+    def _check_staged(self) -> None:
+        present = {p.name for p in self.staging.iterdir()}
+        missing = [n for n, kind in self.entries.items() if not _is_kind(self.staging / n, kind)]
+        extra = sorted(present - set(self.entries))
+        if missing or extra:
+            raise RuntimeError(
+                "the output writer did not produce exactly "
+                + ", ".join(f"{n} ({k})" for n, k in self.entries.items())
+                + (f"; missing {', '.join(missing)}" if missing else "")
+                + (f"; unexpected {', '.join(extra)}" if extra else "")
+                + "; the old output is unchanged"
+            )
+
+    def publish(self) -> list[Path]:
+        """Swap every staged entry into place, replacing the old ones; return the targets."""
+        self._check_staged()
         previous = _block_interrupts()
         try:
-            if self.staging.exists():
-                _remove(self.staging)
-            if self._created_root:
-                try:
-                    self.root.rmdir()
-                except OSError:
-                    pass
+            backup = Path(tempfile.mkdtemp(prefix=f".{self._first}.old-", dir=self.root))
+            moved_old, moved_new = [], []
+            try:
+                for name in self.entries:
+                    target = self.root / name
+                    if target.exists() or target.is_symlink():
+                        os.rename(target, backup / name)
+                        moved_old.append(name)
+                for name in self.entries:
+                    os.rename(self.staging / name, self.root / name)
+                    moved_new.append(name)
+            except OSError:
+                for name in reversed(moved_new):  # undo: new entries back, old ones restored
+                    os.rename(self.root / name, self.staging / name)
+                for name in reversed(moved_old):
+                    os.rename(backup / name, self.root / name)
+                shutil.rmtree(backup)
+                raise
             self._done = True
+            shutil.rmtree(backup)
+            shutil.rmtree(self.staging)
         finally:
             _restore_interrupts(previous)
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        self.discard()
+        return [self.root / name for name in self.entries]

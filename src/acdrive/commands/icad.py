@@ -1,7 +1,11 @@
 """``acdrive icad``: individual channel analysis of a machine's current subsystem.
 
 ``acdrive icad MACHINE --speed W [--controller NAME] [--json]`` analyses one operating speed;
-``acdrive icad MACHINE --sweep [--out DIR]`` analyses a speed range and writes the figures.
+``acdrive icad MACHINE --sweep [--out DIR]`` analyses a speed range and writes the figures into
+the folder DIR (default ``icad-MACHINE``). DIR is written like ``acdrive run``'s output
+(``acdrive.output.OutputFolder``): checked before any analysis (its last component must be a safe
+name, an existing DIR must be a real folder), the figures are written into a hidden staging folder
+beside it and swapped in whole, so an interruption leaves the complete old DIR or the new one.
 """
 
 from __future__ import annotations
@@ -77,7 +81,12 @@ def register(subparsers) -> None:
         metavar=("START", "STOP", "N"),
         help=f"sweep N (1 to {MAX_SWEEP_POINTS}) speeds from START to STOP rad/s",
     )
-    parser.add_argument("--out", default=None, help="figure directory (default icad-MACHINE)")
+    parser.add_argument(
+        "--out",
+        default=None,
+        help="figure folder, replaced whole (default icad-MACHINE); its last component must be a "
+        "plain name",
+    )
     parser.add_argument("--no-verify", action="store_true", help="skip contour cross-checks")
     parser.set_defaults(handler=run)
 
@@ -143,6 +152,17 @@ def run(args) -> int:
     return 0
 
 
+def _figure_folder(out: str | None, machine: str):
+    """The sweep's output folder: ``--out`` (or ``icad-MACHINE``), checked and staged before any
+    analysis. ``--out`` names the folder itself, so its last component must be a safe name."""
+    from pathlib import Path
+
+    from acdrive.output import OutputFolder
+
+    target = Path(out if out is not None else f"icad-{machine}")
+    return OutputFolder(target.parent, target.name, field="--out", name_field="--out")
+
+
 def _sweep(args, params, name, k) -> int:
     from acdrive.output import strict_json
     from acdrive.report.icad_figures import write_sweep_figures
@@ -165,12 +185,15 @@ def _sweep(args, params, name, k) -> int:
         n = 7
     speeds = np.linspace(lo, hi, n)
     speeds[np.abs(speeds) < MIN_SPEED] = 0.0  # rounding noise of linspace around 0
-    plants = [plant_for(args.machine, float(s)) for s in speeds]
-    analyses = [analyse(p, k, k, verify=not args.no_verify) for p in plants]
-    w = analyses[-1].response.w
-    resp = icad_response(plants, k, k, w)
-    out = args.out or f"icad-{args.machine}"
-    paths = write_sweep_figures(analyses, resp, out, title=f"{args.machine}, controller {name}")
+    with _figure_folder(args.out, args.machine) as output:  # --out checked before the analysis
+        plants = [plant_for(args.machine, float(s)) for s in speeds]
+        analyses = [analyse(p, k, k, verify=not args.no_verify) for p in plants]
+        w = analyses[-1].response.w
+        resp = icad_response(plants, k, k, w)
+        title = f"{args.machine}, controller {name}"
+        staged = write_sweep_figures(analyses, resp, output.staging, title=title)
+        target = output.publish()
+    paths = [target / p.relative_to(output.staging) for p in staged]
     summary = summarize(analyses)
     report = {
         "machine": args.machine,

@@ -3,6 +3,13 @@
 Each paper maps to a module ``acdrive.report.<name>_reproduction`` exposing
 ``write_report(out_dir) -> Path``; a paper whose module does not exist yet is a one-line error
 with exit code 2.
+
+The report is ``DIR/<paper>.md`` beside its figure folder ``DIR/<paper>/``. Both are written like
+``acdrive run``'s output (``acdrive.output.OutputEntries``): DIR and the two entries are checked
+before any computation (an existing ``<paper>.md`` must be a file and ``<paper>`` a folder, never
+a symbolic link), the writer works in a hidden staging folder inside DIR, and the two entries are
+swapped in together with SIGINT/SIGTERM blocked, so an interruption leaves the complete old report
+or the complete new one. Nothing else in DIR is touched.
 """
 
 from __future__ import annotations
@@ -26,7 +33,11 @@ def register(subparsers) -> None:
         "reproduce", help="regenerate a reproduction report", description=HELP
     )
     parser.add_argument("paper", choices=sorted(REPORTS), help="which paper(s)")
-    parser.add_argument("--out", default="docs/reproduction", help="output directory")
+    parser.add_argument(
+        "--out",
+        default="docs/reproduction",
+        help="output folder: <paper>.md and <paper>/ in it are replaced together",
+    )
     parser.set_defaults(handler=run)
 
 
@@ -39,6 +50,11 @@ def run(args) -> int:
             raise
         sys.stderr.write(f"acdrive: error: reproduce {args.paper}: report not available yet\n")
         return 2
-    path = module.write_report(args.out)
-    print(path)
+    from acdrive.output import FILE, FOLDER, OutputEntries
+
+    entries = {f"{args.paper}.md": FILE, args.paper: FOLDER}
+    with OutputEntries(args.out, entries, field="--out", name_field="paper") as output:
+        staged = module.write_report(output.staging)  # --out checked before the computation
+        output.publish()
+    print(output.target(staged))
     return 0

@@ -34,7 +34,7 @@ _V_REF = COMMAND.slot("v_ref")
 
 
 @jit
-def program_step(t, u, p, s, y):
+def program_step(t, T_s, u, p, s, y):
     f_at = table_offset(p, _TABLES, 1)
     if s[_STARTED] != 0.0:
         f_mean = 0.5 * (table_at(p, f_at, s[_T_PREV]) + table_at(p, f_at, t))
@@ -61,7 +61,7 @@ _RE = TABLE_PARAMS.table_start
 
 
 @jit
-def complex_program_step(t, u, p, s, y):
+def complex_program_step(t, T_s, u, p, s, y):
     y[_V_REF] = table_at(p, _RE, t)
     y[_V_REF + 1] = table_at(p, table_offset(p, _RE, 1), t)
     return 0

@@ -1,9 +1,13 @@
-"""Speed PI with feedforward and conditional integration (Bodson (25)-(27))."""
+"""Speed PI with feedforward and conditional integration (Bodson (25)-(27)); a speed reference
+profile as a sampled part."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from acdrive.core.parts import SampledPart
+from acdrive.core.signals import Layout, real, table
+from acdrive.core.tables import table_at
 from acdrive.errors import require_positive
 from acdrive.jit import jit
 
@@ -40,3 +44,21 @@ def speed_pi(K_P, K_I, K_F, e_int, w_ref, w, tau_lo, tau_hi, T_s):
     if tau < tau_lo:
         return tau_lo, e_int, True
     return tau, e_int + T_s * (w_ref - w), False
+
+
+REFERENCE_PARAMS = Layout(table("w", "rad/s", "speed reference profile"))
+REFERENCE_OUTPUTS = Layout(real("w_ref", "rad/s", "speed reference"))
+_REF_TABLE = REFERENCE_PARAMS.table_start
+
+
+@jit
+def speed_reference_step(t, T_s, u, p, s, y):
+    y[0] = table_at(p, _REF_TABLE, t)
+    return 0
+
+
+class SpeedReference(SampledPart):
+    """A speed reference read from a piecewise-linear profile at each sample."""
+
+    PARAMS, OUTPUTS = REFERENCE_PARAMS, REFERENCE_OUTPUTS
+    step = speed_reference_step

@@ -14,7 +14,12 @@ Three kinds, with a hard boundary between the continuous plant and the sampled c
   lengths in ``dt[:n]`` (summing to T_s) and output values in ``v[:n, :]``. The averaged converter
   gives one segment; a switching inverter gives several, with exact switching instants.
 * :class:`SampledPart` (sensor, estimator, controller): sees samples only,
-  ``step(t, u, p, s, y) -> events`` updates its discrete state ``s`` and writes its outputs.
+  ``step(t, T_s, u, p, s, y) -> events`` updates its discrete state ``s`` and writes its
+  outputs (``T_s`` is the sample period of the run).
+
+Outputs of sampled parts and modulators are held between samples (zero-order hold); before the
+first sample they hold the values of ``held_outputs()`` (zero unless a part says otherwise, e.g. a
+relay that starts closed), which a run may override.
 
 A part instance has a name (one identifier, unique in its system) and its parameter values,
 packed and validated against ``PARAMS`` at construction (an ``InputError`` naming
@@ -111,6 +116,11 @@ class Part:
         merged.update(self.INITIAL)
         merged.update(values)
         return self.STATES.pack(f"{self.name} initial state", merged)
+
+    def held_outputs(self) -> dict:
+        """Output values held before the first sample (sampled parts and modulators only):
+        output name -> value; outputs not listed hold zero."""
+        return {}
 
     def with_params(self, **changes) -> Part:
         """A copy with some parameters changed (validated again)."""

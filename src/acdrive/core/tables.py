@@ -6,10 +6,10 @@ fixed parameters, so the k-th table starts where the (k-1)-th ends.
 
 from __future__ import annotations
 
-from acdrive.jit import jit
+from acdrive.jit import jit_inline
 
 
-@jit
+@jit_inline
 def table_offset(p, first, k):
     """Start slot of the k-th table (0-based) when the first table starts at ``first``."""
     offset = first
@@ -18,7 +18,7 @@ def table_offset(p, first, k):
     return offset
 
 
-@jit
+@jit_inline
 def table_at(p, offset, t):
     """Value at time ``t`` of the table starting at slot ``offset``: linear between points, held
     before the first and after the last point (a vertical step where two times are equal)."""

@@ -17,7 +17,7 @@ import numpy as np
 from acdrive.core.parts import ContinuousPart
 from acdrive.core.signals import Layout, real, table
 from acdrive.core.tables import table_at
-from acdrive.jit import jit_fast
+from acdrive.jit import jit_fast, jit_inline
 
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
@@ -44,7 +44,7 @@ _TAU_E = SHAFT_INPUTS.slot("tau_e")
 _Y_W, _Y_THETA = SHAFT_OUTPUTS.slot("w"), SHAFT_OUTPUTS.slot("theta")
 
 
-@jit_fast
+@jit_inline
 def load_torque(p, w, t):
     """tau_L(t) + B w + tau_c tanh(w / W_COULOMB): everything that opposes the motor."""
     tau = table_at(p, _LOAD, t) + p[_B] * w

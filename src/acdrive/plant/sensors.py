@@ -1,9 +1,14 @@
-"""Sensors seen by the controller (Bodson section IV-A: encoder, voltage networks)."""
+"""Sensors seen by the controller (Bodson section IV-A): the encoder and the current sensors,
+as functions and as sampled parts. Voltages are read ideally (wired straight to the controller)."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
+from acdrive.core.parts import SampledPart
+from acdrive.core.signals import Layout, cplx, real
 from acdrive.jit import jit
 
 
@@ -16,3 +21,70 @@ def encoder_angle(theta, offset, counts_per_rev):
         return reading
     step = 2.0 * np.pi / counts_per_rev
     return np.floor(reading / step) * step
+
+
+# --- sensors as sampled parts ----------------------------------------------------------------
+
+ENCODER_PARAMS = Layout(
+    real("offset", "rad", "unknown mounting offset added to the shaft angle"),
+    real("counts_per_rev", "", "resolution in counts per revolution (0: ideal)", "nonnegative"),
+)
+ENCODER_INPUTS = Layout(real("theta", "rad", "shaft angle"))
+ENCODER_OUTPUTS = Layout(real("theta", "rad", "measured shaft angle"))
+_ENC_OFFSET, _ENC_CPR = ENCODER_PARAMS.slot("offset"), ENCODER_PARAMS.slot("counts_per_rev")
+
+
+@jit
+def encoder_step(t, T_s, u, p, s, y):
+    y[0] = encoder_angle(u[0], p[_ENC_OFFSET], p[_ENC_CPR])
+    return 0
+
+
+class Encoder(SampledPart):
+    """Incremental encoder read at each sample (``encoder_angle``)."""
+
+    PARAMS, INPUTS, OUTPUTS = ENCODER_PARAMS, ENCODER_INPUTS, ENCODER_OUTPUTS
+    DEFAULTS: ClassVar[dict] = {"offset": 0.0, "counts_per_rev": 0.0}
+    step = encoder_step
+
+
+CURRENT_PARAMS = Layout(
+    real("fails", "", "1: the measurement fails at fault_time, 0: never"),
+    real("fault_time", "s", "time from which the measurement fails", "nonnegative"),
+)
+CURRENT_INPUTS = Layout(
+    cplx("i_s", "A", "stator current, stationary frame"),
+    cplx("i_r", "A", "rotor current in rotor coordinates"),
+)
+CURRENT_OUTPUTS = Layout(
+    cplx("i_s", "A", "measured stator current (last valid value after a failure)"),
+    cplx("i_r", "A", "measured rotor current (last valid value after a failure)"),
+    real("valid", "", "1 while the measurement works, 0 after it failed"),
+)
+_CUR_FAILS, _CUR_FAULT_T = CURRENT_PARAMS.slot("fails"), CURRENT_PARAMS.slot("fault_time")
+_CUR_VALID = CURRENT_OUTPUTS.slot("valid")
+EVENT_CURRENT_LOST = 1
+
+
+@jit
+def current_sensors_step(t, T_s, u, p, s, y):
+    if p[_CUR_FAILS] != 0.0 and t >= p[_CUR_FAULT_T]:
+        y[_CUR_VALID] = 0.0
+        return EVENT_CURRENT_LOST
+    for i in range(4):
+        y[i] = u[i]
+    y[_CUR_VALID] = 1.0
+    return 0
+
+
+class CurrentSensors(SampledPart):
+    """Stator and rotor current sensors sampled together; from ``fault_time`` on (if ``fails``)
+    the measurement is lost: ``valid`` drops to 0 and the currents keep their last values."""
+
+    PARAMS, INPUTS, OUTPUTS = CURRENT_PARAMS, CURRENT_INPUTS, CURRENT_OUTPUTS
+    DEFAULTS: ClassVar[dict] = {"fails": 0.0, "fault_time": 0.0}
+    EVENTS = ("lost",)
+    step = current_sensors_step
+
+    def held_outputs(self) -> dict:
+        return {"valid": 1.0}

@@ -5,11 +5,16 @@ from __future__ import annotations
 from pathlib import Path
 
 from acdrive.output import strict_json
+from acdrive.report import converter_effect
 from acdrive.sim.outcome import ScenarioOutcome, synchronous_rpm
 
 
 def write_outcome(outcome: ScenarioOutcome, folder: Path, figures: bool = True) -> None:
-    """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``."""
+    """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``.
+
+    summary.json is the outcome's summary plus, where a rotor converter has dead time or device
+    drops, ``converter_side_effect``: the steady-state stator reactive power and torque-command
+    offset that converter causes (``acdrive.report.converter_effect``)."""
     folder = Path(folder)
     setup = outcome.setup
     if figures:
@@ -29,5 +34,9 @@ def write_outcome(outcome: ScenarioOutcome, folder: Path, figures: bool = True) 
     if figures and len(outcome.results) > 1:
         limit = setup.motors[0].controller.rotor_current_limit_pk
         write_comparison_figures(outcome.results, folder, limit)
+    summary = dict(outcome.summary)
+    side_effect = converter_effect.summary(outcome)  # None with ideal converters
+    if side_effect is not None:
+        summary["converter_side_effect"] = side_effect
     # strict JSON: a non-finite figure (e.g. an RMS over no samples) is written as null
-    (folder / "summary.json").write_text(strict_json(outcome.summary, indent=2) + "\n")
+    (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n")

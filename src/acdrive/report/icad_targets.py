@@ -21,13 +21,25 @@ AMEZQUITA = "Amezquita-Brooks"
 
 @dataclass(frozen=True)
 class Printed:
-    """One number as printed in a paper: ``value`` [``unit``] at ``where`` (section, eq., fig.)."""
+    """One number as printed in a paper: ``value`` [``unit``] at ``where`` (section, eq., fig.);
+    ``digits``: the number as printed where its last digit is not that of ``value`` written
+    out (e.g. "0.31e4": two significant digits), for the half-unit reading tolerance."""
 
     paper: str
     where: str
     value: float
     unit: str = ""
     text: str = ""
+    digits: str = ""
+
+    @property
+    def as_printed(self) -> str:
+        return self.digits or printed_text(self.value)
+
+
+def printed_text(value: float) -> str:
+    """A printed number written back as the paper prints it (six significant digits at most)."""
+    return f"{value:.6g}"
 
 
 # --- machine parameters as printed ---------------------------------------------------------
@@ -98,9 +110,9 @@ PMSG_A_OFFDIAG_PER_WGEN = Printed(UGALDE, "sec. 3.5 A", 2.0, "")
 PMSG_B = Printed(UGALDE, "sec. 3.5 B", 3105.59, "1/H")
 #: Ugalde-Loo (34): G = 1e4 [[0.31 s + 4.36, 0.62 w], [-0.62 w, 0.31 s + 4.36]] / d(s).
 PMSG_G34 = {
-    "n11_s": Printed(UGALDE, "(34)", 0.31e4),
-    "n11_0": Printed(UGALDE, "(34)", 4.36e4),
-    "n12_per_wgen": Printed(UGALDE, "(34)", 0.62e4),
+    "n11_s": Printed(UGALDE, "(34)", 0.31e4, digits="0.31e4"),
+    "n11_0": Printed(UGALDE, "(34)", 4.36e4, digits="4.36e4"),
+    "n12_per_wgen": Printed(UGALDE, "(34)", 0.62e4, digits="0.62e4"),
 }
 #: Ugalde-Loo (35): d(s) = s^2 + 28.0932 s + 197.31 + 4 w_gen^2.
 PMSG_D35 = {

@@ -47,14 +47,11 @@ from acdrive.plant.profiles import profile_at
 from acdrive.plant.sensors import encoder_angle
 
 # fmt: off
-# --- logged signals, per motor and per logged sample -----------------------------------------
-LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
-             "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
-             "mode", "relay_closed", "i_r_com_d", "i_r_com_q", "i_r_d", "i_r_q")
+from acdrive.sim.result import N_LOG
+
 (LOG_W, LOG_W_REF, LOG_TAU_COM, LOG_TAU_E, LOG_V_S, LOG_V_R, LOG_I_S, LOG_I_R, LOG_I_RX,
  LOG_I_RY, LOG_FLAGS, LOG_I_R_COM, LOG_Q_S, LOG_V_MISMATCH, LOG_THETA_ADJ, LOG_M_ADJ, LOG_PHASE,
- LOG_MODE, LOG_RELAY, LOG_I_R_COM_D, LOG_I_R_COM_Q, LOG_I_R_D, LOG_I_R_Q) = range(len(LOG_NAMES))
-N_LOG = len(LOG_NAMES)
+ LOG_MODE, LOG_RELAY, LOG_I_R_COM_D, LOG_I_R_COM_Q, LOG_I_R_D, LOG_I_R_Q) = range(N_LOG)
 
 # --- per-motor sensor and converter data -----------------------------------------------------
 SN_ENC_OFFSET, SN_ENC_CPR, SN_V_R_MAX, SN_CURRENT_FAULT_T = range(4)

@@ -9,7 +9,12 @@ import numpy as np
 
 from acdrive.control.dfim import EVENT_NAMES
 from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
-from acdrive.sim.engine import LOG_NAMES
+
+#: the signals of a DFIM drive run, per motor and logged sample (``DriveResult.signals``)
+LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
+             "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
+             "mode", "relay_closed", "i_r_com_d", "i_r_com_q", "i_r_d", "i_r_q")  # fmt: skip
+N_LOG = len(LOG_NAMES)
 
 RPM_PER_RAD_S = 30.0 / np.pi
 #: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag

@@ -303,7 +303,19 @@ def divergence_hint(setup: DriveSetup) -> str:
 
 
 def simulate(setup: DriveSetup) -> DriveResult:
-    """Run the compiled loop on ``setup`` and return its typed result.
+    """Run ``setup`` on its parts-built system (``sim.dfim_drive``) and return its typed result.
+
+    Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
+    the state stops being finite (a simulation never returns NaN silently).
+    """
+    from acdrive.sim import dfim_drive
+
+    return dfim_drive.simulate(setup, divergence_hint)
+
+
+def simulate_previous_engine(setup: DriveSetup) -> DriveResult:
+    """Run the previous hand-wired engine (``sim.engine``) on ``setup``; kept only while
+    ``benchmarks/compare_engines.py`` proves the parts-built drive equal to it.
 
     Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
     the state stops being finite (a simulation never returns NaN silently).

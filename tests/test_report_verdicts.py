@@ -1,0 +1,325 @@
+"""Verdicts of the reproduction reports: each is computed from its numbers against its stated
+tolerance, and flips when the numbers cross it."""
+
+from __future__ import annotations
+
+import json
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from acdrive.report import bodson_reproduction as B
+from acdrive.report import converter_effect as C
+from acdrive.report import icad_reproduction as I
+from acdrive.report import verdicts as V
+
+# ---------------------------------------------------------------------------------------------
+# generic helpers (acdrive.report.verdicts)
+
+
+def test_within_abs_flips_at_the_tolerance_and_states_it():
+    inside = V.within_abs(10.4, 10.0, 0.5, " dB")
+    outside = V.within_abs(10.6, 10.0, 0.5, " dB")
+    assert inside.holds and not outside.holds
+    assert inside.text.startswith("agrees") and outside.text.startswith("differs")
+    assert "0.5 dB" in inside.text and "0.5 dB" in outside.text  # the tolerance is printed
+    assert "+0.6" in outside.text  # and the difference
+    custom = V.within_abs(3.0, 0.0, 1.0, yes="near", no="far")
+    assert not custom.holds and custom.text.startswith("far")
+
+
+def test_within_rel_flips_and_handles_complex_and_tiny_tolerances():
+    assert V.within_rel(101.0, 100.0, 0.02).holds
+    assert not V.within_rel(103.0, 100.0, 0.02).holds
+    assert "2 %" in V.within_rel(103.0, 100.0, 0.02).text
+    assert V.within_rel(1 + 1j, 1 + 1j + 1e-12, 1e-9).holds
+    assert not V.within_rel(1 + 1j, 1 + 1.1j, 1e-9).holds
+    tiny = V.within_rel(1.0 + 1e-6, 1.0, 1e-7)
+    assert not tiny.holds and "1e-07" in tiny.text
+
+
+def test_error_within_flips():
+    assert V.error_within(1e-10, 1e-8).holds
+    assert not V.error_within(1e-6, 1e-8).holds
+
+
+@pytest.mark.parametrize(
+    "printed, half",
+    [("13.6", 0.05), ("0.31e4", 50.0), ("3,142", 0.5), ("-14.0466", 5e-5), ("4", 0.5)],
+)
+def test_half_unit_of_the_last_printed_digit(printed, half):
+    assert V.half_unit(printed) == pytest.approx(half)
+
+
+def test_half_unit_rejects_text_that_is_not_a_number():
+    with pytest.raises(ValueError):
+        V.half_unit("approx 20")
+
+
+def test_printed_digits_flips_at_half_a_unit():
+    assert V.printed_digits("0.371", 0.3714).holds
+    assert not V.printed_digits("0.371", 0.3716).holds
+    assert V.printed_digits("0.31e4", 3140.0).holds  # two significant digits
+    assert not V.printed_digits("0.31e4", 3160.0).holds
+    assert "0.0005" in V.printed_digits("0.371", 0.3716).text
+
+
+def test_bounds_flip():
+    assert V.at_least(13.0, 12.0).holds and not V.at_least(11.0, 12.0).holds
+    assert V.at_most(-16.0, -15.0).holds and not V.at_most(-14.0, -15.0).holds
+    assert "margin -1" in V.at_least(11.0, 12.0).text
+    assert V.ratio_at_least(400.0, 30.0, 10.0, "yes", "no").holds
+    assert not V.ratio_at_least(200.0, 30.0, 10.0, "yes", "no").holds
+
+
+# ---------------------------------------------------------------------------------------------
+# ICAD report
+
+
+def _responses(phase_deg, gain_db):
+    w = np.logspace(0, 5, 1001)
+    reference = np.ones_like(w, dtype=complex)
+    model = 10 ** (np.asarray(gain_db) / 20) * np.exp(1j * np.radians(phase_deg))
+    return w, model, reference
+
+
+def test_design_model_b_needs_its_phase_error_near_370():
+    w = np.logspace(0, 5, 1001)
+
+    def bump(centre):
+        return 40.0 * np.exp(-((np.log10(w / centre)) ** 2) / 0.001)
+
+    _, model, ref = _responses(bump(370.0), 0.0 * w)
+    assert I.design_model_verdict("B", w, model, ref).holds
+    _, model, ref = _responses(bump(2000.0), 0.0 * w)  # lag elsewhere
+    assert not I.design_model_verdict("B", w, model, ref).holds
+    _, model, ref = _responses(0.2 * bump(370.0), 0.0 * w)  # too small an error
+    assert not I.design_model_verdict("B", w, model, ref).holds
+
+
+def test_design_model_c_needs_the_phase_error_to_dominate():
+    w = np.logspace(0, 5, 1001)
+    wide = np.where((w > 10) & (w < 1000), 1.0, 0.0)
+    narrow = np.where((w > 300) & (w < 400), 1.0, 0.0)
+    _, model, ref = _responses(30.0 * wide, 6.0 * narrow)
+    assert I.design_model_verdict("C", w, model, ref).holds
+    _, model, ref = _responses(30.0 * narrow, 6.0 * wide)
+    assert not I.design_model_verdict("C", w, model, ref).holds
+
+
+def test_design_model_d_is_insufficient_only_when_it_misses_a():
+    w = np.logspace(0, 5, 1001)
+    _, model, ref = _responses(0.0 * w, 0.0 * w + I.MODEL_GAIN_TOL_DB + 1.0)
+    assert I.design_model_verdict("D", w, model, ref).holds
+    _, model, ref = _responses(0.0 * w, 0.0 * w + I.MODEL_GAIN_TOL_DB - 1.0)
+    assert not I.design_model_verdict("D", w, model, ref).holds
+
+
+def test_pi_family_trend_flips_on_a_step_against_it():
+    assert I.pi_family_trend([17.0, 18.0, 25.0], [95.0, 80.0, 45.0]).holds
+    assert not I.pi_family_trend([17.0, 16.0, 25.0], [95.0, 80.0, 45.0]).holds  # gain dips
+    assert not I.pi_family_trend([17.0, 18.0, 25.0], [95.0, 96.0, 45.0]).holds  # PM rises
+    assert not I.pi_family_trend([17.0, 17.0, 17.0], [95.0, 95.0, 95.0]).holds  # no change
+
+
+def test_gm_min_note_gives_the_reason_only_where_the_appendix_set_differs():
+    assert I._gm_min_note(0.7524, "(13)").startswith("agrees")
+    app = I._gm_min_note(0.7662, "App.")
+    assert app.startswith("differs") and "different sigma" in app
+    assert "different sigma" not in I._gm_min_note(0.7524, "App.")
+
+
+# ---------------------------------------------------------------------------------------------
+# Bodson report
+
+
+def test_determinant_verdict_needs_equal_and_positive():
+    assert B.determinant_verdict(3.28e-4, 3.28e-4).holds
+    assert not B.determinant_verdict(3.28e-4, 3.29e-4).holds
+    negative = B.determinant_verdict(-1e-3, -1e-3)
+    assert not negative.holds and "not both > 0" in negative.text
+
+
+def test_time_scale_verdict_needs_a_decade():
+    assert B.time_scale_verdict(5000.0, 314.0).holds
+    assert not B.time_scale_verdict(35.0, 314.0).holds
+
+
+def test_near_synchronous_verdict_flips_at_the_fraction():
+    sync = 1800.0
+    tol = B.SYNC_SPEED_TOL_FRACTION * sync
+    assert B.near_synchronous_verdict(sync - 0.9 * tol, sync).holds
+    assert not B.near_synchronous_verdict(sync + 1.1 * tol, sync).holds
+
+
+def test_sequence_verdict_checks_signs_and_slip_ranges():
+    below, above = (126.0, 42.0), (-42.0, -126.0)
+    assert B.sequence_verdict(84.0, -84.0, below, above).holds
+    assert not B.sequence_verdict(-84.0, 84.0, below, above).holds  # sequences swapped
+    assert not B.sequence_verdict(200.0, -84.0, below, above).holds  # outside the slip range
+
+
+def test_limit_verdict_flips_at_the_tolerance():
+    limit = 6.0
+    assert B.limit_verdict(limit * (1 + 0.5 * B.LIMIT_TOL_FRACTION), limit).holds
+    over = B.limit_verdict(limit * (1 + 2 * B.LIMIT_TOL_FRACTION), limit)
+    assert not over.holds and over.text.startswith("exceeds")
+
+
+def test_faster_verdict_needs_more_than_the_tolerance():
+    assert B.faster_verdict(0.280, 0.280 + 2 * B.RESPONSE_TIME_TOL_S).holds
+    assert not B.faster_verdict(0.280, 0.280 + 0.5 * B.RESPONSE_TIME_TOL_S).holds
+    assert not B.faster_verdict(0.300, 0.280).holds  # slower
+
+
+def test_close_responses_verdict_flips():
+    step = 1000.0
+    assert B.close_responses_verdict(0.5 * B.RESPONSE_CLOSE_FRACTION * step, step).holds
+    assert not B.close_responses_verdict(2 * B.RESPONSE_CLOSE_FRACTION * step, step).holds
+
+
+def test_better_limit_verdict_compares_the_excursions():
+    limit = 6.0
+    assert B.better_limit_verdict(6.0, 6.8, limit).holds
+    assert not B.better_limit_verdict(6.0, 5.9, limit).holds  # neither exceeds
+    assert not B.better_limit_verdict(6.8, 6.0, limit).holds  # current command worse
+
+
+def test_transient_and_oscillation_verdicts_flip():
+    assert B.transient_verdict(0.5 * B.SYNC_TRANSIENT_FRACTION).holds
+    assert not B.transient_verdict(2 * B.SYNC_TRANSIENT_FRACTION).holds
+    threshold = C.OSCILLATION_FINDING_RPM
+    assert B.oscillation_verdict(0.5 * threshold).holds
+    assert not B.oscillation_verdict(2 * threshold).holds
+
+
+# ---------------------------------------------------------------------------------------------
+# bench converter side effect (acdrive.report.converter_effect)
+
+
+def _effect(q_s=0.0, tau_com=0.01, tau_e=0.01, oscillation=0.0):
+    return C.SideEffect(
+        mode="voltage",
+        motor=0,
+        samples=100,
+        q_s=q_s,
+        q_com=0.0,
+        tau_com=tau_com,
+        tau_e=tau_e,
+        q_tolerance=3.0,
+        oscillation_rpm=oscillation,
+    )
+
+
+def test_reactive_power_verdict_flips_at_its_tolerance():
+    assert _effect(q_s=2.9).reactive_power().holds
+    departs = _effect(q_s=15.0).reactive_power()
+    assert not departs.holds and "15" in departs.text and "3 var" in departs.text
+
+
+def test_torque_verdict_flips_at_its_tolerance():
+    tol = C.TORQUE_TOLERANCE_NM
+    assert _effect(tau_com=0.01 + 0.5 * tol).torque().holds
+    assert not _effect(tau_com=0.01 + 2 * tol).torque().holds
+
+
+def test_comparison_with_the_ideal_converter_flips():
+    bench, ideal = _effect(q_s=15.0, tau_com=0.015), _effect(q_s=0.5)
+    assert not bench.q_against(ideal).holds and not bench.torque_against(ideal).holds
+    same = _effect(q_s=2.0, tau_com=0.0105)
+    assert same.q_against(_effect(q_s=1.0)).holds and same.torque_against(_effect()).holds
+    assert _effect(oscillation=10.0).limit_cycles and not _effect(oscillation=0.1).limit_cycles
+
+
+def test_magnetising_reactive_power_is_v2_over_w_l():
+    assert C.magnetising_reactive_power(0.5, 10.0, 100.0) == pytest.approx(2.0)
+
+
+class _Run:
+    """A stand-in for DriveResult: time, one motor's signals by name."""
+
+    def __init__(self, t, **signals):
+        self.t, self._s = t, signals
+        self.n_motors = 1
+
+    def signal(self, name, motor=0):
+        return self._s[name]
+
+    def speed_oscillation(self, motor=0):
+        return 0.0, 0.0
+
+
+def test_steady_mask_waits_after_each_reference_change_and_for_the_relay():
+    t = np.arange(0.0, 3.0, 0.01)
+    ref = np.where(t < 1.0, 0.0, 100.0)
+    relay = np.where(t < 2.6, 1.0, 0.0)
+    mask = C.steady_mask(_Run(t, w_ref=ref, relay_closed=relay), settle_s=0.5)
+    assert not mask[t < 0.49].any() and mask[(t > 0.51) & (t < 0.99)].all()
+    assert not mask[(t >= 1.0) & (t < 1.49)].any() and mask[(t > 1.51) & (t < 2.59)].all()
+    assert not mask[t >= 2.6].any()
+
+
+def test_measure_averages_the_steady_part_only():
+    t = np.arange(0.0, 2.0, 0.01)
+    ref = np.where(t < 0.5, 0.0, 100.0)
+    q = np.where(t < 1.0, 100.0, 7.0)  # transient values must not count
+    run = _Run(
+        t,
+        w_ref=ref,
+        relay_closed=np.ones_like(t),
+        q_s=q,
+        tau_com=np.full_like(t, 0.02),
+        tau_e=np.full_like(t, 0.015),
+    )
+    motor = SimpleNamespace(
+        machine=SimpleNamespace(L_s=0.1), controller=SimpleNamespace(reactive_power=0.0)
+    )
+    setup = SimpleNamespace(
+        motors=(motor,),
+        supply=SimpleNamespace(voltage_pk=([0.0], [10.0]), frequency_hz=([0.0], [60.0])),
+    )
+    (effect,) = C.measure(SimpleNamespace(setup=setup, results={"voltage": run}))
+    assert effect.q_s == pytest.approx(7.0)
+    assert effect.torque_offset == pytest.approx(0.005)
+    assert not effect.reactive_power().holds and not effect.torque().holds
+    v_s = 10.0 * math.sqrt(1.5)
+    expected_tol = C.Q_TOLERANCE_FRACTION * v_s**2 / (2 * math.pi * 60.0 * 0.1)
+    assert effect.q_tolerance == pytest.approx(expected_tol)
+
+
+def test_summary_json_states_the_side_effect_only_with_a_bench_converter(tmp_path):
+    from acdrive.report.drive_outputs import write_outcome
+    from acdrive.scenarios.loader import load_scenario
+    from acdrive.sim.outcome import run_scenario
+
+    text = """
+name = "short"
+[simulation]
+duration = 1.0
+[[motor]]
+speed_reference_rpm = [[0, 0], [0.2, 300], [1.0, 300]]
+{converter}
+[motor.controller]
+speed_bandwidth = 100.0
+"""
+    bench = "converter_dead_time = 1e-6\nconverter_switching_frequency = 10e3\n" + (
+        "converter_device_drop = 0.7"
+    )
+    for name, converter in (("bench", bench), ("ideal", "")):
+        path = tmp_path / f"{name}.toml"
+        path.write_text(text.format(converter=converter))
+        setup = load_scenario(path)
+        assert C.uses_bench_converter(setup) == (name == "bench")
+        assert not C.uses_bench_converter(C.ideal_converter(setup))
+        write_outcome(run_scenario(setup), tmp_path / name, figures=False)
+        summary = json.loads((tmp_path / name / "summary.json").read_text())
+        if name == "ideal":
+            assert "converter_side_effect" not in summary
+            continue
+        effect = summary["converter_side_effect"]
+        assert effect["converter_loss_v"][0] > 0
+        (run,) = effect["runs"]
+        assert run["steady_samples"] > 0
+        assert run["reactive_power"].split(" (")[0] in ("holds Q_COM", "departs from Q_COM")
