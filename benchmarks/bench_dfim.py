@@ -75,8 +75,8 @@ def main() -> int:
     args = parser.parse_args()
 
     from acdrive.scenarios.loader import load_scenario
+    from acdrive.sim.dfim_drive import simulate_slow
     from acdrive.sim.setup import n_steps, simulate
-    from acdrive.sim.slow import simulate_slow
 
     report: dict = {"benchmark": "dfim-drive", "python": sys.version.split()[0]}
     with tempfile.TemporaryDirectory() as cache:

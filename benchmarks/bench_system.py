@@ -2,7 +2,7 @@
 
 Prints one JSON document with, for ``bodson-ramp`` and ``bodson-two-motors`` (the matched case:
 the same scenario, the same sample time and substeps, the same results to rounding, see
-``benchmarks/compare_engines.py``):
+``benchmarks/compare_engines.py``; the previous engine is frozen in ``benchmarks/previous_engine``):
 
 * control steps per second of each engine, best of ``REPEATS`` runs after a warm-up, and their
   ratio (parts / previous);
@@ -20,17 +20,24 @@ import subprocess
 import sys
 import tempfile
 import time
+from pathlib import Path
 
 REPEATS = 5
 SCENARIOS = ("bodson-ramp", "bodson-two-motors")
 
+HERE = Path(__file__).resolve().parent
+IMPORTS = {
+    "simulate_previous_engine": f"import sys; sys.path.insert(0, {str(HERE)!r}); "
+    "from previous_engine import simulate_previous_engine as run",
+    "simulate": "from acdrive.sim.setup import simulate as run",
+}
 START_SNIPPET = """
 import time; t0 = time.perf_counter()
 import dataclasses
 from acdrive.scenarios.loader import load_scenario
-from acdrive.sim import setup
+{import_line}
 s = dataclasses.replace(load_scenario("bodson-step"), duration=0.01)
-t1 = time.perf_counter(); setup.{function}(s); t2 = time.perf_counter()
+t1 = time.perf_counter(); run(s); t2 = time.perf_counter()
 print(t1 - t0, t2 - t1)
 """
 
@@ -41,7 +48,7 @@ def start_cost(function: str, cache_dir: str) -> dict:
     out = {}
     for which in ("first_process", "second_process"):
         result = subprocess.run(
-            [sys.executable, "-c", START_SNIPPET.format(function=function)],
+            [sys.executable, "-c", START_SNIPPET.format(import_line=IMPORTS[function])],
             capture_output=True, text=True, env=env, check=True,
         )  # fmt: skip
         imp, run = (float(v) for v in result.stdout.split())
@@ -57,14 +64,17 @@ def steps_per_second(simulate, setup) -> float:
 
 def main() -> None:
     from acdrive.scenarios.loader import load_scenario
-    from acdrive.sim import setup as drive
+    from acdrive.sim.setup import simulate
+
+    sys.path.insert(0, str(HERE))
+    from previous_engine import simulate_previous_engine
 
     report = {"repeats": REPEATS, "steps_per_second": {}, "start": {}}
     for name in SCENARIOS:
         s = load_scenario(name)
         s = s.with_mode(s.compare_modes[0]) if s.compare_modes else s
-        previous = steps_per_second(drive.simulate_previous_engine, s)
-        parts = steps_per_second(drive.simulate, s)
+        previous = steps_per_second(simulate_previous_engine, s)
+        parts = steps_per_second(simulate, s)
         report["steps_per_second"][name] = {
             "previous_engine": round(previous),
             "parts": round(parts),

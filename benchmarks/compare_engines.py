@@ -1,5 +1,5 @@
 """Compare the parts-built DFIM drive (``acdrive.sim.dfim_drive``) with the previous engine
-(``acdrive.sim.engine``) on every built-in scenario: prints JSON with, per scenario and mode, the
+(frozen in ``benchmarks/previous_engine``) on every built-in scenario: prints JSON with, per scenario and mode, the
 largest difference of each logged signal relative to that signal's peak magnitude.
 
 Run: ACDRIVE_STRICT_MATH=1 python benchmarks/compare_engines.py [scenario ...]
@@ -14,13 +14,16 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from previous_engine import simulate_previous_engine
 
 from acdrive.jit import STRICT_MATH
 from acdrive.scenarios.loader import builtin_names, load_scenario
 from acdrive.sim import dfim_drive
-from acdrive.sim import setup as setup_mod
 from acdrive.sim.result import LOG_NAMES
 
 TOLERANCE = 1e-12
@@ -42,7 +45,7 @@ def main(names):
         modes = setup.compare_modes or (None,)
         for mode in modes:
             s = setup.with_mode(mode) if mode else setup
-            old = setup_mod.simulate_previous_engine(s)
+            old = simulate_previous_engine(s)
             new = dfim_drive.simulate(s)
             diffs = compare(old, new)
             worst = max(diffs, key=diffs.get)

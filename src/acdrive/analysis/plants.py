@@ -21,15 +21,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.errors import InputError, require_finite
-from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
+from acdrive.machines import registry
+from acdrive.machines.dfim import DFIMParams
 from acdrive.machines.induction import (
-    DELORENZO_IM,
-    DELORENZO_IM_13,
-    UGALDE_IM_300W,
     IMParams,
     stator_current_ss,
 )
-from acdrive.machines.pmsm import PMSG_2MW, PMSGParams, dq_current_ss
+from acdrive.machines.pmsm import PMSGParams, dq_current_ss
 
 #: Grid frequency of Bodson's experiments (60 Hz), used for the DFIM synchronous frame.
 W_E_60HZ = 2.0 * math.pi * 60.0
@@ -162,22 +160,9 @@ def _complex_to_real(M: np.ndarray) -> np.ndarray:
     return np.kron(M.real, np.eye(2)) + np.kron(M.imag, J)
 
 
-#: Built-in machines by CLI name.
-MACHINES: dict[str, IMParams | PMSGParams | DFIMParams] = {
-    "ugalde-im-300w": UGALDE_IM_300W,
-    "delorenzo-im": DELORENZO_IM,
-    "delorenzo-im-13": DELORENZO_IM_13,
-    "pmsg-2mw": PMSG_2MW,
-    "bodson-dfim": BODSON_DFIM,
-}
-
-
-def machine_params(name: str):
-    """Parameters of a built-in machine, or InputError listing the known names."""
-    try:
-        return MACHINES[name]
-    except KeyError:
-        raise InputError("machine", f"unknown '{name}', known: {', '.join(MACHINES)}") from None
+#: Built-in machines by CLI name (one registry: ``acdrive.machines.registry``).
+MACHINES = registry.MACHINES
+machine_params = registry.machine_params
 
 
 def plant_from_params(params, speed: float, *, w_e: float = W_E_60HZ, name: str = "") -> Plant2x2:

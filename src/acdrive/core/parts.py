@@ -7,7 +7,8 @@ Three kinds, with a hard boundary between the continuous plant and the sampled c
   between samples. Kernels, all module-level numba functions with fixed signatures:
   ``state_outputs(t, x, p, y)`` writes the outputs that depend on the state only;
   ``direct_outputs(t, x, u, p, y)`` (optional) writes the rest, reading only the inputs named in
-  ``DIRECT_FROM``; ``rhs(t, x, u, p, dx)`` writes dx/dt; ``project(x, p)`` (optional) re-normalises
+  ``DIRECT_FROM``; ``rhs(t, x, u, p, y, dx)`` writes dx/dt, and may read the part's own
+  outputs ``y`` of the same evaluation (computed just before it) instead of recomputing them; ``project(x, p)`` (optional) re-normalises
   redundant states (e.g. unit phasors) at each sample.
 * :class:`Modulator` (converter, inverter): turns a sampled command into piecewise-constant plant
   inputs within one sample, ``segments(T_s, u, p, s, dt, v) -> (n, events)`` with segment

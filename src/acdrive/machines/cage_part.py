@@ -59,7 +59,7 @@ def cage_state_outputs(t, x, p, y):
 
 
 @jit_fast
-def cage_rhs(t, x, u, p, dx):
+def cage_rhs(t, x, u, p, y, dx):
     """Amezquita-Brooks et al. (1) in complex form (module docstring)."""
     i_s = complex(x[_I_S], x[_I_S + 1])
     psi_r = complex(x[_PSI_R], x[_PSI_R + 1])

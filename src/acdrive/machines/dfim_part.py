@@ -84,14 +84,16 @@ OUTPUTS = Layout(
     cplx("i_r", "A", "rotor current referred to the stator, stationary frame"),
     cplx("i_r_rotor", "A", "rotor current in rotor coordinates"),
     real("tau_e", "N m", "electromagnetic torque"),
-    cplx("v_open", "V", "open-stator terminal voltage (M/L_r) dpsi_r/dt"),
+    cplx("v_open", "V", "stator terminal voltage while disconnected, (M/L_r) dpsi_r/dt; else 0"),
+    cplx("dpsi_r", "V", "rotor flux linkage derivative dpsi_r/dt, stationary frame"),
     real("bus_gain", "1/H", "a of di_s/dt = a v_s + b (zero while disconnected)"),
     cplx("bus_drive", "A/s", "b of di_s/dt = a v_s + b (zero while disconnected)"),
 )
 _PSI_S, _PSI_R, _THETA, _E_R = (STATES.slot(n) for n in ("psi_s", "psi_r", "theta", "e_r"))
 _V_S, _V_R, _W, _CONNECTED = (INPUTS.slot(n) for n in ("v_s", "v_r", "w", "connected"))
-_Y_I_S, _Y_I_R, _Y_I_RR, _Y_TAU, _Y_V_OPEN, _Y_A, _Y_B = (
-    OUTPUTS.slot(n) for n in ("i_s", "i_r", "i_r_rotor", "tau_e", "v_open", "bus_gain", "bus_drive")
+_Y_I_S, _Y_I_R, _Y_I_RR, _Y_TAU, _Y_V_OPEN, _Y_DPSI_R, _Y_A, _Y_B = (
+    OUTPUTS.slot(n)
+    for n in ("i_s", "i_r", "i_r_rotor", "tau_e", "v_open", "dpsi_r", "bus_gain", "bus_drive")
 )
 
 
@@ -121,18 +123,20 @@ def dfim_direct_outputs(t, x, u, p, y):
     i_s, i_r = winding_currents(p, complex(x[_PSI_S], x[_PSI_S + 1]), psi_r, connected)
     i_rr = i_r * complex(x[_E_R], -x[_E_R + 1])
     dpsi_r = rotor_flux_derivative(x, u, p, i_r, psi_r)
-    v_open = (p[_M] / p[_L_R]) * dpsi_r
     y[_Y_I_S], y[_Y_I_S + 1] = i_s.real, i_s.imag
     y[_Y_I_R], y[_Y_I_R + 1] = i_r.real, i_r.imag
     y[_Y_I_RR], y[_Y_I_RR + 1] = i_rr.real, i_rr.imag
     y[_Y_TAU] = electromagnetic_torque(p, i_s, i_r)
-    y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = v_open.real, v_open.imag
+    y[_Y_DPSI_R], y[_Y_DPSI_R + 1] = dpsi_r.real, dpsi_r.imag
     if connected:
         inv_det = 1.0 / (p[_L_S] * p[_L_R] - p[_M] * p[_M])
         b = (-p[_L_R] * p[_R_S] * i_s - p[_M] * dpsi_r) * inv_det
         y[_Y_A] = p[_L_R] * inv_det
         y[_Y_B], y[_Y_B + 1] = b.real, b.imag
+        y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = 0.0, 0.0
     else:
+        v_open = (p[_M] / p[_L_R]) * dpsi_r
+        y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = v_open.real, v_open.imag
         y[_Y_A], y[_Y_B], y[_Y_B + 1] = 0.0, 0.0, 0.0
 
 
@@ -142,20 +146,17 @@ def dfim_state_outputs(t, x, p, y):
 
 
 @jit_fast
-def dfim_rhs(t, x, u, p, dx):
-    """Bodson (9) with theta_e = 0 (module docstring)."""
-    connected = u[_CONNECTED] != 0.0
-    psi_r = complex(x[_PSI_R], x[_PSI_R + 1])
-    i_s, i_r = winding_currents(p, complex(x[_PSI_S], x[_PSI_S + 1]), psi_r, connected)
-    dpsi_r = rotor_flux_derivative(x, u, p, i_r, psi_r)
-    if connected:
-        dpsi_s = complex(u[_V_S], u[_V_S + 1]) - p[_R_S] * i_s
+def dfim_rhs(t, x, u, p, y, dx):
+    """Bodson (9) with theta_e = 0 (module docstring); the currents and dpsi_r/dt are this
+    evaluation's outputs ``y``."""
+    if u[_CONNECTED] != 0.0:
+        dx[_PSI_S] = u[_V_S] - p[_R_S] * y[_Y_I_S]
+        dx[_PSI_S + 1] = u[_V_S + 1] - p[_R_S] * y[_Y_I_S + 1]
     else:
-        dpsi_s = (p[_M] / p[_L_R]) * dpsi_r
+        dx[_PSI_S], dx[_PSI_S + 1] = y[_Y_V_OPEN], y[_Y_V_OPEN + 1]
+    dx[_PSI_R], dx[_PSI_R + 1] = y[_Y_DPSI_R], y[_Y_DPSI_R + 1]
     w_el = p[_N_P] * u[_W]
     de_r = 1j * w_el * complex(x[_E_R], x[_E_R + 1])
-    dx[_PSI_S], dx[_PSI_S + 1] = dpsi_s.real, dpsi_s.imag
-    dx[_PSI_R], dx[_PSI_R + 1] = dpsi_r.real, dpsi_r.imag
     dx[_THETA] = u[_W]
     dx[_E_R], dx[_E_R + 1] = de_r.real, de_r.imag
 

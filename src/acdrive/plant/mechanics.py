@@ -59,7 +59,7 @@ def shaft_state_outputs(t, x, p, y):
 
 
 @jit_fast
-def shaft_rhs(t, x, u, p, dx):
+def shaft_rhs(t, x, u, p, y, dx):
     dx[_W] = (u[_TAU_E] - load_torque(p, x[_W], t)) / p[_J]
     dx[_THETA] = x[_W]
 
@@ -86,7 +86,7 @@ def speed_state_outputs(t, x, p, y):
 
 
 @jit_fast
-def speed_rhs(t, x, u, p, dx):
+def speed_rhs(t, x, u, p, y, dx):
     dx[_S_THETA] = table_at(p, _P_W, t)
 
 

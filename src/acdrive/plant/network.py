@@ -74,7 +74,7 @@ def bus_direct_outputs(t, x, u, p, y):
 
 
 @jit_fast
-def no_rhs(t, x, u, p, dx):
+def no_rhs(t, x, u, p, y, dx):
     pass  # no states
 
 

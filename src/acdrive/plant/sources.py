@@ -44,7 +44,7 @@ def source_state_outputs(t, x, p, y):
 
 
 @jit_fast
-def source_rhs(t, x, u, p, dx):
+def source_rhs(t, x, u, p, y, dx):
     w_g = 2.0 * np.pi * table_at(p, table_offset(p, _TABLES, 1), t)
     du = 1j * w_g * complex(x[_U], x[_U + 1])
     dx[_THETA], dx[_U], dx[_U + 1] = w_g, du.real, du.imag

@@ -53,7 +53,8 @@ from acdrive.errors import (
     require_positive,
     require_safe_name,
 )
-from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
+from acdrive.machines import registry
+from acdrive.machines.dfim import DFIMParams
 from acdrive.machines.dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant.converter import max_voltage_magnitude
 from acdrive.plant.mechanics import W_COULOMB
@@ -72,7 +73,6 @@ from acdrive.sim.setup import (
 )
 from acdrive.sim.system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
-MACHINES = {"bodson-dfim": BODSON_DFIM}
 RAD_S_PER_RPM = math.pi / 30.0
 #: sample time [s] and substeps per sample when the scenario does not say
 DEFAULT_SAMPLE_TIME = 200e-6
@@ -206,8 +206,8 @@ def _machine(section: _Section, index: int) -> DFIMParams:
         except InputError as exc:
             raise InputError(params.field(exc.field), exc.rule) from None
     else:
-        name = section.text("machine", "bodson-dfim", choices=tuple(MACHINES))
-        machine = MACHINES[name]
+        name = section.text("machine", "bodson-dfim", choices=registry.names(DFIMParams))
+        machine = registry.MACHINES[name]
     B = section.number("viscous_friction", 0.0, require_nonnegative)
     tau_c = section.number("coulomb_friction", 0.0, require_nonnegative)
     return dataclasses.replace(machine, B=B, tau_c=tau_c)

@@ -228,6 +228,9 @@ class System:
         emit(f'_jit_fast = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH})')
         emit('_jit_inline = njit(cache=True, error_model="numpy", inline="always")')
         emit(
+            f'_jit_fast_inline = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, inline="always")'
+        )
+        emit(
             f"N_X, N_S, N_U, N_Y = {self.sizes['x']}, {self.sizes['s']}, {self.sizes['u']}, {self.sizes['y']}"
         )
         n_mod = len(self.modulators)
@@ -247,7 +250,7 @@ class System:
         L.extend(body or ["    pass"])
         emit("")
         # plant outputs
-        emit("@_jit_fast")
+        emit("@_jit_fast_inline")
         emit("def plant_outputs(t, X, P, PO, Y, U):")
         body = []
         for p in self.continuous:
@@ -262,7 +265,7 @@ class System:
         L.extend(body or ["    pass"])
         emit("")
         # derivatives
-        emit("@_jit_fast")
+        emit("@_jit_fast_inline")
         emit("def derivatives(t, X, P, PO, Y, U, dX):")
         emit("    plant_outputs(t, X, P, PO, Y, U)")
         for p in self.continuous:
@@ -270,7 +273,7 @@ class System:
             copied = p.DIRECT_FROM if p in self.direct else ()
             L.extend("    " + c for c in self._copies(p, skip=copied))
             emit(
-                f"    {aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], dX[{sl(p, 'x')}])"
+                f"    {aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], Y[{sl(p, 'y')}], dX[{sl(p, 'x')}])"
             )
         emit("")
         emit("@_jit_fast")
