@@ -12,8 +12,10 @@ import pytest
 
 from acdrive.report import bodson_reproduction as B
 from acdrive.report import converter_effect as C
-from acdrive.report import icad_reproduction as I
 from acdrive.report import verdicts as V
+from acdrive.report.icad.delorenzo import gm_min_note
+from acdrive.report.icad.design_models import MODEL_GAIN_TOL_DB, design_model_verdict
+from acdrive.report.icad.pi_comparison import pi_family_trend
 
 # ---------------------------------------------------------------------------------------------
 # generic helpers (acdrive.report.verdicts)
@@ -92,11 +94,11 @@ def test_design_model_b_needs_its_phase_error_near_370():
         return 40.0 * np.exp(-((np.log10(w / centre)) ** 2) / 0.001)
 
     _, model, ref = _responses(bump(370.0), 0.0 * w)
-    assert I.design_model_verdict("B", w, model, ref).holds
+    assert design_model_verdict("B", w, model, ref).holds
     _, model, ref = _responses(bump(2000.0), 0.0 * w)  # lag elsewhere
-    assert not I.design_model_verdict("B", w, model, ref).holds
+    assert not design_model_verdict("B", w, model, ref).holds
     _, model, ref = _responses(0.2 * bump(370.0), 0.0 * w)  # too small an error
-    assert not I.design_model_verdict("B", w, model, ref).holds
+    assert not design_model_verdict("B", w, model, ref).holds
 
 
 def test_design_model_c_needs_the_phase_error_to_dominate():
@@ -104,31 +106,31 @@ def test_design_model_c_needs_the_phase_error_to_dominate():
     wide = np.where((w > 10) & (w < 1000), 1.0, 0.0)
     narrow = np.where((w > 300) & (w < 400), 1.0, 0.0)
     _, model, ref = _responses(30.0 * wide, 6.0 * narrow)
-    assert I.design_model_verdict("C", w, model, ref).holds
+    assert design_model_verdict("C", w, model, ref).holds
     _, model, ref = _responses(30.0 * narrow, 6.0 * wide)
-    assert not I.design_model_verdict("C", w, model, ref).holds
+    assert not design_model_verdict("C", w, model, ref).holds
 
 
 def test_design_model_d_is_insufficient_only_when_it_misses_a():
     w = np.logspace(0, 5, 1001)
-    _, model, ref = _responses(0.0 * w, 0.0 * w + I.MODEL_GAIN_TOL_DB + 1.0)
-    assert I.design_model_verdict("D", w, model, ref).holds
-    _, model, ref = _responses(0.0 * w, 0.0 * w + I.MODEL_GAIN_TOL_DB - 1.0)
-    assert not I.design_model_verdict("D", w, model, ref).holds
+    _, model, ref = _responses(0.0 * w, 0.0 * w + MODEL_GAIN_TOL_DB + 1.0)
+    assert design_model_verdict("D", w, model, ref).holds
+    _, model, ref = _responses(0.0 * w, 0.0 * w + MODEL_GAIN_TOL_DB - 1.0)
+    assert not design_model_verdict("D", w, model, ref).holds
 
 
 def test_pi_family_trend_flips_on_a_step_against_it():
-    assert I.pi_family_trend([17.0, 18.0, 25.0], [95.0, 80.0, 45.0]).holds
-    assert not I.pi_family_trend([17.0, 16.0, 25.0], [95.0, 80.0, 45.0]).holds  # gain dips
-    assert not I.pi_family_trend([17.0, 18.0, 25.0], [95.0, 96.0, 45.0]).holds  # PM rises
-    assert not I.pi_family_trend([17.0, 17.0, 17.0], [95.0, 95.0, 95.0]).holds  # no change
+    assert pi_family_trend([17.0, 18.0, 25.0], [95.0, 80.0, 45.0]).holds
+    assert not pi_family_trend([17.0, 16.0, 25.0], [95.0, 80.0, 45.0]).holds  # gain dips
+    assert not pi_family_trend([17.0, 18.0, 25.0], [95.0, 96.0, 45.0]).holds  # PM rises
+    assert not pi_family_trend([17.0, 17.0, 17.0], [95.0, 95.0, 95.0]).holds  # no change
 
 
 def test_gm_min_note_gives_the_reason_only_where_the_appendix_set_differs():
-    assert I._gm_min_note(0.7524, "(13)").startswith("agrees")
-    app = I._gm_min_note(0.7662, "App.")
+    assert gm_min_note(0.7524, "(13)").startswith("agrees")
+    app = gm_min_note(0.7662, "App.")
     assert app.startswith("differs") and "different sigma" in app
-    assert "different sigma" not in I._gm_min_note(0.7524, "App.")
+    assert "different sigma" not in gm_min_note(0.7524, "App.")
 
 
 # ---------------------------------------------------------------------------------------------
