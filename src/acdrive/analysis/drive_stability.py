@@ -10,20 +10,27 @@ gains from (27), and the torque controller in either mode:
 * ``current``: rotor current command (43) from the same stator current command, and the rotor
   current loop (45)-(47) with its integrator and the gains (49) (Bodson III-E).
 
-Two linearisations are offered, clearly apart:
+Both linearisations use the simulator's parts-built drive (``acdrive.sim.dfim_drive.DFIMDrive``)
+and its compiled loop; they are kept clearly apart:
 
-``continuous``  the controller as the continuous-time law of the paper. The plant is the
-                simulator's own right-hand side (``acdrive.plant.dfim_bus.plant_derivatives``),
-                evaluated in the frame that rotates with the supply (the stator-voltage frame when
-                the supply has no impedance), with the flux linkages psi_s, psi_r as states. The
-                Jacobian is taken by central differences around the equilibrium found by Newton.
-``sampled``     the sampled-data loop exactly as the compiled simulator runs it: at every sample
-                the controller of ``acdrive.control.dfim`` reads the stator voltage and the encoder,
-                its rotor-voltage command is held in rotor coordinates (zero-order hold) and the
-                plant is advanced over one sample period by the engine's RK4 substeps; optionally
-                the command is applied one sample later (computation delay). The result is the
-                Jacobian of this one-sample map at its fixed point; its eigenvalues z are reported
-                also as s = ln(z) / T_s for comparison with the continuous model.
+``continuous``  the controller as the continuous-time law of the paper, evaluated with the
+                functions the sampled controller uses (``machines.dfim``, ``control.speed.speed_pi``,
+                ``control.bodson.rotor_current_loop`` with the ``SpeedController`` part's parameter
+                and state arrays). The plant is the compiled system's own right-hand side
+                (``derivatives``) with the converter's output held at the law's rotor voltage and
+                the relay closed, evaluated in the frame that rotates with the supply (the
+                stator-voltage frame when the supply has no impedance), with the flux linkages
+                psi_s, psi_r as states. The Jacobian is taken by central differences around the
+                equilibrium found by Newton (``acdrive.analysis.linearise``).
+``sampled``     the sampled-data loop exactly as the compiled simulator runs it: one sample of the
+                compiled loop (project, plant outputs, the sampled parts in wiring order: encoder,
+                current sensors, speed and supply-frequency estimators, reference, synchroniser,
+                speed controller; the converter's zero-order hold of the rotor voltage in rotor
+                coordinates; the RK4 substeps of the plant), optionally with the command applied
+                one sample later (computation delay, inserted between controller and converter).
+                The result is the Jacobian of this one-sample map at its fixed point; its
+                eigenvalues z are reported also as s = ln(z) / T_s for comparison with the
+                continuous model.
 
 Units: SI (speeds in rad/s unless the name ends in ``_rpm``); complex space vectors in the
 power-invariant scaling of Bodson (1)-(8).
@@ -37,9 +44,21 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.analysis.linearise import (
+    Coordinate,
+    SampleMap,
+    fixed_point,
+    get_complex,
+    jacobian,
+    newton,
+    set_complex,
+    slot,
+)
 from acdrive.control import dfim as ctl
+from acdrive.control.bodson import rotor_current_loop
 from acdrive.control.speed import SpeedPIGains, speed_pi
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8): space-vector magnitude per peak
 from acdrive.machines.dfim import (
     BODSON_DFIM,
     DFIMParams,
@@ -49,39 +68,22 @@ from acdrive.machines.dfim import (
     stator_current_command,
     torque_window,
 )
-from acdrive.plant import dfim_bus
-from acdrive.plant.converter import converter_output
-from acdrive.plant.dfim_bus import (
-    OMEGA,
-    PSI_R_IM,
-    PSI_R_RE,
-    PSI_S_IM,
-    PSI_S_RE,
-    STATES_PER_MOTOR,
-    THETA,
-    motor_currents,
-    n_states,
-    plant_derivatives,
-)
-from acdrive.sim import engine
+from acdrive.plant.converter import max_voltage_magnitude
+from acdrive.sim.dfim_drive import DFIMDrive
 from acdrive.sim.setup import (
     ConverterLosses,
     DFIMController,
     DriveSetup,
     MotorSetup,
     Supply,
-    build_arrays,
     constant,
     max_speed,
 )
 
-SQRT_3_2 = math.sqrt(1.5)
 RAD_S_PER_RPM = math.pi / 30.0
 MODES = ("voltage", "current")
 KINDS = ("continuous", "sampled")
 SPEED_LOOPS = ("closed", "open", "frozen")
-#: index of the supply angle theta_g in the plant state of one motor
-SUPPLY_ANGLE = STATES_PER_MOTOR + dfim_bus.THETA_G
 #: |z| below this is a structural zero of the sampled map (a state overwritten every sample)
 Z_ZERO = 1e-9
 
@@ -100,8 +102,8 @@ class DriveModel:
     current_limit_pk: stator and rotor current limits (peak) for the torque window (30)-(37);
     speed_loop: "closed" (PI (25) active), "open" (torque command held at its equilibrium value,
     mechanics free) or "frozen" (torque command held and speed constant: electrical loop only);
-    sample_time, substeps, delay_samples: the sampled model (engine sample period, RK4 substeps per
-    period, 0 or 1 sample of computation delay);
+    sample_time, substeps, delay_samples: the sampled model (the compiled loop's sample period, its
+    RK4 substeps per period, 0 or 1 sample of computation delay);
     converter_loss: fundamental voltage [V, space-vector magnitude] the rotor converter loses
     against the rotor current (dead time, device drops), v_R,applied = v_R - V i_R/|i_R|: the
     simulator's first-harmonic converter model (``ConverterLosses``), given here by its result.
@@ -271,7 +273,7 @@ def _torque_window(model: DriveModel, v_s: float) -> tuple[float, float]:
 
 
 # ---------------------------------------------------------------------------------------------
-# the plant of the simulator, one motor, evaluated in the frame rotating with the supply
+# the simulator's drive at an operating point
 # ---------------------------------------------------------------------------------------------
 
 
@@ -311,16 +313,6 @@ def converter_losses(fundamental_loss: float) -> ConverterLosses:
     return ConverterLosses(device_drop=per_phase)
 
 
-def _plant_state(x, machines, psi_s: complex, psi_r: complex, w: float) -> None:
-    """Fill the simulator's plant state of one motor: fluxes and speed given, shaft and supply
-    angles zero, and the plant's rotation phasors set to match."""
-    x[:] = 0.0
-    x[PSI_S_RE], x[PSI_S_IM] = psi_s.real, psi_s.imag
-    x[PSI_R_RE], x[PSI_R_IM] = psi_r.real, psi_r.imag
-    x[OMEGA] = w
-    dfim_bus.project_phasors(x, machines)
-
-
 def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0) -> DriveSetup:
     """The simulator's ``DriveSetup`` for ``model`` held at ``point``: speed reference and
     initial speed at the operating speed, constant load torque."""
@@ -334,58 +326,71 @@ def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0)
     )
 
 
+def _drive(model: DriveModel, point: OperatingPoint) -> DFIMDrive:
+    """The parts-built drive of ``drive_setup(model, point)`` (one motor: parts ``dfim0``,
+    ``shaft0``, ..., ``controller0``, and ``grid``, ``bus``)."""
+    return DFIMDrive(drive_setup(model, point))
+
+
+def _rotor_voltage_limit(drive: DFIMDrive) -> float:
+    """The largest rotor voltage magnitude the drive's converter applies (V_dc / sqrt(2))."""
+    return max_voltage_magnitude(drive.motors[0]["converter"].values["V_dc"])
+
+
 class _Plant:
-    """``plant_derivatives`` of one motor at a constant supply, with the supply and shaft angles
-    set to zero at the instant of evaluation: the stationary-frame derivatives are then those of
-    the frame rotating with the supply (v_g real) apart from the -j w_e x rotation term."""
+    """The compiled plant right-hand side of the drive (``derivatives`` of the generated loop),
+    with the converter's output held at a given rotor voltage and the relay closed.
+
+    The supply angle theta_g and the rotor angle are zero at the instant of evaluation: the
+    stationary frame is then the frame that rotates with the supply (v_g real), rotor coordinates
+    coincide with it, and the supply-frame derivatives are the stationary ones minus j w_e x.
+    """
 
     def __init__(self, model: DriveModel, point: OperatingPoint):
-        a = build_arrays(drive_setup(model, point))
-        self.machines, self.bus, self.supply = a["machines"], a["bus"], a["supply"]
-        self.load_t, self.load_tau, self.closed = a["load_t"], a["load_tau"], a["closed"]
-        self.arrays = a
-        self.x = np.zeros(n_states(1))
-        self.dx = np.empty_like(self.x)
-        self.v_term = np.zeros(1, dtype=complex)
-        self.v_r = np.zeros(1, dtype=complex)
+        self.drive = drive = _drive(model, point)
+        system, parts = drive.system, drive.motors[0]
+        self.parts, self.module = parts, drive.compile().module
+        self.P, self.PO = system.pack_params()
+        self.X, _ = system.pack_initial()  # angles zero, phasors e^{j 0}
+        self.Y = system.pack_held({parts["sync"].name: {"closed": 1.0}})
+        self.U = np.zeros(system.sizes["u"])
+        self.dX = np.empty_like(self.X)
+        dfim, shaft = parts["dfim"], parts["shaft"]
+        self.i_psi_s = slot(system, dfim, "x", "psi_s")
+        self.i_psi_r = slot(system, dfim, "x", "psi_r")
+        self.i_w = slot(system, shaft, "x", "w")
+        self.i_v_r = slot(system, parts["converter"], "y", "v")
+        self.i_v_s = slot(system, parts["relay"], "y", "v")  # what the controller measures
+        self.i_i_s = slot(system, dfim, "y", "i_s")
+        self.i_i_r = slot(system, dfim, "y", "i_r")
         self.w_e = model.w_e
 
     def load(self, psi_s: complex, psi_r: complex, w: float) -> None:
-        _plant_state(self.x, self.machines, psi_s, psi_r, w)
+        """Set the fluxes and the speed (angles stay zero) and evaluate the plant outputs."""
+        X = self.X
+        set_complex(X, self.i_psi_s, psi_s)
+        set_complex(X, self.i_psi_r, psi_r)
+        X[self.i_w] = w
+        self.module.project(X, self.P, self.PO)
+        self.module.plant_outputs(0.0, X, self.P, self.PO, self.Y, self.U)
 
     def evaluate(self, v_r: complex):
         """(d psi_s/dt, d psi_r/dt, dw/dt) in the supply frame and the stator terminal voltage,
         for the state last given to ``load`` and the rotor voltage ``v_r`` (supply frame)."""
-        self.v_r[0] = v_r
-        plant_derivatives(
-            0.0,
-            self.x,
-            self.dx,
-            self.machines,
-            self.bus,
-            self.supply,
-            self.load_t,
-            self.load_tau,
-            self.v_r,
-            self.closed,
-            self.v_term,
-        )
-        x, dx = self.x, self.dx
-        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM])
-        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM])
-        dpsi_s = complex(dx[PSI_S_RE], dx[PSI_S_IM]) - 1j * self.w_e * psi_s
-        dpsi_r = complex(dx[PSI_R_RE], dx[PSI_R_IM]) - 1j * self.w_e * psi_r
-        return dpsi_s, dpsi_r, dx[OMEGA], complex(self.v_term[0])
+        X, dX = self.X, self.dX
+        set_complex(self.Y, self.i_v_r, v_r)
+        self.module.derivatives(0.0, X, self.P, self.PO, self.Y, self.U, dX)
+        psi_s, psi_r = get_complex(X, self.i_psi_s), get_complex(X, self.i_psi_r)
+        dpsi_s = get_complex(dX, self.i_psi_s) - 1j * self.w_e * psi_s
+        dpsi_r = get_complex(dX, self.i_psi_r) - 1j * self.w_e * psi_r
+        return dpsi_s, dpsi_r, dX[self.i_w], get_complex(self.Y, self.i_v_s)
 
     def terminal_voltage(self, v_r: complex) -> complex:
         return self.evaluate(v_r)[3]
 
     def currents(self) -> tuple[complex, complex]:
-        """(i_s, i_r) of the loaded state, from the plant's own flux-current relation (9)."""
-        x = self.x
-        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM])
-        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM])
-        return motor_currents(self.machines[0], psi_s, psi_r, True)
+        """(i_s, i_r) of the loaded state: the machine part's outputs (flux-current relation (9))."""
+        return get_complex(self.Y, self.i_i_s), get_complex(self.Y, self.i_i_r)
 
 
 def fluxes(params: DFIMParams, i_s: complex, i_r: complex) -> tuple[complex, complex]:
@@ -398,26 +403,27 @@ def fluxes(params: DFIMParams, i_s: complex, i_r: complex) -> tuple[complex, com
 # ---------------------------------------------------------------------------------------------
 
 
-def _voltage_law(p_est, w_e, w_hat, v_s_mag, tau_com):
-    """Rotor voltage (20) for the stator current command (22) with Q = 0 (stator-voltage frame)."""
-    i_s_com, _ = stator_current_command(p_est, w_e, v_s_mag, tau_com, 0.0)
-    return rotor_voltage_for(p_est, w_e, w_hat, v_s_mag, i_s_com)
+def _voltage_law(p, w_e, w_hat, v_s_mag, tau_com):
+    """Rotor voltage (20) for the stator current command (22) with Q = 0 (stator-voltage frame);
+    ``p``: the controller's parameter array (its machine estimates)."""
+    i_s_com, _ = stator_current_command(p, w_e, v_s_mag, tau_com, 0.0)
+    return rotor_voltage_for(p, w_e, w_hat, v_s_mag, i_s_com)
 
 
-def _current_law(cp, p_est, w_e, w_hat, v_s_mag, tau_com, i_s, i_r, z):
+def _current_law(p, s, i_int, w_e, w_hat, v_s_mag, tau_com, i_s, i_r, z):
     """Rotor current loop (46)-(47) around the command (43), continuous time; returns
     (v_r, d z / dt) in the stator-voltage frame, z being the integral of the current error.
 
-    The sampled controller's own ``rotor_current_loop`` is evaluated with a unit step and no
-    voltage limit (``cp`` prepared so by the caller): one forward-Euler step of length 1 then
-    returns the integrand, d z / dt = (z after the step) - z.
+    The sampled controller's own ``rotor_current_loop`` (control.bodson) is evaluated on the
+    ``SpeedController``'s parameter array ``p`` without voltage limit (prepared so by the caller)
+    and its state array ``s`` (the integral at ``s[i_int]``), with a unit step: one forward-Euler
+    step of length 1 then returns the integrand, d z / dt = (z after the step) - z.
     """
-    i_s_com, _ = stator_current_command(p_est, w_e, v_s_mag, tau_com, 0.0)
-    i_r_com = rotor_current_for(p_est, w_e, v_s_mag, i_s_com)
-    cs = np.zeros(ctl.N_CTRL_STATES)
-    cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM] = z.real, z.imag
-    v_r, _ = ctl.rotor_current_loop(p_est, cp, cs, w_e, w_hat, v_s_mag, i_s, i_r, i_r_com)
-    return v_r, complex(cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM]) - z
+    i_s_com, _ = stator_current_command(p, w_e, v_s_mag, tau_com, 0.0)
+    i_r_com = rotor_current_for(p, w_e, v_s_mag, i_s_com)
+    set_complex(s, i_int, z)
+    v_r, _ = rotor_current_loop(p, s, 1.0, w_e, w_hat, v_s_mag, i_s, i_r, i_r_com)
+    return v_r, get_complex(s, i_int) - z
 
 
 # ---------------------------------------------------------------------------------------------
@@ -436,9 +442,16 @@ class _Continuous:
     def __init__(self, model: DriveModel, point: OperatingPoint):
         self.model, self.point = model, point
         self.plant = _Plant(model, point)
-        self.p_est = self.plant.arrays["p_est"][0]
-        self.cp_unit = self.plant.arrays["cp"][0].copy()  # see _current_law
-        self.cp_unit[ctl.CP_T_S], self.cp_unit[ctl.CP_V_R_MAX] = 1.0, np.inf
+        ctrl = self.plant.parts["controller"]
+        # the SpeedController part's arrays: parameters (machine estimates, gains) and a state
+        # for the current loop's integral; no voltage limit in the continuous law (see
+        # _current_law)
+        self.p = ctrl.p
+        self.p_unlimited = ctrl.p.copy()
+        self.p_unlimited[ctrl.PARAMS.slot("v_r_max")] = np.inf
+        self.s = ctrl.initial_state()
+        self.i_int = ctrl.STATES.slot("ir_int")
+        self.K_P, self.K_I, self.K_F = (ctrl.values[n] for n in ("K_P", "K_I", "K_F"))
         names = ["psi_s.re", "psi_s.im", "psi_r.re", "psi_r.im"]
         if model.speed_loop != "frozen":
             names.append("w")
@@ -464,11 +477,12 @@ class _Continuous:
         )
 
     def torque_command(self, x) -> float:
+        """The speed PI (25) without limits (the controller's own ``speed_pi``)."""
         _, _, _, e_I, w_f, _ = self.unpack(x)
         if self.model.speed_loop != "closed":
             return self.tau_hold
-        g = self.model.gains
-        return speed_pi(g.K_P, g.K_I, g.K_F, e_I, self.point.speed, w_f, -np.inf, np.inf, 1.0)[0]
+        return speed_pi(self.K_P, self.K_I, self.K_F, e_I, self.point.speed, w_f, -np.inf,
+                        np.inf, 1.0)[0]  # fmt: skip
 
     def rhs(self, x) -> np.ndarray:
         m, plant = self.model, self.plant
@@ -511,10 +525,9 @@ class _Continuous:
         v_mag = abs(v_s)
         to_supply = v_s / v_mag
         if m.mode == "voltage":
-            return _voltage_law(self.p_est, m.w_e, w_hat, v_mag, tau) * to_supply, 0j
-        v_r, dz = _current_law(
-            self.cp_unit, self.p_est, m.w_e, w_hat, v_mag, tau, i_s / to_supply, i_r / to_supply, z
-        )
+            return _voltage_law(self.p, m.w_e, w_hat, v_mag, tau) * to_supply, 0j
+        v_r, dz = _current_law(self.p_unlimited, self.s, self.i_int, m.w_e, w_hat, v_mag, tau,
+                               i_s / to_supply, i_r / to_supply, z)  # fmt: skip
         return v_r * to_supply, dz
 
     def guess(self) -> np.ndarray:
@@ -550,159 +563,149 @@ class _Continuous:
 
 
 # ---------------------------------------------------------------------------------------------
-# sampled-data closed loop: the engine's one-sample map
+# sampled-data closed loop: one sample of the compiled drive
 # ---------------------------------------------------------------------------------------------
 
 
-class _Sampled:
-    """One control sample of the compiled simulator, as a map of the state at the sample instant.
+class _Sampled(SampleMap):
+    """One sample of the compiled drive as a map of the state at the sample instant.
 
-    The frame is re-referenced at every sample (supply angle and shaft angle zero at t_k), so the
-    map is autonomous. State: Re/Im psi_s, Re/Im psi_r, w (at t_k); phi = the shaft angle travelled
-    over the last period (the encoder difference the speed estimate uses); e_I; w_est (speed
-    estimate, filter state); Re/Im of the rotor voltage applied over the last period, in rotor
-    coordinates referred to the current sample (the converter output the stator-voltage
-    measurement sees); with one sample of delay, Re/Im of the command waiting to be applied.
+    The frame is re-referenced at every sample (supply angle theta_g and rotor angle zero at
+    t_k), so the map is autonomous. Its state z holds the system's own quantities (named
+    ``<part>.<quantity>``, ``.re``/``.im`` for complex ones), at t_k in that frame:
+
+    * ``dfim0.psi_s``, ``dfim0.psi_r``: the machine's flux linkages, stationary frame rotated by
+      -theta_g (plant state); ``shaft0.w``: the shaft speed (plant state);
+    * ``speed0.theta_prev``: the encoder reading the speed estimator keeps from the previous
+      sample, relative to the present shaft angle (minus the angle travelled over the last
+      period: its backward difference); ``controller0.e_int``: the speed-PI integral (25);
+      ``speed0.w``: the speed estimate (the filter state);
+    * ``converter0.v``: the rotor voltage the converter held over the last period (its output, in
+      rotor coordinates rotated by n_p theta - theta_g): the plant outputs the sensors read at t_k
+      depend on it through the supply impedance;
+    * in current mode, ``controller0.ir_int``: the rotor current-loop integral (47);
+    * with one sample of computation delay, ``delay.v_r``: the controller's command of the
+      previous sample, waiting in the delay line between controller and converter (rotor
+      coordinates, likewise rotated).
+
+    The discrete states outside z are those the loop sets on its first sample and then keeps
+    (started flags, the synchroniser's closed relay and adjustments, the controller's mode and
+    handover flag, the supply-frequency estimate at its nominal start): the template ``S0``,
+    ``Y0`` is one sample of the compiled loop from the drive's own initial state. Besides, the
+    supply-frequency estimator's previous grid voltage is v_g(t_k) e^{-j w_e T_s} in the frame of
+    t_k, so that its estimate is w_e at every sample (the grid alone drives that estimator: its
+    mode does not couple into the loop, and z leaves it out).
     """
 
-    def __init__(self, model: DriveModel, point: OperatingPoint):
+    DELAY = "delay.v_r"
+
+    def __init__(self, model: DriveModel, point: OperatingPoint, drive: DFIMDrive | None = None):
         if model.speed_loop != "closed":
             raise InputError("speed_loop", "the sampled-data model needs the closed speed loop")
-        self.model, self.point = model, point
-        a = build_arrays(drive_setup(model, point))
-        self.a = a
-        self.p_est, self.cp = a["p_est"][0], a["cp"][0]
-        self.cs = np.zeros(ctl.N_CTRL_STATES)
-        self.x = np.zeros_like(a["x"])
-        self.work = np.empty((5, self.x.shape[0]))
-        self.v_term = np.zeros(1, dtype=complex)
-        self.v_r = np.zeros(1, dtype=complex)
-        names = ["psi_s.re", "psi_s.im", "psi_r.re", "psi_r.im", "w", "phi", "e_I", "w_est"]
-        names += ["v_r.re", "v_r.im"]
-        if model.delay_samples:
-            names += ["v_cmd.re", "v_cmd.im"]
-        if model.mode == "current":
-            names += ["z.re", "z.im"]
-        self.names = tuple(names)
-        self.n_p = model.machine.n_p
-        self.T = model.sample_time
-
-    def load_engine(self, z):
-        """Engine state ``x`` and controller state ``cs`` for map state ``z`` (t_k = 0).
-
-        The controller initialises itself (``estimate_speeds`` on a fresh state) from the encoder
-        and grid readings of the previous sample, -phi and v_g e^{-j w_e T_s}; then its dynamic
-        states (speed integrator, speed estimate, held output, current integrator) are set.
-        """
-        x, cs, T, w_e = self.x, self.cs, self.T, self.model.w_e
-        _plant_state(x, self.a["machines"], complex(z[0], z[1]), complex(z[2], z[3]), z[4])
-        cs[:] = 0.0
-        ctl.estimate_speeds(self.cp, cs, -z[5], self.model.v_g * np.exp(-1j * w_e * T))
-        cs[ctl.CS_E_INT], cs[ctl.CS_W_EST] = z[6], z[7]
-        cs[ctl.CS_VR_RE], cs[ctl.CS_VR_IM] = z[8], z[9]
-        if self.model.mode == "current":
-            cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM] = z[-2], z[-1]
-
-    def step(self, z) -> tuple[np.ndarray, float]:
-        """The state one sample later, and the torque command computed at this sample."""
-        a, T = self.a, self.T
-        self.load_engine(z)
-        x, cs = self.x, self.cs
-        held = complex(z[8], z[9])
-        self.v_r[0] = held
-        v_g = plant_derivatives(
-            0.0, x, self.work[0], a["machines"], a["bus"], a["supply"], a["load_t"],
-            a["load_tau"], self.v_r, a["closed"], self.v_term,
-        )  # fmt: skip
-        i_s, i_r_rotor = engine.measured_currents(a["machines"][0], x, 0, True)
-        command, _, _ = ctl.controller_step(
-            self.p_est, self.cp, cs, self.v_term[0], v_g, i_s, i_r_rotor, 0.0, self.point.speed
+        drive = drive or _drive(model, point)
+        super().__init__(drive.compile(), model.sample_time, model.substeps)
+        self.model, self.point, self.drive = model, point, drive
+        self.parts = parts = drive.motors[0]
+        dfim, shaft, speed, conv, ctrl = (
+            parts[k] for k in ("dfim", "shaft", "speed", "converter", "controller")
         )
-        command, _ = converter_output(command, a["sensors"][0, engine.SN_V_R_MAX])
-        applied = complex(z[10], z[11]) if self.model.delay_samples else command
-        self.v_r[0] = applied
-        engine.advance_plant(
-            0.0, x, T, self.model.substeps, a["machines"], a["bus"], a["supply"], a["load_t"],
-            a["load_tau"], self.v_r, a["closed"], self.work, self.v_term,
-        )  # fmt: skip
-        phi = x[THETA]
-        theta_g = x[SUPPLY_ANGLE]
-        back = np.exp(-1j * theta_g)  # stationary frame at t_k -> frame of the next sample
-        rotor = np.exp(1j * (self.n_p * phi - theta_g))  # rotor coordinates, re-referenced
-        psi_s = complex(x[PSI_S_RE], x[PSI_S_IM]) * back
-        psi_r = complex(x[PSI_R_RE], x[PSI_R_IM]) * back
-        v_applied = applied * rotor
-        out = [psi_s.real, psi_s.imag, psi_r.real, psi_r.imag, x[OMEGA], phi]
-        out += [cs[ctl.CS_E_INT], cs[ctl.CS_W_EST], v_applied.real, v_applied.imag]
+        # the map state, by role (class docstring)
+        self.c = c = {
+            "psi_s": self.coordinate(dfim, "x", "psi_s", "stationary"),
+            "psi_r": self.coordinate(dfim, "x", "psi_r", "stationary"),
+            "w": self.coordinate(shaft, "x", "w"),
+            "theta_prev": self.coordinate(speed, "s", "theta_prev", "shaft angle"),
+            "e_int": self.coordinate(ctrl, "s", "e_int"),
+            "w_est": self.coordinate(speed, "s", "w"),
+            "v_held": self.coordinate(conv, "y", "v", "rotor"),
+            "ir_int": self.coordinate(ctrl, "s", "ir_int"),
+        }
+        roles = list(c)[:-1] + (["ir_int"] if model.mode == "current" else [])
+        self.coordinates = tuple(c[r] for r in roles)
+        self.n_p = dfim.values["n_p"]
+        self.i_theta_g = self.slot(drive.grid, "x", "theta_g")
+        self.i_theta = self.slot(dfim, "x", "theta")  # the angle of rotor coordinates
+        self.i_shaft_theta = self.slot(shaft, "x", "theta")  # what the encoder reads
+        self.i_tau = self.slot(ctrl, "s", "tau_com")
+        self.i_command = self.slot(ctrl, "y", "v_r")
+        self.i_v_g_prev = self.slot(parts["frequency"], "s", "v_prev")
+        # the loop's own start-up: one sample from the drive's initial state
+        initial, held = drive.initial()
+        self.X[:], self.S[:] = self.system.pack_initial(initial)
+        self.Y[:] = self.system.pack_held(held)
+        self.run_sample()
+        self.S0, self.Y0 = self.S.copy(), self.Y.copy()
+        self.X0, _ = self.system.pack_initial()  # angles zero, phasors e^{j 0}
+        # the first sample stored v_g(0), the grid voltage at theta_g = 0
+        v_g_prev = get_complex(self.S0, self.i_v_g_prev) * np.exp(-1j * model.w_e * self.T)
+        set_complex(self.S0, self.i_v_g_prev, v_g_prev)
+        self.waiting = self.command = 0j
+        self.torque_command = 0.0
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        delay = (f"{self.DELAY}.re", f"{self.DELAY}.im") if self.model.delay_samples else ()
+        return super().names + delay
+
+    def load(self, z: np.ndarray) -> int:
+        """X, S, Y at t_k = 0 for the map state ``z`` (class docstring)."""
+        k = super().load(z)
         if self.model.delay_samples:
-            v_wait = command * rotor
-            out += [v_wait.real, v_wait.imag]
-        if self.model.mode == "current":
-            out += [cs[ctl.CS_IR_INT_RE], cs[ctl.CS_IR_INT_IM]]
-        return np.array(out), cs[ctl.CS_TAU_COM]
+            self.waiting = complex(z[k], z[k + 1])
+            k += 2
+        return k
+
+    def between(self) -> None:
+        """With a computation delay the converter receives the previous sample's command."""
+        if self.model.delay_samples:
+            self.command = get_complex(self.Y, self.i_command)
+            set_complex(self.Y, self.i_command, self.waiting)
+
+    def read(self) -> np.ndarray:
+        """The map state at t_k + T_s, re-referenced to the frame of that instant."""
+        X = self.X
+        theta_g = X[self.i_theta_g]
+        self.back = np.exp(-1j * theta_g)  # stationary frame at t_k -> frame of the next sample
+        self.rotor = np.exp(1j * (self.n_p * X[self.i_theta] - theta_g))  # rotor coordinates
+        self.torque_command = self.S[self.i_tau]
+        out = super().read()
+        if self.model.delay_samples:
+            v_wait = self.command * self.rotor
+            out = np.append(out, [v_wait.real, v_wait.imag])
+        return out
+
+    def rereference(self, c: Coordinate, value):
+        if c.frame == "stationary":
+            return value * self.back
+        if c.frame == "rotor":
+            return value * self.rotor
+        if c.frame == "shaft angle":
+            return value - self.X[self.i_shaft_theta]
+        return value
+
+    def held_voltage(self, z: np.ndarray) -> complex:
+        """The converter's output (rotor voltage held over the last period) in map state ``z``."""
+        return self.value(z, self.c["v_held"].name)
 
     def guess(self, cont_state: np.ndarray, cont: _Continuous) -> np.ndarray:
+        """The continuous equilibrium, with the rotor voltage of the law (20)."""
         psi_s, psi_r, w, e_I, _, integral = cont.unpack(cont_state)
         m = self.model
         tau = cont.torque_command(cont_state)
-        v_r = _voltage_law(machine_vector(m.controller_params or m.machine), m.w_e, w, m.v_g, tau)
-        z = [
-            psi_s.real,
-            psi_s.imag,
-            psi_r.real,
-            psi_r.imag,
-            w,
-            w * self.T,
-            e_I,
-            w,
-            v_r.real,
-            v_r.imag,
-        ]
-        if m.delay_samples:
-            z += [v_r.real, v_r.imag]
-        if m.mode == "current":
-            z += [integral.real, integral.imag]
-        return np.array(z)
+        v_r = _voltage_law(cont.p, m.w_e, w, m.v_g, tau)
+        values = {"psi_s": psi_s, "psi_r": psi_r, "w": w, "theta_prev": -w * self.T,
+                  "e_int": e_I, "w_est": w, "v_held": v_r, "ir_int": integral}  # fmt: skip
+        values = {self.c[role].name: v for role, v in values.items()}
+        return np.append(self.vector(values), [v_r.real, v_r.imag][: 2 * m.delay_samples])
 
     def scales(self) -> np.ndarray:
         m = self.model
         psi = m.v_g / m.w_e
-        s = [psi] * 4 + [100.0, 100.0 * self.T, 0.1, 100.0, 10.0, 10.0]
-        s += [10.0, 10.0] if m.delay_samples else []
-        return np.array(s + ([0.01, 0.01] if m.mode == "current" else []))
-
-
-# ---------------------------------------------------------------------------------------------
-# numerics: Jacobian by central differences, Newton
-# ---------------------------------------------------------------------------------------------
-
-FD_STEP = 1e-6  # relative step of the central differences (truncation ~1e-12, rounding ~1e-10)
-
-
-def jacobian(f, x: np.ndarray, scales: np.ndarray) -> np.ndarray:
-    """Central-difference Jacobian of the vector function ``f`` at ``x``."""
-    cols = []
-    for i in range(x.size):
-        h = FD_STEP * max(abs(x[i]), scales[i])
-        xp, xm = x.copy(), x.copy()
-        xp[i] += h
-        xm[i] -= h
-        cols.append((f(xp) - f(xm)) / (2.0 * h))
-    return np.column_stack(cols)
-
-
-def newton(f, x0: np.ndarray, scales: np.ndarray, tol: float = 1e-10, max_iter: int = 30):
-    """Solve f(x) = 0 by Newton's method with the central-difference Jacobian."""
-    x = x0.copy()
-    for _ in range(max_iter):
-        r = f(x)
-        if np.all(np.abs(r) <= 1e-14 * scales):
-            return x
-        dx = np.linalg.solve(jacobian(f, x, scales), -r)
-        x = x + dx
-        if np.all(np.abs(dx) <= tol * np.maximum(np.abs(x), scales)):
-            return x
-    raise RuntimeError("equilibrium not found (Newton did not converge)")
+        scale = {"psi_s": psi * (1 + 1j), "psi_r": psi * (1 + 1j), "w": 100.0,
+                 "theta_prev": 100.0 * self.T, "e_int": 0.1, "w_est": 100.0,
+                 "v_held": 10.0 + 10j, "ir_int": 0.01 + 0.01j}  # fmt: skip
+        values = {self.c[role].name: v for role, v in scale.items()}
+        return np.append(self.vector(values), [10.0, 10.0][: 2 * m.delay_samples])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -739,7 +742,7 @@ def linearize(
     """Linearise the closed loop of ``model`` at ``point`` and return its eigenvalues.
 
     ``kind``: "continuous" (continuous-time law, Jacobian of the right-hand side) or "sampled"
-    (the simulator's sampled-data loop, Jacobian of the one-sample map; voltage mode).
+    (the simulator's sampled-data loop, Jacobian of the one-sample map; closed speed loop).
     """
     if kind not in KINDS:
         raise InputError("kind", f"must be one of {', '.join(KINDS)}")
@@ -761,23 +764,23 @@ def linearize(
         z_eig, state, names, jac = np.array([], dtype=complex), x, cont.names, A
         stable = bool(np.all(s.real < 0.0))
     else:
-        smp = _Sampled(model, point)
+        smp = _Sampled(model, point, cont.plant.drive)
         try:
-            z0 = newton(lambda z: smp.step(z)[0] - z, smp.guess(x, cont), smp.scales())
+            z0, F = fixed_point(smp, smp.guess(x, cont), smp.scales())
         except (RuntimeError, np.linalg.LinAlgError):
             raise InputError(
                 "load_torque", "no sampled-data equilibrium inside the controller's limits"
             ) from None
-        tau = smp.step(z0)[1]
-        F = jacobian(lambda z: smp.step(z)[0], z0, smp.scales())
+        smp(z0)
+        tau = smp.torque_command
         z_eig = np.linalg.eigvals(F)
         nonzero = z_eig[np.abs(z_eig) > Z_ZERO]
         s = np.log(nonzero.astype(complex)) / model.sample_time
         state, names, jac = z0, smp.names, F
         stable = bool(np.all(np.abs(z_eig) < 1.0))
-        v_r = abs(complex(z0[8], z0[9]))
+        v_r = abs(smp.held_voltage(z0))
     lo, hi = _torque_window(model, v_s)
-    v_max = cont.plant.arrays["sensors"][0, engine.SN_V_R_MAX]
+    v_max = _rotor_voltage_limit(cont.plant.drive)
     # the linearisation describes the unclipped controller: torque inside the window (30)-(37),
     # rotor current inside its limit (43), converter inside its voltage range
     inside = lo < tau < hi and v_r < v_max and i_r <= model.i_max * (1.0 + 1e-9)
@@ -1098,28 +1101,24 @@ def stabilising_thresholds(
 
 
 # ---------------------------------------------------------------------------------------------
-# nonlinear cross-check: the compiled engine started at the sampled equilibrium
+# nonlinear cross-check: the compiled drive started at the sampled equilibrium
 # ---------------------------------------------------------------------------------------------
 
 
 def simulate_from_equilibrium(result: StabilityResult, perturbation: np.ndarray, n_samples: int):
-    """Run the compiled engine ``n_samples`` samples from the sampled equilibrium of ``result``
-    plus ``perturbation`` (a map-state vector); returns (t, shaft speed w at every sample).
+    """Run the compiled drive (``CompiledSystem.run``) ``n_samples`` samples from the sampled
+    equilibrium of ``result`` plus ``perturbation`` (a map-state vector); returns (t, shaft speed
+    w at every sample).
 
     ``result`` must come from ``linearize(..., kind="sampled")`` with no computation delay
-    (the engine applies each command at once).
+    (the compiled loop applies each command at once).
     """
     if result.kind != "sampled" or result.model.delay_samples:
         raise InputError("result", "needs a sampled-data result without computation delay")
     smp = _Sampled(result.model, result.point)
-    smp.load_engine(result.state + perturbation)
-    a = dict(smp.a)
-    a["x"] = smp.x.copy()
-    a["cs"] = smp.cs.copy()[None, :]
-    log = np.zeros((n_samples, 1, engine.N_LOG))
-    _, status = engine.run_drive(
-        **a, T_s=smp.T, n_sub=result.model.substeps, n_steps=n_samples, log_every=1, log=log
-    )
-    if status != engine.STATUS_OK:
-        raise RuntimeError("simulation diverged")
-    return np.arange(n_samples) * smp.T, log[:, 0, engine.LOG_W]
+    smp.load(result.state + perturbation)
+    initial, held = smp.initial_and_held()
+    w = smp.parts["shaft"].out.w
+    run = smp.compiled.run(n_samples * smp.T, smp.T, substeps=smp.substeps, initial=initial,
+                           held=held, log=[w])  # fmt: skip
+    return run.t, run.signal(w)
