@@ -265,7 +265,7 @@ class System:
         L.extend(body or ["    pass"])
         emit("")
         # derivatives
-        emit("@_jit_fast_inline")
+        emit("@_jit_fast")  # called from four RK4 stages: inlining it quadruples the compile time
         emit("def derivatives(t, X, P, PO, Y, U, dX):")
         emit("    plant_outputs(t, X, P, PO, Y, U)")
         for p in self.continuous:
