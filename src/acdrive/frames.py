@@ -191,3 +191,14 @@ def complex_from_peak(peak, phase=0.0):
     peak = _as_real("peak", peak)
     phase = _as_real("phase", phase)
     return _unwrap(K_PEAK * peak * np.exp(1j * phase))
+
+
+@njit(cache=True, error_model="numpy")
+def clip_magnitude(x, limit):
+    """(x, False) if |x| <= limit, else (x scaled back along its own direction to magnitude
+    ``limit``, True): a converter's voltage limit or a current command's limit on a space
+    vector."""
+    magnitude = np.abs(x)
+    if magnitude <= limit:
+        return x, False
+    return x * (limit / magnitude), True

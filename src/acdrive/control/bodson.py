@@ -32,6 +32,7 @@ from acdrive.control.dfim import MIN_SUPPLY_FREQUENCY
 from acdrive.control.speed import speed_pi
 from acdrive.core.parts import SampledPart
 from acdrive.core.signals import Layout, cplx, real
+from acdrive.frames import clip_magnitude
 from acdrive.jit import jit
 from acdrive.machines import dfim
 from acdrive.machines.dfim import (
@@ -60,14 +61,6 @@ def _check_estimate_slots(layout: Layout) -> None:
 @jit
 def _wrap(angle):
     return (angle + np.pi) % (2.0 * np.pi) - np.pi
-
-
-@jit
-def _clip_magnitude(x, limit):
-    magnitude = np.abs(x)
-    if magnitude <= limit:
-        return x, False
-    return x * (limit / magnitude), True
 
 
 # --- speed from the encoder ------------------------------------------------------------------
@@ -386,7 +379,7 @@ def rotor_current_loop(p, s, T_s, w_e, w, v_s, i_s, i_r, i_r_com):
     error = i_r_com - i_r
     integral = _cget(s, _S_IRINT)
     v_r = u_r - p[_P_RT] * i_r + p[_P_KPC] * error + p[_P_KIC] * integral
-    v_r, saturated = _clip_magnitude(v_r, p[_P_VRMAX])
+    v_r, saturated = clip_magnitude(v_r, p[_P_VRMAX])
     if not saturated:
         _cset(s, _S_IRINT, integral + T_s * error)
     return v_r, saturated
@@ -460,7 +453,7 @@ def _run(t, T_s, u, p, s):
         i_s_com, sqrt_limited = stator_current_command(p, w_e, v_s_mag, tau_com, q_com)
     if sqrt_limited:
         events |= _EV_SQRT
-    i_r_com, limited = _clip_magnitude(rotor_current_for(p, w_e, v_s_mag, i_s_com), p[_P_IRMAX])
+    i_r_com, limited = clip_magnitude(rotor_current_for(p, w_e, v_s_mag, i_s_com), p[_P_IRMAX])
     _cset(s, _S_IRCOM, i_r_com)
     if currents_valid:  # a failed measurement leaves the last valid value
         _cset(s, _S_IRF, i_r_f)

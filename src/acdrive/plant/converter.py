@@ -12,6 +12,7 @@ import numpy as np
 
 from acdrive.core.parts import Modulator
 from acdrive.core.signals import Layout, cplx, real
+from acdrive.frames import clip_magnitude
 from acdrive.jit import jit
 
 
@@ -24,10 +25,7 @@ def max_voltage_magnitude(v_dc):
 @jit
 def converter_output(v_command, v_max):
     """(applied voltage, saturated) for a complex command and magnitude limit ``v_max``."""
-    magnitude = np.abs(v_command)
-    if magnitude <= v_max:
-        return v_command, False
-    return v_command * (v_max / magnitude), True
+    return clip_magnitude(v_command, v_max)
 
 
 # --- the averaged converter as a modulator part -----------------------------------------------
