@@ -38,9 +38,9 @@ STATUS_OK, STATUS_NONFINITE = 0, 1
 
 @dataclass(frozen=True)
 class _Slots:
-    """Where one part lives in the system's flat arrays: (start, stop) per array."""
+    """Where one part lives in the system's flat arrays: (start, stop) per array (its parameters
+    are found at run time, ``System.pack_params``)."""
 
-    p: tuple[int, int]
     x: tuple[int, int]  # continuous states (continuous parts)
     s: tuple[int, int]  # discrete states (sampled parts and modulators)
     u: tuple[int, int]
@@ -149,7 +149,7 @@ class System:
 
     # --- slots ------------------------------------------------------------------------------
     def _allocate(self):
-        counters = {"p": 0, "x": 0, "s": 0, "u": 0, "y": 0}
+        counters = {"x": 0, "s": 0, "u": 0, "y": 0}
         self.slots: dict[str, _Slots] = {}
 
         def take(key, n):
@@ -161,7 +161,6 @@ class System:
             continuous = isinstance(part, ContinuousPart)
             n_state = part.STATES.size()
             self.slots[part.name] = _Slots(
-                p=take("p", part.p.size),
                 x=take("x", n_state if continuous else 0),
                 s=take("s", 0 if continuous else n_state),
                 u=take("u", part.INPUTS.size()),
