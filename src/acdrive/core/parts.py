@@ -8,8 +8,8 @@ Three kinds, with a hard boundary between the continuous plant and the sampled c
   ``state_outputs(t, x, p, y)`` writes the outputs that depend on the state only;
   ``direct_outputs(t, x, u, p, y)`` (optional) writes the rest, reading only the inputs named in
   ``DIRECT_FROM``; ``rhs(t, x, u, p, y, dx)`` writes dx/dt, and may read the part's own
-  outputs ``y`` of the same evaluation (computed just before it) instead of recomputing them; ``project(x, p)`` (optional) re-normalises
-  redundant states (e.g. unit phasors) at each sample.
+  outputs ``y`` of the same evaluation (computed just before it) instead of recomputing them;
+  ``project(x, p)`` (optional) re-normalises redundant states (e.g. unit phasors) at each sample.
 * :class:`Modulator` (converter, inverter): turns a sampled command into piecewise-constant plant
   inputs within one sample, ``segments(T_s, u, p, s, dt, v) -> (n, events)`` with segment
   lengths in ``dt[:n]`` (summing to T_s) and output values in ``v[:n, :]``. The averaged converter
@@ -21,6 +21,10 @@ Three kinds, with a hard boundary between the continuous plant and the sampled c
 Outputs of sampled parts and modulators are held between samples (zero-order hold); before the
 first sample they hold the values of ``held_outputs()`` (zero unless a part says otherwise, e.g. a
 relay that starts closed), which a run may override.
+
+Continuous-part kernels run in the integrator, compiled without numba's reference counting for
+speed: they must not allocate arrays (``np.zeros``, array arithmetic); numba refuses such a kernel
+when the system compiles. Modulators and sampled parts may allocate (better not, for speed).
 
 A part instance has a name (one identifier, unique in its system) and its parameter values,
 packed and validated against ``PARAMS`` at construction (an ``InputError`` naming

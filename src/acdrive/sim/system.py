@@ -220,10 +220,11 @@ class System:
             emit(f'{alias} = njit(inline="always", error_model="numpy")({alias}.py_func)')
         emit("")
         emit('_jit = njit(cache=True, error_model="numpy")')
-        emit("# The plant side (outputs, right-hand side, integrator) is fast-math like acdrive.jit.jit_fast,")
-        emit("# and runs without numba's reference counting (_nrt=False): the array view it takes per part")
-        emit("# and per evaluation then costs nothing (measured: a third of the loop's time for two motors).")
-        emit("# Plant kernels and modulators therefore must not allocate arrays; sampled parts may.")
+        # The plant side (outputs, right-hand side, integrator) is fast-math like jit_fast, and
+        # runs without numba's reference counting (_nrt=False): the array view it takes per part
+        # and per evaluation then costs nothing (it was a third of the loop's time for two motors).
+        # Plant kernels and modulators therefore must not allocate arrays; sampled parts may.
+        emit("# plant side: fast-math, no reference counting (sim.system.System.source)")
         emit('_jit_plant = njit(cache=True, error_model="numpy", _nrt=False)')
         emit(
             f'_jit_plant_fast = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False)'
@@ -267,7 +268,8 @@ class System:
         L.extend(body or ["    pass"])
         emit("")
         # derivatives
-        emit("@_jit_plant_fast")  # called from four RK4 stages: inlining it quadruples the compile time
+        # called from four RK4 stages: inlining it would quadruple the compile time
+        emit("@_jit_plant_fast")
         emit("def derivatives(t, X, P, PO, Y, U, dX):")
         emit("    plant_outputs(t, X, P, PO, Y, U)")
         for p in self.continuous:
