@@ -182,3 +182,47 @@ def test_a_diverging_system_stops_with_the_time_and_the_state():
     # one explicit RK4 step of 20 ms against electrical modes near -360 1/s and faster: unstable
     with pytest.raises(SimulationDiverged, match=r"im\.(i_s|psi_r)\.(re|im)"):
         system.compile().run(20.0, 0.02, 1, log=[im.out.i_s])
+
+
+# --- cache keys ---------------------------------------------------------------------------------
+_USER_PART = """
+from numba import njit
+from acdrive.core.parts import ContinuousPart
+from acdrive.core.signals import Layout, real
+
+@njit
+def level_outputs(t, x, p, y):
+    y[0] = {value}
+
+@njit
+def level_rhs(t, x, u, p, y, dx):
+    pass
+
+class Level(ContinuousPart):
+    OUTPUTS = Layout(real("v", "V", "a constant"))
+    state_outputs = level_outputs
+    rhs = level_rhs
+"""
+
+
+def _user_system(folder, value):
+    import importlib.util
+    import sys
+
+    path = folder / "user_kernels.py"
+    path.write_text(_USER_PART.format(value=value))
+    spec = importlib.util.spec_from_file_location("user_kernels", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["user_kernels"] = module
+    spec.loader.exec_module(module)
+    return System([module.Level("level")], []).source()
+
+
+def test_an_edit_of_a_kernel_outside_acdrive_gives_a_new_generated_source(tmp_path):
+    """The loop inlines its kernels, so its cache entry must change when a user's kernel file
+    changes although the generated calls stay the same."""
+    first, same, edited = (_user_system(tmp_path, v) for v in ("1.0", "1.0", "2.0"))
+    assert first == same
+    assert first != edited
+    acdrive_only = System([ThreePhaseSource("grid", V_pk=1.0)], []).source()
+    assert "# kernels of" not in acdrive_only

@@ -115,6 +115,11 @@ class Part:
         """Cross-field rules on ``self.values`` (raise ``InputError`` naming ``<part>.<field>``);
         rules on single values are declared with the parameter (``Var.rule``)."""
 
+    def check_run(self, sample_time: float) -> None:
+        """Rules that involve the run's control sample time (raise ``InputError`` naming the
+        field), e.g. a PWM period that must be a whole number of samples; checked before every
+        run."""
+
     def initial_state(self, **values) -> np.ndarray:
         """Packed initial state: ``INITIAL`` defaults, then ``values``, zero elsewhere."""
         merged = {v.name: 0.0 for v in self.STATES}

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import inspect
 import os
 import sys
 import tempfile
@@ -64,3 +65,28 @@ def kernel_import(function, alias: str) -> str:
     if py.__qualname__ != py.__name__:
         raise TypeError(f"kernel {py.__qualname__} must be defined at module level")
     return f"from {py.__module__} import {py.__name__} as {alias}"
+
+
+def kernel_fingerprint(function) -> str | None:
+    """A hash of the source a kernel from outside acdrive is compiled from, or None for acdrive's
+    own kernels (the cache folder is keyed by acdrive's sources already).
+
+    The generated loop inlines its kernels, so numba's cache of the loop does not see an edit of a
+    kernel defined elsewhere (a user's module, a test file); the fingerprint in the generated
+    source makes such an edit a new source, hence a new cache entry. It hashes the kernel's whole
+    module file (the kernel may call helpers defined beside it), or the function's code object
+    when there is no file (a notebook cell).
+    """
+    py = function.py_func
+    if py.__module__ == "acdrive" or py.__module__.startswith("acdrive."):
+        return None
+    digest = hashlib.sha256()
+    try:
+        path = inspect.getsourcefile(py)
+        digest.update(Path(path).read_bytes() if path else b"")
+    except (OSError, TypeError):
+        path = None
+    if not path:
+        code = py.__code__
+        digest.update(code.co_code + repr(code.co_consts).encode() + repr(code.co_names).encode())
+    return digest.hexdigest()[:16]
