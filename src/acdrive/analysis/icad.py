@@ -53,6 +53,7 @@ from acdrive.analysis.margins import (
     winding_number,
 )
 from acdrive.analysis.plants import Plant2x2, as_plant
+from acdrive.control.lti import PAPER_20, PAPER_PI
 from acdrive.errors import InputError, require_finite
 from acdrive.machines.induction import IMParams
 from acdrive.machines.pmsm import PMSGParams
@@ -934,11 +935,12 @@ def imc_pi(params, a: float = A_CUR_DEFAULT) -> LTI:
 
 def controller_for(name: str, params=None, a: float = A_CUR_DEFAULT) -> LTI:
     """Built-in controller by name: ``paper-20`` (Amezquita-Brooks et al. (20)), ``paper-pi``
-    (their PI, K_P = 360, K_I = 9000) or ``imc-pi`` (``imc_pi`` for the machine ``params``)."""
+    (their PI, K_P = 360, K_I = 9000) or ``imc-pi`` (``imc_pi`` for the machine ``params``).
+    The paper's controllers are the shared built-in objects of ``acdrive.control.lti``."""
     if name == "paper-20":
-        return LTI.paper_20()
+        return PAPER_20
     if name == "paper-pi":
-        return LTI.pi(360.0, 9000.0, name="paper-pi")
+        return PAPER_PI
     if name == "imc-pi":
         if params is None:
             raise InputError("controller", "imc-pi needs machine parameters")

@@ -12,6 +12,7 @@ import numpy as np
 from acdrive.analysis.design import PAPER_SPECS, check_controller, propose_controller
 from acdrive.analysis.freqresp import LTI
 from acdrive.analysis.robustness import speed_sweep
+from acdrive.control.lti import PAPER_PI
 from acdrive.report import icad_targets as targets
 from acdrive.report.icad.common import W_R
 from acdrive.report.markdown import Row, Section, fmt
@@ -38,7 +39,7 @@ def section_design_helpers(k20: LTI) -> Section:
                 "",
             )
         )
-        pi = LTI.pi(targets.PI_KP, targets.PI_KI)
+        pi = PAPER_PI
         chk = check_controller(machine, pi, pi, PAPER_SPECS)
         s.rows.append(
             Row(
