@@ -2,10 +2,16 @@
 
 Free shaft (Bodson (26), Amezquita-Brooks et al. (2) in mechanical speed):
 
-    J dw/dt = tau_e - tau_L(t) - B w - tau_c tanh(w / W_COULOMB),   d theta/dt = w
+    J dw/dt = tau_e - tau_L(t) - (B + k_b(t)) w - tau_c tanh(w / W_COULOMB),   d theta/dt = w
 
-B w is also the passive eddy-current brake (torque proportional to speed); the Coulomb friction
-is smoothed over W_COULOMB so the right-hand side stays smooth for the integrator.
+tau_e drives the shaft (a machine's motoring torque); everything else opposes positive speed:
+the active load-torque profile tau_L(t) (a turbine driving a generator is a negative load), the
+viscous friction B w, the passive eddy-current brake k_b(t) w and the Coulomb friction, smoothed
+over W_COULOMB so the right-hand side stays smooth for the integrator. The brake is passive (it
+only dissipates, k_b >= 0) and its coefficient follows a profile (the ``brake`` table, N m s/rad,
+zero by default), so a brake is applied or released at a given time: a step of the coefficient
+is a vertical step of the table. A free shaft with a constant brake and no other torque decays
+as w(t) = w(0) exp(-(B + k_b) t / J).
 """
 
 from __future__ import annotations
@@ -15,8 +21,9 @@ from typing import ClassVar
 import numpy as np
 
 from acdrive.core.parts import ContinuousPart
-from acdrive.core.signals import Layout, real, table
-from acdrive.core.tables import table_at
+from acdrive.core.signals import Layout, pack_table, real, table
+from acdrive.core.tables import table_at, table_offset
+from acdrive.errors import InputError
 from acdrive.jit import jit_fast, jit_inline
 
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
@@ -24,9 +31,11 @@ W_COULOMB = 0.5
 
 SHAFT_PARAMS = Layout(
     real("J", "kg m^2", "inertia of rotor and load", "positive"),
-    real("B", "N m s/rad", "viscous friction and eddy-current brake coefficient", "nonnegative"),
+    real("B", "N m s/rad", "viscous friction coefficient", "nonnegative"),
     real("tau_c", "N m", "Coulomb friction torque", "nonnegative"),
     table("load", "N m", "active load torque profile, opposing positive speed"),
+    # appended after ``load``: the layout of the earlier parameters is unchanged
+    table("brake", "N m s/rad", "eddy-current brake coefficient profile (>= 0), torque -k_b w"),
 )
 SHAFT_STATES = Layout(
     real("w", "rad/s", "mechanical speed"),
@@ -46,11 +55,24 @@ _Y_W, _Y_THETA = SHAFT_OUTPUTS.slot("w"), SHAFT_OUTPUTS.slot("theta")
 
 @jit_inline
 def load_torque(p, w, t):
-    """tau_L(t) + B w + tau_c tanh(w / W_COULOMB): everything that opposes the motor."""
+    """tau_L(t) + B w + tau_c tanh(w / W_COULOMB): the load and the friction (the brake is
+    ``brake_torque``; together they are everything that opposes the motor)."""
     tau = table_at(p, _LOAD, t) + p[_B] * w
     if p[_TAU_C] != 0.0:
         tau += p[_TAU_C] * np.tanh(w / W_COULOMB)
     return tau
+
+
+@jit_inline
+def brake_coefficient(p, t):
+    """k_b(t) [N m s/rad], the eddy-current brake's coefficient profile."""
+    return table_at(p, table_offset(p, _LOAD, 1), t)
+
+
+@jit_inline
+def brake_torque(p, w, t):
+    """k_b(t) w: the passive eddy-current brake's torque against the speed."""
+    return brake_coefficient(p, t) * w
 
 
 @jit_fast
@@ -61,16 +83,27 @@ def shaft_state_outputs(t, x, p, y):
 @jit_fast
 def shaft_rhs(t, x, u, p, y, dx):
     dx[_W] = (u[_TAU_E] - load_torque(p, x[_W], t)) / p[_J]
+    k_b = brake_coefficient(p, t)
+    if k_b != 0.0:  # a separate term: with k_b = 0 the arithmetic is the brake-free shaft's
+        dx[_W] -= k_b * x[_W] / p[_J]
     dx[_THETA] = x[_W]
 
 
 class Shaft(ContinuousPart):
-    """Free shaft with inertia, viscous and Coulomb friction and a load-torque profile."""
+    """Free shaft with inertia, viscous and Coulomb friction, a load-torque profile and an
+    eddy-current brake whose coefficient follows a profile (module docstring)."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = SHAFT_PARAMS, SHAFT_STATES, SHAFT_INPUTS, SHAFT_OUTPUTS
-    DEFAULTS: ClassVar[dict] = {"B": 0.0, "tau_c": 0.0, "load": 0.0}
+    DEFAULTS: ClassVar[dict] = {"B": 0.0, "tau_c": 0.0, "load": 0.0, "brake": 0.0}
     state_outputs = shaft_state_outputs
     rhs = shaft_rhs
+
+    def check(self):
+        field = f"{self.name}.brake"
+        brake = pack_table(field, self.values["brake"])
+        n = int(brake[0])
+        if (brake[1 + n :] < 0.0).any():
+            raise InputError(field, "a passive brake's coefficient must be >= 0 at every point")
 
 
 SPEED_PARAMS = Layout(table("w", "rad/s", "prescribed mechanical speed profile"))
