@@ -17,6 +17,10 @@ closed, the machine's open-circuit voltage while it is open.
 
 ``RelayCommand``: a sampled part that closes a relay at a given time (e.g. a stator switched onto
 the grid at t = 0); drive controllers give the same output from their synchroniser.
+
+``ForcedRelay``: a relay mis-operation between a command and the relay: the contact closes at a
+given time whatever the command says (an operator's manual close, a welded contact), and stays
+closed; before that it follows the command.
 """
 
 from __future__ import annotations
@@ -157,6 +161,39 @@ class RelayCommand(SampledPart):
     PARAMS, OUTPUTS = COMMAND_PARAMS, COMMAND_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"close_at": 0.0}
     step = relay_command_step
+
+    def held_outputs(self) -> dict:
+        return {"closed": 1.0 if self.values["close_at"] == 0.0 else 0.0}
+
+
+FORCED_PARAMS = Layout(
+    real("close_at", "s", "time from which the relay is closed whatever its command", "nonnegative")
+)
+FORCED_INPUTS = Layout(real("command", "", "relay command: 1 closed, 0 open"))
+FORCED_OUTPUTS = Layout(real("closed", "", "relay state: 1 closed, 0 open"))
+EVENT_FORCED = 1
+
+
+@jit
+def forced_relay_step(t, T_s, u, p, s, y):
+    if u[0] != 0.0:
+        y[0] = 1.0
+        return 0
+    if t >= p[0]:
+        y[0] = 1.0
+        return EVENT_FORCED
+    y[0] = 0.0
+    return 0
+
+
+class ForcedRelay(SampledPart):
+    """A relay closed at ``close_at`` whatever its ``command`` (module docstring): closed =
+    command or t >= close_at, from the sample at or after ``close_at`` (from the start if it is
+    0); event ``forced`` on every sample it holds the relay closed against an open command."""
+
+    PARAMS, INPUTS, OUTPUTS = FORCED_PARAMS, FORCED_INPUTS, FORCED_OUTPUTS
+    EVENTS = ("forced",)
+    step = forced_relay_step
 
     def held_outputs(self) -> dict:
         return {"closed": 1.0 if self.values["close_at"] == 0.0 else 0.0}

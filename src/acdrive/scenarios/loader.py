@@ -6,13 +6,21 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
     name, description, note (copied into summary.json), compare_modes (e.g. ["voltage", "current"]: one run per mode)
     [simulation]  duration, sample_time, substeps, log_every
     [supply]      voltage_pk | voltage_pk_profile = [[t, V], ...], frequency_hz |
-                  frequency_hz_profile, resistance, inductance
+                  frequency_hz_profile, resistance, inductance,
+                  phase_a_scale | phase_a_scale_profile, and the same for phases b and c (each
+                  phase EMF's magnitude as a fraction of voltage_pk, 0 to 1; any of them gives an
+                  unbalanced source, ``plant.sources.UnbalancedSource``, e.g. a collapsed phase)
     [[motor]]     machine (built-in name) or [motor.params] (R_s, R_r, L_s, L_r, M, n_p, J),
                   viscous_friction, coulomb_friction, load_torque | load_torque_profile,
-                  speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm, dc_link_voltage,
+                  speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm,
+                  dc_link_voltage | dc_link_voltage_profile (V; a profile is fed from a DC source
+                  and limits the applied rotor voltage; the controller's limit and the converter
+                  loss use its value at t = 0),
                   encoder_counts_per_rev, encoder_offset, converter_dead_time (s),
                   converter_switching_frequency (Hz), converter_device_drop (V)
-                  current_sensor_fault_time (s; current measurements fail from then on)
+                  current_sensor_fault_time (s; current measurements fail from then on),
+                  relay_forced_close_time (s; the stator relay closes then whatever the
+                  synchroniser says: a mis-operation; needs controller.sync.enabled)
     [motor.controller]  mode ("voltage" | "current"), lossless_law (R_s = 0 form (39)),
                   current_bandwidth, R_T,
                   reactive_power_kp, reactive_power_ki | reactive_power_bandwidth, speed_bandwidth, design_inertia (J used in (27),
@@ -25,7 +33,9 @@ Physical pre-checks, made before any simulation (each an ``InputError`` naming t
 
 - converter: a dead time needs a switching frequency, must be shorter than the switching period
   (t_d f_sw < 1), and the fundamental loss ``ConverterLosses.fundamental_loss(V_dc)`` must be
-  smaller than the largest voltage the converter applies, ``max_voltage_magnitude(V_dc)``;
+  smaller than the largest voltage the converter applies, ``max_voltage_magnitude(V_dc)``; with a
+  DC-link profile, the loss (at the nominal voltage, as simulated) against the lowest voltage of
+  the profile;
 - integration step: see :func:`choose_substeps`. An omitted ``simulation.substeps`` is raised
   from its default of 4 to what the plant's fastest mode needs, with a one-line
   ``acdrive.errors.Notice``; a step no allowed number of substeps can make stable is refused;
@@ -48,6 +58,7 @@ from acdrive.control.speed import SpeedPIGains
 from acdrive.errors import (
     InputError,
     Notice,
+    require_between,
     require_finite,
     require_nonnegative,
     require_positive,
@@ -268,12 +279,16 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     return controller
 
 
-def _converter(section: _Section, k: int, v_dc: float) -> ConverterLosses:
+def _converter(
+    section: _Section, k: int, v_dc: float, v_min: float | None = None
+) -> ConverterLosses:
     """The rotor converter's losses, refused unless the DC link ``v_dc`` can supply them.
 
     A dead time acts only through the switching frequency (loss V_dc t_d f_sw), so it needs one,
     and it must be shorter than the switching period; the fundamental loss must stay below the
-    largest voltage the converter applies, or no rotor voltage at all would remain.
+    largest voltage the converter applies, or no rotor voltage at all would remain. With a DC-link
+    profile the loss is simulated at the nominal ``v_dc`` and the converter applies at most
+    ``v_min`` / sqrt(2) at the profile's lowest point ``v_min``.
     """
     field = f"motor[{k}].converter_"
     losses = ConverterLosses(
@@ -298,18 +313,51 @@ def _converter(section: _Section, k: int, v_dc: float) -> ConverterLosses:
             f"{t_d * f_sw:.3g} >= 1)",
         )
     loss = float(losses.fundamental_loss(v_dc))
-    v_max = float(max_voltage_magnitude(v_dc))
+    lowest = v_dc if v_min is None else v_min
+    v_max = float(max_voltage_magnitude(lowest))
     if not loss < v_max:
         dead_part = v_dc * t_d * f_sw
+        link = (
+            f"dc_link_voltage {v_dc:g} V"
+            if v_min is None
+            else f"dc_link_voltage_profile from {v_dc:g} V, lowest {v_min:g} V"
+        )
         raise InputError(
             field + ("dead_time" if dead_part > drop else "device_drop"),
             f"the converter's fundamental loss sqrt(3/2) (4/pi) (V_dc t_d f_sw + V_drop) = "
             f"{loss:.4g} V must be smaller than the largest voltage it applies, V_dc / sqrt(2) = "
-            f"{v_max:.4g} V (dc_link_voltage {v_dc:g} V, converter_dead_time {t_d:g} s, "
+            f"{v_max:.4g} V ({link}, converter_dead_time {t_d:g} s, "
             f"converter_switching_frequency {f_sw:g} Hz, converter_device_drop {drop:g} V): "
             "the DC link cannot supply it",
         )
     return losses
+
+
+def _phase_scales(section: _Section):
+    """(k_a, k_b, k_c) profiles of the phase EMF magnitudes, or None if the scenario gives none
+    (a balanced source). Each scale is a fraction of voltage_pk between 0 (the phase's EMF
+    collapsed) and 1 (healthy), so voltage_pk stays the largest phase EMF the checks assume."""
+    keys = [f"phase_{x}_scale" for x in "abc"]
+    if not any(section.has(key) or section.has(f"{key}_profile") for key in keys):
+        return None
+
+    def fraction(field, value):
+        return require_between(field, value, 0.0, 1.0)
+
+    return tuple(section.constant_or_profile(key, 1.0, rule=fraction) for key in keys)
+
+
+def _forced_close(section: _Section, duration: float) -> float:
+    """relay_forced_close_time: inf if not given, else a time in [0, duration)."""
+    if not section.has("relay_forced_close_time"):
+        return math.inf
+    value = section.number("relay_forced_close_time", 0.0, require_nonnegative)
+    if value >= duration:
+        raise InputError(
+            section.field("relay_forced_close_time"),
+            f"must be shorter than simulation.duration ({duration:g} s), got {value:g} s",
+        )
+    return value
 
 
 def _flux_rate(machine: DFIMParams, R_s: float, L_s: float, R_r: float, w_el: float) -> float:
@@ -531,6 +579,7 @@ def build_setup(data: dict) -> DriveSetup:
         frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=require_positive),
         resistance=sup.number("resistance", 0.0, require_nonnegative),
         inductance=sup.number("inductance", 0.0, require_nonnegative),
+        phase_scales=_phase_scales(sup),
     )
     sup.done()
     if supply.voltage_pk[1][0] <= 0.0:
@@ -545,7 +594,9 @@ def build_setup(data: dict) -> DriveSetup:
         machine = _machine(sec, k)
         if not sec.has("speed_reference_rpm"):
             raise InputError(sec.field("speed_reference_rpm"), "is required")
-        dc_link_voltage = sec.number("dc_link_voltage", 30.0, require_positive)
+        dc_link = sec.constant_or_profile("dc_link_voltage", 30.0, rule=require_positive)
+        dc_link_profile = dc_link if sec.has("dc_link_voltage_profile") else None
+        dc_link_voltage = float(dc_link[1][0])  # nominal: the voltage the drive starts with
         motor = MotorSetup(
             machine=machine,
             controller=_controller(
@@ -554,7 +605,10 @@ def build_setup(data: dict) -> DriveSetup:
             speed_reference=sec.profile("speed_reference_rpm", RAD_S_PER_RPM),
             load_torque=sec.constant_or_profile("load_torque", 0.0),
             dc_link_voltage=dc_link_voltage,
-            converter=_converter(sec, k, dc_link_voltage),
+            dc_link_profile=dc_link_profile,
+            converter=_converter(
+                sec, k, dc_link_voltage, None if dc_link_profile is None else float(min(dc_link[1]))
+            ),
             encoder_counts_per_rev=float(sec.integer("encoder_counts_per_rev", 0, minimum=0)),
             encoder_offset=sec.number("encoder_offset", 0.0),
             initial_speed=sec.number("initial_speed_rpm", 0.0) * RAD_S_PER_RPM,
@@ -563,7 +617,14 @@ def build_setup(data: dict) -> DriveSetup:
             )
             if sec.has("current_sensor_fault_time")
             else math.inf,
+            relay_forced_close_time=_forced_close(sec, duration),
         )
+        if motor.relay_forced_close_time < math.inf and not motor.controller.sync.enabled:
+            raise InputError(
+                sec.field("relay_forced_close_time"),
+                "needs controller.sync.enabled = true (without synchronisation the relay is "
+                "closed from the start)",
+            )
         sec.done()
         motors.append(motor)
     top.done()

@@ -7,6 +7,12 @@ the sensors ``encoder`` and ``currents``; the estimators ``speed`` and ``frequen
 ``grid`` source and the ``bus`` behind the supply's series R-L. The wiring follows Bodson's bench
 (section IV-A): the controller reads the stator terminal and grid voltages, the stator and rotor
 currents and the encoder, and commands the rotor converter and the stator relay.
+
+Fault variants, each present only when the scenario asks for it (the other scenarios keep their
+topology): a ``grid`` with per-phase EMF magnitudes (``UnbalancedSource``, e.g. a collapsed
+phase); a DC link ``dc`` whose voltage follows a profile, feeding a ``DCFedConverter`` (the
+controller's rotor-voltage limit and the converter loss stay at the nominal DC-link voltage); a
+relay ``forced`` closed at a given time whatever the synchroniser commands (``ForcedRelay``).
 """
 
 from __future__ import annotations
@@ -20,11 +26,11 @@ from acdrive.errors import SimulationDiverged
 from acdrive.frames import K_PEAK as SQRT_3_2
 from acdrive.frames import complex_to_abc
 from acdrive.machines.dfim_part import DoublyFedMachine
-from acdrive.plant.converter import AveragedConverter, max_voltage_magnitude
+from acdrive.plant.converter import AveragedConverter, DCFedConverter, max_voltage_magnitude
 from acdrive.plant.mechanics import Shaft
-from acdrive.plant.network import StatorRelay, SupplyBus
+from acdrive.plant.network import ForcedRelay, StatorRelay, SupplyBus
 from acdrive.plant.sensors import CurrentSensors, Encoder
-from acdrive.plant.sources import ThreePhaseSource
+from acdrive.plant.sources import DCSource, ThreePhaseSource, UnbalancedSource
 from acdrive.sim.result import LOG_NAMES, DriveResult
 from acdrive.sim.system import CompiledSystem, System
 
@@ -44,13 +50,17 @@ def _motor_parts(k: int, motor, setup) -> dict:
     v_min = SQRT_3_2 * c.min_stator_voltage_pk
     kpc, kic = c.current_gains(m)
     w_nominal = 2.0 * np.pi * float(setup.supply.frequency_hz[1][0])
-    return {
+    parts = {
         "dfim": DoublyFedMachine.from_params(
             f"dfim{k}", m, V_loss=motor.converter.fundamental_loss(motor.dc_link_voltage)
         ),
         "shaft": Shaft(f"shaft{k}", J=m.J, B=m.B, tau_c=m.tau_c, load=motor.load_torque),
         "relay": StatorRelay(f"relay{k}"),
-        "converter": AveragedConverter(f"converter{k}", V_dc=motor.dc_link_voltage),
+        "converter": (
+            AveragedConverter(f"converter{k}", V_dc=motor.dc_link_voltage)
+            if motor.dc_link_profile is None
+            else DCFedConverter(f"converter{k}")
+        ),
         "encoder": Encoder(
             f"encoder{k}", offset=motor.encoder_offset, counts_per_rev=motor.encoder_counts_per_rev
         ),
@@ -100,16 +110,28 @@ def _motor_parts(k: int, motor, setup) -> dict:
             lossless=float(c.lossless_law),
         ),
     }
+    if motor.dc_link_profile is not None:
+        parts["dc"] = DCSource(f"dc{k}", V=motor.dc_link_profile)
+    if np.isfinite(motor.relay_forced_close_time):
+        parts["forced"] = ForcedRelay(f"forced{k}", close_at=motor.relay_forced_close_time)
+    return parts
 
 
 def _motor_wires(k: int, p: dict, grid, bus) -> list:
     dfim, shaft, relay, ctrl, sync = p["dfim"], p["shaft"], p["relay"], p["controller"], p["sync"]
     enc, cur, spd, freq = p["encoder"], p["currents"], p["speed"], p["frequency"]
-    return [
+    extra = []
+    if "dc" in p:
+        extra.append((p["dc"].out.v_dc, p["converter"].inp.v_dc))
+    closed = sync.out.closed  # the relay follows the synchroniser, unless forced
+    if "forced" in p:
+        extra.append((sync.out.closed, p["forced"].inp.command))
+        closed = p["forced"].out.closed
+    return extra + [
         *bus.wires_from(k, dfim),
         (bus.out.v, dfim.inp.v_s), (bus.out.v, relay.inp.v_bus),
         (dfim.out.v_open, relay.inp.v_open),
-        (sync.out.closed, relay.inp.closed), (sync.out.closed, dfim.inp.connected),
+        (closed, relay.inp.closed), (closed, dfim.inp.connected),
         (p["converter"].out.v, dfim.inp.v_r),
         (shaft.out.w, dfim.inp.w), (dfim.out.tau_e, shaft.inp.tau_e),
         (shaft.out.theta, enc.inp.theta),
@@ -120,7 +142,7 @@ def _motor_wires(k: int, p: dict, grid, bus) -> list:
         (relay.out.v, ctrl.inp.v_s), (cur.out.i_s, ctrl.inp.i_s), (cur.out.i_r, ctrl.inp.i_r),
         (cur.out.valid, ctrl.inp.currents_valid), (enc.out.theta, ctrl.inp.theta),
         (spd.out.w, ctrl.inp.w), (freq.out.w_e, ctrl.inp.w_e),
-        (p["reference"].out.w_ref, ctrl.inp.w_ref), (sync.out.closed, ctrl.inp.closed),
+        (p["reference"].out.w_ref, ctrl.inp.w_ref), (closed, ctrl.inp.closed),
         (sync.out.v_r, ctrl.inp.v_r_sync), (sync.out.adj, ctrl.inp.adj),
         (sync.out.m_adj, ctrl.inp.m_adj),
         (ctrl.out.v_r, p["converter"].inp.v_ref),
@@ -133,7 +155,13 @@ class DFIMDrive:
     def __init__(self, setup):
         self.setup = setup
         s = setup.supply
-        self.grid = ThreePhaseSource("grid", V_pk=s.voltage_pk, f=s.frequency_hz)
+        if s.phase_scales is None:
+            self.grid = ThreePhaseSource("grid", V_pk=s.voltage_pk, f=s.frequency_hz)
+        else:
+            k_a, k_b, k_c = s.phase_scales
+            self.grid = UnbalancedSource(
+                "grid", V_pk=s.voltage_pk, f=s.frequency_hz, k_a=k_a, k_b=k_b, k_c=k_c
+            )
         n = len(setup.motors)
         self.bus = SupplyBus("bus", n_machines=n, R=s.resistance, L=s.inductance)
         self.motors = [_motor_parts(k, m, setup) for k, m in enumerate(setup.motors)]
@@ -155,7 +183,8 @@ class DFIMDrive:
         voltage is Z_MS i_r (Bodson (19)), so i_r = v_s / (j w_e M) and the held rotor voltage is
         Z_R i_r = (R_r + j w_slip L_r) i_r (at t = 0 the supply angle is zero, so v_s is real).
         A motor that synchronises first starts de-energised, its stator open, the converter at
-        zero.
+        zero. The steady state is that of the balanced supply at t = 0: per-phase scales other
+        than 1 at t = 0 (``UnbalancedSource``) start with a transient.
         """
         setup = self.setup
         v_s = SQRT_3_2 * float(setup.supply.voltage_pk[1][0])
@@ -183,6 +212,8 @@ class DFIMDrive:
                 p["sync"].out.theta_adj, p["sync"].out.m_adj, p["sync"].out.closed,
                 p["controller"].out.mode, p["relay"].out.closed,
             ]  # fmt: skip
+            if "dc" in p:
+                ports.append(p["dc"].out.v_dc)
         return ports
 
     def compile(self) -> CompiledSystem:

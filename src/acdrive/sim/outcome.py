@@ -18,13 +18,22 @@ from acdrive.sim.setup import DriveSetup, simulate
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
 #: speed-error RMS in the 20-200 Hz band above which the summary states a limit-cycle finding
 OSCILLATION_FINDING_RPM = 1.0
+#: the end of the run in which an oscillation is also looked for [s]: the shortest stretch the
+#: estimate accepts (five periods of the band's lowest frequency), so a late or growing
+#: oscillation is not averaged away over a quiet start
+LATE_WINDOW_S = 5.0 / OSCILLATION_BAND_HZ[0]
 
 
 def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict | None:
     """Relay closing time, stator current transient after closing, and the encoder alignment.
 
     The transient is the largest peak stator phase current within 0.1 s of closing (Bodson (8)),
-    also given as a fraction of the stator current limit.
+    also given as a fraction of the stator current limit. ``theta_adj_error_rad`` is theta_adj
+    minus the encoder's electrical offset n_p x offset, wrapped to (-pi, pi]: what the
+    synchroniser left unidentified (a few hundredths of a radian after a synchronised closing: the
+    phase errors of the law it compensates, converter loss and hold). With a
+    ``relay_forced_close_time`` the summary adds that time and ``closed_by_force``: whether the
+    relay was still open by the synchroniser's command then.
     """
     closed = result.signal("relay_closed", motor)
     m = setup.motors[motor]
@@ -36,16 +45,89 @@ def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int =
     after = (result.t >= result.t[i]) & (result.t < result.t[i] + 0.1)
     peak = float(np.max(result.peak("i_s_mag", motor)[after]))
     expected = math.remainder(m.machine.n_p * m.encoder_offset, 2 * math.pi)
+    theta_adj = float(result.signal("theta_adj", motor)[i])
+    forced = (
+        {
+            "relay_forced_close_time_s": m.relay_forced_close_time,
+            "closed_by_force": _closed_by_force(result, setup, motor),
+        }
+        if math.isfinite(m.relay_forced_close_time)
+        else {}
+    )
     return {
         "relay_closed": True,
+        **forced,
         "closing_time_s": float(result.t[i]),
         "closing_stator_current_peak_a": peak,
         "closing_current_fraction_of_limit": peak / m.controller.stator_current_limit_pk,
         "voltage_mismatch_at_closing": float(result.signal("v_mismatch", motor)[max(i - 1, 0)]),
-        "theta_adj_rad": float(result.signal("theta_adj", motor)[i]),
+        "theta_adj_rad": theta_adj,
         "encoder_offset_electrical_rad": expected,
+        "theta_adj_error_rad": math.remainder(theta_adj - expected, 2 * math.pi),
         "m_adj": float(result.signal("m_adj", motor)[i]),
     }
+
+
+def _late_oscillation(results: dict) -> tuple | None:
+    """(mode, motor, RMS [rpm], frequency [Hz], whole-run RMS) of the first speed oscillation
+    above the finding threshold over the last ``LATE_WINDOW_S`` of a run, or None."""
+    for mode, result in results.items():
+        tail = result.t >= result.t[-1] - LATE_WINDOW_S * (1 - 1e-9)
+        end = DriveResult(result.name, result.t[tail], result.signals[tail], result.sample_time,
+                          result.final_state)  # fmt: skip
+        for k in range(result.n_motors):
+            rms, hz = end.speed_oscillation(k)
+            if rms > OSCILLATION_FINDING_RPM:
+                return mode, k, rms, hz, result.speed_oscillation(k)[0]
+    return None
+
+
+def _open_relay_reasons(result: DriveResult, motor: int = 0) -> str:
+    """Why a synchroniser may not have closed the relay, from the events of the run: a saturated
+    rotor converter (the open-stator voltage of (28) at this speed needs more than the DC link
+    gives) or a lost supply (synchronising suspended)."""
+    events = result.events(motor)
+    reasons = ""
+    if events["converter_saturation"]:
+        reasons += (
+            f"; the rotor converter was saturated on {events['converter_saturation']} samples: "
+            "the rotor voltage that builds the grid's voltage on the open stator at this speed "
+            "(Bodson (28)) is beyond what the DC link gives"
+        )
+    if events["supply_lost"]:
+        reasons += f"; the supply was lost on {events['supply_lost']} samples"
+    return reasons
+
+
+def _closed_by_force(result: DriveResult, setup: DriveSetup, k: int) -> bool:
+    """True if motor k's relay was closed by ``relay_forced_close_time`` while its synchroniser
+    still held it open (the synchroniser's command, column ``phase``, open at that sample)."""
+    t_force = setup.motors[k].relay_forced_close_time
+    if not math.isfinite(t_force) or t_force > result.t[-1]:
+        return False
+    at = int(np.argmax(result.t >= t_force))
+    return bool(result.signal("phase", k)[at] == 0.0)
+
+
+def _forced_close_warning(result: DriveResult, setup: DriveSetup, k: int) -> str:
+    """The relay of motor k closed by force (``_closed_by_force``): when, how far from
+    synchronised, what the synchroniser left unidentified and where the speed ended up."""
+    m = setup.motors[k]
+    closed = result.signal("relay_closed", k)
+    i = int(np.argmax(closed > 0))
+    mismatch = float(result.signal("v_mismatch", k)[max(i - 1, 0)])
+    expected = m.machine.n_p * m.encoder_offset
+    error = math.remainder(float(result.signal("theta_adj", k)[i]) - expected, 2 * math.pi)
+    tail = result.t >= 0.9 * result.t[-1]
+    speed_error = float(np.max(np.abs(result.reference_rpm(k) - result.speed_rpm(k))[tail]))
+    return (
+        f"motor {k + 1}: relay closed by force at relay_forced_close_time = "
+        f"{m.relay_forced_close_time:g} s, unsynchronised: |v_s - v_g| was {mismatch:.0%} of the "
+        f"grid voltage just before; theta_adj then differs from the encoder's electrical offset by "
+        f"{error:+.3f} rad and the synchroniser cannot identify it any more (the stator carries "
+        f"the grid's voltage); speed error over the last 10 % of the run up to "
+        f"{speed_error:.1f} rpm"
+    )
 
 
 @dataclass
@@ -101,6 +183,20 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
                 "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
             )
             break
+    if "finding" not in summary:
+        late = _late_oscillation(results)
+        if late is not None:
+            mode, k, rms, hz, whole = late
+            low, high = OSCILLATION_BAND_HZ
+            summary["finding"] = (
+                f"{mode} command: the speed oscillates at the end of the run (motor {k + 1}: "
+                f"{rms:.1f} rpm RMS at about {hz:.0f} Hz over its last {LATE_WINDOW_S:g} s in "
+                f"the {low:g}-{high:g} Hz band, above the {OSCILLATION_FINDING_RPM:g} rpm "
+                f"threshold; {whole:.1f} rpm over the whole run): an oscillation that starts late "
+                f"or is still growing, at a_D,VEL = "
+                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
+                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+            )
     if setup.note:
         summary["note"] = setup.note
     warnings = []
@@ -129,8 +225,11 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
         if not sync["relay_closed"]:
             warnings.append(
                 f"the synchroniser never closed the relay in {setup.duration:g} s: the stator "
-                "stayed open and the speed was not controlled"
+                "stayed open and the speed was not controlled" + _open_relay_reasons(first)
             )
+    for k in range(len(setup.motors)):
+        if _closed_by_force(first, setup, k):
+            warnings.append(_forced_close_warning(first, setup, k))
     if warnings:
         summary["warnings"] = warnings
     fallback = first.first_event_time("sensor_fallback")

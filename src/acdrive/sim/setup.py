@@ -30,12 +30,16 @@ def constant(value: float) -> Profile:
 @dataclass(frozen=True)
 class Supply:
     """Three-phase stator supply: peak line-neutral voltage and frequency profiles, behind a
-    series R-L impedance shared by every motor on it (Bodson's transformer)."""
+    series R-L impedance shared by every motor on it (Bodson's transformer).
+
+    ``phase_scales``: None for a balanced source, else the magnitude profiles (k_a, k_b, k_c) of
+    the three phase EMFs as fractions of ``voltage_pk`` (``plant.sources.UnbalancedSource``)."""
 
     voltage_pk: Profile = field(default_factory=lambda: constant(11.1))
     frequency_hz: Profile = field(default_factory=lambda: constant(60.0))
     resistance: float = 0.0
     inductance: float = 0.0
+    phase_scales: tuple[Profile, Profile, Profile] | None = None
 
 
 @dataclass(frozen=True)
@@ -95,7 +99,13 @@ class ConverterLosses:
 
 @dataclass(frozen=True)
 class MotorSetup:
-    """One DFIM with its load, sensors, converter, controller and speed reference."""
+    """One DFIM with its load, sensors, converter, controller and speed reference.
+
+    ``dc_link_voltage`` is the converter's nominal DC-link voltage (the controller's rotor-voltage
+    limit and the converter loss are computed from it); ``dc_link_profile``, if given, is the DC
+    link's voltage over time (``plant.sources.DCSource``), which limits the applied rotor voltage,
+    and starts at ``dc_link_voltage``. ``relay_forced_close_time``: the stator relay closes then
+    whatever the synchroniser commands (a mis-operation; ``plant.network.ForcedRelay``)."""
 
     machine: DFIMParams
     controller: DFIMController
@@ -107,6 +117,15 @@ class MotorSetup:
     encoder_offset: float = 0.0
     initial_speed: float = 0.0
     current_sensor_fault_time: float = np.inf  # current measurements fail from this time on
+    dc_link_profile: Profile | None = None  # None: a constant dc_link_voltage
+    relay_forced_close_time: float = np.inf  # inf: the relay follows the synchroniser
+
+    @property
+    def dc_link_min(self) -> float:
+        """The lowest DC-link voltage of the run [V] (what the physical pre-checks use)."""
+        if self.dc_link_profile is None:
+            return self.dc_link_voltage
+        return float(np.min(self.dc_link_profile[1]))
 
 
 @dataclass(frozen=True)
@@ -136,12 +155,13 @@ def max_speed(motor: MotorSetup, supply: Supply) -> float:
     """Largest |shaft speed| [rad/s] the converter can hold at zero torque.
 
     The steady rotor voltage at i_s = 0 is (Z_R / Z_MS) v_s (Bodson (20)), about |slip| (L_r/M) v_s;
-    the converter gives at most V_dc / sqrt(2), so |slip| <= V_dc / sqrt(2) / ((L_r/M) v_s).
+    the converter gives at most V_dc / sqrt(2), so |slip| <= V_dc / sqrt(2) / ((L_r/M) v_s), with
+    the lowest DC-link voltage of the run.
     """
     m = motor.machine
     v_s = SQRT_3_2 * float(np.max(supply.voltage_pk[1]))
     f = float(np.max(supply.frequency_hz[1]))
-    slip_max = max_voltage_magnitude(motor.dc_link_voltage) / (m.L_r / m.M * v_s)
+    slip_max = max_voltage_magnitude(motor.dc_link_min) / (m.L_r / m.M * v_s)
     return 2.0 * np.pi * f / m.n_p * (1.0 + slip_max)
 
 
