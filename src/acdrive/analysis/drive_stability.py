@@ -77,7 +77,9 @@ from acdrive.sim.setup import (
     MotorSetup,
     Supply,
     constant,
-    max_speed,
+)
+from acdrive.sim.setup import (
+    speed_range as setup_speed_range,
 )
 
 RAD_S_PER_RPM = math.pi / 30.0
@@ -244,9 +246,10 @@ class StabilityResult:
 # ---------------------------------------------------------------------------------------------
 
 
-def speed_range(model: DriveModel) -> float:
-    """Largest |speed| [rad/s] the drive can hold (converter rotor-voltage limit, sim.setup)."""
-    return max_speed(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
+def speed_range(model: DriveModel) -> tuple[float, float]:
+    """(lowest, highest) speed [rad/s] the drive can hold (converter rotor-voltage limit,
+    ``sim.setup.speed_range``)."""
+    return setup_speed_range(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
 
 
 def check_point(model: DriveModel, point: OperatingPoint) -> None:
@@ -254,9 +257,12 @@ def check_point(model: DriveModel, point: OperatingPoint) -> None:
     (plus friction) inside the torque window of the controller (30)-(37)."""
     w = require_finite("speed", point.speed)
     tau_l = require_finite("load_torque", point.load_torque)
-    limit = speed_range(model)
-    if abs(w) > limit:
-        raise InputError("speed", f"must stay within +-{limit / RAD_S_PER_RPM:.0f} rpm")
+    low, high = speed_range(model)
+    if not low <= w <= high:
+        raise InputError(
+            "speed",
+            f"must stay within {low / RAD_S_PER_RPM:.0f} to {high / RAD_S_PER_RPM:.0f} rpm",
+        )
     lo, hi = _torque_window(model, model.v_g)
     need = tau_l + model.machine.B * w
     if not lo < need < hi:

@@ -42,6 +42,10 @@ def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int =
     if not closed.any():
         return {"relay_closed": False}
     i = int(np.argmax(closed > 0))
+    # the logged relay state is the plant's at t_k, read with the command held from the previous
+    # sample: the contact closed at the sample before the first closed row (exact with log_every
+    # = 1, within one logging interval otherwise)
+    t_close = float(result.t[i]) - result.sample_time
     after = (result.t >= result.t[i]) & (result.t < result.t[i] + 0.1)
     peak = float(np.max(result.peak("i_s_mag", motor)[after]))
     expected = math.remainder(m.machine.n_p * m.encoder_offset, 2 * math.pi)
@@ -57,7 +61,7 @@ def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int =
     return {
         "relay_closed": True,
         **forced,
-        "closing_time_s": float(result.t[i]),
+        "closing_time_s": t_close,
         "closing_stator_current_peak_a": peak,
         "closing_current_fraction_of_limit": peak / m.controller.stator_current_limit_pk,
         "voltage_mismatch_at_closing": float(result.signal("v_mismatch", motor)[max(i - 1, 0)]),

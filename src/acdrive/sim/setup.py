@@ -151,18 +151,29 @@ class DriveSetup:
         return dataclasses.replace(self, motors=motors, compare_modes=())
 
 
-def max_speed(motor: MotorSetup, supply: Supply) -> float:
-    """Largest |shaft speed| [rad/s] the converter can hold at zero torque.
+def speed_range(motor: MotorSetup, supply: Supply) -> tuple[float, float]:
+    """(lowest, highest) shaft speed [rad/s] the converter can hold at zero torque.
 
-    The steady rotor voltage at i_s = 0 is (Z_R / Z_MS) v_s (Bodson (20)), about |slip| (L_r/M) v_s;
-    the converter gives at most V_dc / sqrt(2), so |slip| <= V_dc / sqrt(2) / ((L_r/M) v_s), with
-    the lowest DC-link voltage of the run.
+    The steady rotor voltage at i_s = 0 is (Z_R / Z_MS) v_s (Bodson (20)), about |slip| (L_r/M) v_s
+    with slip s = (w_e - n_p w) / w_e; the converter gives at most V_dc / sqrt(2), so |s| <= s_max
+    = V_dc / sqrt(2) / ((L_r/M) v_s), i.e. w_e (1 - s_max) / n_p <= w <= w_e (1 + s_max) / n_p:
+    below zero speed the slip exceeds 1, so the negative bound is (w_e / n_p)(s_max - 1) in
+    magnitude, not the positive one.
+
+    The range is that of the nominal conditions: the supply voltage at t = 0, the DC link's nominal
+    voltage, and the extremes of the supply frequency. A reference outside it could never be held;
+    a fault that narrows the range for a while (a DC-link drop, a supply change) is simulated, and
+    the converter's saturation is reported.
     """
     m = motor.machine
-    v_s = SQRT_3_2 * float(np.max(supply.voltage_pk[1]))
-    f = float(np.max(supply.frequency_hz[1]))
-    slip_max = max_voltage_magnitude(motor.dc_link_min) / (m.L_r / m.M * v_s)
-    return 2.0 * np.pi * f / m.n_p * (1.0 + slip_max)
+    v_s = SQRT_3_2 * float(supply.voltage_pk[1][0])
+    f_low = float(np.min(supply.frequency_hz[1]))
+    f_high = float(np.max(supply.frequency_hz[1]))
+    slip_max = max_voltage_magnitude(motor.dc_link_voltage) / (m.L_r / m.M * v_s)
+    return (
+        2.0 * np.pi * f_low / m.n_p * (1.0 - slip_max),
+        2.0 * np.pi * f_high / m.n_p * (1.0 + slip_max),
+    )
 
 
 def n_steps(setup: DriveSetup) -> int:
@@ -225,13 +236,18 @@ def simulate(setup: DriveSetup) -> DriveResult:
 def check_setup(setup: DriveSetup) -> None:
     """Cross-field rules that single fields cannot express (raises InputError)."""
     for k, motor in enumerate(setup.motors):
-        limit = max_speed(motor, setup.supply)
+        low, high = speed_range(motor, setup.supply)
+        rule = (
+            f"must stay within {low * 30 / np.pi:.0f} to {high * 30 / np.pi:.0f} rpm (the "
+            "converter's rotor-voltage limit at the nominal supply and DC link)"
+        )
         ref = motor.speed_reference[1]
-        if np.max(np.abs(ref)) > limit:
-            raise InputError(
-                f"motor[{k}].speed_reference_rpm",
-                f"must stay within +-{limit * 30 / np.pi:.0f} rpm (the converter's rotor-voltage limit)",
-            )
+        if np.min(ref) < low or np.max(ref) > high:
+            raise InputError(f"motor[{k}].speed_reference_rpm", rule)
+        # a motor connected at t = 0 starts in steady state at its initial speed; a synchronising
+        # one starts with its stator open, and the summary reports a relay that cannot close
+        if not motor.controller.sync.enabled and not low <= motor.initial_speed <= high:
+            raise InputError(f"motor[{k}].initial_speed_rpm", rule)
         # the rotor must be able to carry the magnetising current v_s / (w_e M) at zero torque (33)
         v_pk = float(np.max(setup.supply.voltage_pk[1]))
         f_min = float(np.min(setup.supply.frequency_hz[1]))
