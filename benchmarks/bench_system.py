@@ -4,8 +4,8 @@ Prints one JSON document with, for ``bodson-ramp`` and ``bodson-two-motors`` (th
 the same scenario, the same sample time and substeps, the same results to rounding, see
 ``benchmarks/compare_engines.py``; the previous engine is frozen in ``benchmarks/previous_engine``):
 
-* control steps per second of each engine, best of ``REPEATS`` runs after a warm-up, and their
-  ratio (parts / previous);
+* control steps per second of each engine, best of ``REPEATS`` alternating runs after a
+  warm-up, and their ratio (parts / previous);
 * the start cost in a second process (import + a 0.01 s run) with the compiled code cached by a
   first process, for each engine: the second process must load, not compile.
 
@@ -22,7 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-REPEATS = 5
+REPEATS = 10
 SCENARIOS = ("bodson-ramp", "bodson-two-motors")
 
 HERE = Path(__file__).resolve().parent
@@ -56,10 +56,17 @@ def start_cost(function: str, cache_dir: str) -> dict:
     return out
 
 
-def steps_per_second(simulate, setup) -> float:
-    simulate(setup)  # warm-up (compiles once)
-    best = min(simulate(setup).wall_time for _ in range(REPEATS))
-    return round(setup.duration / setup.sample_time) / best
+def steps_per_second(engines: dict, setup) -> dict:
+    """Control steps per second of each engine (name -> simulate function), best of ``REPEATS``
+    runs after a warm-up, the engines' runs alternating so that both see the same machine load."""
+    for simulate in engines.values():
+        simulate(setup)  # warm-up (compiles once)
+    best = dict.fromkeys(engines, float("inf"))
+    for _ in range(REPEATS):
+        for name, simulate in engines.items():
+            best[name] = min(best[name], simulate(setup).wall_time)
+    steps = round(setup.duration / setup.sample_time)
+    return {name: steps / wall for name, wall in best.items()}
 
 
 def main() -> None:
@@ -73,8 +80,8 @@ def main() -> None:
     for name in SCENARIOS:
         s = load_scenario(name)
         s = s.with_mode(s.compare_modes[0]) if s.compare_modes else s
-        previous = steps_per_second(simulate_previous_engine, s)
-        parts = steps_per_second(simulate, s)
+        rates = steps_per_second({"previous": simulate_previous_engine, "parts": simulate}, s)
+        previous, parts = rates["previous"], rates["parts"]
         report["steps_per_second"][name] = {
             "previous_engine": round(previous),
             "parts": round(parts),

@@ -201,6 +201,11 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
                 f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
                 "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
             )
+    # the bench converter's first-harmonic voltage loss per motor (dead time and device drops,
+    # plant.converter / machines.dfim_part), which the scenario notes refer to
+    summary["converter_fundamental_loss_v"] = [
+        float(m.converter.fundamental_loss(m.dc_link_voltage)) for m in setup.motors
+    ]
     if setup.note:
         summary["note"] = setup.note
     warnings = []
