@@ -1,5 +1,6 @@
-"""Sensors seen by the controller (Bodson section IV-A): the encoder and the current sensors,
-as functions and as sampled parts. Voltages are read ideally (wired straight to the controller)."""
+"""Sensors seen by the controller (Bodson section IV-A): the encoder, the current sensors and a
+voltage sensor, as functions and as sampled parts. A voltage may also be wired straight to a
+controller (an ideal measurement)."""
 
 from __future__ import annotations
 
@@ -85,6 +86,43 @@ class CurrentSensors(SampledPart):
     DEFAULTS: ClassVar[dict] = {"fails": 0.0, "fault_time": 0.0}
     EVENTS = ("lost",)
     step = current_sensors_step
+
+    def held_outputs(self) -> dict:
+        return {"valid": 1.0}
+
+
+VOLTAGE_PARAMS = Layout(
+    real("gain", "", "measured / true (1: exact; a calibration error otherwise)", "positive"),
+    real("fails", "", "1: the measurement fails at fault_time, 0: never"),
+    real("fault_time", "s", "time from which the measurement fails", "nonnegative"),
+)
+VOLTAGE_INPUTS = Layout(cplx("v", "V", "voltage space vector"))
+VOLTAGE_OUTPUTS = Layout(
+    cplx("v", "V", "measured voltage (last valid value after a failure)"),
+    real("valid", "", "1 while the measurement works, 0 after it failed"),
+)
+_V_GAIN, _V_FAILS, _V_FAULT_T = (VOLTAGE_PARAMS.slot(n) for n in ("gain", "fails", "fault_time"))
+_V_VALID = VOLTAGE_OUTPUTS.slot("valid")
+
+
+@jit
+def voltage_sensor_step(t, T_s, u, p, s, y):
+    if p[_V_FAILS] != 0.0 and t >= p[_V_FAULT_T]:
+        y[_V_VALID] = 0.0
+        return EVENT_CURRENT_LOST  # bit 0: "lost", as for the current sensors
+    y[0], y[1] = p[_V_GAIN] * u[0], p[_V_GAIN] * u[1]
+    y[_V_VALID] = 1.0
+    return 0
+
+
+class VoltageSensor(SampledPart):
+    """A voltage space-vector measurement with a gain error; from ``fault_time`` on (if
+    ``fails``) it is lost: ``valid`` drops to 0 and the voltage keeps its last value."""
+
+    PARAMS, INPUTS, OUTPUTS = VOLTAGE_PARAMS, VOLTAGE_INPUTS, VOLTAGE_OUTPUTS
+    DEFAULTS: ClassVar[dict] = {"gain": 1.0, "fails": 0.0, "fault_time": 0.0}
+    EVENTS = ("lost",)
+    step = voltage_sensor_step
 
     def held_outputs(self) -> dict:
         return {"valid": 1.0}
