@@ -28,6 +28,12 @@ def run(args) -> int:
     from acdrive.sim.outcome import run_scenario
 
     setup = load_scenario(args.scenario)  # validates everything before any output exists
+    from acdrive.sim.im_drive import IMDriveSetup
+
+    if isinstance(setup, IMDriveSetup):  # a cage induction motor drive: its own outputs
+        from acdrive.commands.im_run import run_im
+
+        return run_im(args, setup)
     with OutputFolder(args.out, setup.name) as output:  # --out checked before the simulation
         outcome = run_scenario(setup)
         summary = outcome.summary

@@ -86,7 +86,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from acdrive.core.parts import Modulator
+from acdrive.core.parts import Modulator, SampledPart
 from acdrive.core.signals import Layout, cplx, real
 from acdrive.errors import InputError
 from acdrive.frames import K_3C
@@ -317,3 +317,44 @@ class Inverter(Modulator):
                 f"divided by an integer >= 1, got {sample_time:g} s (ratio {ratio:.6g})",
             )
         return int(n)
+
+
+# --- the PWM unit's latch, in front of an averaged converter -----------------------------------------------------
+
+LATCH_PARAMS = Layout(real("f_pwm", "Hz", "carrier frequency", "positive"))
+LATCH_STATES = Layout(
+    real("k", "", "index of the next control sample within the carrier period"),
+    cplx("v", "V", "command latched at the carrier period start"),
+)
+LATCH_INPUTS = Layout(cplx("v_ref", "V", "voltage command of the controller, every sample"))
+LATCH_OUTPUTS = Layout(cplx("v_ref", "V", "command latched at the carrier period start"))
+_LA_F = LATCH_PARAMS.slot("f_pwm")
+_LA_K, _LA_V = LATCH_STATES.slot("k"), LATCH_STATES.slot("v")
+
+
+@jit
+def latch_step(t, T_s, u, p, s, y):
+    """At the first sample of each carrier period take the command; hold it for N samples (the
+    rule of ``plant.inverter.inverter_segments``, same N)."""
+    n = carrier_samples(p[_LA_F], T_s)
+    j = s[_LA_K]
+    if j < 0.0 or j >= n:
+        j = 0.0
+    if j == 0.0:
+        s[_LA_V], s[_LA_V + 1] = u[0], u[1]
+    s[_LA_K] = j + 1.0 if j + 1.0 < n else 0.0
+    y[0], y[1] = s[_LA_V], s[_LA_V + 1]
+    return 0
+
+
+class CarrierLatch(SampledPart):
+    """The PWM unit's shadow register: the controller's command taken once per carrier period
+    1 / f_pwm (N = T_pwm / T_s samples) and held, as ``plant.inverter.Inverter`` latches it; in
+    front of an averaged converter it makes the carrier-period average of the inverter."""
+
+    PARAMS, STATES, INPUTS, OUTPUTS = LATCH_PARAMS, LATCH_STATES, LATCH_INPUTS, LATCH_OUTPUTS
+    DEFAULTS: ClassVar[dict] = {"f_pwm": 5000.0}
+    step = latch_step
+
+    def check_run(self, sample_time: float) -> None:
+        Inverter(self.name, f_pwm=self.values["f_pwm"]).check_sample_time(sample_time)

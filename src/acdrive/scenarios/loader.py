@@ -45,11 +45,8 @@ Physical pre-checks, made before any simulation (each an ``InputError`` naming t
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
-import tomllib
 import warnings
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -59,7 +56,6 @@ from acdrive.errors import (
     InputError,
     Notice,
     require_between,
-    require_finite,
     require_nonnegative,
     require_positive,
     require_safe_name,
@@ -69,6 +65,8 @@ from acdrive.machines.dfim import DFIMParams
 from acdrive.machines.dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant.converter import max_voltage_magnitude
 from acdrive.plant.mechanics import W_COULOMB
+from acdrive.scenarios.files import Section as _Section
+from acdrive.scenarios.files import builtin_names, builtin_text, read_scenario
 from acdrive.sim.result import N_LOG
 from acdrive.sim.setup import (
     RK4_STEP_LIMIT,
@@ -79,10 +77,19 @@ from acdrive.sim.setup import (
     Supply,
     Synchroniser,
     check_setup,
-    constant,
     fastest_electrical_rate,
 )
 from acdrive.sim.system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
+
+__all__ = [  # the reading functions of scenarios.files are offered here too
+    "build_setup",
+    "builtin_names",
+    "builtin_text",
+    "choose_substeps",
+    "fastest_mode",
+    "load_scenario",
+    "read_scenario",
+]
 
 RAD_S_PER_RPM = math.pi / 30.0
 #: sample time [s] and substeps per sample when the scenario does not say
@@ -90,115 +97,17 @@ DEFAULT_SAMPLE_TIME = 200e-6
 DEFAULT_SUBSTEPS = 4
 
 
-def builtin_names() -> list[str]:
-    folder = resources.files("acdrive.scenarios") / "builtin"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
-
-
-def builtin_text(name: str) -> str:
-    return (resources.files("acdrive.scenarios") / "builtin" / f"{name}.toml").read_text()
-
-
-def read_scenario(source: str | Path) -> dict:
-    """Parse a scenario: a built-in name or a path to a TOML file."""
-    source = str(source)
-    if source in builtin_names():
-        text, origin = builtin_text(source), source
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise InputError(
-                "scenario",
-                f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file",
-            )
-        try:
-            text, origin = path.read_text(encoding="utf-8"), str(path)
-        except UnicodeDecodeError:
-            raise InputError("scenario", f"{path} is not a UTF-8 text file") from None
-        except OSError as exc:
-            raise InputError("scenario", f"cannot read {path} ({exc.strerror})") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError("scenario", f"{origin} is not valid TOML ({exc})") from None
-
-
 def load_scenario(source: str | Path) -> DriveSetup:
-    """Read, validate and build a scenario into a ``DriveSetup``."""
-    return build_setup(read_scenario(source))
+    """Read, validate and build a scenario into a ``DriveSetup`` (a file that says
+    ``drive = "cage-im"``: an ``IMDriveSetup``, ``scenarios.im_loader``)."""
+    data = read_scenario(source)
+    if isinstance(data, dict) and "drive" in data:
+        if data["drive"] != "cage-im":
+            raise InputError("drive", 'must be "cage-im" (omit it for a DFIM scenario)')
+        from acdrive.scenarios.im_loader import build_im_setup
 
-
-class _Section:
-    """A TOML table being validated: tracks the keys read so unknown keys can be reported."""
-
-    def __init__(self, data, path: str):
-        if not isinstance(data, dict):
-            raise InputError(path, "must be a table")
-        self.data, self.path, self.used = data, path, set()
-
-    def field(self, key: str) -> str:
-        return f"{self.path}.{key}" if self.path else key
-
-    def get(self, key, default=None):
-        self.used.add(key)
-        return self.data.get(key, default)
-
-    def has(self, key) -> bool:
-        return key in self.data
-
-    def number(self, key, default, rule=require_finite):
-        value = self.get(key, default)
-        return rule(self.field(key), value)
-
-    def integer(self, key, default, minimum=1, maximum=None):
-        value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise InputError(self.field(key), f"must be an integer >= {minimum}")
-        if maximum is not None and value > maximum:
-            raise InputError(self.field(key), f"must be an integer <= {maximum}, got {value}")
-        return value
-
-    def boolean(self, key, default):
-        value = self.get(key, default)
-        if not isinstance(value, bool):
-            raise InputError(self.field(key), "must be true or false")
-        return value
-
-    def text(self, key, default=None, choices=None):
-        value = self.get(key, default)
-        if not isinstance(value, str):
-            raise InputError(self.field(key), "must be a string")
-        if choices is not None and value not in choices:
-            raise InputError(self.field(key), f"must be one of {', '.join(choices)}")
-        return value
-
-    def profile(self, key, scale=1.0, rule=require_finite):
-        """A list of [t, value] pairs with non-decreasing t >= 0, as (times, values) arrays."""
-        value = self.get(key)
-        name = self.field(key)
-        if not isinstance(value, list) or not value:
-            raise InputError(name, "must be a non-empty list of [time_s, value] pairs")
-        times, values = [], []
-        for i, pair in enumerate(value):
-            if not isinstance(pair, list) or len(pair) != 2:
-                raise InputError(f"{name}[{i}]", "must be a [time_s, value] pair")
-            times.append(require_nonnegative(f"{name}[{i}][0]", pair[0]))
-            values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
-        if any(b < a for a, b in itertools.pairwise(times)):
-            raise InputError(name, "times must be non-decreasing")
-        return np.array(times), np.array(values)
-
-    def constant_or_profile(self, key, default, scale=1.0, rule=require_finite):
-        if self.has(key) and self.has(f"{key}_profile"):
-            raise InputError(self.field(key), f"give either {key} or {key}_profile, not both")
-        if self.has(f"{key}_profile"):
-            return self.profile(f"{key}_profile", scale, rule)
-        return constant(self.number(key, default, rule) * scale)
-
-    def done(self):
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            raise InputError(self.field(unknown[0]), "unknown key")
+        return build_im_setup(data)
+    return build_setup(data)
 
 
 def _machine(section: _Section, index: int) -> DFIMParams:
