@@ -4,7 +4,8 @@ Each paper maps to a module ``acdrive.report.<name>_reproduction`` exposing
 ``write_report(out_dir) -> Path``; a paper whose module does not exist yet is a one-line error
 with exit code 2.
 
-The report is ``DIR/<paper>.md`` beside its figure folder ``DIR/<paper>/``. Both are written like
+The report is ``DIR/<stem>.md`` beside its figure folder ``DIR/<stem>/`` (the stem is the
+paper's name unless ``STEMS`` gives another). Both are written like
 ``acdrive run``'s output (``acdrive.output.OutputEntries``): DIR and the two entries are checked
 before any computation (an existing ``<paper>.md`` must be a file and ``<paper>`` a folder, never
 a symbolic link), the writer works in a hidden staging folder inside DIR, and the two entries are
@@ -21,11 +22,15 @@ import sys
 REPORTS = {
     "icad": "acdrive.report.icad_reproduction",
     "bodson": "acdrive.report.bodson_reproduction",
+    "im": "acdrive.report.im_reproduction",
 }
+#: Paper name -> report file stem, where it is not the paper's name.
+STEMS = {"im": "im-current-control"}
 
 HELP = """Recompute every number and figure of a paper's analysis and write a Markdown report
 (DIR/<paper>.md, figures in DIR/<paper>/) with the printed value beside acdrive's and the reason
-for each difference. Papers: icad (Ugalde-Loo et al. and Amezquita-Brooks et al.), bodson."""
+for each difference. Papers: icad (Ugalde-Loo et al. and Amezquita-Brooks et al.), bodson, im
+(Amezquita-Brooks et al. secs. VI-VIII, im-current-control.md)."""
 
 
 def register(subparsers) -> None:
@@ -52,7 +57,8 @@ def run(args) -> int:
         return 2
     from acdrive.output import FILE, FOLDER, OutputEntries
 
-    entries = {f"{args.paper}.md": FILE, args.paper: FOLDER}
+    stem = STEMS.get(args.paper, args.paper)
+    entries = {f"{stem}.md": FILE, stem: FOLDER}
     with OutputEntries(args.out, entries, field="--out", name_field="paper") as output:
         staged = module.write_report(output.staging)  # --out checked before the computation
         output.publish()
