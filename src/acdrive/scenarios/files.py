@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.errors import InputError, require_finite, require_nonnegative
+from acdrive.machines import registry
 from acdrive.sim.setup import constant
 
 
@@ -123,3 +124,31 @@ class Section:
         unknown = sorted(set(self.data) - self.used)
         if unknown:
             raise InputError(self.field(unknown[0]), "unknown key")
+
+
+def machine_from(
+    section: Section,
+    kind: type,
+    fields: tuple[str, ...],
+    default: str,
+    params_label: str = "[params]",
+):
+    """The machine of ``section``: a built-in name (``machine``, of parameter class ``kind``) or
+    the table ``params`` holding ``fields``, validated by ``kind`` itself; not both."""
+    if section.has("machine") and section.has("params"):
+        raise InputError(
+            section.field("machine"), f"give either machine or {params_label}, not both"
+        )
+    if section.has("params"):
+        params = Section(section.get("params"), section.field("params"))
+        values = {k: params.get(k) for k in fields}
+        params.done()
+        missing = [k for k, v in values.items() if v is None]
+        if missing:
+            raise InputError(params.field(missing[0]), "is required")
+        try:
+            return kind(**values)
+        except InputError as exc:
+            raise InputError(params.field(exc.field), exc.rule) from None
+    name = section.text("machine", default, choices=registry.names(kind))
+    return registry.MACHINES[name]

@@ -76,9 +76,9 @@ from acdrive.errors import (
     require_safe_name,
 )
 from acdrive.frames import K_PEAK as SQRT_3_2
-from acdrive.machines import registry
 from acdrive.machines.induction import IMParams
 from acdrive.scenarios.files import Section as _Section
+from acdrive.scenarios.files import machine_from
 from acdrive.sim.im_drive import (
     INVERTER_MODELS,
     MODES,
@@ -115,23 +115,10 @@ def _require_nothing(section: _Section, mode: str, why: str) -> None:
 
 def _machine(sec: _Section) -> tuple[IMParams, IMParams]:
     """(nominal machine, simulated plant)."""
-    if sec.has("machine") and sec.has("params"):
-        raise InputError(sec.field("machine"), "give either machine or [machine.params], not both")
-    if sec.has("params"):
-        params = _Section(sec.get("params"), sec.field("params"))
-        fields = ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p")
-        values = {k: params.get(k) for k in fields}
-        params.done()
-        missing = [k for k, v in values.items() if v is None]
-        if missing:
-            raise InputError(params.field(missing[0]), "is required")
-        try:
-            nominal = IMParams(**values)
-        except InputError as exc:
-            raise InputError(params.field(exc.field), exc.rule) from None
-    else:
-        name = sec.text("machine", "delorenzo-im", choices=registry.names(IMParams))
-        nominal = registry.MACHINES[name]
+    nominal = machine_from(
+        sec, IMParams, ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p"), "delorenzo-im",
+        params_label="[machine.params]",
+    )  # fmt: skip
     plant = nominal
     if sec.has("perturbation"):
         pert = _Section(sec.get("perturbation"), sec.field("perturbation"))

@@ -60,13 +60,12 @@ from acdrive.errors import (
     require_positive,
     require_safe_name,
 )
-from acdrive.machines import registry
 from acdrive.machines.dfim import DFIMParams
 from acdrive.machines.dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant.converter import max_voltage_magnitude
 from acdrive.plant.mechanics import W_COULOMB
 from acdrive.scenarios.files import Section as _Section
-from acdrive.scenarios.files import builtin_names, builtin_text, read_scenario
+from acdrive.scenarios.files import builtin_names, builtin_text, machine_from, read_scenario
 from acdrive.sim.result import N_LOG
 from acdrive.sim.setup import (
     RK4_STEP_LIMIT,
@@ -111,23 +110,9 @@ def load_scenario(source: str | Path) -> DriveSetup:
 
 
 def _machine(section: _Section, index: int) -> DFIMParams:
-    if section.has("machine") and section.has("params"):
-        raise InputError(section.field("machine"), "give either machine or [params], not both")
-    if section.has("params"):
-        params = _Section(section.get("params"), section.field("params"))
-        fields = ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J")
-        values = {k: params.get(k) for k in fields}
-        params.done()
-        missing = [k for k, v in values.items() if v is None]
-        if missing:
-            raise InputError(params.field(missing[0]), "is required")
-        try:
-            machine = DFIMParams(**values)
-        except InputError as exc:
-            raise InputError(params.field(exc.field), exc.rule) from None
-    else:
-        name = section.text("machine", "bodson-dfim", choices=registry.names(DFIMParams))
-        machine = registry.MACHINES[name]
+    machine = machine_from(
+        section, DFIMParams, ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J"), "bodson-dfim"
+    )
     B = section.number("viscous_friction", 0.0, require_nonnegative)
     tau_c = section.number("coulomb_friction", 0.0, require_nonnegative)
     return dataclasses.replace(machine, B=B, tau_c=tau_c)
