@@ -437,6 +437,10 @@ BAD = {
         "current_control.controller: must be one of",
     ),
     "unknown key": ({"machine": "colour = 1"}, "machine.colour: unknown key"),
+    "unknown integrator": (
+        {"simulation": 'integrator = "euler"'},
+        "simulation.integrator: must be one of rk4, rk6",
+    ),
     "speed loop on a held shaft": (
         {"raw": BASE.replace('mode = "current"', 'mode = "speed-pi"\nspeed_rad_s = 10.0')},
         "machine.prescribed_speed_rad_s: mode speed-pi controls the shaft: it must be free",

@@ -306,3 +306,33 @@ def test_rl_load_is_integrated_over_the_exact_segments_with_fourth_order_rk4(rl_
     orders = [math.log2(a / b) for a, b in pairwise(errors)]
     assert all(3.7 < order < 4.3 for order in orders), (errors, orders)
     assert errors[-1] < 1e-10
+
+
+@pytest.mark.parametrize("t_d", [0.0, 2e-6])
+def test_the_sixth_order_method_converges_at_order_six_over_the_same_segments(t_d):
+    """``System(method="rk6")``: Butcher's seven-stage method over the exact segments."""
+    program = VoltageProgram("program", V_pk=V_PK, f=50.0)
+    dc = DCSource("dc", V=V_DC)
+    inv = Inverter("inv", f_pwm=F_PWM, t_d=t_d, v_drop=1.2 if t_d else 0.0)
+    load = RLLoad("load", R=R_LOAD, L=L_LOAD)
+    wires = [
+        (program.out.v_ref, inv.inp.v_ref),
+        (dc.out.v_dc, inv.inp.v_dc),
+        (load.out.i_s, inv.inp.i_s),
+        (inv.out.v, load.inp.v),
+    ]
+    compiled = System([program, dc, inv, load], wires, method="rk6").compile()
+    errors, reference = [], None
+    for substeps in [1, 2, 4]:
+        result = compiled.run(0.02, T_PWM, substeps, log=[program.out.v_ref, load.out.i_s])
+        if reference is None:
+            reference = exact_rl_currents(inv, T_PWM, result.signal(program.out.v_ref))
+            scale = np.max(np.abs(reference))
+        errors.append(np.max(np.abs(result.signal(load.out.i_s) - reference)) / scale)
+    orders = [math.log2(a / b) for a, b in pairwise(errors)]
+    assert all(5.6 < order < 6.4 for order in orders), (errors, orders)
+
+
+def test_an_unknown_integration_method_is_refused():
+    with pytest.raises(InputError, match=r"^method: must be one of rk4, rk6"):
+        System([DCSource("dc", V=V_DC)], [], method="euler")

@@ -134,7 +134,7 @@ class SampleMap:
         self.E = np.zeros(m.N_EVENTS, dtype=np.int64)
         self.DT, self.V = np.zeros((m.N_MOD, m.MAX_SEG)), np.zeros((m.N_MOD, m.MAX_SEG, m.MAX_W))
         self.NSEG = np.zeros(m.N_MOD, dtype=np.int64)
-        self.W = np.empty((5, system.sizes["x"]))
+        self.W = np.empty((m.N_W, system.sizes["x"]))
         self.IDX, self.LEFT = np.zeros(m.N_MOD, dtype=np.int64), np.zeros(m.N_MOD)
         self._steps = [getattr(m, f"sample_{i}") for i in range(len(system.sampled))]
         self._planned = None

@@ -9,8 +9,10 @@ units in the key names where not SI; defaults in brackets):
     drive = "cage-im", name, description, note (copied into summary.json),
     compare_controllers = { <label> = "<built-in controller>", ... }   one run per controller,
                   the label names its results (e.g. { icad = "paper-20", pi = "paper-pi" })
-    [simulation]  duration [0.2], sample_time [2e-5: the paper's 50 kHz], substeps [4],
-                  log_every [1], metrics_from (s; start of the current-error window) [0]
+    [simulation]  duration [0.2], sample_time [2e-5: the paper's 50 kHz], substeps [4] (steps
+                  of the integrator per held segment), integrator ("rk4" | "rk6": classical
+                  fourth-order or Butcher's sixth-order Runge-Kutta, ``sim.system.INTEGRATORS``)
+                  ["rk4"], log_every [1], metrics_from (s; start of the current-error window) [0]
     [machine]     machine ["delorenzo-im"; a built-in cage IM] or [machine.params]
                   (R_s, R_r, L_s, L_r, L_m, n_p): the nominal machine the controllers are
                   designed for; J [foc.J_ESTIMATE], viscous_friction, coulomb_friction [0],
@@ -98,7 +100,7 @@ from acdrive.sim.im_drive import (
     SpeedPSetup,
     current_loop_radius,
 )
-from acdrive.sim.system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
+from acdrive.sim.system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 DRIVE = "cage-im"
 #: relative tolerance of "the sample time divides the carrier period" (as plant.inverter)
@@ -399,6 +401,7 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     if sample_time > duration:
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
     substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
+    integrator = sim.text("integrator", "rk4", choices=tuple(INTEGRATORS))
     log_every = sim.integer("log_every", 1)
     if log_every > round(duration / sample_time):
         raise InputError(
@@ -491,6 +494,7 @@ def build_im_setup(data: dict) -> IMDriveSetup:
         duration=duration,
         sample_time=sample_time,
         substeps=substeps,
+        integrator=integrator,
         log_every=log_every,
         name=name,
         description=description,

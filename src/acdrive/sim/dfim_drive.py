@@ -174,7 +174,7 @@ class DFIMDrive:
                 for w in _motor_wires(k, p, self.grid, self.bus)
             ),
         ]
-        self.system = System(parts, wires)
+        self.system = System(parts, wires, method=setup.integrator)
 
     def initial(self) -> tuple[dict, dict]:
         """(initial states, held outputs) at t = 0.

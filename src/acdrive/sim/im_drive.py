@@ -339,6 +339,7 @@ class IMDriveSetup:
     duration: float = 0.2
     sample_time: float = PAPER_SAMPLE_TIME
     substeps: int = 4
+    integrator: str = "rk4"
     log_every: int = 1
     name: str = "custom"
     description: str = ""
@@ -718,7 +719,7 @@ def _build_system(s: IMDriveSetup, p: dict) -> System:
             wires += [(p["encoder"].out.theta, pos.inp.theta), (pos.out.w_ref, sc.inp.w_ref)]
         else:
             wires.append((p["speed_reference"].out.w_ref, sc.inp.w_ref))
-    return System(list(p.values()), wires)
+    return System(list(p.values()), wires, method=s.integrator)
 
 
 def divergence_hint(setup: IMDriveSetup) -> str:

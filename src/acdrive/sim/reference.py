@@ -50,7 +50,7 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
     ECOUNT = np.zeros((m.N_EVENTS, 64), dtype=np.int64)
     idx = np.array([c[2] for c in columns], dtype=np.int64)
     out_slots = [system.slots[p.name].y for p in system.modulators]
-    W = np.empty((5, system.sizes["x"]))
+    W = np.empty((m.N_W, system.sizes["x"]))
     IDX, LEFT = np.zeros(m.N_MOD, dtype=np.int64), np.zeros(m.N_MOD)
     steps = _sampled_steps(system, m, P, PO, S, Y, U, python_steps or {})
 

@@ -137,6 +137,7 @@ class DriveSetup:
     duration: float = 1.0
     sample_time: float = 200e-6
     substeps: int = 4
+    integrator: str = "rk4"  # sim.system.INTEGRATORS
     log_every: int = 1
     name: str = "custom"
     compare_modes: tuple[str, ...] = ()  # run once per controller mode (Bodson Figs. 8-11)
