@@ -18,7 +18,7 @@ import warnings
 from acdrive.errors import InputError, Notice, SimulationDiverged
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
-COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce")
+COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce", "sweep", "bench")
 
 
 #: A negative number as an option value (``--load-nm -0.1``, ``--speed -1e5``, ``-inf``):
