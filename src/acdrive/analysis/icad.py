@@ -53,7 +53,7 @@ from acdrive.analysis.margins import (
     winding_number,
 )
 from acdrive.analysis.plants import Plant2x2, as_plant
-from acdrive.control.lti import PAPER_20, PAPER_PI
+from acdrive.control.lti import PAPER_20, PAPER_PI, as_lti
 from acdrive.errors import InputError, require_finite
 from acdrive.machines.induction import IMParams
 from acdrive.machines.pmsm import PMSGParams
@@ -203,6 +203,7 @@ def icad_response_arrays(A, B, C, D, k1: LTI, k2: LTI, w, speeds=None) -> ICADRe
     G = evaluate_ss(A, B, C, D, 1j * w)
     if G.shape[-2:] != (2, 2):
         raise InputError("plant", f"must be 2x2, got {G.shape[-2]}x{G.shape[-1]}")
+    k1, k2 = as_lti(k1, "k1"), as_lti(k2, "k2")  # python-control objects are welcome too
     kv = np.stack([k1.freqresp(w), k2.freqresp(w)])
     _, _, _, gamma, h, c, coupling = _kernel_outputs(G, kv[0], kv[1])
     ns = G.shape[0]
@@ -613,10 +614,10 @@ class ICADAnalysis:
         return worst((ch.coupling_peak_db for ch in self.channels), max)
 
 
-def check_controller(k: LTI, name: str) -> LTI:
-    """Require a controller without open right-half-plane poles (integrators are allowed)."""
-    if not isinstance(k, LTI):
-        raise InputError(name, f"must be an LTI controller, got {type(k).__name__}")
+def check_controller(k, name: str) -> LTI:
+    """Require a controller without open right-half-plane poles (integrators are allowed); a
+    python-control SISO ``TransferFunction`` or ``StateSpace`` is taken as its ``LTI``."""
+    k = as_lti(k, name)
     bad = k.rhp_poles()
     if bad.size:
         raise InputError(

@@ -101,6 +101,19 @@ class Plant2x2:
         """Eigenvalues of A (the open-loop poles, with any uncontrollable/unobservable modes)."""
         return np.linalg.eigvals(self.A)
 
+    def to_control(self):
+        """This plant as a python-control ``StateSpace`` (continuous time; the optional
+        ``control`` extra), inputs and outputs named as here."""
+        try:
+            import control
+        except ImportError:  # pragma: no cover - depends on the environment
+            raise InputError(
+                "control", "python-control is not installed (pip install 'acdrive[control]')"
+            ) from None
+        kwargs = {"name": self.name} if self.name else {}
+        return control.ss(self.A, self.B, self.C, self.D, inputs=list(self.inputs),
+                          outputs=list(self.outputs), **kwargs)  # fmt: skip
+
     def siso(self, i: int, j: int):
         """(A, b, c, d) of the element g_ij (0-based indices), as arrays."""
         return self.A, self.B[:, j : j + 1], self.C[i : i + 1, :], self.D[i : i + 1, j : j + 1]

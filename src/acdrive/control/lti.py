@@ -393,6 +393,11 @@ class LTI:
             raise InputError("controller", "must be continuous-time (dt = 0)")
         return cls(ss.A, ss.B, ss.C, ss.D, name=name)
 
+    def to_control(self):
+        """This controller as a python-control ``StateSpace`` (continuous time; needs the optional
+        ``control`` extra). ``control.tf(k.to_control())`` gives the transfer function."""
+        return _to_control_ss(self.A, self.B, self.C, self.D, 0, self.name)
+
     # -- properties ---------------------------------------------------------------------------
     @property
     def order(self) -> int:
@@ -422,6 +427,45 @@ class LTI:
 
 # ---------------------------------------------------------------------------------------------
 # MIMO controllers
+
+
+def _to_control_ss(A, B, C, D, dt, name: str):
+    """A python-control ``StateSpace`` of (A, B, C, D) at sampling time ``dt`` (0: continuous);
+    python-control is an optional dependency, so its absence is an input error naming it."""
+    try:
+        import control
+    except ImportError:  # pragma: no cover - depends on the environment
+        raise InputError(
+            "control", "python-control is not installed (pip install 'acdrive[control]')"
+        ) from None
+    n = np.asarray(A).shape[0]
+    p, m = np.asarray(D).shape
+    # python-control wants (n x m) B and (p x n) C even when n = 0
+    B = np.asarray(B, dtype=float).reshape(n, m)
+    C = np.asarray(C, dtype=float).reshape(p, n)
+    kwargs = {"name": name} if name else {}
+    return control.ss(np.asarray(A, dtype=float).reshape(n, n), B, C, D, dt, **kwargs)
+
+
+def as_lti(controller, field_name: str = "controller") -> LTI:
+    """An ``LTI`` from an ``LTI`` (returned as it is) or a python-control SISO continuous-time
+    ``TransferFunction`` / ``StateSpace``; anything else is an ``InputError`` naming the field."""
+    if isinstance(controller, LTI):
+        return controller
+    try:
+        import control
+    except ImportError:  # pragma: no cover - depends on the environment
+        control = None
+    if control is not None and isinstance(controller, control.LTI):
+        try:
+            return LTI.from_control(controller, name=getattr(controller, "name", "") or "")
+        except InputError as exc:
+            raise InputError(field_name, exc.rule) from None
+    raise InputError(
+        field_name,
+        "must be an LTI controller or a python-control TransferFunction/StateSpace, got "
+        f"{type(controller).__name__}",
+    )
 
 
 def _matrix(field_name: str, value, shape: tuple[int | None, int | None]) -> np.ndarray:
@@ -489,6 +533,21 @@ class LTIMatrix:
         C = np.asarray(C, dtype=float)
         C = np.atleast_2d(C) if C.size else np.zeros((D.shape[0], n))
         return cls(A, B, C, D, name=name)
+
+    @classmethod
+    def from_control(cls, sys, name: str = "") -> LTIMatrix:
+        """From a python-control continuous-time ``StateSpace`` or ``TransferFunction`` (any
+        number of inputs and outputs)."""
+        import control
+
+        ss = control.ss(sys)
+        if ss.dt not in (0, None):
+            raise InputError("controller", "must be continuous-time (dt = 0)")
+        return cls.ss(ss.A, ss.B, ss.C, ss.D, name=name or getattr(sys, "name", "") or "")
+
+    def to_control(self):
+        """This controller as a python-control ``StateSpace`` (continuous time)."""
+        return _to_control_ss(self.A, self.B, self.C, self.D, 0, self.name)
 
     @classmethod
     def grid(cls, rows, name: str = "") -> LTIMatrix:
@@ -645,6 +704,10 @@ class DiscreteLTI:
 
     def __iter__(self):
         return iter((self.Ad, self.Bd, self.Cd, self.Dd))
+
+    def to_control(self):
+        """This discrete controller as a python-control ``StateSpace`` with ``dt = T_s``."""
+        return _to_control_ss(self.Ad, self.Bd, self.Cd, self.Dd, self.T_s, self.source.name)
 
     @property
     def order(self) -> int:
