@@ -1,0 +1,42 @@
+"""The public namespaces: every name in a subpackage's ``__all__`` resolves to the object defined
+in its module, unknown names raise AttributeError, and importing a subpackage stays light."""
+
+from __future__ import annotations
+
+import importlib
+
+import pytest
+
+PACKAGES = (
+    "acdrive.machines",
+    "acdrive.control",
+    "acdrive.plant",
+    "acdrive.analysis",
+    "acdrive.sim",
+    "acdrive.scenarios",
+)
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_every_public_name_resolves_and_is_listed(package):
+    module = importlib.import_module(package)
+    assert module.__all__ == sorted(module.__all__) and module.__all__
+    for name in module.__all__:
+        obj = getattr(module, name)
+        assert obj is not None
+        assert name in dir(module)
+    with pytest.raises(AttributeError, match="has no attribute 'no_such_name'"):
+        module.no_such_name  # noqa: B018
+
+
+def test_public_names_are_the_defining_modules_objects():
+    from acdrive.analysis import analyse
+    from acdrive.analysis.icad import analyse as analyse_def
+    from acdrive.control import LTI, PAPER_20
+    from acdrive.control.lti import LTI as LTI_def
+    from acdrive.control.lti import PAPER_20 as PAPER_20_def
+    from acdrive.machines import BODSON_DFIM
+    from acdrive.machines.dfim import BODSON_DFIM as BODSON_def
+
+    assert analyse is analyse_def and LTI is LTI_def and PAPER_20 is PAPER_20_def
+    assert BODSON_DFIM is BODSON_def
