@@ -56,7 +56,7 @@ speed_bandwidth = 100.0
     import pandas as pd
 
     frame = pd.read_parquet(folder / "data.parquet")
-    assert len(frame) == 1500 and {"t", "w", "i_r_mag"} <= set(frame.columns)
+    assert len(frame) == 1500 and {"t", "w", "i_r_pk", "i_r_d_sv"} <= set(frame.columns)
 
 
 BAD = {

@@ -141,7 +141,9 @@ def test_locked_rotor_summary_is_the_logged_data_and_20_beats_the_pi(outcomes):
         errors[label] = rms
         assert result.setup.current_control.controller == dict(setup.compare_controllers)[label]
         assert np.all(result.signal("w") == 0.0)  # locked rotor
-    assert summary["current_rms_error_a"] == errors["icad"]  # the first run at the top level
+    # the first run at the top level (two formulas of the same RMS: equal to rounding)
+    assert summary["current_rms_error_a"] == summary["runs"]["icad"]["current_rms_error_a"]
+    assert summary["current_rms_error_a"] == pytest.approx(errors["icad"], rel=1e-12)
     # (20)'s high loop gain around the rotor frequency (sec. V-C) against the PI's (sec. VI-D)
     assert errors["icad"] < errors["pi"] / 4
 
@@ -542,7 +544,7 @@ def test_run_writes_data_figures_and_a_strict_summary(tmp_path):
         "inner_pi",
         "high_ki_pi",
     }
-    assert summary["units"]["i_s_alpha"] == "A" and summary["units"]["tau_e"] == "N m"
+    assert summary["units"]["i_s_alpha_sv"] == "A" and summary["units"]["tau_e"] == "N m"
     assert (folder / "step_responses.png").exists()
     import pandas as pd
 
@@ -550,7 +552,15 @@ def test_run_writes_data_figures_and_a_strict_summary(tmp_path):
         assert (folder / label / "currents.png").exists()
         assert (folder / label / "modulation_a.png").exists()
         frame = pd.read_parquet(folder / label / "data.parquet")
-        assert len(frame) == 2000 and {"t", "i_s_alpha", "i_ref_beta", "m_a", "w"} <= set(frame)
+        assert len(frame) == 2000
+        assert {"t", "i_s_alpha_sv", "i_ref_beta_sv", "m_a", "w"} <= set(frame)
+        from acdrive.columns import read_units
+
+        meta = read_units(folder / label / "data.parquet")
+        assert list(meta) == list(frame) and meta["i_s_alpha_sv"]["unit"] == "A"
+        assert "power-invariant" in meta["i_s_alpha_sv"]["description"]
+        notes = (folder / label / "columns.md").read_text()
+        assert all(f"| `{name}` |" in notes for name in frame)
     # the printed rows are the summary's numbers
     over = summary["step_overshoot_icad"]
     assert f"{over:.1%}" in out.stdout and "linear ICAD model" in out.stdout

@@ -40,3 +40,18 @@ def test_public_names_are_the_defining_modules_objects():
 
     assert analyse is analyse_def and LTI is LTI_def and PAPER_20 is PAPER_20_def
     assert BODSON_DFIM is BODSON_def
+
+
+def test_importing_the_namespaces_does_not_import_numba():
+    """``import acdrive.machines`` (and the analysis namespace) stays light: no numba until a
+    compiled function is needed."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR",)}
+    code = "import sys, acdrive.machines, acdrive.analysis; print('numba' in sys.modules)"
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
+    assert out.stdout.strip() == "False"

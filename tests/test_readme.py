@@ -32,3 +32,28 @@ def test_parts_example_runs_and_the_shorted_dfim_runs_up_to_synchronous_speed():
     i_s = np.abs(result.signal(dfim.out.i_s))
     assert i_s[-100:].max() == pytest.approx(no_load, rel=0.01)
     assert i_s[: len(i_s) // 10].max() > 2 * no_load  # the starting current
+
+
+def test_scenario_example_runs_every_mode_and_saves_into_new_folders(tmp_path, monkeypatch):
+    """The first Python example: a two-mode scenario gives both modes, and save() creates its
+    folder (the scenario is shortened here; the code is the README's)."""
+    import dataclasses
+
+    from acdrive.scenarios import loader
+
+    text = README.read_text()
+    code = re.search(r"```python\n(from acdrive.scenarios.loader.*?)```", text, re.DOTALL).group(1)
+    original = loader.load_scenario
+    monkeypatch.setattr(
+        loader, "load_scenario", lambda name: dataclasses.replace(original(name), duration=0.2)
+    )
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102  (the README example itself)
+    outcome = scope["outcome"]
+    modes = set(original("bodson-step").compare_modes)
+    assert set(outcome.results) == modes == {"voltage", "current"}
+    for mode in outcome.results:
+        assert (tmp_path / "bodson-step" / mode / "data.parquet").exists()
+        assert (tmp_path / "bodson-step" / mode / "columns.md").exists()
+    assert "units" in scope["frame"].attrs

@@ -10,13 +10,21 @@ def _configure_numba_cache() -> None:
     a callee from another file even after that file changes. Keying the whole cache folder by the
     content of every acdrive source file makes a stale mix impossible (after an edit or an upgrade
     the first run compiles again). A NUMBA_CACHE_DIR set by the user is left alone.
+
+    Importing acdrive does not import numba (``acdrive --help`` stays fast): before numba is
+    imported the folder is handed over as NUMBA_CACHE_DIR, which numba reads when it is
+    imported, with ACDRIVE_NUMBA_CACHE_DIR marking it as acdrive's own, so a child process
+    (which inherits both) keys its cache by its own sources again instead of taking the folder
+    for the user's. If numba is imported already, its configuration is set directly.
     """
     import hashlib
     import os
+    import sys
     from pathlib import Path
 
-    if os.environ.get("NUMBA_CACHE_DIR"):
-        return
+    given = os.environ.get("NUMBA_CACHE_DIR")
+    if given and given != os.environ.get("ACDRIVE_NUMBA_CACHE_DIR"):
+        return  # the user's choice
     package = Path(__file__).resolve().parent
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*.py")):
@@ -30,9 +38,10 @@ def _configure_numba_cache() -> None:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:
         return  # read-only home: numba falls back to its default locations
-    import numba
-
-    numba.config.CACHE_DIR = str(folder)
+    if "numba" in sys.modules:
+        sys.modules["numba"].config.CACHE_DIR = str(folder)
+    else:
+        os.environ["NUMBA_CACHE_DIR"] = os.environ["ACDRIVE_NUMBA_CACHE_DIR"] = str(folder)
 
 
 _configure_numba_cache()

@@ -10,15 +10,33 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import re
 import signal
 import sys
 import warnings
 
+from acdrive import __version__
 from acdrive.errors import InputError, Notice, SimulationDiverged
+from acdrive.progress import ACTIVE_BARS
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
-COMMAND_MODULES = ("run", "scenarios", "limits", "icad", "stability", "reproduce", "sweep", "bench")
+
+#: Subcommand -> its one-line help. Only the chosen command's module is imported (its
+#: ``register`` builds the full parser); the others are listed from this table, so ``--help``
+#: imports no numerical library. A listed module that does not exist (yet) is left out.
+COMMANDS = {
+    "run": "simulate a scenario (default: the Bodson Fig. 4 ramp)",
+    "scenarios": "list the built-in scenarios",
+    "limits": "torque limits of the built-in DFIM (Bodson (30), (32), (37))",
+    "icad": "individual channel analysis",
+    "stability": "drive stability (eigenvalues, map)",
+    "reproduce": "regenerate a reproduction report",
+    "sweep": "run a scenario over a grid of parameter values",
+    "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor with "
+    "both sides' accuracy, and the ICAD timing",
+}
+COMMAND_MODULES = tuple(COMMANDS)
 
 
 #: A negative number as an option value (``--load-nm -0.1``, ``--speed -1e5``, ``-inf``):
@@ -42,20 +60,36 @@ class _OneLineParser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _exists(name: str) -> bool:
+    """Whether ``acdrive.commands.<name>`` exists (found without importing it)."""
+    return importlib.util.find_spec(f"acdrive.commands.{name}") is not None
+
+
+def chosen_command(argv: list[str]) -> str | None:
+    """The subcommand named in ``argv``: its first token that is not an option, if any."""
+    return next((token for token in argv if not token.startswith("-")), None)
+
+
+def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
+    """The ``acdrive`` parser. With ``argv``, only the command it names is imported and gets its
+    full parser; every other command is a one-line entry of :data:`COMMANDS`. Without ``argv``
+    every command's full parser is built (documentation, tests)."""
     parser = _OneLineParser(prog="acdrive", description=DESCRIPTION)
     parser.add_argument(
         "--debug", action="store_true", help="show the full traceback of a failure (for developers)"
     )
-    sub = parser.add_subparsers(dest="command", parser_class=_OneLineParser, required=True)
-    for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(f"acdrive.commands.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"acdrive.commands.{name}":
-                continue  # subcommand not built yet
-            raise
-        module.register(sub)
+    parser.add_argument("--version", action="version", version=f"acdrive {__version__}")
+    sub = parser.add_subparsers(
+        dest="command", parser_class=_OneLineParser, required=True, metavar="COMMAND"
+    )
+    chosen = chosen_command(argv) if argv is not None else None
+    for name, help_line in COMMANDS.items():
+        if not _exists(name):
+            continue  # subcommand not built yet
+        if argv is None or name == chosen:
+            importlib.import_module(f"acdrive.commands.{name}").register(sub)
+        else:
+            sub.add_parser(name, help=help_line)
     return parser
 
 
@@ -78,7 +112,11 @@ def _show_notices(original):
 
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, Notice):
-            sys.stderr.write(f"acdrive: note: {_one_line(message)}\n")
+            line = f"acdrive: note: {_one_line(message)}"
+            if ACTIVE_BARS:
+                ACTIVE_BARS[-1].write(line, file=sys.stderr)
+            else:
+                sys.stderr.write(line + "\n")
         else:
             original(message, category, filename, lineno, file, line)
 
@@ -108,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
     warnings.simplefilter("always", Notice)  # every decision taken for the user is reported
     warnings.showwarning = _show_notices(warnings.showwarning)  # restored by catch_warnings
     try:
-        parser = build_parser()
+        parser = build_parser(argv)
         args = parser.parse_args(argv)
         return int(args.handler(args) or 0)
     except InputError as exc:

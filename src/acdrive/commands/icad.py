@@ -12,24 +12,14 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from acdrive.analysis.icad import (
-    A_CUR_DEFAULT,
-    CONTROLLER_NAMES,
-    analyse,
-    controller_for,
-    default_controller_name,
-    gm_min,
-    icad_response,
-    im_msf_magnitude_at_rotor_speed,
-    summarize,
-    worst,
-)
-from acdrive.analysis.plants import MACHINES, machine_params, plant_for
 from acdrive.errors import InputError, require_between, require_finite
-from acdrive.machines.induction import IMParams
-from acdrive.machines.pmsm import PMSGParams
+
+#: The names of ``acdrive.analysis.plants.MACHINES`` and ``acdrive.analysis.icad``'s
+#: ``CONTROLLER_NAMES`` and ``A_CUR_DEFAULT``, written out so that ``acdrive icad --help`` does not
+#: import the analysis (scipy); tests/test_cli_habits.py checks they match.
+MACHINES = ("ugalde-im-300w", "delorenzo-im", "delorenzo-im-13", "pmsg-2mw", "bodson-dfim")
+CONTROLLER_NAMES = ("paper-20", "paper-pi", "imc-pi")
+A_CUR_DEFAULT = 3142.0
 
 HELP = f"""Individual channel analysis (ICAD) of a machine current subsystem with a diagonal
 controller k_1 = k_2. Machines: {", ".join(MACHINES)}. Controllers: paper-20 (Amezquita-Brooks
@@ -38,8 +28,10 @@ style, a = --bandwidth). Default controller: paper-20 for induction motors, imc-
 pmsg-2mw and bodson-dfim. Speeds are electrical rotor speeds in rad/s. JSON margins that are
 infinite (no crossing) or undefined are written as null."""
 
-#: Default sweep ranges of electrical speed [rad/s] (the papers' operating ranges).
-SWEEP_RANGES = {IMParams: (0.0, 375.0), PMSGParams: (0.0, 2 * math.pi * 50.0)}
+#: Default sweep ranges of electrical speed [rad/s] (the papers' operating ranges), by the class
+#: name of the machine's parameters (IMParams, PMSGParams); any other machine (the DFIM) sweeps
+#: DFIM_SWEEP.
+SWEEP_RANGES = {"IMParams": (0.0, 375.0), "PMSGParams": (0.0, 2 * math.pi * 50.0)}
 DFIM_SWEEP = (0.0, 1.5 * 2 * math.pi * 60.0)
 
 #: Accepted ranges: |speed| <= MAX_SPEED rad/s (about 160 kHz electrical) and 0 or at least
@@ -98,6 +90,10 @@ def _num(x) -> float | None:
 
 def single_report(machine: str, speed: float, controller: str, analysis) -> dict:
     """The JSON-ready report of one analysis (field names documented in docs/icad.md)."""
+    from acdrive.analysis.icad import gm_min, im_msf_magnitude_at_rotor_speed, worst
+    from acdrive.analysis.plants import machine_params
+    from acdrive.machines.induction import IMParams
+
     params = machine_params(machine)
     c = analysis.conditions
     chans = analysis.channels
@@ -133,6 +129,8 @@ def single_report(machine: str, speed: float, controller: str, analysis) -> dict
 
 
 def run(args) -> int:
+    from acdrive.analysis.icad import analyse, controller_for, default_controller_name
+    from acdrive.analysis.plants import machine_params, plant_for
     from acdrive.output import strict_json
 
     params = machine_params(args.machine)
@@ -164,6 +162,10 @@ def _figure_folder(out: str | None, machine: str):
 
 
 def _sweep(args, params, name, k) -> int:
+    import numpy as np
+
+    from acdrive.analysis.icad import analyse, icad_response, summarize
+    from acdrive.analysis.plants import plant_for
     from acdrive.output import strict_json
     from acdrive.report.icad_figures import write_sweep_figures
 
@@ -181,7 +183,7 @@ def _sweep(args, params, name, k) -> int:
             )
         lo, hi, n = start, stop, int(n)
     else:
-        lo, hi = SWEEP_RANGES.get(type(params), DFIM_SWEEP)
+        lo, hi = SWEEP_RANGES.get(type(params).__name__, DFIM_SWEEP)
         n = 7
     speeds = np.linspace(lo, hi, n)
     speeds[np.abs(speeds) < MIN_SPEED] = 0.0  # rounding noise of linspace around 0

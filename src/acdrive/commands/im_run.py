@@ -74,13 +74,27 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
 
 
 def run_im(args, setup) -> int:
+    from acdrive.commands.run import written
+    from acdrive.progress import Progress
     from acdrive.report.im_outputs import write_im_outcome
+    from acdrive.sim import codegen
     from acdrive.sim.im_drive import run_im_scenario
 
-    with OutputFolder(args.out, setup.name) as output:  # --out checked before the simulation
+    n = len(list(setup.runs()))
+    with (
+        OutputFolder(args.out, setup.name) as output,  # --out checked before the simulation
+        Progress(2, f"run {setup.name}") as bar,
+    ):
+        bar.phase(f"simulating ({n} run{'s' * (n > 1)})")
         outcome = run_im_scenario(setup)
-        summary = write_im_outcome(outcome, output.staging, figures=not args.no_figures)
+        codegen.record_compile_times()
+        bar.advance()
+        bar.phase("writing data" + (" and figures" if not args.no_figures else ""))
+        summary = write_im_outcome(
+            outcome, output.staging, figures=not args.no_figures, fmt=args.format
+        )
         target = output.publish()
+        bar.advance()
     wall = sum(r.wall_time for r in outcome.results.values())
     n = len(outcome.results)
     inv = setup.inverter
@@ -97,5 +111,5 @@ def run_im(args, setup) -> int:
         print(f"  warning: {warning}")
     if "note" in summary:
         print(f"  note: {summary['note']}")
-    print(f"wrote {target}/ (data.csv, data.parquet, summary.json, figures)")
+    print(f"wrote {target}/: {written(target, args.format)}")
     return 0

@@ -59,8 +59,15 @@ def run(args) -> int:
 
     stem = STEMS.get(args.paper, args.paper)
     entries = {f"{stem}.md": FILE, stem: FOLDER}
-    with OutputEntries(args.out, entries, field="--out", name_field="paper") as output:
+    from acdrive.progress import Progress
+
+    with (
+        OutputEntries(args.out, entries, field="--out", name_field="paper") as output,
+        Progress(1, f"reproduce {args.paper}") as bar,
+    ):
+        bar.phase("recomputing every number and figure")
         staged = module.write_report(output.staging)  # --out checked before the computation
         output.publish()
-    print(output.target(staged))
+        bar.advance()
+    print(output.target(staged))  # the report; its figures are in the folder beside it
     return 0

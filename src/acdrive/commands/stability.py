@@ -16,8 +16,6 @@ import dataclasses
 import math
 from pathlib import Path
 
-import numpy as np
-
 from acdrive.errors import InputError, require_between, require_finite, require_positive
 from acdrive.output import strict_json
 
@@ -77,7 +75,9 @@ def register(subparsers) -> None:
     p.add_argument(
         "--converter-loss", type=float, default=0.0, help="converter fundamental voltage loss [V]"
     )
-    p.add_argument("--out", default="stability-map", help="figure directory for --map")
+    p.add_argument(
+        "--out", default="stability-map", help="folder the --map figure is written into (created)"
+    )
     p.add_argument(
         "--grid", type=int, nargs=2, default=(13, 7), metavar=("N_SPEED", "N_LOAD"),
         help="map grid: speeds 0..2700 rpm, loads over 90%% of the torque window",
@@ -169,25 +169,36 @@ def run(args) -> int:
 
 
 def _map(args) -> int:
+    import numpy as np
+
     from acdrive.analysis.drive_stability import default_grid, max_stable_bandwidth, stability_map
 
     n_speed, n_load = args.grid
     if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
         raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
+    from acdrive.progress import Progress
+
     maps, report = {}, {}
-    for mode in ("voltage", "current"):
-        model = _model(args, mode)
+    models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
+    bar = Progress(7, "stability map")
+    for mode, model in models.items():
         speeds, loads = default_grid(model, n_speed, n_load)
+        bar.phase(f"{mode} command: {n_speed} x {n_load} operating points")
         m = stability_map(model, speeds, loads, args.model)
+        bar.advance()
         maps[mode] = m
         fields = {f.name: getattr(model, f.name) for f in dataclasses.fields(model)}
         fields = {k: v for k, v in fields.items() if k not in ("mode", "speed_bandwidth")}
+        bar.phase(f"{mode} command: largest stable a_D,VEL")
         tolerated = max_stable_bandwidth(
             mode, speeds, loads, kind=args.model, upper=UPPER_BANDWIDTH, **fields
         )
+        bar.advance()
+        bar.phase(f"{mode} command: largest stable a_D,VEL without load")
         unloaded = max_stable_bandwidth(
             mode, speeds, [0.0], kind=args.model, upper=UPPER_BANDWIDTH, **fields
         )
+        bar.advance()
         graded = np.where(m.feasible, m.max_real_part, -np.inf)
         worst = np.unravel_index(np.argmax(graded), graded.shape)
         report[mode] = {
@@ -200,7 +211,9 @@ def _map(args) -> int:
             "max_stable_bandwidth_rad_s": tolerated,
             "max_stable_bandwidth_zero_load_rad_s": unloaded,
         }
+    bar.phase("drawing")
     path = _draw(maps, Path(args.out), args)
+    bar.close()
     out = {
         "bandwidth_rad_s": args.bandwidth,
         "model": args.model,
@@ -283,6 +296,7 @@ def _bench(args) -> int:
 
 def _draw(maps, out: Path, args) -> Path:
     import matplotlib
+    import numpy as np
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

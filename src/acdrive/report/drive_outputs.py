@@ -1,16 +1,21 @@
-"""The files of one scenario run: data (CSV, Parquet), figures and summary.json."""
+"""The files of one scenario run: data (Parquet, CSV or .mat) with columns.md, figures and
+summary.json."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from acdrive.columns import DEFAULT_FORMAT
 from acdrive.output import strict_json
 from acdrive.report import converter_effect
 from acdrive.sim.outcome import ScenarioOutcome, synchronous_rpm
 
 
-def write_outcome(outcome: ScenarioOutcome, folder: Path, figures: bool = True) -> None:
-    """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``.
+def write_outcome(
+    outcome: ScenarioOutcome, folder: Path, figures: bool = True, fmt: str = DEFAULT_FORMAT
+) -> None:
+    """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``: the
+    data as ``fmt`` (``acdrive.columns.FORMATS``) with columns.md, figures, summary.json.
 
     summary.json is the outcome's summary plus, where a rotor converter has dead time or device
     drops, ``converter_side_effect``: the steady-state stator reactive power and torque-command
@@ -26,7 +31,7 @@ def write_outcome(outcome: ScenarioOutcome, folder: Path, figures: bool = True) 
     for label, result in outcome.results.items():
         sub = folder if len(outcome.results) == 1 else folder / label
         sub.mkdir(parents=True, exist_ok=True)
-        result.save(sub)
+        result.save(sub, fmt)
         if figures:
             write_drive_figures(result, sub, synchronous_rpm(setup))
             if setup.motors[0].controller.sync.enabled:

@@ -1,5 +1,5 @@
-"""The files of one cage-IM drive run (``sim.im_drive``): data (CSV, Parquet), figures and
-summary.json, and the linear closed-loop step responses of the ICAD model beside simulated steps.
+"""The files of one cage-IM drive run (``sim.im_drive``): data (Parquet, CSV or .mat, with
+columns.md), figures and summary.json, and the linear closed-loop step responses of the ICAD model beside simulated steps.
 
 Layout as the DFIM drive's (``report.drive_outputs``): one run writes into the folder itself;
 several runs (compared controllers) each into ``<folder>/<label>/``, with the comparison figures
@@ -393,22 +393,25 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
 # --- everything ------------------------------------------------------------------------------
 
 
-def write_im_outcome(outcome: IMOutcome, folder: Path, figures: bool = True) -> dict:
-    """Write the data and figures of every run, the comparison figures and summary.json (the
-    outcome's summary, the step-response comparison where the runs are current steps, and the
-    unit of every data column) into ``folder``; returns the summary written."""
+def write_im_outcome(
+    outcome: IMOutcome, folder: Path, figures: bool = True, fmt: str = "parquet"
+) -> dict:
+    """Write the data (as ``fmt``, ``acdrive.columns.FORMATS``, with columns.md) and figures of
+    every run, the comparison figures and summary.json (the outcome's summary, the step-response
+    comparison where the runs are current steps, and the unit of every data column) into
+    ``folder``; returns the summary written."""
     folder = Path(folder)
     for label, result in outcome.results.items():
         sub = folder if len(outcome.results) == 1 else folder / label
         sub.mkdir(parents=True, exist_ok=True)
-        result.save(sub)
+        result.save(sub, fmt)
         if figures:
             write_run_figures(result, sub)
     if figures and (len(outcome.results) > 1 or step_comparison(outcome.main) is not None):
         write_comparison_figures(outcome, folder)
     summary = dict(outcome.summary)
     summary.update(step_summary(outcome))
-    summary["units"] = {name: unit for name, (_, unit) in outcome.main.columns().items()}
+    summary["units"] = {c.name: c.unit for c in outcome.main.columns()}
     # strict JSON: a non-finite figure is written as null
     (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
     return summary

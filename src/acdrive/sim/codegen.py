@@ -13,14 +13,22 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import inspect
+import json
 import os
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import numba
 
+from acdrive.errors import Notice
+
 _LOADED: dict[str, object] = {}
+#: generated modules whose loop is compiled in this process (not loaded from numba's cache)
+_COMPILING: list[object] = []
+#: where the last compile time is kept, in the folder of the generated modules
+_COMPILE_RECORD = "last-compile.json"
 
 
 def _folder() -> Path:
@@ -54,7 +62,53 @@ def load_module(source: str):
     sys.modules[name] = module
     spec.loader.exec_module(module)
     _LOADED[digest] = module
+    if _needs_compile(module):
+        _COMPILING.append(module)
+        if os.environ.get("ACDRIVE_COMPILE_NOTICE", "1") != "0":  # "0": scripts, the test suite
+            warnings.warn(Notice(_compile_notice(path.parent)), stacklevel=2)
     return module
+
+
+def _needs_compile(module) -> bool:
+    """Whether numba has no cached machine code for the loop ``module.run`` (its cache index file
+    is missing): the first call compiles. False if that cannot be told (numba internals)."""
+    try:
+        return not os.path.exists(module.run._cache._cache_file._index_path)
+    except AttributeError:
+        return False
+
+
+def _compile_notice(folder: Path) -> str:
+    """The one-line notice that the loop is compiled now, with the last compile time measured in
+    ``folder`` (``record_compile_times``) if there is one."""
+    try:
+        seconds = float(json.loads((folder / _COMPILE_RECORD).read_text())["seconds"])
+        about = f"about {seconds:.2g} s as the last time; "
+    except (OSError, ValueError, KeyError, TypeError):
+        about = ""
+    return f"compiling the simulation loop for this drive once ({about}later runs load it)"
+
+
+def record_compile_times() -> float:
+    """Compile time [s] of the loops compiled in this process since the last call (numba's own
+    timers of every compiled signature), kept in the generated modules' folder for the next
+    compile notice; 0 if none was compiled."""
+    total = 0.0
+    while _COMPILING:
+        module = _COMPILING.pop()
+        for function in (getattr(module, "run", None), getattr(module, "run_batch", None)):
+            for signature in getattr(function, "signatures", ()):
+                try:
+                    timers = function.get_metadata(signature)["timers"]
+                except (KeyError, AttributeError):
+                    continue
+                total += float(timers.get("compiler_lock", 0.0))
+    if total > 0.0:
+        try:
+            (_folder() / _COMPILE_RECORD).write_text(json.dumps({"seconds": total}))
+        except OSError:
+            pass  # a read-only cache: the next notice has no estimate
+    return total
 
 
 def kernel_import(function, alias: str) -> str:

@@ -753,21 +753,27 @@ class IMDriveResult:
     flags: dict[str, np.ndarray]
     wall_time: float = 0.0
     steps: int = 0
+    #: one-line description of each signal (the logged port's declaration)
+    descriptions: dict[str, str] = field(default_factory=dict)
 
     @classmethod
     def from_system(cls, drive: IMDrive, raw, label: str | None = None) -> IMDriveResult:
         s = drive.setup
-        signals, units = {}, {}
+        signals, units, descriptions = {}, {}, {}
         for name, port in drive.log_ports().items():
             signals[name] = raw.signal(port)
             units[name] = port.var.unit
+            descriptions[name] = f"{port.var.doc} ({port.path})"
         if "m_a" not in signals:  # averaged model: the modulation signal of the latched command
             signals["m_a"] = modulation_signals(signals["v_pwm"], signals["v_dc"])[0]
             units["m_a"] = ""
+            descriptions["m_a"] = "phase-a modulation signal of the latched voltage command"
         w = signals["w"]
         signals["tau_load"] = s.mechanics.external_torque(raw.t, w)
         signals["tau_friction"] = s.mechanics.friction_torque(w)
         units["tau_load"] = units["tau_friction"] = "N m"
+        descriptions["tau_load"] = "load torque on the shaft (active load and brake)"
+        descriptions["tau_friction"] = "friction torque on the shaft"
         for name, values in signals.items():
             bad = ~np.isfinite(values)
             if bad.any():
@@ -785,6 +791,7 @@ class IMDriveResult:
             flags=drive.event_flags(raw),
             wall_time=raw.wall_time,
             steps=raw.steps,
+            descriptions=descriptions,
         )
 
     def signal(self, name: str) -> np.ndarray:
@@ -974,39 +981,53 @@ class IMDriveResult:
         return out
 
     # -- export -----------------------------------------------------------------------------
-    def columns(self) -> dict[str, tuple[np.ndarray, str]]:
-        """Column name -> (values, unit); a space vector gives ``<name>_alpha`` and
-        ``<name>_beta`` (power-invariant, Bodson (8)), or ``<name>_d`` and ``<name>_q`` in the
-        IFOC's field frame (``FIELD_FRAME``)."""
-        out = {"t": (self.t, "s")}
+    def columns(self) -> list:
+        """The columns of the result files (``acdrive.columns.Column``: name, values, unit,
+        description). A space vector gives ``<name>_alpha_sv`` and ``<name>_beta_sv``, or
+        ``<name>_d_sv`` and ``<name>_q_sv`` in the IFOC's field frame (``FIELD_FRAME``): the
+        components of the power-invariant space vector as simulated (Bodson (8); divide by
+        sqrt(3/2) for the phase-peak scaling of the figures and summary.json)."""
+        from acdrive.columns import Column
+
+        out = [Column("t", self.t, "s", "time of the logged sample")]
         for name, values in self.signals.items():
-            unit = self.units[name]
+            unit, text = self.units[name], self.descriptions.get(name, name)
             if np.iscomplexobj(values):
-                re, im = ("_d", "_q") if name in FIELD_FRAME else ("_alpha", "_beta")
-                out[name + re] = (values.real, unit)
-                out[name + im] = (values.imag, unit)
+                re, im = ("d", "q") if name in FIELD_FRAME else ("alpha", "beta")
+                scaling = (
+                    "power-invariant space-vector component (divide by sqrt(3/2) for phase peak)"
+                )
+                out.append(Column(f"{name}_{re}_sv", values.real, unit, f"{text}, {re}: {scaling}"))
+                out.append(Column(f"{name}_{im}_sv", values.imag, unit, f"{text}, {im}: {scaling}"))
             else:
-                out[name] = (values, unit)
-        out["saturated"] = (self.flags["saturated"].astype(np.int8), "")
-        out["overmodulation"] = (self.flags["overmodulation"].astype(np.int8), "")
+                out.append(Column(name, values, unit, text))
+        for flag, what in (
+            ("saturated", "the current controller's voltage command was limited"),
+            ("overmodulation", "the inverter limited its latched command"),
+        ):
+            out.append(Column(flag, self.flags[flag].astype(np.int8), "", f"1 where {what}"))
         return out
 
     def to_dataframe(self):
+        """A pandas DataFrame of :meth:`columns`; units in ``frame.attrs["units"]``,
+        descriptions in ``frame.attrs["descriptions"]``."""
         import pandas as pd
 
         cols = self.columns()
-        frame = pd.DataFrame({name: values for name, (values, _) in cols.items()})
-        frame.attrs["units"] = {name: unit for name, (_, unit) in cols.items()}
+        frame = pd.DataFrame({c.name: c.values for c in cols})
+        frame.attrs["units"] = {c.name: c.unit for c in cols}
+        frame.attrs["descriptions"] = {c.name: c.description for c in cols}
         return frame
 
-    def save(self, folder) -> list:
+    def save(self, folder, fmt: str = "parquet") -> list:
+        """Write the data as ``fmt`` (``acdrive.columns.FORMATS``: parquet, csv or mat) and
+        ``columns.md`` into ``folder`` (created if needed); return the paths written."""
         from pathlib import Path
 
-        folder = Path(folder)
-        frame = self.to_dataframe()
-        frame.to_csv(folder / "data.csv", index=False)
-        frame.to_parquet(folder / "data.parquet", index=False)
-        return [folder / "data.csv", folder / "data.parquet"]
+        from acdrive.columns import write_table
+
+        title = f"{self.setup.name} [{self.label}]: result columns"
+        return write_table(Path(folder), self.columns(), fmt, title)
 
 
 def ideal_ramp(t, t_step, w0, w_target, k_p, tau_max, J) -> np.ndarray:

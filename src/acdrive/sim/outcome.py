@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive.sim.result import OSCILLATION_BAND_HZ, DriveResult
+from acdrive.sim.result import OSCILLATION_BAND_HZ, RPM_PER_RAD_S, DriveResult
 from acdrive.sim.setup import DriveSetup, simulate
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
@@ -134,6 +134,84 @@ def _forced_close_warning(result: DriveResult, setup: DriveSetup, k: int) -> str
     )
 
 
+#: the drive may deliver less than its current-limit torque while slewing (converter voltage,
+#: losses): a step's slewing window is this many times the time at the limit torque
+SLEW_MARGIN = 2.0
+#: time constants 1 / a_D,VEL of the speed loop after slewing: both roots of (27) sit at
+#: -a_D,VEL, whose step error (1 + a t) e^{-a t} is below 2 % after 6 / a_D,VEL
+SETTLE_TIME_CONSTANTS = 6.0
+
+
+def _slew_torque(setup: DriveSetup, motor: int) -> float:
+    """The smaller of the motoring and generating torque limits [N m] of motor ``motor`` at the
+    nominal supply (Bodson (30)-(37), as ``acdrive limits``): the torque a reference step is
+    slewed with at most."""
+    from acdrive.frames import K_PEAK
+    from acdrive.machines.dfim import machine_vector, torque_limits_case1
+
+    m = setup.motors[motor]
+    c = m.controller
+    v_pk = float(setup.supply.voltage_pk[1][0])
+    w_e = 2.0 * math.pi * float(setup.supply.frequency_hz[1][0])
+    t1, t2, t3, m2, m3, _ = torque_limits_case1(
+        machine_vector(m.machine), w_e, K_PEAK * v_pk, K_PEAK * c.stator_current_limit_pk,
+        K_PEAK * c.rotor_current_limit_pk,
+    )  # fmt: skip
+    return min(abs(min(t1, t2, t3)), abs(max(m2, m3)))
+
+
+def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict:
+    """Where the speed of motor ``motor`` is expected to track its reference, and how well it did.
+
+    Not expected: while the stator relay is open (the speed is not controlled), and after each
+    change of the reference faster than the drive can follow (a step, or a segment steeper than
+    tau/J) and each relay closing, for SLEW_MARGIN x J |dw| / tau to slew at the torque limit
+    tau (``_slew_torque``) plus SETTLE_TIME_CONSTANTS / a_D,VEL for the speed loop to settle
+    (a_D,VEL = K_P / (2 J), (27)); dw is the step, or the speed error at closing. Returns the
+    ``rule`` (a sentence with the numbers), the excluded ``windows_s``, the ``tracked_fraction``
+    of the samples and the RMS and largest |error| [rpm] over the tracked samples, with when the
+    largest occurred (``None`` for all three if no sample is tracked)."""
+    m = setup.motors[motor]
+    J = m.machine.J
+    a = m.controller.gains.K_P / (2.0 * J)
+    tau = _slew_torque(setup, motor)
+    settle = SETTLE_TIME_CONSTANTS / a
+    times, values = (np.asarray(x, dtype=float) for x in m.speed_reference)
+    changes = []  # (time, |dw| [rad/s])
+    for i in range(1, times.size):
+        dt, dw = times[i] - times[i - 1], abs(values[i] - values[i - 1])
+        if dw > 0.0 and (dt <= 0.0 or dw / dt > tau / J):
+            changes.append((float(times[i - 1]), float(dw)))
+    t = result.t
+    err = result.reference_rpm(motor) - result.speed_rpm(motor)
+    closed = result.signal("relay_closed", motor) > 0
+    closings = np.flatnonzero(closed[1:] & ~closed[:-1]) + 1
+    for i in closings:
+        changes.append((float(t[i]), abs(float(err[i])) / RPM_PER_RAD_S))
+    mask = closed.copy()
+    windows = []
+    for start, dw in sorted(changes):
+        end = start + SLEW_MARGIN * J * dw / tau + settle
+        mask[(t >= start) & (t < end)] = False
+        windows.append([start, min(end, float(t[-1]))])
+    open_s = float(np.count_nonzero(~closed)) * (t[1] - t[0] if t.size > 1 else 0.0)
+    relay = f"relay closed ({open_s:.3g} s open excluded) and " if open_s > 0.0 else ""
+    rule = (
+        f"speed error where tracking is expected: {relay}not within {SLEW_MARGIN:g} x J |dw| / tau + {SETTLE_TIME_CONSTANTS:g} / a_D,VEL of "
+        f"a reference step or relay closing (J = {J:.3g} kg m^2, tau = {tau:.3g} N m at the "
+        f"nominal supply, a_D,VEL = {a:.0f} rad/s: {settle * 1e3:.1f} ms to settle)"
+    )
+    out = {"rule": rule, "windows_s": windows, "tracked_fraction": float(np.mean(mask))}
+    if mask.any():
+        k = int(np.argmax(np.where(mask, np.abs(err), -1.0)))
+        out["rms_error_rpm"] = float(np.sqrt(np.mean(err[mask] ** 2)))
+        out["max_abs_error_rpm"] = float(abs(err[k]))
+        out["max_abs_error_at_s"] = float(t[k])
+    else:
+        out["rms_error_rpm"] = out["max_abs_error_rpm"] = out["max_abs_error_at_s"] = None
+    return out
+
+
 @dataclass
 class ScenarioOutcome:
     setup: DriveSetup
@@ -149,13 +227,24 @@ def synchronous_rpm(setup: DriveSetup) -> float:
     return 60.0 * float(setup.supply.frequency_hz[1][0]) / setup.motors[0].machine.n_p
 
 
-def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
-    """Simulate ``setup`` (once per mode if it compares modes) and summarise."""
-    if setup.compare_modes:
-        results = {mode: simulate(setup.with_mode(mode)) for mode in setup.compare_modes}
-    else:
-        results = {setup.motors[0].controller.mode: simulate(setup)}
+def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
+    """Simulate ``setup`` (once per mode if it compares modes) and summarise. ``on_run(mode)``,
+    if given, is called before each simulation (a progress display)."""
+    runs = (
+        [(mode, setup.with_mode(mode)) for mode in setup.compare_modes]
+        if setup.compare_modes
+        else [(setup.motors[0].controller.mode, setup)]
+    )
+    results = {}
+    for mode, run_setup in runs:
+        if on_run is not None:
+            on_run(mode)
+        results[mode] = simulate(run_setup)
     summaries = {mode: result.summary() for mode, result in results.items()}  # once each
+    for mode, result in results.items():  # tracking where it is expected (the headline)
+        for k, motor_summary in enumerate(summaries[mode]["motors"]):
+            motor_summary["speed_tracking"] = tracking_windows(result, setup, k)
+        summaries[mode]["speed_tracking"] = summaries[mode]["motors"][0]["speed_tracking"]
     first_mode, first = next(iter(results.items()))
     summary = dict(summaries[first_mode])
     motor = setup.motors[0]
@@ -174,6 +263,7 @@ def run_scenario(setup: DriveSetup) -> ScenarioOutcome:
             suffix = MODE_SUFFIX[mode]
             summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
             summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
+            summary[f"speed_tracking_{suffix}"] = s["speed_tracking"]
             summary[f"limit_events_{suffix}"] = s["limit_events"]
     for mode, s in summaries.items():
         worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])

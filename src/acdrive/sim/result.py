@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive.columns import DEFAULT_FORMAT, Column, write_table
 from acdrive.control.dfim import EVENT_NAMES
 from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
 
@@ -15,6 +16,43 @@ LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", 
              "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
              "mode", "relay_closed", "i_r_com_d", "i_r_com_q", "i_r_d", "i_r_q")  # fmt: skip
 N_LOG = len(LOG_NAMES)
+
+_PK = "peak phase value (space-vector magnitude / sqrt(3/2), Bodson (8))"
+_SV = (
+    "power-invariant space-vector component in the stator-voltage frame (divide by sqrt(3/2) "
+    "for phase peak)"
+)
+#: the columns of the result files: (file name, signal of ``LOG_NAMES``, scale, unit, description).
+#: Magnitudes are written as peak phase values (suffix ``_pk``, as summary.json and the figures),
+#: components as power-invariant space vectors (suffix ``_sv``; ``acdrive.columns``).
+FILE_COLUMNS = (
+    ("w", "w", 1.0, "rad/s", "shaft speed (mechanical)"),
+    ("w_ref", "w_ref", 1.0, "rad/s", "speed reference (mechanical)"),
+    ("tau_com", "tau_com", 1.0, "N m", "torque command of the speed controller (25), limited"),
+    ("tau_e", "tau_e", 1.0, "N m", "electromagnetic torque"),
+    ("v_s_pk", "v_s_mag", 1.0 / SQRT_3_2, "V", f"stator terminal voltage, {_PK}"),
+    ("v_r_pk", "v_r_mag", 1.0 / SQRT_3_2, "V", f"rotor voltage applied by the converter, {_PK}"),
+    ("i_s_pk", "i_s_mag", 1.0 / SQRT_3_2, "A", f"stator current, {_PK}"),
+    ("i_r_pk", "i_r_mag", 1.0 / SQRT_3_2, "A", f"rotor current, {_PK}"),
+    ("i_rx", "i_rx", 1.0, "A", "rotor phase X current, instantaneous"),
+    ("i_ry", "i_ry", 1.0, "A", "rotor phase Y current, instantaneous"),
+    ("flags", "flags", 1.0, "",
+     "event bits raised on this sample: " + ", ".join(
+         f"{1 << b} {name}" for b, name in enumerate(EVENT_NAMES))),
+    ("i_r_com_pk", "i_r_com_mag", 1.0 / SQRT_3_2, "A", f"rotor current command (43), {_PK}"),
+    ("q_s", "q_s", 1.0, "var", "stator reactive power Im(v_s conj(i_s)) (Bodson (5))"),
+    ("v_mismatch", "v_mismatch", 1.0, "",
+     "|v_s - v_grid| / |v_grid|: stator voltage against the grid's (synchronisation)"),
+    ("theta_adj", "theta_adj", 1.0, "rad", "synchroniser's angle adjustment theta_adj"),
+    ("m_adj", "m_adj", 1.0, "", "synchroniser's magnitude adjustment m_adj"),
+    ("relay_command", "phase", 1.0, "", "synchroniser's relay command: 1 close, 0 open"),
+    ("mode", "mode", 1.0, "", "controller mode in use: 0 voltage command, 1 current command"),
+    ("relay_closed", "relay_closed", 1.0, "", "stator relay: 1 closed, 0 open"),
+    ("i_r_com_d_sv", "i_r_com_d", 1.0, "A", f"rotor current command (43), d: {_SV}"),
+    ("i_r_com_q_sv", "i_r_com_q", 1.0, "A", f"rotor current command (43), q: {_SV}"),
+    ("i_r_d_sv", "i_r_d", 1.0, "A", f"measured rotor current, d: {_SV}"),
+    ("i_r_q_sv", "i_r_q", 1.0, "A", f"measured rotor current, q: {_SV}"),
+)  # fmt: skip
 
 RPM_PER_RAD_S = 30.0 / np.pi
 #: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag
@@ -124,7 +162,10 @@ class DriveResult:
         """Headline metrics (motor 0 at top level, every motor under ``motors``).
 
         speed_rms_error_rpm is taken over ``tracking_mask`` samples (reference steps excluded for
-        0.5 s); speed_max_abs_error_rpm over the whole run."""
+        0.5 s); speed_max_abs_error_whole_run_rpm over the whole run, including the intended
+        reference steps (``speed_max_abs_error_rpm``: the same number under its former name).
+        Tracking where it is expected, from the scenario's reference profile and the speed
+        loop's bandwidth: ``acdrive.sim.outcome.tracking_windows`` (``speed_tracking``)."""
         per_motor = []
         oscillation = [self.speed_oscillation(k) for k in range(self.n_motors)]
         for k in range(self.n_motors):
@@ -133,6 +174,7 @@ class DriveResult:
             per_motor.append(
                 {
                     "speed_rms_error_rpm": float(np.sqrt(np.mean(err[tracking] ** 2))),
+                    "speed_max_abs_error_whole_run_rpm": float(np.max(np.abs(err))),
                     "speed_max_abs_error_rpm": float(np.max(np.abs(err))),
                     "peak_rotor_current_a": float(np.max(self.peak("i_r_mag", k))),
                     "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
@@ -150,29 +192,38 @@ class DriveResult:
             "wall_time_s": self.wall_time,
         }
 
+    def columns(self) -> list[Column]:
+        """The columns of the result files (``FILE_COLUMNS``; for several motors every signal
+        once per motor, named ``<name>_m<k>`` for motor k = 1, 2, ...), with units and
+        descriptions."""
+        out = [Column("t", self.t, "s", "time of the logged sample")]
+        for k in range(self.n_motors):
+            suffix = "" if self.n_motors == 1 else f"_m{k + 1}"
+            who = "" if self.n_motors == 1 else f"motor {k + 1}: "
+            for name, log_name, scale, unit, description in FILE_COLUMNS:
+                values = self.signals[:, k, LOG_NAMES.index(log_name)]
+                if name == "flags":
+                    values = values.astype(np.int32)
+                elif scale != 1.0:
+                    values = values * scale
+                out.append(Column(name + suffix, values, unit, who + description))
+        return out
+
     def to_dataframe(self):
-        """A pandas DataFrame with column ``t`` and one column per signal (``name`` for a single
-        motor, ``name_k`` for motor k of several)."""
+        """A pandas DataFrame of :meth:`columns` (the result files' table); units in
+        ``frame.attrs["units"]``, descriptions in ``frame.attrs["descriptions"]``."""
         import pandas as pd
 
-        columns = {"t": self.t}
-        for k in range(self.n_motors):
-            suffix = "" if self.n_motors == 1 else f"_{k}"
-            for j, name in enumerate(LOG_NAMES):
-                columns[name + suffix] = self.signals[:, k, j]
-        return pd.DataFrame(columns)
+        columns = self.columns()
+        frame = pd.DataFrame({c.name: c.values for c in columns})
+        frame.attrs["units"] = {c.name: c.unit for c in columns}
+        frame.attrs["descriptions"] = {c.name: c.description for c in columns}
+        return frame
 
-    def save(self, folder: Path, formats=("csv", "parquet")) -> list[Path]:
-        folder = Path(folder)
-        frame = self.to_dataframe()
-        written = []
-        if "csv" in formats:
-            frame.to_csv(folder / "data.csv", index=False)
-            written.append(folder / "data.csv")
-        if "parquet" in formats:
-            frame.to_parquet(folder / "data.parquet", index=False)
-            written.append(folder / "data.parquet")
-        return written
+    def save(self, folder: Path, fmt: str = DEFAULT_FORMAT) -> list[Path]:
+        """Write the data as ``fmt`` (``acdrive.columns.FORMATS``: parquet, csv or mat) and
+        ``columns.md`` into ``folder`` (created if needed); return the paths written."""
+        return write_table(Path(folder), self.columns(), fmt, f"{self.name}: result columns")
 
 
 def _longest_run(mask: np.ndarray) -> tuple[int, int]:
