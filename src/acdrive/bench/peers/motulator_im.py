@@ -1,17 +1,19 @@
-"""Peer run for benchmarks/bench_im.py: motulator 0.18's 2.2 kW cage-IM speed drive with pwm=True.
+"""Peer run for ``acdrive bench``: motulator 0.18's 2.2 kW cage-IM speed drive.
 
-Runs under motulator's own virtualenv (motulator 0.18 needs Python >= 3.12; bench_im.py makes
-``benchmarks/.motulator-venv`` with python3.12), never with acdrive on the path:
+Runs in motulator's own virtualenv (motulator 0.18 needs Python >= 3.12; ``acdrive bench`` makes
+it, see ``acdrive.bench.venvs``), never with acdrive on the path:
 
-    benchmarks/.motulator-venv/bin/python benchmarks/peers/motulator_im_pwm.py --out run.npz
+    python motulator_im.py --converter {averaged,pwm} [--seconds 1.5] [--out run.npz]
 
 The case is motulator's example ``examples/drive/current_vector/plot_2kw_im_sat_cvc.py``
 (2.2 kW, 400 V, 50 Hz, 2 pole pairs, J = 0.015 kg m^2, 540 V DC link, default sampling period
 125 us, speed step to 0.5 p.u. at 0.2 s, rated load torque 14.6 N m from 0.75 s, 1.5 s) with:
 
-* ``model.Drive(..., pwm=True)``: carrier comparison with exact switching instants (duty ratios
-  updated at every sampling instant, i.e. twice per carrier period of 2 T_s = 250 us, 4 kHz;
-  one sampling period of computational delay), instead of the example's averaged converter;
+* the converter: ``--converter averaged`` is the example's own ``model.Drive(..., pwm=False)``
+  (the duty ratios held over each sampling period); ``--converter pwm`` is ``pwm=True``: carrier
+  comparison with exact switching instants (duty ratios updated at every sampling instant, i.e.
+  twice per carrier period of 2 T_s = 250 us, 4 kHz); one sampling period of computational
+  delay in the control system either way;
 * the example's own alternative, unsaturated machine: inverse-Gamma parameters R_s = 3.7 ohm,
   R_R = 2.1 ohm, L_sgm = 21 mH, L_M = 224 mH (the example's saturated Gamma model has no linear
   counterpart in acdrive);
@@ -26,11 +28,11 @@ Everything else is the example's: current-vector control with psi_s_nom = 0.95 p
 i_s_max = 1.5 i_base, the 2DOF complex PI current controller (alpha_c = 2 pi 200 rad/s), the
 speed PI k_p = 1, k_i = 10, motulator's default solver (RK45, rtol 1e-3, atol 1e-6).
 
-Two runs of the same case: the first is timed (only ``Simulation.simulate``, no progress bar,
-nothing recorded); the second records, at every sampling instant, the model state and the
-switching sequence that ``Drive.modulate`` hands to the simulation loop (interval lengths and
-switching states), which ``--out`` saves for bench_im.py's accuracy reference. One JSON line is
-printed.
+Two kinds of run of the same case: the timed ones (``--repeats``, the best kept; only
+``Simulation.simulate`` is timed, no progress bar, nothing recorded); then one that records, at
+every sampling instant, the model state and the switching sequence that ``Drive.modulate`` hands to the simulation loop (interval lengths and
+switching states, or duty ratios with the averaged converter), which ``--out`` saves for the
+suite's accuracy reference (``acdrive.bench.motulator_im``). One JSON line is printed.
 """
 
 from __future__ import annotations
@@ -67,13 +69,13 @@ def load_torque(t: float) -> float:
     return nom.tau * min(max((t - T_LOAD) / LOAD_RAMP, 0.0), 1.0)
 
 
-def build() -> model.Simulation:
+def build(pwm: bool) -> model.Simulation:
     par = model.InductionMachineInvGammaPars(**PAR)
     mdl = model.Drive(
         model.InductionMachine(par),
         model.MechanicalSystem(J=J),
         model.VoltageSourceConverter(u_dc=U_DC),
-        pwm=True,
+        pwm=pwm,
     )
     mdl.mechanics.set_external_load_torque(load_torque)
     cfg = control.CurrentVectorControllerCfg(
@@ -110,19 +112,26 @@ def record(sim: model.Simulation) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", help="save the recorded run (.npz) for the accuracy reference")
+    parser.add_argument("--converter", choices=("averaged", "pwm"), default="pwm")
     parser.add_argument("--seconds", type=float, default=DURATION, help="model time [s]")
+    parser.add_argument("--repeats", type=int, default=1, help="timed runs (the best is kept)")
     args = parser.parse_args()
 
-    sim = build()
-    start = time.perf_counter()
-    res = sim.simulate(t_stop=args.seconds)
-    wall = time.perf_counter() - start
+    pwm = args.converter == "pwm"
+    walls = []
+    for _ in range(max(args.repeats, 1)):
+        sim = build(pwm)
+        start = time.perf_counter()
+        res = sim.simulate(t_stop=args.seconds)
+        walls.append(time.perf_counter() - start)
+    wall = min(walls)
     steps = len(res.ctrl.t)  # control-system calls (the loop runs to the first sample after t_stop)
     w_M = np.real(res.mdl.mechanics.w_M)
     i_s = np.asarray(res.mdl.machine.i_s_ab)
     out = {
         "peer": "motulator",
         "version": version("motulator"),
+        "converter": args.converter,
         "python": platform.python_version(),
         "numpy": version("numpy"),
         "scipy": version("scipy"),
@@ -130,6 +139,7 @@ def main() -> None:
         "model_time_s": float(res.ctrl.t[-1] + T_S),
         "control_steps": steps,
         "wall_s": wall,
+        "wall_s_all_runs": walls,
         "steps_per_s": steps / wall,
         "real_time_factor": steps * T_S / wall,
         "final_speed_rad_s": float(w_M[-1]),
@@ -137,7 +147,7 @@ def main() -> None:
         "base": {"w_M": float(base.w_M), "psi": float(base.psi), "i": float(base.i)},
     }
     if args.out:
-        sim2 = build()
+        sim2 = build(pwm)
         rec = record(sim2)
         res2 = sim2.simulate(t_stop=args.seconds)
         mdl = sim2.mdl

@@ -1,0 +1,207 @@
+"""The peers' virtual environments: made by the suite, kept in a cache folder, never in the repo.
+
+Each peer runs in its own virtualenv under ``peers_dir`` (default ``$XDG_CACHE_HOME/acdrive/peers``
+or ``~/.cache/acdrive/peers``, outside the repository and outside any output folder, overridable
+with ``acdrive bench --peers-dir``), one folder per peer and pinned version, e.g.
+``motulator-0.18``. A venv that already imports the pinned version is reused; otherwise it is made
+with a Python the peer supports (``PeerSpec.pythons``: motulator 0.18 needs 3.12; GEM 3.0.3 runs
+on the suite's own Python) and the pinned requirement is installed from the package index with
+pip. Every failure is returned as a reason, never raised: the suite still measures acdrive and the
+JSON says why the peer is missing (``available: false``).
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import shutil
+import subprocess
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+PEER_SCRIPTS = Path(__file__).resolve().parent / "peers"
+
+
+def default_peers_dir() -> Path:
+    """``$XDG_CACHE_HOME/acdrive/peers``, else ``~/.cache/acdrive/peers``."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "acdrive" / "peers"
+
+
+def _pythons_named(minor: str) -> list[str]:
+    """Existing interpreters called ``python<minor>``: PATH, pyenv's versions, /usr(/local)/bin."""
+    found = [shutil.which(f"python{minor}")]
+    found += sorted(glob.glob(os.path.expanduser(f"~/.pyenv/versions/{minor}*/bin/python{minor}")))
+    found += [f"/usr/bin/python{minor}", f"/usr/local/bin/python{minor}"]
+    out = []
+    for c in found:
+        if c and os.path.exists(c) and c not in out:
+            out.append(c)
+    return out
+
+
+def python312() -> list[str]:
+    """Candidates for motulator 0.18, which needs Python >= 3.12."""
+    return _pythons_named("3.12")
+
+
+def running_python() -> list[str]:
+    """The suite's own interpreter (a venv's python makes a venv from its base), then 3.11."""
+    return [sys.executable, *_pythons_named("3.11")]
+
+
+@dataclass(frozen=True)
+class PeerSpec:
+    """A peer: its distribution, pinned requirement and version prefix, its venv folder name,
+    the interpreters to try (a function returning paths) and the Python versions it accepts."""
+
+    name: str
+    distribution: str
+    requirement: str
+    version_prefix: str
+    folder: str
+    pythons: Callable[[], list[str]]
+    accepts: tuple[tuple[int, int], ...]
+
+
+MOTULATOR = PeerSpec(
+    "motulator",
+    "motulator",
+    "motulator==0.18.*",
+    "0.18",
+    "motulator-0.18",
+    python312,
+    ((3, 12), (3, 13)),
+)
+GEM = PeerSpec(
+    "gym-electric-motor",
+    "gym-electric-motor",
+    "gym-electric-motor==3.0.3",
+    "3.0.3",
+    "gem-3.0.3",
+    running_python,
+    ((3, 9), (3, 10), (3, 11), (3, 12)),
+)
+
+
+def _output(cmd: list[str], timeout: float = 120.0) -> str | None:
+    """stdout of ``cmd`` if it succeeds, else None."""
+    try:
+        r = subprocess.run(
+            cmd, check=False, capture_output=True, text=True, timeout=timeout, env=clean_env()
+        )
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return r.stdout.strip() if r.returncode == 0 else None
+
+
+def clean_env() -> dict:
+    """The environment for a peer's process: without acdrive's venv or path settings."""
+    return {
+        k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONHOME")
+    }
+
+
+def installed_version(python: str, distribution: str) -> str | None:
+    """The version of ``distribution`` importable by ``python``, or None."""
+    code = f"import importlib.metadata as m; print(m.version({distribution!r}))"
+    return _output([python, "-c", code])
+
+
+def ensure_venv(spec: PeerSpec, peers_dir: Path, log=None) -> dict:
+    """``{"available": True, "python": ..., "venv": ..., "version": ...}`` once ``spec``'s venv
+    imports the pinned version (made or repaired here if needed), else ``{"available": False,
+    "reason": ...}``. ``log`` receives progress lines."""
+    say = log or (lambda _msg: None)
+    venv = Path(peers_dir) / spec.folder
+    python = venv / "bin" / "python"
+    info = {"venv": str(venv), "requirement": spec.requirement}
+    if python.exists():
+        got = installed_version(str(python), spec.distribution) or ""
+        if got.startswith(spec.version_prefix):
+            return {"available": True, "python": str(python), "version": got, **info}
+    else:
+        base = None
+        tried = spec.pythons()
+        for candidate in tried:
+            v = _output([candidate, "-c", "import sys; print(*sys.version_info[:2])"])
+            if v and tuple(int(x) for x in v.split()) in spec.accepts:
+                base = candidate
+                break
+        if base is None:
+            versions = ", ".join(f"{a}.{b}" for a, b in spec.accepts)
+            return {
+                "available": False,
+                **info,
+                "reason": (
+                    f"no Python that {spec.name} supports ({versions}) was found (tried: "
+                    f"{', '.join(tried) or 'none'})"
+                ),
+            }
+        say(f"making {venv} with {base}")
+        try:
+            venv.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            return {"available": False, **info, "reason": f"cannot create {venv.parent}: {exc}"}
+        failed = _run_step([base, "-m", "venv", str(venv)])
+        if failed:
+            return {"available": False, **info, "reason": failed}
+    say(f"installing {spec.requirement} in {venv}")
+    failed = _run_step(
+        [str(python), "-m", "pip", "install", "--quiet", spec.requirement], timeout=1800
+    )
+    if failed:
+        return {"available": False, **info, "reason": failed}
+    got = installed_version(str(python), spec.distribution) or ""
+    if not got.startswith(spec.version_prefix):
+        return {
+            "available": False,
+            **info,
+            "reason": f"{spec.requirement} not importable in {venv} after install (got {got!r})",
+        }
+    return {"available": True, "python": str(python), "version": got, **info}
+
+
+def _run_step(cmd: list[str], timeout: float = 600.0) -> str | None:
+    """None if ``cmd`` succeeds, else a one-line reason with the end of its output."""
+    try:
+        r = subprocess.run(
+            cmd, check=False, capture_output=True, text=True, timeout=timeout, env=clean_env()
+        )
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"{' '.join(cmd[:4])} failed: {exc}"
+    if r.returncode != 0:
+        tail = (r.stderr or r.stdout).strip().splitlines()[-3:]
+        return f"{' '.join(cmd[:4])} failed: {' | '.join(tail)}"
+    return None
+
+
+def run_peer_script(
+    python: str, script: str, args: list[str], cwd: str | None = None, timeout: float = 3600.0
+) -> dict:
+    """Run ``peers/<script>`` with the peer's python; its last stdout line is JSON. Returns that
+    dict with ``available: True``, or ``{"available": False, "reason": ...}``."""
+    cmd = [python, str(PEER_SCRIPTS / script), *args]
+    try:
+        r = subprocess.run(
+            cmd,
+            check=False,
+            capture_output=True,
+            text=True,
+            env=clean_env(),
+            cwd=cwd,
+            timeout=timeout,
+        )
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return {"available": False, "reason": f"{script} failed: {exc}"}
+    if r.returncode != 0:
+        tail = r.stderr.strip().splitlines()[-5:]
+        return {"available": False, "reason": f"{script} failed: " + " | ".join(tail)}
+    try:
+        result = dict(__import__("json").loads(r.stdout.strip().splitlines()[-1]))
+    except (ValueError, IndexError):
+        return {"available": False, "reason": f"{script} printed no JSON line"}
+    result["available"] = True
+    return result
