@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from numba import njit
+from numba import njit, prange
 
 from acdrive.analysis.freqresp import LTI, check_frequency_grid, evaluate_ss
 from acdrive.analysis.margins import (
@@ -67,21 +67,25 @@ INFINITE_EIG = 1e8  # generalised eigenvalues above this times the pencil norm a
 # batched frequency data
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
-    """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring."""
-    for idx in range(k1.size):
+    """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring (points
+    in parallel on all cores). The controller values repeat with the period of their length
+    (k of shape (K,) for G of shape (nb * K, 2, 2): the same frequency grid at every speed)."""
+    K1, K2 = k1.size, k2.size
+    for idx in prange(G.shape[0]):
+        a, b = k1[idx % K1], k2[idx % K2]
         g11, g12, g21, g22 = G[idx, 0, 0], G[idx, 0, 1], G[idx, 1, 0], G[idx, 1, 1]
         det = g11 * g22 - g12 * g21
-        kg1, kg2 = k1[idx] * g11, k2[idx] * g22
+        kg1, kg2 = a * g11, b * g22
         r1, r2 = 1.0 / (1.0 + kg1), 1.0 / (1.0 + kg2)  # 1 / (1 + k_i g_ii)
-        c1 = k1[idx] * (g11 + k2[idx] * det) * r2
-        c2 = k2[idx] * (g22 + k1[idx] * det) * r1
+        c1 = a * (g11 + b * det) * r2
+        c2 = b * (g22 + a * det) * r1
         gamma[idx] = (g12 * g21) / (g11 * g22)
         h[idx, 0], h[idx, 1] = kg1 * r1, kg2 * r2
         c[idx, 0], c[idx, 1] = c1, c2
-        coupling[idx, 0] = g12 * k2[idx] * r2 / (1.0 + c1)
-        coupling[idx, 1] = g21 * k1[idx] * r1 / (1.0 + c2)
+        coupling[idx, 0] = g12 * b * r2 / (1.0 + c1)
+        coupling[idx, 1] = g21 * a * r1 / (1.0 + c2)
 
 
 def _derived(key: str, G, k1, k2, gamma, h, c) -> np.ndarray:
@@ -106,17 +110,21 @@ def _kernel_outputs(G, k1, k2):
     k1, k2 = np.asarray(k1, dtype=complex), np.asarray(k2, dtype=complex)
     shape = np.broadcast_shapes(G.shape[:-2], k1.shape, k2.shape)
     N = int(np.prod(shape))
-    G = np.broadcast_to(G, shape + (2, 2))
-    k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
+    G_flat = np.ascontiguousarray(np.broadcast_to(G, shape + (2, 2))).reshape(N, 2, 2)
+
+    def periodic(k):
+        """k as the kernel takes it: its own values if they repeat along the leading axes (the
+        frequency grid of every speed), else broadcast to every point."""
+        if k.ndim >= 1 and shape[len(shape) - k.ndim :] == k.shape:
+            return np.ascontiguousarray(k).reshape(-1)
+        return np.ascontiguousarray(np.broadcast_to(k, shape)).reshape(N)
+
     gamma = np.empty(N, dtype=complex)
     h, c, coupling = (np.empty((N, 2), dtype=complex) for _ in range(3))
-    _icad_kernel(
-        np.ascontiguousarray(G).reshape(N, 2, 2),
-        np.ascontiguousarray(k1).reshape(N),
-        np.ascontiguousarray(k2).reshape(N),
-        gamma, h, c, coupling,
-    )  # fmt: skip
+    _icad_kernel(G_flat, periodic(k1), periodic(k2), gamma, h, c, coupling)
     two = shape + (2,)
+    k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
+    G = G_flat.reshape(shape + (2, 2))
     return G, k1, k2, gamma.reshape(shape), h.reshape(two), c.reshape(two), coupling.reshape(two)
 
 

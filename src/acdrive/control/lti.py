@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
-from numba import njit
+from numba import njit, prange
 
 from acdrive.errors import InputError, require_finite
 
@@ -49,14 +49,15 @@ EIG_COND_LIMIT = 1e5
 CANCEL_LIMIT = 1e6
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", parallel=True)
 def _modal_sum(s, lam, R, D, limit, out, lost):
     """out[b, k, c] = D[b, c] + sum_i R[b, i, c] / (s[k] - lam[b, i]) (c: flattened entry);
     lost[b, k] flags points where, for some entry, the summed size (|re| + |im|) of the terms
-    exceeds ``limit`` times the size of their sum."""
+    exceeds ``limit`` times the size of their sum. Models (b) run in parallel on all cores;
+    every point's arithmetic is the same as in a serial loop."""
     nb, n, q = R.shape
-    total = np.empty(q)
-    for b in range(nb):
+    for b in prange(nb):
+        total = np.empty(q)
         for k in range(s.size):
             for c in range(q):
                 out[b, k, c] = 0.0
