@@ -1,16 +1,14 @@
-"""Benchmark: control steps per second of the compiled DFIM drive simulation (issue 2 / 3).
+"""Benchmark: control steps per second of the compiled DFIM drive scenarios.
 
-Prints one JSON document. Speeds are quoted as ratios against peers measured in the same run:
-acdrive's own slow path (the same loop driven from Python), and, when a peer virtualenv is
-available (``--peer-python``, default benchmarks/.peer-venv or /tmp/peer), motulator and
-gym-electric-motor (see benchmarks/peers/README.md).
+Prints one JSON document: compile and cold-start times, control steps per second and real-time
+factor of each scenario, and the ratio against acdrive's own slow path (the same loop driven
+from Python) measured in the same run. The matched comparisons with other simulators
+(motulator, gym-electric-motor), with both sides' accuracy, are the benchmark suite:
+``acdrive bench --json``.
 
     python benchmarks/bench_dfim.py [--scenarios bodson-ramp bodson-two-motors] [--repeats 3]
-                                    [--peer-python PATH]
 
-Several motors on one supply advance together: one control step counts all of them. Peers run in
-their own virtualenv: python -m venv benchmarks/.peer-venv &&
-benchmarks/.peer-venv/bin/pip install -r benchmarks/peers/requirements.txt
+Several motors on one supply advance together: one control step counts all of them.
 """
 
 from __future__ import annotations
@@ -51,27 +49,10 @@ def first_run_seconds(scenario: str, cache_dir: str) -> tuple[float, float]:
     return imp, first
 
 
-def run_peer(python: str, script: str, seconds: float) -> dict | None:
-    try:
-        out = subprocess.run(
-            [python, str(HERE / "peers" / script), "--seconds", str(seconds)],
-            capture_output=True,
-            text=True,
-            timeout=600,
-        )
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        return {"error": str(exc)}
-    if out.returncode != 0:
-        return {"error": out.stderr.strip().splitlines()[-1] if out.stderr.strip() else "failed"}
-    return json.loads(out.stdout.strip().splitlines()[-1])
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenarios", nargs="+", default=["bodson-ramp", "bodson-two-motors"])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--peer-python", default=None)
-    parser.add_argument("--peer-seconds", type=float, default=1.0)
     args = parser.parse_args()
 
     from acdrive.scenarios.loader import load_scenario
@@ -102,26 +83,15 @@ def main() -> int:
     report["scenarios"] = runs
     first = runs[args.scenarios[0]]
 
-    # peers, measured in the same run; speedups are against the first scenario (one motor)
+    # acdrive's own slow path, measured in the same run, against the first scenario (one motor)
     short = dataclasses.replace(load_scenario(args.scenarios[0]), duration=0.2)
     t0 = time.perf_counter()
     simulate_slow(short)
-    peers = {"acdrive-slow-path": {"steps_per_s": n_steps(short) / (time.perf_counter() - t0)}}
-    peer_python = args.peer_python
-    for candidate in (HERE / ".peer-venv" / "bin" / "python", Path("/tmp/peer/bin/python")):
-        if peer_python is None and candidate.exists():
-            peer_python = str(candidate)
-    if peer_python:
-        for name, script in (
-            ("motulator", "motulator_steps.py"),
-            ("gym-electric-motor", "gem_steps.py"),
-        ):
-            if (HERE / "peers" / script).exists():
-                peers[name] = run_peer(peer_python, script, args.peer_seconds)
-    for peer in peers.values():
-        if peer and "steps_per_s" in peer:
-            peer["acdrive_speedup"] = first["control_steps_per_s"] / peer["steps_per_s"]
-    report["peers"] = peers
+    slow = n_steps(short) / (time.perf_counter() - t0)
+    report["slow_path"] = {
+        "steps_per_s": slow,
+        "compiled_speedup": first["control_steps_per_s"] / slow,
+    }
     print(json.dumps(report, indent=2))
     return 0
 

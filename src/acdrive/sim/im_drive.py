@@ -800,6 +800,49 @@ class IMDriveResult:
         except KeyError:
             raise KeyError(f"{name} was not logged (logged: {', '.join(self.signals)})") from None
 
+    def __repr__(self) -> str:
+        """One line for a notebook or a log: what ran and its headline numbers (computed)."""
+        s = self.setup
+        duration = float(self.t[-1] + s.sample_time) if self.t.size else 0.0
+        head = (
+            f"<IMDriveResult {s.name!r} [{self.label}]: mode {s.mode}, {duration:g} s in "
+            f"{self.t.size} samples; current RMS error {self.current_rms_error():.3g} A"
+        )
+        if s.mode != "current":
+            w = self.signal("w")
+            head += f", speed {float(np.min(w)):.1f} to {float(np.max(w)):.1f} rad/s"
+        return head + ">"
+
+    def plot(self, axes=None):
+        """Phase-a current against its reference (phase peak), the speed against its reference
+        (FOC modes) and the electrical torque against time; returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        rows = 2 if self.setup.mode == "current" else 3
+        if axes is None:
+            fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(8, 2.2 * rows + 0.6))
+        else:
+            fig = axes[0].figure
+        ax = iter(axes)
+        a = next(ax)
+        a.plot(self.t, self.phase_peak("i_ref").real, "k--", lw=0.8, label="reference")
+        a.plot(self.t, self.phase_peak("i_s").real, lw=0.7, label="i_alpha")
+        a.set_ylabel("current [A, phase peak]")
+        a.legend(loc="best")
+        a.set_title(f"{self.setup.name} [{self.label}]")
+        if rows == 3:
+            a = next(ax)
+            a.plot(self.t, self.signal("w_ref"), "k--", lw=0.8, label="reference")
+            a.plot(self.t, self.signal("w"), lw=0.8, label="speed")
+            a.set_ylabel("speed [rad/s]")
+            a.legend(loc="best")
+        a = next(ax)
+        a.plot(self.t, self.signal("tau_e"), lw=0.7)
+        a.set_ylabel("torque [N m]")
+        a.set_xlabel("time [s]")
+        fig.tight_layout()
+        return fig
+
     def phase_peak(self, name: str) -> np.ndarray:
         """A space vector in the paper's amplitude-invariant alpha, beta scaling (peak phase
         amperes or volts): the power-invariant vector over sqrt(3/2) (Bodson (8))."""

@@ -225,6 +225,47 @@ class DriveResult:
         ``columns.md`` into ``folder`` (created if needed); return the paths written."""
         return write_table(Path(folder), self.columns(), fmt, f"{self.name}: result columns")
 
+    def __repr__(self) -> str:
+        """One line for a notebook or a log: what ran and its headline numbers (computed)."""
+        duration = float(self.t[-1] + self.sample_time) if self.t.size else 0.0
+        speed = self.speed_rpm(0)
+        peaks = [float(np.max(self.peak("i_r_mag", k))) for k in range(self.n_motors)]
+        motors = f"{self.n_motors} motor{'s' * (self.n_motors > 1)}"
+        return (
+            f"<DriveResult {self.name!r}: {motors}, {duration:g} s in {self.t.size} samples; "
+            f"speed {float(np.min(speed)):.0f} to {float(np.max(speed)):.0f} rpm, "
+            f"peak rotor current {max(peaks):.3g} A (phase peak)>"
+        )
+
+    def plot(self, motor: int = 0, axes=None):
+        """Speed against its reference, rotor and stator current magnitudes (phase peak) and the
+        torque (command and electrical) of ``motor`` against time, on three stacked axes (or on
+        the three ``axes`` given); returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        if axes is None:
+            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5))
+        else:
+            fig = axes[0].figure
+        ax_w, ax_i, ax_t = axes
+        ax_w.plot(self.t, self.reference_rpm(motor), "k--", lw=0.8, label="reference")
+        ax_w.plot(self.t, self.speed_rpm(motor), lw=0.8, label="speed")
+        ax_w.set_ylabel("speed [rpm]")
+        ax_w.legend(loc="best")
+        ax_i.plot(self.t, self.peak("i_r_mag", motor), lw=0.7, label="rotor |i_R|")
+        ax_i.plot(self.t, self.peak("i_s_mag", motor), lw=0.7, label="stator |i_S|")
+        ax_i.set_ylabel("current [A, phase peak]")
+        ax_i.legend(loc="best")
+        ax_t.plot(self.t, self.signal("tau_com", motor), lw=0.7, label="command")
+        ax_t.plot(self.t, self.signal("tau_e", motor), lw=0.7, label="electrical")
+        ax_t.set_ylabel("torque [N m]")
+        ax_t.set_xlabel("time [s]")
+        ax_t.legend(loc="best")
+        title = self.name if self.n_motors == 1 else f"{self.name}, motor {motor + 1}"
+        ax_w.set_title(title)
+        fig.tight_layout()
+        return fig
+
 
 def _longest_run(mask: np.ndarray) -> tuple[int, int]:
     """(start, stop) of the longest stretch of True in ``mask`` ((0, 0) if there is none)."""
