@@ -2,28 +2,35 @@
 Using acdrive from a notebook
 =============================
 
-Results are plain Python objects: a pandas frame of every logged signal (with units in
-``frame.attrs``), a summary dictionary, and arrays by name. This is how a notebook session
-typically looks.
+Results are plain Python objects: a one-line ``repr`` with the headline numbers, ``plot()``, a
+pandas frame of every logged signal (units and descriptions in ``frame.attrs``), the summary
+dictionary that ``acdrive run`` writes as ``summary.json``, and ``save()`` to Parquet, CSV or
+MATLAB ``.mat`` with a ``columns.md`` beside the data.
 """
+
+import tempfile
+from pathlib import Path
 
 from acdrive.scenarios.loader import load_scenario
 from acdrive.sim.setup import simulate
 
-setup = load_scenario("bodson-two-motors")
-result = simulate(setup)
+result = simulate(load_scenario("bodson-two-motors"))
+result  # noqa: B018 - a notebook shows the repr of the last expression
+
+# %%
+# The result draws itself (speed, currents, torque of one motor).
+fig = result.plot(motor=1)
+
+# %%
+# Pandas does the rest; the columns carry their units.
 frame = result.to_dataframe()
 print(frame.shape)
-print(frame.columns[:8].tolist())
+print({name: frame.attrs["units"][name] for name in ("t", "w_m1", "i_r_pk_m1", "tau_e_m2")})
 
 # %%
-# Pandas does the rest: resample, describe, plot.
-ax = frame.iloc[::50].plot(
-    x="t", y=[c for c in frame.columns if c.startswith("w")][:2], figsize=(7, 3)
-)
-ax.set_ylabel("speed [rad/s]")
-
-# %%
-# The summary is the same dictionary that ``acdrive run`` writes as ``summary.json``.
-summary = result.summary()
-print({k: summary[k] for k in list(summary)[:6]})
+# Saving: Parquet by default, or ``"csv"`` / ``"mat"``; every column is described in
+# ``columns.md``.
+folder = Path(tempfile.mkdtemp()) / "two-motors"
+written = result.save(folder, "mat")
+print([p.name for p in written])
+print((folder / "columns.md").read_text().splitlines()[:6])
