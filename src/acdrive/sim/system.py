@@ -810,6 +810,46 @@ class CompiledSystem:
             results.append(r)
         return results
 
+    def run_packed(self, P, PO, X, S, Y, duration, sample_time, substeps=4, log=None,
+                   log_every=None, t0=0.0):  # fmt: skip
+        """The batch loop on arrays packed per variant, row b being variant b: ``P[b]`` (with the
+        common offsets ``PO``), ``X[b]``, ``S[b]``, ``Y[b]`` as each variant's own system gives
+        them (``pack_params``, ``pack_initial``, ``pack_held``). This is ``run_batch`` for
+        variants that differ in more than parameters (initial states, held outputs, whole parts
+        of the same shape); each row's result equals running that variant alone.
+
+        ``X`` and ``S`` hold the final states on return (a sampled part that accumulates a
+        metric in its state, ``sim.batch``, leaves it there). ``log`` lists output ports
+        (default: none) logged every ``log_every`` samples (default: only the first sample, so
+        nothing is kept per sample). Returns ``(LOG, ELOG, ECOUNT, DONE, STATUS, wall time)``.
+        """
+        n_steps = self._steps(duration, sample_time, substeps)
+        log = [] if log is None else log
+        log_every = n_steps if log_every is None else log_every
+        columns, rows = self._log_setup(log, n_steps, log_every)
+        B = X.shape[0]
+        sizes = self.system.sizes
+        if B < 1:
+            raise InputError("variants", "must hold at least one variant")
+        for name, array, width in (("X", X, sizes["x"]), ("S", S, sizes["s"]),
+                                   ("Y", Y, sizes["y"]), ("P", P, int(PO[-1]))):  # fmt: skip
+            if array.ndim != 2 or array.shape != (B, width) or array.dtype != np.float64:
+                raise InputError(name, f"must be a float64 array of shape ({B}, {width})")
+        self._check_size(n_steps, substeps, rows, len(columns), variants=B)
+        U = np.zeros((B, sizes["u"]))
+        n_ev = len(self.system.event_names())
+        LOG = np.zeros((B, rows, len(columns)))
+        ELOG = np.zeros((B, rows, n_ev), dtype=np.int64)
+        ECOUNT = np.zeros((B, n_ev, 64), dtype=np.int64)
+        DONE = np.zeros(B, dtype=np.int64)
+        STATUS = np.zeros(B, dtype=np.int64)
+        idx = np.array([c[2] for c in columns], dtype=np.int64)
+        start = time.perf_counter()
+        self.module.run_batch(X, P, np.asarray(PO, dtype=np.int64), S, Y, U, float(t0),
+                              float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
+                              ECOUNT, DONE, STATUS)  # fmt: skip
+        return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
+
     # --- pieces for the slow path and the linearisation -------------------------------------
     def derivatives(self, t: float, X: np.ndarray, held: np.ndarray, parts=None) -> np.ndarray:
         """dX/dt with every non-plant output held at ``held`` (a Y vector): the right-hand side a

@@ -1,0 +1,838 @@
+"""Many variants of one scenario in the compiled batch loop, on all cores, reduced on line.
+
+``simulate_batch(base, variants)`` takes a base scenario (built-in name, TOML path or parsed
+dict; or a ``DriveSetup`` / ``IMDriveSetup`` when the variants only change parts and initial
+states) and a list of variants, each a dict of overrides in three forms:
+
+* ``"motor[0].controller.speed_bandwidth": 100`` -- a field of the scenario file, dotted as the
+  loader names it in its errors (``motor[0].params.R_s`` expands ``machine = "<name>"`` into its
+  parameters first, so a built-in machine's parameters can be varied one by one);
+* ``"part:shaft0.load": 0.05`` -- a parameter of one part of the built system (checked by the
+  part's own declaration);
+* ``"initial:shaft0.w": 100.0`` -- an initial state of one part (after the drive's own initial
+  state, e.g. a perturbed speed).
+
+Every variant goes through the same validation as a single run (``scenarios.loader``): a bad one
+is recorded as invalid with the ``InputError`` text and the batch goes on. Valid variants are
+grouped by compiled topology and table layout (same generated source, parameter offsets, sample
+time, duration and substeps) and each group runs in one call of the compiled ``run_batch``
+(numba ``prange`` over the variants), bit-identical to running each variant alone: the loop is
+the single run's loop, one variant per row (``tests/test_batch.py`` checks ``np.array_equal``).
+
+**On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
+appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
+reference, window and exceed limit (peak |x| and its time, mean, RMS, the count of samples
+beyond a limit and the first such time, the final value), and one part per oscillation metric
+(``oscillation_step``: the band-limited RMS in two late windows). Each reads one output port
+(minus a reference port, if given) at every control sample and accumulates in its discrete
+state, read back after the run. Nothing is logged per sample unless asked for, so the memory of
+a batch is a few hundred floats per variant whatever the duration. The reducer parts only read,
+so the plant's slots and generated code are those of the single run; the plant states agree
+with the reducer-free loop bit for bit under ``ACDRIVE_STRICT_MATH=1`` and to the last bit
+(fast-math contraction in a larger compiled loop) otherwise (docs/design.md, "Batches and
+sweeps"). A variant in a batch equals the same variant alone in the same loop bit for bit.
+
+**Stability verdict** (DFIM): a variant is ``unstable`` if its state stopped being finite, or if
+the speed error's RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-order high-pass
+sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run
+exceeds ``OSCILLATION_FINDING_RPM`` (1 rpm): the threshold of the single run's limit-cycle
+finding (``sim.outcome``). The ratio of that RMS to the one over the 0.25 s before
+(``speed_oscillation_growth``) tells a growing oscillation from a settled limit cycle.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from acdrive.core.parts import SampledPart
+from acdrive.core.signals import Layout, cplx, real
+from acdrive.errors import InputError
+from acdrive.jit import jit
+from acdrive.sim.outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
+from acdrive.sim.result import OSCILLATION_BAND_HZ
+from acdrive.sim.system import STATUS_OK, System
+
+RPM_PER_RAD_S = 30.0 / math.pi
+#: sqrt(3/2): space-vector magnitude of a balanced three-phase set per peak phase value
+SQRT_3_2 = math.sqrt(1.5)
+REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation")
+#: prefix of the parts appended to a system for its reducers
+REDUCER_PREFIX = "reducer_"
+
+# --- reducer parts -------------------------------------------------------------------------
+
+REDUCER_PARAMS = Layout(
+    real("start", "s", "start of the window the metric is taken over"),
+    real("stop", "s", "end of the window (inclusive)"),
+    real("split", "s", "oscillation: start of the late window (the early one ends there)"),
+    real("limit", "", "stats: threshold on |x| in the signal's unit (exceed count)"),
+    real("a_hp", "", "oscillation: tau/(tau + T_s) of the high-pass sections (backward Euler)"),
+    real("b_lp", "", "oscillation: T_s/(tau + T_s) of the low-pass section (backward Euler)"),
+    real("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
+    real("has_ref", "", "1 if a reference is subtracted from the signal"),
+)
+_START, _STOP, _SPLIT = (REDUCER_PARAMS.slot(n) for n in ("start", "stop", "split"))
+_LIMIT, _A, _B = (REDUCER_PARAMS.slot(n) for n in ("limit", "a_hp", "b_lp"))
+_CPLX, _REF = REDUCER_PARAMS.slot("is_complex"), REDUCER_PARAMS.slot("has_ref")
+
+_inline = njit(cache=True, error_model="numpy", inline="always")
+
+
+@_inline
+def _reduced_value(u, p):
+    """The quantity a reducer reads: signal minus reference (if any); for a space vector the
+    magnitude of that difference."""
+    if p[_CPLX] > 0.5:
+        re, im = u[0], u[1]
+        if p[_REF] > 0.5:
+            re -= u[2]
+            im -= u[3]
+        return math.sqrt(re * re + im * im)
+    if p[_REF] > 0.5:
+        return u[0] - u[1]
+    return u[0]
+
+
+#: every peak / mean / rms / exceed / final metric of a system is served by one "stats" part
+#: with one channel per (signal, reference, window, exceed limit) (``_with_reducers``): the cost
+#: of a reducer part is mostly per part per sample (about 35 ns), not in its arithmetic.
+STATS_CHANNEL = (
+    ("n", "", "samples in the window"),
+    ("peak", "", "largest |x| in the window"),
+    ("t_peak", "s", "time of the peak"),
+    ("sum", "", "sum of x over the window"),
+    ("sum_sq", "", "sum of x^2 over the window"),
+    ("count", "", "samples with |x| > limit in the window"),
+    ("t_first", "s", "time of the first such sample (-1: none)"),
+    ("last", "", "x at the last sample of the window"),
+)
+STATS_PARAMS = (
+    ("start", "s", "start of the window"),
+    ("stop", "s", "end of the window (inclusive)"),
+    ("limit", "", "threshold on |x| for the exceed count"),
+    ("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
+    ("x_slot", "", "first input slot of the signal"),
+    ("ref_slot", "", "first input slot of the reference (-1: none)"),
+)
+_NS, _NP = len(STATS_CHANNEL), len(STATS_PARAMS)
+
+
+@jit
+def stats_step(t, T_s, u, p, s, y):
+    for c in range(int(p[0])):
+        q = 1 + _NP * c
+        if p[q] <= t <= p[q + 1]:
+            o, r = int(p[q + 4]), int(p[q + 5])
+            if p[q + 3] > 0.5:
+                re, im = u[o], u[o + 1]
+                if r >= 0:
+                    re -= u[r]
+                    im -= u[r + 1]
+                v = math.sqrt(re * re + im * im)
+            else:
+                v = u[o]
+                if r >= 0:
+                    v -= u[r]
+            a = abs(v)
+            k = _NS * c
+            s[k] += 1.0
+            if s[k] == 1.0 or a > s[k + 1]:
+                s[k + 1] = a
+                s[k + 2] = t
+            s[k + 3] += v
+            s[k + 4] += v * v
+            if a > p[q + 2]:
+                if s[k + 5] == 0.0:
+                    s[k + 6] = t
+                s[k + 5] += 1.0
+            s[k + 7] = v
+    return 0
+
+
+_STATS_CLASSES: dict[tuple, type] = {}
+
+
+def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
+    """The stats part for ``channels`` = ((unit, is complex, has reference), ...): inputs
+    ``x<c>`` (and ``ref<c>``) declared in each signal's unit (the wiring checks units)."""
+    if channels not in _STATS_CLASSES:
+        inputs, params, states = [], [real("channels", "", "number of channels")], []
+        for c, (unit, is_complex, has_ref) in enumerate(channels):
+            make = cplx if is_complex else real
+            inputs.append(make(f"x{c}", unit, f"signal of channel {c}"))
+            if has_ref:
+                inputs.append(make(f"ref{c}", unit, f"reference of channel {c}"))
+            params += [real(f"{n}{c}", u, d) for n, u, d in STATS_PARAMS]
+            states += [real(f"{n}{c}", u, d) for n, u, d in STATS_CHANNEL]
+        _STATS_CLASSES[channels] = type(
+            "Reducer_stats",
+            (SampledPart,),
+            {
+                "__doc__": "On-line peak, mean, RMS, exceed count and final value (sim.batch).",
+                "PARAMS": Layout(*params),
+                "STATES": Layout(*states),
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "INITIAL": {f"t_first{c}": -1.0 for c in range(len(channels))},
+                "step": stats_step,
+            },
+        )
+    return _STATS_CLASSES[channels]
+
+
+OSC_STATES = Layout(
+    real("started", "", "1 once the filters hold the first sample"),
+    real("x_prev", "", "previous input of the first high-pass section"),
+    real("h1", "", "output of the first high-pass section"),
+    real("h2", "", "output of the second high-pass section"),
+    real("band", "", "band-limited signal (low-pass output)"),
+    real("early_sq", "", "sum of band^2 over [start, split)"),
+    real("early_n", "", "samples in the early window"),
+    real("late_sq", "", "sum of band^2 over [split, stop]"),
+    real("late_n", "", "samples in the late window"),
+)
+
+
+@jit
+def oscillation_step(t, T_s, u, p, s, y):
+    x = _reduced_value(u, p)
+    if s[0] == 0.0:
+        s[0] = 1.0
+        s[1] = x
+    a, b = p[_A], p[_B]
+    h1 = a * (s[2] + x - s[1])
+    h2 = a * (s[3] + h1 - s[2])
+    s[4] += b * (h2 - s[4])
+    s[1], s[2], s[3] = x, h1, h2
+    band = s[4]
+    if p[_START] <= t < p[_SPLIT]:
+        s[5] += band * band
+        s[6] += 1.0
+    elif p[_SPLIT] <= t <= p[_STOP]:
+        s[7] += band * band
+        s[8] += 1.0
+    return 0
+
+
+def band_coefficients(band_hz, sample_time: float) -> tuple[float, float]:
+    """(a, b) of the backward-Euler high-pass (lower edge) and low-pass (upper edge) sections."""
+    tau_h, tau_l = 1.0 / (2.0 * math.pi * band_hz[0]), 1.0 / (2.0 * math.pi * band_hz[1])
+    return tau_h / (tau_h + sample_time), sample_time / (tau_l + sample_time)
+
+
+#: no exceed metric on a stats part: a limit no finite |x| passes
+NO_LIMIT = 1e300
+_KERNELS = {"oscillation": (oscillation_step, OSC_STATES)}
+_CLASSES: dict[tuple, type] = {}
+
+
+def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> type:
+    """The sampled part of one reducer kind ("oscillation") reading a signal of ``unit`` (the wiring checks units, so the input is declared in the signal's own unit)."""
+    key = (kind, unit, is_complex, has_ref)
+    if key not in _CLASSES:
+        make = cplx if is_complex else real
+        inputs = [make("x", unit, "the reduced signal")]
+        if has_ref:
+            inputs.append(make("ref", unit, "reference subtracted from the signal"))
+        step, states = _KERNELS[kind]
+        _CLASSES[key] = type(
+            f"Reducer_{kind}",
+            (SampledPart,),
+            {
+                "__doc__": f"On-line {kind} of a signal (sim.batch).",
+                "PARAMS": REDUCER_PARAMS,
+                "STATES": states,
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "DEFAULTS": {"split": 0.0, "limit": NO_LIMIT, "a_hp": 0.0, "b_lp": 0.0},
+                "INITIAL": {},
+                "step": step,
+            },
+        )
+    return _CLASSES[key]
+
+
+@dataclass(frozen=True)
+class Reducer:
+    """A metric computed inside the loop.
+
+    ``kind``: ``peak`` (max |x|; also ``<name>_time``), ``mean``, ``rms``, ``exceed`` (samples
+    with |x| > ``limit``; also ``<name>_first_time``, NaN if none), ``final`` (x at the last
+    sample of the window), ``oscillation`` (RMS of x in ``band_hz`` over the last ``window`` s of
+    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before). ``x`` is
+    ``signal`` ("part.output") minus ``reference`` if given; a space vector's magnitude. The
+    window is [``start``, ``stop``] (``stop`` None: the end of the run). The value is multiplied
+    by ``scale`` (e.g. rad/s -> rpm); ``limit`` is in the signal's unit.
+    """
+
+    name: str
+    kind: str
+    signal: str
+    reference: str | None = None
+    start: float = 0.0
+    stop: float | None = None
+    limit: float = 0.0
+    scale: float = 1.0
+    band_hz: tuple[float, float] = OSCILLATION_BAND_HZ
+    window: float = LATE_WINDOW_S
+
+    def columns(self) -> list[str]:
+        extra = {"peak": ["_time"], "exceed": ["_first_time"], "oscillation": ["_growth"]}
+        return [self.name] + [self.name + s for s in extra.get(self.kind, [])]
+
+
+def check_reducer(r: Reducer, where: str) -> Reducer:
+    """``r`` if its fields are well formed (an ``InputError`` naming ``where.<field>``)."""
+    if not isinstance(r.name, str) or not r.name.replace("_", "a").replace(".", "a").isalnum():
+        raise InputError(f"{where}.name", "must be letters, digits, '_' or '.'")
+    if r.kind not in REDUCER_KINDS:
+        raise InputError(f"{where}.kind", f"must be one of {', '.join(REDUCER_KINDS)}")
+    for name in ("signal", "reference"):
+        value = getattr(r, name)
+        if (value is not None or name == "signal") and (
+            not isinstance(value, str) or value.count(".") != 1
+        ):
+            raise InputError(f"{where}.{name}", 'must name an output as "part.output"')
+    numbers = {"start": r.start, "limit": r.limit, "scale": r.scale, "window": r.window}
+    if r.stop is not None:
+        numbers["stop"] = r.stop
+    for name, value in numbers.items():
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
+            raise InputError(f"{where}.{name}", "must be a finite number")
+    if r.window <= 0 or r.limit < 0 or r.start < 0:
+        raise InputError(f"{where}.window", "window must be > 0, start and limit >= 0")
+    if r.stop is not None and r.stop <= r.start:
+        raise InputError(f"{where}.stop", "must be later than start")
+    lo, hi = r.band_hz
+    if not 0 < lo < hi:
+        raise InputError(f"{where}.band_hz", "must be two frequencies 0 < low < high")
+    return r
+
+
+def dfim_reducers(setup) -> list[Reducer]:
+    """The default metrics of a DFIM drive, per motor k (suffix ``_m<k>`` beyond the first):
+    speed error RMS and peak [rpm], band-limited speed oscillation and its growth, peak phase
+    currents [A] and samples above the controller's current limits, peak torque, final speed."""
+    out = []
+    for k, motor in enumerate(setup.motors):
+        sfx = "" if k == 0 else f"_m{k}"
+        c = motor.controller
+        w, ref = f"shaft{k}.w", f"reference{k}.w_ref"
+        out += [
+            Reducer(f"speed_error_rms_rpm{sfx}", "rms", w, ref, scale=RPM_PER_RAD_S),
+            Reducer(f"speed_error_peak_rpm{sfx}", "peak", w, ref, scale=RPM_PER_RAD_S),
+            Reducer(f"speed_oscillation_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
+            Reducer(f"peak_stator_current_a{sfx}", "peak", f"dfim{k}.i_s", scale=1 / SQRT_3_2),
+            Reducer(f"peak_rotor_current_a{sfx}", "peak", f"dfim{k}.i_r_rotor", scale=1 / SQRT_3_2),
+            Reducer(
+                f"stator_current_over_limit{sfx}",
+                "exceed",
+                f"dfim{k}.i_s",
+                limit=SQRT_3_2 * c.stator_current_limit_pk,
+            ),
+            Reducer(
+                f"rotor_current_over_limit{sfx}",
+                "exceed",
+                f"dfim{k}.i_r_rotor",
+                limit=SQRT_3_2 * c.rotor_current_limit_pk,
+            ),
+            Reducer(f"peak_torque_nm{sfx}", "peak", f"dfim{k}.tau_e"),
+            Reducer(f"final_speed_rpm{sfx}", "final", w, scale=RPM_PER_RAD_S),
+        ]
+    return out
+
+
+def default_reducers(setup) -> list[Reducer]:
+    """The default metrics of ``setup``'s drive (DFIM or cage IM)."""
+    return dfim_reducers(setup) if hasattr(setup, "motors") else im_reducers(setup)
+
+
+def im_reducers(setup) -> list[Reducer]:
+    """The default metrics of a cage-IM drive: current tracking RMS error and peak current [A,
+    space vector], peak torque, final speed, and the speed error's RMS if a speed reference
+    exists."""
+    reference = "reference.i" if setup.mode == "current" else "ifoc.i_s_ref"  # IMDrive's
+    out = [
+        Reducer("current_error_rms_a", "rms", "machine.i_s", reference),
+        Reducer("peak_stator_current_a", "peak", "machine.i_s"),
+        Reducer("peak_torque_nm", "peak", "machine.tau_e"),
+        Reducer("final_speed_rad_s", "final", "shaft.w"),
+    ]
+    if setup.mode in ("speed-p", "speed-pi"):
+        out.append(Reducer("speed_error_rms_rad_s", "rms", "shaft.w", "speed_reference.w_ref"))
+    return out
+
+
+# --- variants -------------------------------------------------------------------------------
+
+
+def _segments(path: str) -> list[tuple[str, int | None]]:
+    out = []
+    for token in path.split("."):
+        index = None
+        if token.endswith("]") and "[" in token:
+            token, _, rest = token.partition("[")
+            if not rest[:-1].isdigit():
+                raise InputError(path, "an index must be a non-negative integer, as in motor[0]")
+            index = int(rest[:-1])
+        if not token.isidentifier():
+            raise InputError(path, "is not a dotted scenario field such as motor[0].load_torque")
+        out.append((token, index))
+    return out
+
+
+def _default_machine(data: dict) -> str:
+    return "delorenzo-im" if data.get("drive") == "cage-im" else "bodson-dfim"
+
+
+#: the fields of a scenario's [params] table per machine class (scenarios.loader, im_loader)
+_PARAMS_FIELDS = {
+    "DFIMParams": ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J"),
+    "IMParams": ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p"),
+}
+
+
+def _expand_machine(table: dict, root: dict, path: str) -> None:
+    """Replace ``machine = "<built-in>"`` in ``table`` by its ``params`` (the required fields of
+    its parameter class), so one of them can be changed."""
+    from acdrive.machines import registry
+
+    if "params" in table:
+        return
+    name = table.get("machine", _default_machine(root))
+    if name not in registry.MACHINES:
+        raise InputError(path, f"machine {name!r} is not built in: give [params] instead")
+    machine = registry.MACHINES[name]
+    fields = _PARAMS_FIELDS.get(type(machine).__name__)
+    if fields is None:
+        raise InputError(path, f"machine {name!r} has no [params] form in a scenario")
+    table.pop("machine", None)
+    table["params"] = {k: getattr(machine, k) for k in fields}
+
+
+def _walk(data: dict, path: str, create: bool):
+    """(parent table, last key) of a dotted field; ``create`` makes missing tables."""
+    parts = _segments(path)
+    node = data
+    for i, (key, index) in enumerate(parts):
+        last = i == len(parts) - 1
+        if key == "params" and isinstance(node, dict) and not last:
+            _expand_machine(node, data, path)
+        if last and index is None:
+            if not isinstance(node, dict):
+                raise InputError(path, "is not inside a table")
+            return node, key
+        if not isinstance(node, dict):
+            raise InputError(path, "is not inside a table")
+        if key not in node:
+            if not create or index is not None:
+                raise InputError(path, f"the base scenario has no {key}")
+            node[key] = {}
+        node = node[key]
+        if index is not None:
+            if not isinstance(node, list) or index >= len(node):
+                raise InputError(path, f"the base scenario has no {key}[{index}]")
+            if last:
+                raise InputError(path, "names a whole table, not a field")
+            node = node[index]
+    raise InputError(path, "is empty")  # pragma: no cover
+
+
+def get_field(data: dict, path: str):
+    """The value of dotted field ``path`` in a parsed scenario (None if absent); a built-in
+    machine's parameter is read from the machine (``motor[0].params.R_s``)."""
+    data = copy.deepcopy(data)
+    parent, key = _walk(data, path, create=True)
+    return parent.get(key)
+
+
+def apply_overrides(data: dict, overrides: dict) -> dict:
+    """A copy of the parsed scenario ``data`` with dotted fields set (``motor[0].load_torque``).
+
+    An unknown field is set as given: the loader then names it as an unknown key."""
+    out = copy.deepcopy(data)
+    for path, value in overrides.items():
+        parent, key = _walk(out, path, create=True)
+        parent[key] = value
+    return out
+
+
+def _split(overrides: dict) -> tuple[dict, dict, dict]:
+    fields, parts, initial = {}, {}, {}
+    for key, value in overrides.items():
+        if not isinstance(key, str):
+            raise InputError(f"{key!r}", "a variant's keys must be strings")
+        if key.startswith(("part:", "initial:")):
+            prefix, _, rest = key.partition(":")
+            name, dot, param = rest.partition(".")
+            if not dot or not name.isidentifier() or not param.isidentifier():
+                raise InputError(key, f'must read "{prefix}:<part>.<name>"')
+            target = parts if prefix == "part" else initial
+            target.setdefault(name, {})[param] = value
+        else:
+            fields[key] = value
+    return fields, parts, initial
+
+
+def _base_data(base):
+    """(parsed scenario dict or None, setup or None) of ``base``."""
+    from acdrive.scenarios.loader import read_scenario
+
+    if isinstance(base, dict):
+        return copy.deepcopy(base), None
+    if isinstance(base, str) or hasattr(base, "__fspath__"):
+        return read_scenario(base), None
+    if hasattr(base, "motors") or hasattr(base, "mechanics"):
+        return None, base
+    raise InputError("base", "must be a scenario name, a TOML path, a parsed dict or a setup")
+
+
+def build_variant_setup(data: dict):
+    """The setup of a parsed scenario (DFIM or cage IM), validated by the scenario loaders."""
+    from acdrive.scenarios.loader import build_setup
+
+    if "drive" in data:
+        if data["drive"] != "cage-im":
+            raise InputError("drive", 'must be "cage-im" (omit it for a DFIM scenario)')
+        from acdrive.scenarios.im_loader import build_im_setup
+
+        return build_im_setup(data)
+    return build_setup(data)
+
+
+def _drive_of(setup):
+    from acdrive.sim.im_drive import IMDrive, IMDriveSetup
+
+    if isinstance(setup, IMDriveSetup):
+        if setup.runs() and len(setup.runs()) > 1:
+            raise InputError("compare", "a batch runs one controller per variant: no comparisons")
+        return IMDrive(setup)
+    if setup.compare_modes:
+        raise InputError("compare_modes", "a batch runs one mode per variant: no comparisons")
+    from acdrive.sim.dfim_drive import DFIMDrive
+
+    return DFIMDrive(setup)
+
+
+def _port(system: System, path: str, where: str):
+    part, _, output = path.partition(".")
+    try:
+        return getattr(system.part(part).out, output)
+    except InputError as exc:
+        raise InputError(where, exc.rule) from None
+
+
+@dataclass
+class _Prepared:
+    """One valid variant, ready to be packed."""
+
+    index: int
+    setup: object
+    system: System
+    initial: dict
+    held: dict
+    reducers: list[tuple[Reducer, tuple[str, int]]]
+    log_ports: list
+
+
+def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
+                   replaced=None) -> tuple[System, list[tuple[str, int]]]:  # fmt: skip
+    """The drive's system with the reducer parts appended after every other part (the same
+    wires; the plant's slots and generated code unchanged), and (part name, first state slot
+    within the part) of each reducer. Peak, mean, RMS, exceed and final metrics of the same
+    signal, reference and window share one channel of the one "stats" part (at most one exceed
+    limit per channel); each oscillation has its own part.
+    ``replaced[name]`` is a re-parametrised copy of part ``name`` used in its place."""
+    from acdrive.core.parts import Port
+
+    base = drive.system
+    replaced = replaced or {}
+
+    def remap(port):
+        part = replaced.get(port.part.name)
+        return port if part is None else Port(part, port.var, port.direction)
+
+    parts = [replaced.get(p.name, p) for p in base.parts]
+    wires = []
+    for (dst_part, dst_var), src in base.source_of.items():
+        wires.append((remap(src), remap(getattr(base.part(dst_part).inp, dst_var))))
+    groups: dict[tuple, dict] = {}
+    served = []
+    for r in reducers:
+        where = f"metrics.{r.name}"
+        x = remap(_port(base, r.signal, f"{where}.signal"))
+        ref = None
+        if r.reference is not None:
+            ref = remap(_port(base, r.reference, f"{where}.reference"))
+        if ref is not None and (ref.var.kind, ref.var.unit) != (x.var.kind, x.var.unit):
+            raise InputError(f"{where}.reference", "must have the kind and unit of the signal")
+        if x.var.kind not in ("real", "complex"):
+            raise InputError(f"{where}.signal", "must be a real or complex output")
+        if r.kind == "oscillation" and x.var.kind == "complex":
+            raise InputError(f"{where}.signal", "an oscillation is measured on a real signal")
+        stop = duration if r.stop is None else min(r.stop, duration)
+        start, split, a_hp, b_lp = r.start, 0.0, 0.0, 0.0
+        kind = "oscillation" if r.kind == "oscillation" else "stats"
+        limit = r.limit if r.kind == "exceed" else None
+        if kind == "oscillation":  # two windows at the end of the run
+            split = max(stop - r.window, 0.0)
+            start = max(split - r.window, r.start)
+            a_hp, b_lp = band_coefficients(r.band_hz, sample_time)
+        key = (kind, r.signal, r.reference, start, stop, split, a_hp, b_lp)
+        group = groups.get(key)
+        if group is None or (limit is not None and group["limit"] not in (None, limit)):
+            key = (*key, len(groups))  # a new channel (stats) or part (oscillation)
+            group = groups[key] = {"limit": None, "x": x, "ref": ref, "kind": kind,
+                                   "start": start, "stop": stop, "split": split, "a": a_hp,
+                                   "b": b_lp, "served": []}  # fmt: skip
+        if limit is not None:
+            group["limit"] = limit
+        group["served"].append(len(served))
+        served.append(None)
+    stats = [g for g in groups.values() if g["kind"] == "stats"]
+    if stats:
+        channels = tuple(
+            (g["x"].var.unit, g["x"].var.kind == "complex", g["ref"] is not None) for g in stats
+        )
+        cls = _stats_class(channels)
+        values = {"channels": float(len(stats))}
+        for c, g in enumerate(stats):
+            ref_slot = -1 if g["ref"] is None else cls.INPUTS.slot(f"ref{c}")
+            values.update({
+                f"start{c}": g["start"], f"stop{c}": g["stop"],
+                f"limit{c}": NO_LIMIT if g["limit"] is None else g["limit"],
+                f"is_complex{c}": float(g["x"].var.kind == "complex"),
+                f"x_slot{c}": float(cls.INPUTS.slot(f"x{c}")), f"ref_slot{c}": float(ref_slot),
+            })  # fmt: skip
+        part = cls(f"{REDUCER_PREFIX}stats", **values)
+        parts.append(part)
+        for c, g in enumerate(stats):
+            wires.append((g["x"], getattr(part.inp, f"x{c}")))
+            if g["ref"] is not None:
+                wires.append((g["ref"], getattr(part.inp, f"ref{c}")))
+            for i in g["served"]:
+                served[i] = (part.name, _NS * c)
+    oscillations = [g for g in groups.values() if g["kind"] == "oscillation"]
+    for j, g in enumerate(oscillations):
+        x, ref = g["x"], g["ref"]
+        cls = _reducer_class("oscillation", x.var.unit, False, ref is not None)
+        part = cls(
+            f"{REDUCER_PREFIX}oscillation{j}", start=g["start"], stop=g["stop"],
+            split=g["split"], a_hp=g["a"], b_lp=g["b"], is_complex=0.0,
+            has_ref=float(ref is not None),
+        )  # fmt: skip
+        parts.append(part)
+        wires.append((x, part.inp.x))
+        if ref is not None:
+            wires.append((ref, part.inp.ref))
+        for i in g["served"]:
+            served[i] = (part.name, 0)
+    return System(parts, wires, method=base.method), served
+
+
+def _reduce(r: Reducer, s: np.ndarray, n_ok: bool) -> dict:
+    """The metric columns of reducer ``r`` from its part's final discrete state ``s``."""
+    nan = math.nan
+    if not n_ok:
+        return dict.fromkeys(r.columns(), nan)
+    if r.kind == "oscillation":
+        late = math.sqrt(s[7] / s[8]) * abs(r.scale) if s[8] else nan
+        early = math.sqrt(s[5] / s[6]) * abs(r.scale) if s[6] else nan
+        growth = late / early if early and early > 0 else nan
+        return {r.name: late, f"{r.name}_growth": growth}
+    n = s[0]
+    if r.kind == "peak":
+        return {r.name: s[1] * abs(r.scale) if n else nan, f"{r.name}_time": s[2] if n else nan}
+    if r.kind == "mean":
+        return {r.name: s[3] / n * r.scale if n else nan}
+    if r.kind == "rms":
+        return {r.name: math.sqrt(s[4] / n) * abs(r.scale) if n else nan}
+    if r.kind == "exceed":
+        return {r.name: float(s[5]), f"{r.name}_first_time": s[6] if s[5] else nan}
+    return {r.name: s[7] * r.scale if n else nan}  # final
+
+
+@dataclass
+class BatchResult:
+    """Per variant (in the order given) one row of scalars: ``variant`` (its index), ``valid``
+    and ``reason`` (the ``InputError`` text of an invalid variant), ``status`` (``ok``,
+    ``invalid`` or ``diverged at t = ... s``), ``stable`` (DFIM: the verdict of the module
+    docstring; None for other drives or invalid variants), the reducers' metrics and
+    ``events.<part>.<event>`` (samples on which the event was raised). ``traces[i]`` holds the
+    ``SystemResult`` of variant i when ``log`` was asked for. ``wall_time`` is the compiled
+    loops' time; ``steps`` the control steps simulated (valid variants)."""
+
+    rows: list[dict]
+    traces: dict = field(default_factory=dict)
+    wall_time: float = 0.0
+    steps: int = 0
+    groups: int = 0
+
+    def to_dataframe(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.rows)
+
+
+def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None = None,
+                    substeps: int | None = None):  # fmt: skip
+    """(setup, drive, system with reducers, initial, held, [(reducer, (part, slot))]) of one
+    variant; raises ``InputError`` if it is invalid. ``reducers`` None: the drive's default
+    metrics."""
+    data, setup = _base_data(base)
+    fields, part_changes, initial_changes = _split(dict(overrides))
+    if fields:
+        if data is None:
+            raise InputError(next(iter(fields)), "scenario fields need a scenario as the base")
+        data = apply_overrides(data, fields)
+    if setup is None:
+        setup = build_variant_setup(data)
+    changes = {}
+    if integrator is not None:
+        changes["integrator"] = integrator
+    if substeps is not None:
+        changes["substeps"] = substeps
+    if changes:
+        setup = dataclasses.replace(setup, **changes)
+    drive = _drive_of(setup)
+    replaced = {}
+    for name, params in part_changes.items():
+        try:
+            replaced[name] = drive.system.part(name).with_params(**params)
+        except TypeError as exc:  # a parameter the part does not declare
+            raise InputError(f"part:{name}", str(exc)) from None
+    initial, held = drive.initial()
+    for name, values in initial_changes.items():
+        drive.system.part(name)  # names the part if unknown
+        initial[name] = {**initial.get(name, {}), **values}
+    if reducers is None:
+        reducers = default_reducers(setup)
+    elif callable(reducers):
+        reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers(setup))]
+    system, served = _with_reducers(
+        drive, list(reducers), setup.duration, setup.sample_time, replaced
+    )
+    return setup, drive, system, initial, held, list(zip(reducers, served, strict=True))
+
+
+def _invalid_row(i: int, reason: str, reducers) -> dict:
+    row = {"variant": i, "valid": False, "reason": reason, "status": "invalid", "stable": None}
+    for r in () if reducers is None or callable(reducers) else reducers:
+        row.update(dict.fromkeys(r.columns(), math.nan))
+    return row
+
+
+def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | None = None,
+                   integrator: str | None = None, substeps: int | None = None) -> BatchResult:  # fmt: skip
+    """Simulate every variant of ``base`` (module docstring) in the compiled batch loop.
+
+    ``reducers``: the metrics (a list of ``Reducer``, or a function of a variant's setup giving
+    them; default: ``default_reducers`` of each variant). ``log``: None (no per-sample data) or a list of "part.output" signals to keep,
+    every ``log_every`` samples (default: the scenario's), in ``BatchResult.traces``.
+    ``integrator`` / ``substeps``: override the scenario's (e.g. ``"rk6"``, 1), applied to every
+    variant; running a variant alone with the same setup gives the same bits.
+    """
+    if not isinstance(variants, (list, tuple)):
+        raise InputError("variants", "must be a list of dicts of overrides")
+    if reducers is not None and not callable(reducers):
+        reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers)]
+    rows: list[dict | None] = [None] * len(variants)
+    groups: dict[tuple, list[_Prepared]] = {}
+    for i, overrides in enumerate(variants):
+        if not isinstance(overrides, dict):
+            rows[i] = _invalid_row(i, "variants: each variant must be a dict", reducers)
+            continue
+        try:
+            setup, _drive, system, initial, held, used = prepare_variant(
+                base, overrides, reducers, integrator, substeps
+            )
+            ports = []
+            if log is not None:
+                ports = [_port(system, name, f"log[{j}]") for j, name in enumerate(log)]
+            every = log_every if log_every is not None else setup.log_every
+            P, PO = system.pack_params()
+            system.pack_initial(initial)  # validates the initial-state overrides now
+            key = (system.source(), tuple(PO), setup.duration, setup.sample_time,
+                   setup.substeps, every if ports else None)  # fmt: skip
+        except InputError as exc:
+            rows[i] = _invalid_row(i, str(exc), reducers)
+            continue
+        groups.setdefault(key, []).append(_Prepared(i, setup, system, initial, held, used, ports))
+    wall, steps = 0.0, 0
+    traces = {}
+    for key, members in groups.items():
+        _, PO, duration, sample_time, n_sub, every = key
+        first = members[0]
+        compiled = first.system.compile()
+        P = np.stack([m.system.pack_params()[0] for m in members])
+        packed = [m.system.pack_initial(m.initial) for m in members]
+        X = np.stack([x for x, _ in packed])
+        S = np.stack([s for _, s in packed])
+        Y = np.stack([m.system.pack_held(m.held) for m in members])
+        LOG, ELOG, ECOUNT, DONE, STATUS, seconds = compiled.run_packed(
+            P, np.array(PO, dtype=np.int64), X, S, Y, duration, sample_time, n_sub,
+            log=first.log_ports, log_every=every,
+        )  # fmt: skip
+        wall += seconds
+        n_steps = round(duration / sample_time)
+        steps += n_steps * len(members)
+        names = first.system.event_names()
+        for b, m in enumerate(members):
+            ok = STATUS[b] == STATUS_OK
+            row = {
+                "variant": m.index,
+                "valid": True,
+                "reason": "",
+                "status": "ok" if ok else f"diverged at t = {DONE[b] * sample_time:.6g} s",
+            }
+            for r, (part, offset) in m.reducers:
+                a = m.system.slots[part].s[0] + offset
+                values = _reduce(r, S[b, a : a + max(_NS, len(OSC_STATES))], ok)
+                row.update({k: float(x) for k, x in values.items()})
+            for e, (part, events) in enumerate(names):
+                if part.startswith(REDUCER_PREFIX):
+                    continue
+                for bit, name in enumerate(events):
+                    row[f"events.{part}.{name}"] = int(ECOUNT[b, e, bit])
+            row["stable"] = _verdict(m.setup, row, ok)
+            rows[m.index] = row
+            if first.log_ports:
+                traces[m.index] = compiled._result(
+                    0.0, sample_time, every, LOG.shape[1],
+                    m.system.log_columns(first.log_ports), LOG[b], ELOG[b], ECOUNT[b], X[b],
+                    seconds / len(members), n_steps,
+                )  # fmt: skip
+                traces[m.index].extra["status"] = row["status"]
+    metric_names = {}
+    for row in rows:
+        if row["valid"]:
+            metric_names.update(dict.fromkeys(k for k in row if not k.startswith("events.")))
+    for row in rows:  # an invalid variant has every metric column, NaN
+        if not row["valid"]:
+            for name in metric_names:
+                row.setdefault(name, math.nan)
+    return BatchResult(rows=rows, traces=traces, wall_time=wall, steps=steps, groups=len(groups))
+
+
+def _verdict(setup, row: dict, finite: bool):
+    """DFIM: False if diverged or the late speed oscillation of any motor exceeds
+    ``OSCILLATION_FINDING_RPM``; True otherwise; None without the oscillation metric."""
+    if not finite:
+        return False
+    keys = [k for k in row if k.startswith("speed_oscillation_rpm") and not k.endswith("_growth")]
+    if not keys or not hasattr(setup, "motors"):
+        return None
+    values = [row[k] for k in keys]
+    if any(math.isnan(v) for v in values):
+        return None
+    return bool(max(values) <= OSCILLATION_FINDING_RPM)

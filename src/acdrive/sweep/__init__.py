@@ -1,0 +1,8 @@
+"""Parameter sweeps: many variants of one scenario, run in chunks into a Parquet dataset.
+
+``spec`` reads and validates a sweep file; ``variants`` turns it into variants (grid or seeded
+random, computed on demand); ``engine`` runs the chunks (locally or on a Dask cluster), writes
+each atomically, resumes after an interruption and refuses a sweep too large for the limits;
+``report`` writes the markdown report and its figures. The simulation itself is
+``acdrive.sim.batch.simulate_batch``.
+"""

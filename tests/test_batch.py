@@ -1,0 +1,168 @@
+"""Batch simulation (acdrive.sim.batch): equality with single runs, on-line reducers against the
+logged signals, invalid variants reported with their reason."""
+
+import math
+
+import numpy as np
+import pytest
+
+from acdrive.scenarios.loader import read_scenario
+from acdrive.sim.batch import (
+    Reducer,
+    apply_overrides,
+    band_coefficients,
+    build_variant_setup,
+    get_field,
+    oscillation_step,
+    prepare_variant,
+    simulate_batch,
+)
+from acdrive.sim.dfim_drive import DFIMDrive
+
+BASE = "bodson-ramp"
+SHORT = {"simulation.duration": 0.12}
+LOGGED = ["shaft0.w", "reference0.w_ref", "dfim0.i_s", "dfim0.tau_e"]
+
+
+def _variants():
+    return [
+        {**SHORT, "motor[0].load_torque": 0.0},
+        {**SHORT, "motor[0].load_torque": 0.08, "motor[0].controller.speed_bandwidth": 150.0},
+        {**SHORT, "motor[0].params.R_r": 1.2, "initial:shaft0.w": 20.0},
+    ]
+
+
+def _alone(overrides):
+    """The variant run alone by the drive's own single-run path (DFIMDrive.run)."""
+    fields = {k: v for k, v in overrides.items() if ":" not in k}
+    setup = build_variant_setup(apply_overrides(read_scenario(BASE), fields))
+    drive = DFIMDrive(setup)
+    initial, held = drive.initial()
+    for key, value in overrides.items():
+        if key.startswith("initial:"):
+            part, state = key[len("initial:") :].split(".")
+            initial[part] = {**initial.get(part, {}), state: value}
+    compiled = drive.compile()
+    return compiled.run(setup.duration, setup.sample_time, setup.substeps, initial=initial,
+                        held=held, log=[compiled.system.part(p.split(".")[0]).out.__getattr__(
+                            p.split(".")[1]) for p in LOGGED])  # fmt: skip
+
+
+def test_batch_without_reducers_equals_single_runs_bit_for_bit():
+    variants = _variants()
+    batch = simulate_batch(BASE, variants, reducers=[], log=LOGGED, log_every=1)
+    assert batch.groups == 1 and all(row["status"] == "ok" for row in batch.rows)
+    for i, v in enumerate(variants):
+        alone = _alone(v)
+        assert np.array_equal(batch.traces[i].final_state, alone.final_state)
+        assert np.array_equal(batch.traces[i].data, alone.data)
+    # the variants really differ (a batch of copies would pass the test above trivially)
+    assert not np.array_equal(batch.traces[0].data, batch.traces[1].data)
+    assert batch.traces[2].data[0, 0] == 20.0  # the initial-state override took effect
+
+
+def test_batch_with_reducers_equals_each_variant_alone():
+    """With the reducers in the loop, a variant in a batch equals the same variant alone (the
+    same compiled loop, one variant), metrics and states alike."""
+    variants = _variants()
+    batch = simulate_batch(BASE, variants, log=["shaft0.w"], log_every=1)
+    for i, v in enumerate(variants):
+        alone = simulate_batch(BASE, [v], log=["shaft0.w"], log_every=1)
+        assert np.array_equal(batch.traces[i].final_state, alone.traces[0].final_state)
+        for key, value in alone.rows[0].items():
+            if key == "variant":
+                continue
+            same = value == batch.rows[i][key] or (
+                isinstance(value, float) and math.isnan(value) and math.isnan(batch.rows[i][key])
+            )
+            assert same, key
+
+
+def test_reducers_agree_with_the_logged_signals():
+    rpm = 30 / math.pi
+    reducers = [
+        Reducer("rms", "rms", "shaft0.w", "reference0.w_ref", scale=rpm),
+        Reducer("mean_w", "mean", "shaft0.w", start=0.02, stop=0.1),
+        Reducer("peak_is", "peak", "dfim0.i_s"),
+        Reducer("over", "exceed", "dfim0.i_s", limit=0.3),
+        Reducer("last_tau", "final", "dfim0.tau_e"),
+    ]
+    v = {**SHORT, "motor[0].load_torque": 0.05}
+    batch = simulate_batch(BASE, [v], reducers=reducers, log=LOGGED, log_every=1)
+    row, tr = batch.rows[0], batch.traces[0]
+    t, w, ref = tr.t, tr.signal("shaft0.w"), tr.signal("reference0.w_ref")
+    i_s = np.abs(tr.signal("dfim0.i_s"))
+    assert row["rms"] == pytest.approx(np.sqrt(np.mean((w - ref) ** 2)) * rpm, rel=1e-12)
+    window = (t >= 0.02) & (t <= 0.1)
+    assert row["mean_w"] == pytest.approx(np.mean(w[window]), rel=1e-12)
+    assert row["peak_is"] == pytest.approx(i_s.max(), rel=1e-14)
+    assert row["peak_is_time"] == t[np.argmax(i_s)]
+    assert row["over"] == np.count_nonzero(i_s > 0.3) > 0
+    assert row["over_first_time"] == t[np.argmax(i_s > 0.3)]
+    assert row["last_tau"] == tr.signal("dfim0.tau_e")[-1]
+
+
+def test_oscillation_reducer_measures_a_sinusoid_through_its_band_filter():
+    """A 50 Hz sinusoid of amplitude A: the late-window RMS equals A/sqrt(2) times the gain at
+    50 Hz of the band filter (two backward-Euler high-pass sections at 20 Hz, one low-pass at
+    200 Hz, sampled at 5 kHz: its exact discrete transfer function), within 0.5 % (what is left
+    of the start transient, the window's partial periods); constant amplitude -> growth 1."""
+    T = 200e-6
+    a, b = band_coefficients((20.0, 200.0), T)
+    p = np.array([0.5, 1.0, 0.75, 0.0, a, b, 0.0, 0.0])
+    s = np.zeros(9)
+    A, f = 3.0, 50.0
+    for k in range(int(1.0 / T) + 1):
+        t = k * T
+        oscillation_step.py_func(t, T, np.array([A * np.sin(2 * np.pi * f * t)]), p, s, None)
+    z1 = np.exp(-2j * np.pi * f * T)  # z^-1 on the unit circle
+    tau_h, tau_l = 1 / (2 * np.pi * 20.0), 1 / (2 * np.pi * 200.0)
+    assert (a, b) == (tau_h / (tau_h + T), T / (tau_l + T))
+    gain = abs((a * (1 - z1) / (1 - a * z1)) ** 2 * b / (1 - (1 - b) * z1))
+    late, early = math.sqrt(s[7] / s[8]), math.sqrt(s[5] / s[6])
+    assert late == pytest.approx(A / math.sqrt(2) * gain, rel=0.005)
+    assert late / early == pytest.approx(1.0, abs=0.01)
+
+
+def test_invalid_variants_are_reported_with_their_reason_and_the_batch_goes_on():
+    variants = [
+        {**SHORT, "motor[0].params.M": 20e-3},  # sigma = 1 - M^2/(L_s L_r) < 0
+        {**SHORT, "motor[0].params.R_s": -0.5},
+        {**SHORT, "motor[0].no_such_field": 1.0},
+        {**SHORT, "part:shaft0.J": 0.0},
+        {**SHORT},
+    ]
+    rows = simulate_batch(BASE, variants).rows
+    assert [r["valid"] for r in rows] == [False, False, False, False, True]
+    assert rows[0]["reason"].startswith("motor[0].params.M:") and "sigma" in rows[0]["reason"]
+    assert rows[1]["reason"].startswith("motor[0].params.R_s:")
+    assert rows[2]["reason"].startswith("motor[0].no_such_field:")
+    assert rows[3]["reason"].startswith("shaft0.J:")
+    assert math.isnan(rows[0]["speed_error_rms_rpm"]) and rows[0]["status"] == "invalid"
+    assert rows[4]["status"] == "ok" and rows[4]["stable"] is True
+    assert np.isfinite(rows[4]["speed_error_rms_rpm"])
+
+
+def test_machine_parameter_override_expands_the_built_in_machine():
+    data = read_scenario(BASE)
+    assert get_field(data, "motor[0].params.R_s") == 0.66  # Bodson's DFIM
+    setup, *_ = prepare_variant(BASE, {**SHORT, "motor[0].params.R_s": 0.99})
+    assert setup.motors[0].machine.R_s == 0.99 and setup.motors[0].machine.L_s == 13.1e-3
+
+
+def test_cage_im_variants_equal_single_runs():
+    from acdrive.sim.im_drive import IMDrive
+
+    variants = [
+        {"simulation.duration": 0.01, "machine.J": 0.0015},
+        {"simulation.duration": 0.01, "machine.params.R_s": -1.0},
+    ]
+    batch = simulate_batch("im-foc-speed", variants, reducers=[], log=["shaft.w"], log_every=1)
+    assert batch.rows[1]["reason"].startswith("machine.params.R_s:")
+    setup = build_variant_setup(apply_overrides(read_scenario("im-foc-speed"), variants[0]))
+    drive = IMDrive(setup)
+    initial, held = drive.initial()
+    alone = drive.compile().run(setup.duration, setup.sample_time, setup.substeps,
+                                initial=initial, held=held, log=[drive.parts["shaft"].out.w])  # fmt: skip
+    assert np.array_equal(batch.traces[0].final_state, alone.final_state)
+    assert np.array_equal(batch.traces[0].data, alone.data)

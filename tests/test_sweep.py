@@ -1,0 +1,254 @@
+"""Sweeps (acdrive.sweep, `acdrive sweep`): variant generation, resume after SIGKILL without
+loss or duplication, local and Dask backends giving the same table, one-line errors, refusal
+of an oversized sweep, the report."""
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from acdrive.cli import main
+from acdrive.sweep import variants as V
+from acdrive.sweep.engine import read_table, run_sweep
+from acdrive.sweep.spec import build_spec, load_sweep
+
+TINY = """
+name = "tiny"
+base = "bodson-ramp"
+chunk = {chunk}
+
+[fixed]
+"simulation.duration" = {duration}
+
+[[vary]]
+field = "motor[0].load_torque"
+values = {loads}
+
+[[vary]]
+field = "motor[0].controller.speed_bandwidth"
+low = 100.0
+high = 300.0
+points = 2
+"""
+
+
+def _write(tmp_path, text, name="s.toml"):
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def _tiny(tmp_path, chunk=2, duration=0.05, loads="[0.0, 0.05, 0.1]"):
+    return _write(tmp_path, TINY.format(chunk=chunk, duration=duration, loads=loads))
+
+
+def _cli(*args, timeout=300):
+    env = {**os.environ, "NUMBA_CACHE_DIR": os.environ.get("NUMBA_CACHE_DIR", "")}
+    env = {k: v for k, v in env.items() if v}
+    return subprocess.run([sys.executable, "-m", "acdrive.cli", *args], capture_output=True,
+                          text=True, timeout=timeout, env=env, check=False)  # fmt: skip
+
+
+def test_grid_covers_every_combination_once_in_a_fixed_order(tmp_path):
+    spec = load_sweep(str(_tiny(tmp_path)))
+    assert V.count(spec) == 6
+    combos = [tuple(V.variant(spec, i).values()) for i in range(6)]
+    assert len(set(combos)) == 6
+    assert combos[0] == (0.0, 100.0) and combos[1] == (0.0, 300.0) and combos[5] == (0.1, 300.0)
+
+
+def test_random_variants_are_reproducible_and_within_their_bounds(tmp_path):
+    text = """
+    base = "bodson-ramp"
+    [sampling]
+    method = "random"
+    samples = 200
+    seed = 7
+    [[vary]]
+    field = "motor[0].params.R_r"
+    relative = 0.5
+    [[vary]]
+    field = "motor[0].load_torque"
+    low = -0.1
+    high = 0.1
+    """
+    spec = load_sweep(str(_write(tmp_path, text)))
+    first = [V.variant(spec, i) for i in range(200)]
+    assert first == [V.variant(spec, i) for i in range(200)]  # same seed, same variants
+    assert V.variant(spec, 150) == first[150]  # a variant does not depend on the others
+    r_r = np.array([v["motor[0].params.R_r"] for v in first])
+    assert r_r.min() >= 0.94 * 0.5 and r_r.max() <= 0.94 * 1.5  # Bodson's R_r +- 50 %
+    assert r_r.max() - r_r.min() > 0.8 * 0.94  # spread over the range, not a constant
+    other = build_spec({**_data(text), "sampling": {"method": "random", "samples": 200, "seed": 8}})
+    assert V.variant(other, 0) != first[0]
+    ids = [V.variant_id(i, v) for i, v in enumerate(first)]
+    assert len(set(ids)) == 200
+
+
+def _data(text):
+    import tomllib
+
+    return tomllib.loads(textwrap.dedent(text))
+
+
+def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
+    spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
+    out = tmp_path / "out"
+    env = {k: v for k, v in os.environ.items()}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "acdrive.cli", "sweep", str(spec_path), "--out", str(out),
+         "--quiet", "--no-report"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+    )  # fmt: skip
+    table_dir = out / "tiny" / "table"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None:
+        if table_dir.is_dir() and any(table_dir.glob("chunk-*.parquet")):
+            break
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done_at_kill = len(list(table_dir.glob("chunk-*.parquet")))
+    assert 1 <= done_at_kill < 10, "the kill came too late to test a resume"
+    # a torn write of the next chunk: only a temporary file can be left behind
+    (table_dir / ".chunk-000009.parquet.99999.tmp").write_bytes(b"PAR1 torn")
+    again = _cli("sweep", str(spec_path), "--out", str(out), "--quiet")
+    assert again.returncode == 0, again.stderr
+    resumed = read_table(out / "tiny")
+    assert list(resumed["variant"]) == list(range(10))
+    assert resumed["variant_id"].is_unique
+    assert not list(table_dir.glob(".*.tmp"))
+    # the resumed table equals an uninterrupted run's
+    spec = load_sweep(str(spec_path))
+    whole = read_table(run_sweep(spec, tmp_path / "whole", progress=False, report=False))
+    pd.testing.assert_frame_equal(resumed, whole)
+
+
+def test_local_and_dask_backends_give_the_same_table(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    spec = load_sweep(str(_tiny(tmp_path)))
+    local = read_table(run_sweep(spec, tmp_path / "local", progress=False, report=False))
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  host="127.0.0.1", protocol="tcp://", scheduler_port=0,
+                                  dashboard_address=None) as cluster:  # fmt: skip
+        folder = run_sweep(spec, tmp_path / "dask", scheduler=cluster.scheduler_address,
+                           progress=False, report=False)  # fmt: skip
+    remote = read_table(folder)
+    assert len(local) == 6 and local["valid"].all()
+    pd.testing.assert_frame_equal(local, remote)
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_unreachable_scheduler_is_one_line_after_a_bounded_time(tmp_path):
+    spec_path = _tiny(tmp_path)
+    start = time.monotonic()
+    r = _cli("sweep", str(spec_path), "--out", str(tmp_path / "o"),
+             "--scheduler", f"tcp://127.0.0.1:{_free_port()}", "--timeout", "2")  # fmt: skip
+    assert time.monotonic() - start < 60
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("acdrive: error: --scheduler:"), r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "field"),
+    [
+        ("[[vary]]\nfield = 'motor[0].load_torque'\n", "vary[0].values"),
+        ("[[vary]]\nfield = 'motor[0].load_torque'\nlow = 1.0\nhigh = 0.0\npoints = 2\n",
+         "vary[0].high"),
+        ("chunk = 0\n[[vary]]\nfield = 'motor[0].load_torque'\nvalues = [0.0]\n", "chunk"),
+        ("[sampling]\nmethod = 'sobol'\n", "sampling.method"),
+        ("[[vary]]\nfield = 'motor[0].load_torque'\nvalues = [0.0]\nbogus = 1\n",
+         "vary[0].bogus"),
+        ("[[vary]]\nfield = 'motor[0].controller.K_P'\nrelative = 0.5\n", "vary[0].relative"),
+        ("name = '../x'\n[[vary]]\nfield = 'a'\nvalues = [1]\n", "name"),
+        ("[[vary]]\nfield = 'motor[0].load_torque'\nvalues = [0.0]\n[metrics]\ndefault = 3\n",
+         "metrics.default"),
+        ("base = 'no-such-scenario'\n", "base"),
+    ],
+)  # fmt: skip
+def test_malformed_sweep_file_is_one_line_naming_the_field(tmp_path, capsys, text, field):
+    path = _write(tmp_path, text)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"acdrive: error: {field}:"), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_oversized_sweep_is_refused_before_it_starts(tmp_path, capsys):
+    text = """
+    base = "bodson-ramp"
+    [sampling]
+    method = "random"
+    samples = 100000000
+    [[vary]]
+    field = "motor[0].load_torque"
+    low = 0.0
+    high = 0.1
+    """
+    path = _write(tmp_path, text)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("acdrive: error: sampling.samples:"), err
+    assert not (tmp_path / "o").exists()
+    # the same sweep with traces of every sample is refused for its memory/disk even when small
+    traced = text.replace("100000000", "50") + '[traces]\nsignals = ["shaft0.w"]\nevery = 1\n'
+    traced = traced.replace("[sampling]", '[fixed]\n"simulation.duration" = 14.0\n[sampling]')
+    traced += "[limits]\nmax_table_mb = 10\n"
+    assert (
+        main(["sweep", str(_write(tmp_path, traced, "t.toml")), "--out", str(tmp_path / "o")]) == 2
+    )
+    assert "limits.max_table_mb" in capsys.readouterr().err
+
+
+def test_report_lists_invalid_and_unstable_variants_and_the_table_keeps_the_reason(tmp_path):
+    text = """
+    name = "mixed"
+    base = "bodson-ramp-ideal"
+    [fixed]
+    "simulation.duration" = 1.5
+    "motor[0].speed_reference_rpm" = [[0.0, 0.0], [0.1, 0.0], [1.1, 900.0], [1.5, 900.0]]
+    [[vary]]
+    field = "motor[0].params.M"
+    values = [9.7e-3, 20e-3]
+    [[vary]]
+    field = "motor[0].controller.speed_bandwidth"
+    values = [100.0, 314.0]
+    [traces]
+    signals = ["shaft0.w"]
+    every = 100
+    """
+    folder = run_sweep(load_sweep(str(_write(tmp_path, text))), tmp_path / "o", progress=False)
+    table = read_table(folder)
+    invalid = table[~table["valid"]]
+    assert len(invalid) == 2 and invalid["reason"].str.startswith("motor[0].params.M:").all()
+    ok = table[table["valid"]].set_index("vary.motor[0].controller.speed_bandwidth")
+    # the README's finding: the ideal converter's limit cycle at the paper's 314 rad/s
+    assert not ok.loc[314.0, "stable"] and ok.loc[100.0, "stable"]
+    report = (folder / "report.md").read_text()
+    assert "## Invalid variants" in report and "sigma" in report
+    assert f"`{ok.loc[314.0, 'variant_id']}`" in report.split("## Unstable variants")[1]
+    assert any(Path(folder, "figures").glob("*.png"))
+    traces = pd.read_parquet(folder / "traces")
+    assert set(traces["variant_id"]) == set(table.loc[table["valid"], "variant_id"])
+    assert traces.groupby("variant_id").size().eq(75).all()  # 7,500 samples every 100
+
+
+def test_builtin_bandwidth_sweep_is_valid_and_cross_checked():
+    spec = load_sweep("dfim-bandwidth")
+    assert spec.crosscheck["bandwidth_field"] == "motor[0].controller.speed_bandwidth"
+    assert V.count(spec) == 32
