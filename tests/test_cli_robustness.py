@@ -261,9 +261,7 @@ FLAGS = [
     (["stability", "--speed-rpm", "900"], "--converter-loss", []),
     (["stability", "--bench"], "--bandwidth", ["0", "1e-308"]),
 ]
-FLAG_CASES = [
-    (prefix, flag, value) for prefix, flag, extra in FLAGS for value in EXTREMES + extra
-]
+FLAG_CASES = [(prefix, flag, value) for prefix, flag, extra in FLAGS for value in EXTREMES + extra]
 
 
 @pytest.mark.parametrize(
@@ -495,3 +493,25 @@ def test_the_toml_writer_round_trips():
 
     data = _base()
     assert tomllib.loads(to_toml(data)) == data
+
+
+def test_an_interrupt_inside_a_parallel_compiled_call_stays_an_interrupt():
+    """A signal handled while a parallel numba function runs reaches the caller as a SystemError
+    caused by the handler's exception; ``call_interruptible`` re-raises the interrupt itself,
+    and leaves every other error alone."""
+    from acdrive.errors import call_interruptible, interrupt_behind
+
+    def hidden(exc):
+        def fn():
+            try:
+                raise exc
+            except BaseException as inner:
+                raise SystemError("returned a result with an exception set") from inner
+
+        return fn
+
+    with pytest.raises(KeyboardInterrupt):
+        call_interruptible(hidden(KeyboardInterrupt()))
+    with pytest.raises(SystemError):
+        call_interruptible(hidden(ValueError("a real error")))
+    assert interrupt_behind(ValueError()) is None

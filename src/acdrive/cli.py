@@ -17,7 +17,7 @@ import sys
 import warnings
 
 from acdrive import __version__
-from acdrive.errors import InputError, Notice, SimulationDiverged
+from acdrive.errors import InputError, Notice, SimulationDiverged, call_interruptible
 from acdrive.progress import ACTIVE_BARS
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
@@ -148,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parser = build_parser(argv)
         args = parser.parse_args(argv)
-        return int(args.handler(args) or 0)
+        return int(call_interruptible(args.handler, args) or 0)
     except InputError as exc:
         if debug:
             raise

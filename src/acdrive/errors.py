@@ -100,3 +100,29 @@ def require_leakage(field: str, L_s: float, L_r: float, mutual: float) -> None:
     if 1.0 - mutual * mutual / (L_s * L_r) <= 0.0:
         symbol = field.rsplit(".", 1)[-1]
         raise InputError(field, f"leakage factor sigma = 1 - {symbol}^2/(L_s L_r) must be > 0")
+
+
+def interrupt_behind(exc: BaseException) -> BaseException | None:
+    """The interrupt (KeyboardInterrupt, a SIGTERM exception, SystemExit: a BaseException that is
+    not an Exception) hidden behind ``exc``, or None.
+
+    A signal that arrives while a parallel compiled (numba) function runs has its handler run
+    inside that call; CPython then reports a ``SystemError`` ("returned a result with an exception
+    set") whose ``__cause__`` is the handler's exception. Callers re-raise that cause, so an
+    interrupt stays an interrupt."""
+    cause = exc.__cause__ if isinstance(exc, SystemError) else None
+    if isinstance(cause, BaseException) and not isinstance(cause, Exception):
+        return cause
+    return None
+
+
+def call_interruptible(function, *args):
+    """``function(*args)`` (a parallel compiled function), re-raising an interrupt that arrived
+    during the call as itself (``interrupt_behind``)."""
+    try:
+        return function(*args)
+    except SystemError as exc:
+        cause = interrupt_behind(exc)
+        if cause is not None:
+            raise cause from None
+        raise

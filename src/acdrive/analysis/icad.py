@@ -54,7 +54,7 @@ from acdrive.analysis.margins import (
 )
 from acdrive.analysis.plants import Plant2x2, as_plant
 from acdrive.control.lti import PAPER_20, PAPER_PI, as_lti
-from acdrive.errors import InputError, require_finite
+from acdrive.errors import InputError, call_interruptible, require_finite
 from acdrive.machines.induction import IMParams
 from acdrive.machines.pmsm import PMSGParams
 
@@ -121,7 +121,7 @@ def _kernel_outputs(G, k1, k2):
 
     gamma = np.empty(N, dtype=complex)
     h, c, coupling = (np.empty((N, 2), dtype=complex) for _ in range(3))
-    _icad_kernel(G_flat, periodic(k1), periodic(k2), gamma, h, c, coupling)
+    call_interruptible(_icad_kernel, G_flat, periodic(k1), periodic(k2), gamma, h, c, coupling)
     two = shape + (2,)
     k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
     G = G_flat.reshape(shape + (2, 2))

@@ -41,7 +41,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit, prange
 
-from acdrive.errors import InputError, require_finite
+from acdrive.errors import InputError, call_interruptible, require_finite
 
 #: Models whose eigenvector matrix has a larger condition number use the Hessenberg path.
 EIG_COND_LIMIT = 1e5
@@ -177,7 +177,9 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
         )
         lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
         Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
-        _modal_sum(s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost)
+        call_interruptible(
+            _modal_sum, s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost
+        )
         if not all_good:
             G[good] = modal.reshape(-1, s.size, p, m)
         for gb, b in enumerate(np.flatnonzero(good)):

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.core.parts import ContinuousPart, Modulator, Part, Port, SampledPart
-from acdrive.errors import InputError, SimulationDiverged
+from acdrive.errors import InputError, SimulationDiverged, call_interruptible
 from acdrive.jit import STRICT_MATH
 from acdrive.sim import codegen
 
@@ -784,8 +784,9 @@ class CompiledSystem:
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
         start = time.perf_counter()
-        self.module.run_batch(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
-                              log_every, idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+        call_interruptible(self.module.run_batch, X, P, PO, S, Y, U, float(t0),
+                           float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
+                           ECOUNT, DONE, STATUS)  # fmt: skip
         wall = time.perf_counter() - start
         results = []
         for b in range(B):
@@ -845,9 +846,9 @@ class CompiledSystem:
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
         start = time.perf_counter()
-        self.module.run_batch(X, P, np.asarray(PO, dtype=np.int64), S, Y, U, float(t0),
-                              float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
-                              ECOUNT, DONE, STATUS)  # fmt: skip
+        call_interruptible(self.module.run_batch, X, P, np.asarray(PO, dtype=np.int64), S, Y,
+                           U, float(t0), float(sample_time), substeps, n_steps, log_every, idx,
+                           LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
         return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
 
     # --- pieces for the slow path and the linearisation -------------------------------------
