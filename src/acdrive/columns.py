@@ -192,3 +192,13 @@ def read_units(path: Path) -> dict[str, dict[str, str]]:
 
     schema = pq.read_schema(path)
     return {f.name: {k.decode(): v.decode() for k, v in (f.metadata or {}).items()} for f in schema}
+
+
+def written(target, fmt: str) -> str:
+    """What ``target`` holds, counted from the files there: '<data>, columns.md, summary.json,
+    N figures' (per run sub-folder: 'in each of a/, b/')."""
+    subs = sorted(p.name + "/" for p in target.iterdir() if p.is_dir())
+    figures = sum(1 for _ in target.rglob("*.png"))
+    where = f" (in {', '.join(subs)})" if subs else ""
+    text = f"{FORMATS[fmt]} and columns.md{where}, summary.json"
+    return text + (f", {figures} figure{'s' * (figures != 1)}" if figures else "")

@@ -74,7 +74,7 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
 
 
 def run_im(args, setup) -> int:
-    from acdrive.commands.run import written
+    from acdrive.columns import written
     from acdrive.progress import Progress
     from acdrive.report.im_outputs import write_im_outcome
     from acdrive.sim import codegen

@@ -10,7 +10,7 @@ excluded, and said so), peak currents against their limits, events.
 
 from __future__ import annotations
 
-from acdrive.columns import DEFAULT_FORMAT, FORMATS
+from acdrive.columns import DEFAULT_FORMAT, FORMATS, written
 from acdrive.output import OutputFolder
 
 DEFAULT_SCENARIO = "bodson-ramp"
@@ -40,16 +40,6 @@ def register(subparsers):
     )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
     p.set_defaults(handler=run)
-
-
-def written(target, fmt: str) -> str:
-    """What ``target`` holds, counted from the files there: '<data>, columns.md, summary.json,
-    N figures' (per run sub-folder: 'in each of a/, b/')."""
-    subs = sorted(p.name + "/" for p in target.iterdir() if p.is_dir())
-    figures = sum(1 for _ in target.rglob("*.png"))
-    where = f" (in {', '.join(subs)})" if subs else ""
-    text = f"{FORMATS[fmt]} and columns.md{where}, summary.json"
-    return text + (f", {figures} figure{'s' * (figures != 1)}" if figures else "")
 
 
 def tracking_row(tracking: dict) -> str:
