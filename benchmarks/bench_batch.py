@@ -27,7 +27,7 @@ import time
 import numba
 import numpy as np
 
-from acdrive.sim.batch import prepare_variant, simulate_batch
+from acdrive.batch import prepare_variant, simulate_batch
 
 BASE = "bodson-ramp"
 

@@ -12,7 +12,7 @@ resumable Parquet table, a report and the cross-check against the linearised dri
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.sim.batch import simulate_batch
+from acdrive.batch import simulate_batch
 
 bandwidths = np.geomspace(100.0, 800.0, 7)  # rad/s
 loads = (0.0, 0.1)  # N m

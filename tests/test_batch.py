@@ -1,4 +1,4 @@
-"""Batch simulation (acdrive.sim.batch): equality with single runs, on-line reducers against the
+"""Batch simulation (acdrive.batch): equality with single runs, on-line reducers against the
 logged signals, invalid variants reported with their reason."""
 
 import math
@@ -6,8 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.scenarios.loader import read_scenario
-from acdrive.sim.batch import (
+from acdrive.batch import (
     Reducer,
     apply_overrides,
     band_coefficients,
@@ -17,6 +16,7 @@ from acdrive.sim.batch import (
     prepare_variant,
     simulate_batch,
 )
+from acdrive.scenarios.loader import read_scenario
 from acdrive.sim.dfim_drive import DFIMDrive
 
 BASE = "bodson-ramp"

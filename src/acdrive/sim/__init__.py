@@ -19,7 +19,5 @@ __all__, __getattr__, __dir__ = namespace(
         "IMDriveResult": ".im_drive",
         "run_im_scenario": ".im_drive",
         "run_scenario": ".outcome",
-        "simulate_batch": ".batch",
-        "BatchResult": ".batch",
     },
 )

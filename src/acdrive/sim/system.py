@@ -820,7 +820,7 @@ class CompiledSystem:
         of the same shape); each row's result equals running that variant alone.
 
         ``X`` and ``S`` hold the final states on return (a sampled part that accumulates a
-        metric in its state, ``sim.batch``, leaves it there). ``log`` lists output ports
+        metric in its state, ``acdrive.batch``, leaves it there). ``log`` lists output ports
         (default: none) logged every ``log_every`` samples (default: only the first sample, so
         nothing is kept per sample). Returns ``(LOG, ELOG, ECOUNT, DONE, STATUS, wall time)``.
         """

@@ -4,5 +4,5 @@
 random, computed on demand); ``engine`` runs the chunks (locally or on a Dask cluster), writes
 each atomically, resumes after an interruption and refuses a sweep too large for the limits;
 ``report`` writes the markdown report and its figures. The simulation itself is
-``acdrive.sim.batch.simulate_batch``.
+``acdrive.batch.simulate_batch``.
 """

@@ -18,7 +18,7 @@ only the missing chunks. A kill at any moment loses at most the chunks in progre
 leaves a partial or duplicated one.
 
 **Bounded memory.** A chunk holds one row of scalars per variant (plus its decimated traces if
-asked for); the batch loop logs nothing per sample otherwise (``sim.batch``). Before anything
+asked for); the batch loop logs nothing per sample otherwise (``acdrive.batch``). Before anything
 runs, ``estimate`` sizes the table, the traces and the memory of a chunk, and the sweep is
 refused (one-line ``InputError``) beyond ``[limits]`` or the free disk space.
 
@@ -57,7 +57,7 @@ def _chunk_name(c: int) -> str:
 
 
 def _reducer_factory(spec: SweepSpec):
-    from acdrive.sim.batch import default_reducers
+    from acdrive.batch import default_reducers
 
     def make(setup):
         return (default_reducers(setup) if spec.default_metrics else []) + list(spec.reducers)
@@ -66,7 +66,7 @@ def _reducer_factory(spec: SweepSpec):
 
 
 def _pluck(summary: dict, path: str):
-    from acdrive.sim.batch import _segments
+    from acdrive.batch import _segments
 
     node = summary
     for key, index in _segments(path):
@@ -88,7 +88,7 @@ def _summary_metrics(spec: SweepSpec, overrides: dict) -> dict:
     """The ``summary.json`` keys of one variant: a full single run (``sim.outcome``)."""
     import dataclasses
 
-    from acdrive.sim.batch import apply_overrides, build_variant_setup
+    from acdrive.batch import apply_overrides, build_variant_setup
     from acdrive.sim.outcome import run_scenario
 
     setup = build_variant_setup(apply_overrides(spec.base_data, overrides))
@@ -108,7 +108,7 @@ def run_chunk(payload: dict, c: int):
     import numpy as np
     import pandas as pd
 
-    from acdrive.sim.batch import simulate_batch
+    from acdrive.batch import simulate_batch
 
     spec = spec_from_payload(payload)
     n = V.count(spec)
@@ -167,7 +167,7 @@ def run_chunk(payload: dict, c: int):
 def _base_timing(spec: SweepSpec) -> tuple[float, float]:
     """(longest duration, sample time) of the sweep's runs, from the base, the fixed overrides
     and the varied fields (the largest value a varied duration may take)."""
-    from acdrive.sim.batch import apply_overrides, get_field
+    from acdrive.batch import apply_overrides, get_field
 
     fixed = {k: v for k, v in spec.fixed.items() if not k.startswith(("part:", "initial:"))}
     data = apply_overrides(spec.base_data, fixed)

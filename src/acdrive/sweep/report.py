@@ -5,7 +5,7 @@ min, 5th percentile, median, 95th percentile, max; a histogram per metric); the 
 (largest ``report.worst``); the invalid variants with their reasons; the variants that tripped
 a limit (any ``*_over_limit`` metric > 0, or a ``limit`` / ``saturat`` event counted on at least
 one sample); the unstable variants (``stable`` false: diverged, or late speed oscillation above
-``OSCILLATION_FINDING_RPM``, ``sim.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
+``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
 speed-loop bandwidth per combination of the other varied fields, simulated against the
 linearised sampled drive (``analysis.drive_stability.max_stable_bandwidth``), with the verdict.
 
@@ -100,7 +100,7 @@ def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
     """Per combination of the other varied fields: the simulated and the linearised tolerated
     bandwidth and whether they agree (module docstring). Returns (rows, all agree)."""
     from acdrive.analysis.drive_stability import max_stable_bandwidth
-    from acdrive.sim.batch import apply_overrides, build_variant_setup
+    from acdrive.batch import apply_overrides, build_variant_setup
 
     cc = spec.crosscheck
     bw = f"vary.{cc['bandwidth_field']}"

@@ -27,9 +27,9 @@ Schema (units as in the scenario files; every table optional except ``[[vary]]``
     log = false
 
     [metrics]
-    default = true                  # the drive's own on-line metrics (sim.batch.dfim_reducers)
+    default = true                  # the drive's own on-line metrics (acdrive.batch.dfim_reducers)
     summary = ["speed_rms_error_rpm"]   # summary.json keys (a full single run per variant)
-    [[metrics.reducer]]             # more on-line metrics (sim.batch.Reducer)
+    [[metrics.reducer]]             # more on-line metrics (acdrive.batch.Reducer)
     name = "peak_speed_rpm"
     kind = "peak"                   # peak | mean | rms | exceed | final | oscillation
     signal = "shaft0.w"             # "part.output"
@@ -202,7 +202,7 @@ class SweepSpec:
 
 
 def spec_from_payload(payload: dict) -> SweepSpec:
-    from acdrive.sim.batch import Reducer
+    from acdrive.batch import Reducer
 
     data = dict(payload)
     data["vary"] = tuple(Vary(**v) for v in data["vary"])
@@ -259,14 +259,14 @@ def _base(top: _Table, folder: Path | None) -> tuple[str, dict]:
 
 
 def _vary(raw, index: int, method: str, base_data: dict) -> Vary:
-    from acdrive.sim.batch import get_field
+    from acdrive.batch import get_field
 
     t = _Table(raw, f"vary[{index}]")
     name = t.text("field")
     where = t.name("field")
     if not name.startswith(("part:", "initial:")):
         try:
-            from acdrive.sim.batch import _segments
+            from acdrive.batch import _segments
 
             _segments(name)
         except InputError as exc:
@@ -318,7 +318,7 @@ def _vary(raw, index: int, method: str, base_data: dict) -> Vary:
 
 
 def _reducers(metrics: _Table) -> tuple:
-    from acdrive.sim.batch import Reducer, check_reducer
+    from acdrive.batch import Reducer, check_reducer
 
     raw = metrics.get("reducer", [])
     if not isinstance(raw, list):
@@ -393,7 +393,7 @@ def build_spec(data: dict, folder: Path | None = None) -> SweepSpec:
     summary = tuple(metrics.strings("summary"))
     reducers = _reducers(metrics)
     metrics.done()
-    from acdrive.sim.batch import _segments
+    from acdrive.batch import _segments
 
     for i, key in enumerate(summary):
         try:

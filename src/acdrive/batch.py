@@ -174,7 +174,7 @@ def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
             "Reducer_stats",
             (SampledPart,),
             {
-                "__doc__": "On-line peak, mean, RMS, exceed count and final value (sim.batch).",
+                "__doc__": "On-line peak, mean, RMS, exceed count and final value (acdrive.batch).",
                 "PARAMS": Layout(*params),
                 "STATES": Layout(*states),
                 "INPUTS": Layout(*inputs),
@@ -245,7 +245,7 @@ def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> typ
             f"Reducer_{kind}",
             (SampledPart,),
             {
-                "__doc__": f"On-line {kind} of a signal (sim.batch).",
+                "__doc__": f"On-line {kind} of a signal (acdrive.batch).",
                 "PARAMS": REDUCER_PARAMS,
                 "STATES": states,
                 "INPUTS": Layout(*inputs),
