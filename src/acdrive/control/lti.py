@@ -26,10 +26,12 @@ The batched frequency-response evaluation (``evaluate_ss``) lives here because `
 - Hessenberg path: H = Q^T A Q once per model, then one Hessenberg solve (s I - H) X = Q^T B per
   point (pivoting between adjacent rows) and G = (C Q) X + D.
 
-The modal path is used when the eigenvector matrix is well conditioned; points where its terms
+The modal path is used when the eigenvector matrix is well conditioned. Points where its terms
 cancel (the sum of their sizes exceeds ``CANCEL_LIMIT`` times the size of the result, e.g. an
-element of high relative degree far above its poles) and models with ill-conditioned V (defective
-or nearly defective A) are evaluated by the Hessenberg path, which is as accurate as a dense solve.
+element of high relative degree far above its poles) are solved directly, all at once (a batched
+LU solve of (s I - A) X = B, backward stable like the Hessenberg solve); models with
+ill-conditioned V (defective or nearly defective A) are evaluated by the Hessenberg path, which is
+as accurate as a dense solve.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from acdrive.errors import InputError, call_interruptible, require_finite
 
 #: Models whose eigenvector matrix has a larger condition number use the Hessenberg path.
 EIG_COND_LIMIT = 1e5
-#: Points whose modal terms cancel by more than this factor use the Hessenberg path.
+#: Points whose modal terms cancel by more than this factor are solved directly (LU).
 CANCEL_LIMIT = 1e6
 
 
@@ -76,6 +78,10 @@ def _modal_sum(s, lam, R, D, limit, out, lost):
                 out[b, k, c] = v + D[b, c]
             lost[b, k] = flag
     return out
+
+
+#: the same loop compiled without threads, for a single model
+_modal_sum_one = njit(cache=True, error_model="numpy")(_modal_sum.py_func)
 
 
 @njit(cache=True, error_model="numpy")
@@ -177,15 +183,19 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
         )
         lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
         Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
+        # one model (a controller's response): the serial twin, no thread start-up
+        modal_sum = _modal_sum if R.shape[0] > 1 else _modal_sum_one
         call_interruptible(
-            _modal_sum, s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost
+            modal_sum, s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost
         )
         if not all_good:
             G[good] = modal.reshape(-1, s.size, p, m)
-        for gb, b in enumerate(np.flatnonzero(good)):
-            pts = np.flatnonzero(lost[gb])
-            if pts.size:
-                G[b, pts] = _hessenberg_points(A2[b], B2[b], C2[b], D2[b], s[pts])
+        gb, k = np.nonzero(lost)
+        if gb.size:  # every such point at once: C (s I - A)^-1 B + D by a batched LU solve
+            b = np.flatnonzero(good)[gb]
+            M = s[k, None, None] * np.eye(n) - A2[b]
+            X = np.linalg.solve(M, B2[b].astype(complex))
+            G[b, k] = C2[b] @ X + D2[b]
     for b in np.flatnonzero(~good):
         G[b] = _hessenberg_points(A2[b], B2[b], C2[b], D2[b], s)
     return G.reshape(out_shape)
