@@ -202,3 +202,18 @@ def written(target, fmt: str) -> str:
     where = f" (in {', '.join(subs)})" if subs else ""
     text = f"{FORMATS[fmt]} and columns.md{where}, summary.json"
     return text + (f", {figures} figure{'s' * (figures != 1)}" if figures else "")
+
+
+def print_headline(rows: list[tuple[str, str]], summary: dict, target, fmt: str) -> None:
+    """The end of a run command's output: the aligned ``rows`` (label, value), the summary's
+    finding, warnings and note where it has them, and what was written where."""
+    width = max(len(label) for label, _ in rows)
+    for label, value in rows:
+        print(f"  {label:<{width}} {value}")
+    if "finding" in summary:
+        print(f"  finding: {summary['finding']}")
+    for warning in summary.get("warnings", []):
+        print(f"  warning: {warning}")
+    if "note" in summary:
+        print(f"  note: {summary['note']}")
+    print(f"wrote {target}/: {written(target, fmt)}")

@@ -212,7 +212,8 @@ def icad_response_arrays(A, B, C, D, k1: LTI, k2: LTI, w, speeds=None) -> ICADRe
     if G.shape[-2:] != (2, 2):
         raise InputError("plant", f"must be 2x2, got {G.shape[-2]}x{G.shape[-1]}")
     k1, k2 = as_lti(k1, "k1"), as_lti(k2, "k2")  # python-control objects are welcome too
-    kv = np.stack([k1.freqresp(w), k2.freqresp(w)])
+    k1w = k1.freqresp(w)
+    kv = np.stack([k1w, k1w if k2 is k1 else k2.freqresp(w)])
     _, _, _, gamma, h, c, coupling = _kernel_outputs(G, kv[0], kv[1])
     ns = G.shape[0]
     speeds = np.full(ns, np.nan) if speeds is None else np.asarray(speeds, dtype=float)

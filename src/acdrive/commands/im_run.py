@@ -74,7 +74,7 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
 
 
 def run_im(args, setup) -> int:
-    from acdrive.columns import written
+    from acdrive.columns import print_headline
     from acdrive.progress import Progress
     from acdrive.report.im_outputs import write_im_outcome
     from acdrive.sim import codegen
@@ -104,12 +104,5 @@ def run_im(args, setup) -> int:
         f"{inv.f_pwm:g} Hz, sampling {1.0 / setup.sample_time:g} Hz)"
     )
     rows = _rows(summary, setup)
-    width = max(len(label) for label, _ in rows)
-    for label, value in rows:
-        print(f"  {label:<{width}} {value}")
-    for warning in summary.get("warnings", []):
-        print(f"  warning: {warning}")
-    if "note" in summary:
-        print(f"  note: {summary['note']}")
-    print(f"wrote {target}/: {written(target, args.format)}")
+    print_headline(rows, summary, target, args.format)
     return 0

@@ -10,7 +10,7 @@ excluded, and said so), peak currents against their limits, events.
 
 from __future__ import annotations
 
-from acdrive.columns import DEFAULT_FORMAT, FORMATS, written
+from acdrive.columns import DEFAULT_FORMAT, FORMATS, print_headline
 from acdrive.output import OutputFolder
 
 DEFAULT_SCENARIO = "bodson-ramp"
@@ -139,14 +139,5 @@ def run(args) -> int:
         )
     events = ", ".join(f"{k} {v}" for k, v in summary["limit_events"].items() if v) or "none"
     rows.append(("events (samples)", events))
-    width = max(len(label) for label, _ in rows)
-    for label, value in rows:
-        print(f"  {label:<{width}} {value}")
-    if "finding" in summary:
-        print(f"  finding: {summary['finding']}")
-    for warning in summary.get("warnings", []):
-        print(f"  warning: {warning}")
-    if "note" in summary:
-        print(f"  note: {summary['note']}")
-    print(f"wrote {target}/: {written(target, args.format)}")
+    print_headline(rows, summary, target, args.format)
     return 0

@@ -775,19 +775,10 @@ class CompiledSystem:
         P = np.stack([params for params, _ in packed])
         X0, S0 = sys_.pack_initial(initial)
         X, S = np.tile(X0, (B, 1)), np.tile(S0, (B, 1))
-        Y, U = np.tile(sys_.pack_held(held), (B, 1)), np.zeros((B, sys_.sizes["u"]))
-        n_ev = len(sys_.event_names())
-        LOG = np.zeros((B, rows, len(columns)))
-        ELOG = np.zeros((B, rows, n_ev), dtype=np.int64)
-        ECOUNT = np.zeros((B, n_ev, 64), dtype=np.int64)
-        DONE = np.zeros(B, dtype=np.int64)
-        STATUS = np.zeros(B, dtype=np.int64)
-        idx = np.array([c[2] for c in columns], dtype=np.int64)
-        start = time.perf_counter()
-        call_interruptible(self.module.run_batch, X, P, PO, S, Y, U, float(t0),
-                           float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
-                           ECOUNT, DONE, STATUS)  # fmt: skip
-        wall = time.perf_counter() - start
+        Y = np.tile(sys_.pack_held(held), (B, 1))
+        LOG, ELOG, ECOUNT, DONE, STATUS, wall = self._batch_loop(
+            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows
+        )
         results = []
         for b in range(B):
             r = self._result(
@@ -837,7 +828,17 @@ class CompiledSystem:
             if array.ndim != 2 or array.shape != (B, width) or array.dtype != np.float64:
                 raise InputError(name, f"must be a float64 array of shape ({B}, {width})")
         self._check_size(n_steps, substeps, rows, len(columns), variants=B)
-        U = np.zeros((B, sizes["u"]))
+        PO = np.asarray(PO, dtype=np.int64)
+        return self._batch_loop(
+            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows
+        )
+
+    def _batch_loop(self, P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every,
+                    columns, rows):  # fmt: skip
+        """The compiled batch loop over rows of packed arrays (states updated in place): the
+        logs, event counts, samples done and status of every variant, and the wall time."""
+        B = X.shape[0]
+        U = np.zeros((B, self.system.sizes["u"]))
         n_ev = len(self.system.event_names())
         LOG = np.zeros((B, rows, len(columns)))
         ELOG = np.zeros((B, rows, n_ev), dtype=np.int64)
@@ -846,9 +847,9 @@ class CompiledSystem:
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
         start = time.perf_counter()
-        call_interruptible(self.module.run_batch, X, P, np.asarray(PO, dtype=np.int64), S, Y,
-                           U, float(t0), float(sample_time), substeps, n_steps, log_every, idx,
-                           LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+        call_interruptible(self.module.run_batch, X, P, PO, S, Y, U, float(t0),
+                           float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
+                           ECOUNT, DONE, STATUS)  # fmt: skip
         return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
 
     # --- pieces for the slow path and the linearisation -------------------------------------

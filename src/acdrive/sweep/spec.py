@@ -69,6 +69,7 @@ from importlib import resources
 from pathlib import Path
 
 from acdrive.errors import InputError, require_safe_name
+from acdrive.scenarios.files import Section
 
 METHODS = ("grid", "random")
 DEFAULT_CHUNK = 50
@@ -81,23 +82,17 @@ def builtin_sweeps() -> list[str]:
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
-class _Table:
-    """One TOML table under validation: every key read is recorded, unknown keys refused."""
+class _Table(Section):
+    """One TOML table under validation (``scenarios.files.Section``: every key read is recorded,
+    unknown keys refused), with the sweep file's own rules for numbers, integers and text."""
 
     def __init__(self, data, path: str):
         if not isinstance(data, dict):
             raise InputError(path or "sweep", "must be a table")
-        self.data, self.path, self.used = data, path, set()
+        super().__init__(data, path)
 
     def name(self, key: str) -> str:
-        return f"{self.path}.{key}" if self.path else key
-
-    def get(self, key, default=None):
-        self.used.add(key)
-        return self.data.get(key, default)
-
-    def has(self, key) -> bool:
-        return key in self.data
+        return self.field(key)
 
     def number(self, key, default=None, minimum=None, positive=False):
         value = self.get(key, default)
@@ -127,22 +122,11 @@ class _Table:
             raise InputError(self.name(key), f"must be one of {', '.join(choices)}")
         return value
 
-    def boolean(self, key, default):
-        value = self.get(key, default)
-        if not isinstance(value, bool):
-            raise InputError(self.name(key), "must be true or false")
-        return value
-
     def strings(self, key):
         value = self.get(key, [])
         if not isinstance(value, list) or not all(isinstance(v, str) and v for v in value):
             raise InputError(self.name(key), "must be a list of strings")
         return list(value)
-
-    def done(self):
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            raise InputError(self.name(unknown[0]), "unknown key")
 
 
 @dataclass(frozen=True)
