@@ -47,5 +47,7 @@ axes[2].set_xlabel("time [s]")
 fig.tight_layout()
 
 # %%
-# With no load, the run-up ends near synchronous speed (60 Hz, two pole pairs: 1,800 rpm).
-print(f"final speed: {result.signal(shaft.out.w)[-1] * 30 / np.pi:.1f} rpm")
+# Without load the machine runs up towards synchronous speed, 60 f / n_p: the final speed beside it.
+synchronous_rpm = 60.0 * 60.0 / BODSON_DFIM.n_p
+final_rpm = result.signal(shaft.out.w)[-1] * 30 / np.pi
+print(f"final speed {final_rpm:.1f} rpm, synchronous speed {synchronous_rpm:.0f} rpm")

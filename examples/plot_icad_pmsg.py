@@ -2,9 +2,9 @@
 ICAD of the PMSG current subsystem across speed
 ===============================================
 
-Ugalde-Loo et al.'s 2 MW permanent-magnet generator: the magnitude of the structure function
-gamma, the measure of cross-coupling between the d and q current channels, grows with the rotor
-speed.
+Ugalde-Loo et al.'s 2 MW permanent-magnet generator: the peak magnitude of the structure function
+gamma, the measure of cross-coupling between the d and q current channels, computed at eight rotor
+speeds.
 """
 
 import matplotlib.pyplot as plt

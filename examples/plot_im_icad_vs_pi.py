@@ -3,10 +3,9 @@ Controller (20) against the PI under a saturated speed law (Amezquita-Brooks et 
 =============================================================================================
 
 The saturated proportional speed law (21) asks for the largest torque until the speed nears 376
-rad/s; with the ICAD current controller (20) the drive follows the ideal constant-torque ramp,
-with the PI (no decoupling, no back-EMF compensation) the current, and so the torque, falls
-behind as the back EMF grows. The scenario runs both controllers; the summary quantifies the
-difference with the same metric for both.
+rad/s, so the ideal response is a constant-torque ramp. The scenario runs it with the ICAD current
+controller (20) and with the PI (no decoupling, no back-EMF compensation); the printed summary
+gives both controllers' RMS speed error to the ideal ramp, the same metric for both.
 """
 
 import matplotlib.pyplot as plt
