@@ -298,7 +298,17 @@ class System:
         emit(
             f'_jit_plant_fast = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False)'
         )
+        # LLVM-level inlining (numba's forceinline): the right-hand side goes into each stage of
+        # the step and the step into the segment loop without a call and its ~40 array-field
+        # arguments per call; unlike numba-level inlining it adds little compile time
+        emit(
+            f'_jit_plant_fast_inline = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False, forceinline=True)'
+        )
         emit('_jit_inline = njit(cache=True, error_model="numpy", inline="always")')
+        emit('_jit_into_run = njit(cache=True, error_model="numpy", forceinline=True)')
+        emit(
+            '_jit_plant_into_run = njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)'
+        )
         emit(
             f'_jit_fast_inline = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, inline="always")'
         )
@@ -313,7 +323,7 @@ class System:
         emit(f"N_MOD, MAX_SEG, MAX_W = {max(n_mod, 1)}, {max_seg}, {max(max_w, 1)}")
         emit("")
         # project
-        emit("@_jit_plant")
+        emit("@_jit_plant_into_run")
         emit("def project(X, P, PO):")
         body = [
             f"    {aliases[(p.name, 'project')]}(X[{sl(p, 'x')}], P[{sl(p, 'p')}])"
@@ -338,8 +348,7 @@ class System:
         L.extend(body or ["    pass"])
         emit("")
         # derivatives
-        # called from four RK4 stages: inlining it would quadruple the compile time
-        emit("@_jit_plant_fast")
+        emit("@_jit_plant_fast_inline")
         emit("def derivatives(t, X, P, PO, Y, U, dX):")
         emit("    plant_outputs(t, X, P, PO, Y, U)")
         for p in self.continuous:
@@ -350,7 +359,7 @@ class System:
                 f"    {aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], Y[{sl(p, 'y')}], dX[{sl(p, 'x')}])"
             )
         emit("")
-        emit("@_jit_plant_fast")
+        emit("@_jit_plant_fast_inline")
         emit("def plant_step(t, X, h, P, PO, Y, U, W):")
         L.extend(self._step_body())
         emit("")
@@ -380,7 +389,7 @@ class System:
             body += [f"    Y[{a + i}] = V[{m}, 0, {i}]" for i in range(b - a)]
         L.extend(body or ["    pass"])
         emit("")
-        emit("@_jit")
+        emit("@_jit_into_run")
         emit("def sample(t, T_s, P, PO, S, Y, U, E, DT, V, NSEG):")
         body = [
             f"    E[{i}] = sample_{i}(t, T_s, P, PO, S, Y, U)" for i in range(len(self.sampled))
@@ -389,7 +398,7 @@ class System:
         L.extend(body)
         emit("")
         # integration over merged segments
-        emit("@_jit_plant")  # not fast-math: it compares with np.inf
+        emit("@_jit_plant_into_run")  # not fast-math: it compares with np.inf
         emit("def integrate(t, T_s, n_sub, X, P, PO, Y, U, W, DT, V, NSEG, IDX, LEFT):")
         if not self.modulators:
             emit("    h = T_s / n_sub")
@@ -424,7 +433,7 @@ class System:
             emit("                index[m] += 1")
             emit("                left[m] = DT[m, index[m]] if index[m] < NSEG[m] else np.inf")
         emit("")
-        emit("@_jit")
+        emit("@_jit_into_run")
         emit("def sample_instant(t, T_s, X, P, PO, S, Y, U, E, DT, V, NSEG):")
         emit(
             '    """At t_k: project, read the plant with held inputs, run sampled parts and modulators."""'
@@ -433,7 +442,7 @@ class System:
         emit("    plant_outputs(t, X, P, PO, Y, U)")
         emit("    sample(t, T_s, P, PO, S, Y, U, E, DT, V, NSEG)")
         emit("")
-        emit("@_jit_plant")
+        emit("@_jit_plant_into_run")
         emit("def record(k, log_every, Y, E, LOG_IDX, LOG, ELOG, ECOUNT):")
         emit(
             '    """Count the event bits of sample k; log the selected outputs every log_every samples."""'
