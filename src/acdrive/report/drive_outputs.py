@@ -24,6 +24,7 @@ def write_outcome(
     setup = outcome.setup
     if figures:
         from acdrive.report.dfim_figures import (
+            current_limits,
             write_comparison_figures,
             write_drive_figures,
             write_sync_figure,
@@ -33,7 +34,7 @@ def write_outcome(
         sub.mkdir(parents=True, exist_ok=True)
         result.save(sub, fmt)
         if figures:
-            write_drive_figures(result, sub, synchronous_rpm(setup))
+            write_drive_figures(result, sub, synchronous_rpm(setup), current_limits(setup))
             if setup.motors[0].controller.sync.enabled:
                 write_sync_figure(result, sub)
     if figures and len(outcome.results) > 1:

@@ -9,7 +9,8 @@ modulation signal (13(d)), position (14(a)), the speed ramps against the ideal c
 ramp and the superimposed alpha currents (16(a), (b)), step responses (18, 20). Their titles and
 labels are built from the scenario and the computed numbers. Space vectors are drawn in the
 paper's amplitude-invariant alpha-beta scaling (peak phase amperes: acdrive's power-invariant
-vector over sqrt(3/2), Bodson (8)).
+vector over sqrt(3/2), Bodson (8)). Time traces are drawn as their min/max envelope, every peak
+kept (``report.plotting``).
 """
 
 from __future__ import annotations
@@ -17,23 +18,19 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import scipy.linalg
 import scipy.signal
 
 from acdrive.analysis.plants import plant_from_params
 from acdrive.output import strict_json
+from acdrive.report.markdown import save_figure
+from acdrive.report.plotting import new_figure, plot_trace
 from acdrive.sim.im_drive import IMDriveResult, IMOutcome, ideal_ramp
 
 
 def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(path, fig)
     return path
 
 
@@ -122,16 +119,16 @@ def _current_axes(ax, result: IMDriveResult, window=None):
     t = result.t
     mask = np.ones(t.size, dtype=bool) if window is None else (t >= window[0]) & (t <= window[1])
     i_s, i_ref = result.phase_peak("i_s")[mask], result.phase_peak("i_ref")[mask]
-    ax.plot(t[mask], i_s.real, lw=0.8, label="i_alpha")
-    ax.plot(t[mask], i_s.imag, lw=0.8, label="i_beta")
-    ax.plot(t[mask], i_ref.real, "k--", lw=0.8, label="i_alpha reference")
-    ax.plot(t[mask], i_ref.imag, "k:", lw=0.8, label="i_beta reference")
+    plot_trace(ax, t[mask], i_s.real, lw=0.8, label="i_alpha")
+    plot_trace(ax, t[mask], i_s.imag, lw=0.8, label="i_beta")
+    plot_trace(ax, t[mask], i_ref.real, "k--", lw=0.8, label="i_alpha reference")
+    plot_trace(ax, t[mask], i_ref.imag, "k:", lw=0.8, label="i_beta reference")
     ax.set(xlabel="time (s)", ylabel="current (A, phase peak)")
     ax.legend(fontsize=7, loc="upper right")
 
 
 def _currents_figure(result: IMDriveResult, path: Path, window=None, what="stator currents"):
-    fig, ax = plt.subplots(figsize=(8, 3.6))
+    fig, ax = new_figure((8, 3.6))
     _current_axes(ax, result, window)
     err = result.current_rms_error()
     ax.set_title(
@@ -172,12 +169,13 @@ def write_run_figures(result: IMDriveResult, folder: Path) -> list[Path]:
             )
         )
     if s.mode in ("speed-p", "speed-pi"):
-        fig, ax = plt.subplots(figsize=(8, 3.6))
-        ax.plot(t, result.signal("w_ref"), "k--", lw=1, label="reference")
-        ax.plot(t, result.signal("w"), lw=1, label="speed")
+        fig, ax = new_figure((8, 3.6))
+        plot_trace(ax, t, result.signal("w_ref"), "k--", lw=1, label="reference")
+        plot_trace(ax, t, result.signal("w"), lw=1, label="speed")
         ramp = result.ramp_metrics()
         if ramp is not None:
-            ax.plot(
+            plot_trace(
+                ax,
                 t,
                 _ideal(result),
                 ":",
@@ -197,8 +195,8 @@ def write_run_figures(result: IMDriveResult, folder: Path) -> list[Path]:
         ax.legend(fontsize=8)
         paths.append(_save(fig, folder / "speed.png"))
     elif s.mode == "current" and s.mechanics.free:  # imposed currents run the motor
-        fig, ax = plt.subplots(figsize=(8, 3.2))
-        ax.plot(t, result.signal("w"), lw=1)
+        fig, ax = new_figure((8, 3.2))
+        plot_trace(ax, t, result.signal("w"), lw=1)
         ax.set(xlabel="time (s)", ylabel="speed (rad/s)")
         ax.set_title(
             _title(
@@ -209,10 +207,10 @@ def write_run_figures(result: IMDriveResult, folder: Path) -> list[Path]:
         )
         paths.append(_save(fig, folder / "speed.png"))
     if s.mode == "position":
-        fig, ax = plt.subplots(figsize=(8, 3.6))
+        fig, ax = new_figure((8, 3.6))
         theta = result.signal("theta") + s.sensors.offset
-        ax.plot(t, result.signal("theta_ref"), "k--", lw=1, label="reference")
-        ax.plot(t, theta, lw=1, label="position")
+        plot_trace(ax, t, result.signal("theta_ref"), "k--", lw=1, label="reference")
+        plot_trace(ax, t, theta, lw=1, label="position")
         m = result.position_metrics()
         ax.set(xlabel="time (s)", ylabel="position (rad)")
         ax.set_title(
@@ -222,16 +220,16 @@ def write_run_figures(result: IMDriveResult, folder: Path) -> list[Path]:
         ax.legend(fontsize=8)
         paths.append(_save(fig, folder / "position.png"))
     if s.mechanics.free:
-        fig, ax = plt.subplots(figsize=(8, 3.6))
-        ax.plot(t, result.signal("tau_load"), lw=1, label="load (active + brake)")
-        ax.plot(t, result.signal("tau_e"), lw=0.6, alpha=0.8, label="electromagnetic torque")
-        ax.plot(t, result.signal("tau_friction"), lw=1, label="friction")
+        fig, ax = new_figure((8, 3.6))
+        plot_trace(ax, t, result.signal("tau_load"), lw=1, label="load (active + brake)")
+        plot_trace(ax, t, result.signal("tau_e"), lw=0.6, alpha=0.8, label="electromagnetic torque")
+        plot_trace(ax, t, result.signal("tau_friction"), lw=1, label="friction")
         ax.set(xlabel="time (s)", ylabel="torque (N m)")
         ax.set_title(_title(result, "load torque"), fontsize=9)
         ax.legend(fontsize=8)
         paths.append(_save(fig, folder / "load_torque.png"))
-    fig, ax = plt.subplots(figsize=(8, 3.2))
-    ax.plot(t, result.signal("m_a"), lw=0.6)
+    fig, ax = new_figure((8, 3.2))
+    plot_trace(ax, t, result.signal("m_a"), lw=0.6)
     ax.axhline(1.0, color="k", ls=":", lw=0.8)
     ax.axhline(-1.0, color="k", ls=":", lw=0.8)
     peak = float(np.max(np.abs(result.signal("m_a"))))
@@ -277,15 +275,17 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
     paths = []
     steps = {label: step_comparison(r) for label, r in results.items()}
     if any(v is not None for v in steps.values()):
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+        fig, axes = new_figure((11, 4), 1, 2)
         for label, c in steps.items():
-            (line,) = axes[0].plot(
+            line = plot_trace(
+                axes[0],
                 1e3 * c["t"],
                 c["simulated"].real,
                 lw=1,
                 label=f"{label} simulated ({c['overshoot_simulated']:.1%})",
             )
-            axes[0].plot(
+            plot_trace(
+                axes[0],
                 1e3 * c["t"],
                 c["linear"][:, 0],
                 "--",
@@ -293,14 +293,15 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
                 lw=1,
                 label=f"{label} linear ({c['overshoot_linear']:.1%})",
             )
-            axes[1].plot(
+            plot_trace(
+                axes[1],
                 1e3 * c["t"],
                 c["simulated"].imag,
                 lw=1,
                 color=line.get_color(),
                 label=f"{label} simulated",
             )
-            axes[1].plot(1e3 * c["t"], c["linear"][:, 1], "--", color=line.get_color(), lw=1)
+            plot_trace(axes[1], 1e3 * c["t"], c["linear"][:, 1], "--", color=line.get_color(), lw=1)
         w = next(v for v in steps.values() if v is not None)["speed_rad_s"]
         axes[0].set(
             xlabel="time after the step (ms)",
@@ -315,15 +316,18 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
         paths.append(_save(fig, folder / "step_responses.png"))
         return paths
     if s.mode == "current":
-        fig, ax = plt.subplots(figsize=(8, 3.6))
+        fig, ax = new_figure((8, 3.6))
         lo = s.metrics_from
         hi = min(
             first.t[-1], lo + 3.0 * 2.0 * math.pi / max(abs(s.current_reference.frequency), 1.0)
         )
         mask = (first.t >= lo) & (first.t <= hi)
-        ax.plot(first.t[mask], first.phase_peak("i_ref")[mask].real, "k--", lw=1, label="reference")
+        plot_trace(
+            ax, first.t[mask], first.phase_peak("i_ref")[mask].real, "k--", lw=1, label="reference"
+        )
         for label, r in results.items():
-            ax.plot(
+            plot_trace(
+                ax,
                 r.t[mask],
                 r.phase_peak("i_s")[mask].real,
                 lw=0.8,
@@ -340,11 +344,12 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
         ax.legend(fontsize=7)
         paths.append(_save(fig, folder / "compare_currents.png"))
     if s.mode in ("speed-p", "speed-pi"):
-        fig, ax = plt.subplots(figsize=(8, 3.8))
-        ax.plot(first.t, first.signal("w_ref"), "k--", lw=1, label="reference")
+        fig, ax = new_figure((8, 3.8))
+        plot_trace(ax, first.t, first.signal("w_ref"), "k--", lw=1, label="reference")
         if first.ramp_metrics() is not None:
             ramp = first.ramp_metrics()
-            ax.plot(
+            plot_trace(
+                ax,
                 first.t,
                 _ideal(first),
                 "k:",
@@ -361,19 +366,22 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
                     f"{ramp['speed_ramp_error_rad_s']:.3g} rad/s"
                 )
             )
-            ax.plot(r.t, r.signal("w"), lw=1, label=f"{label}{extra}")
+            plot_trace(ax, r.t, r.signal("w"), lw=1, label=f"{label}{extra}")
         ax.set(
             xlabel="time (s)", ylabel="speed (rad/s)", title=f"{s.name}: speed of each controller"
         )
         ax.legend(fontsize=7)
         paths.append(_save(fig, folder / "compare_speed.png"))
-        fig, ax = plt.subplots(figsize=(8, 3.6))
+        fig, ax = new_figure((8, 3.6))
         lo, hi = _comparison_window(first)
         mask = (first.t >= lo) & (first.t <= hi)
         for label, r in results.items():
             err = r.current_rms_error(mask)
-            ax.plot(r.t[mask], r.phase_peak("i_s")[mask].real, lw=0.8, label=f"{label} i_alpha")
-            ax.plot(
+            plot_trace(
+                ax, r.t[mask], r.phase_peak("i_s")[mask].real, lw=0.8, label=f"{label} i_alpha"
+            )
+            plot_trace(
+                ax,
                 r.t[mask],
                 r.phase_peak("i_ref")[mask].real,
                 "--",

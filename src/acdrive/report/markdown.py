@@ -11,13 +11,9 @@ after the table and figures with their captions; ``render_section`` writes one a
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 
 #: Resolution of the report figures [dots per inch].
 DPI = 90
@@ -65,10 +61,19 @@ def db(x: float) -> float:
 
 
 def save_figure(path: Path, fig) -> None:
-    """Write ``fig`` to ``path`` (tight layout, ``DPI``) and close it."""
-    fig.tight_layout()
+    """Write ``fig`` to ``path`` at ``DPI`` and close it.
+
+    A figure without a layout engine (``pyplot.subplots``, ``report.plotting.new_figure``) gets the
+    tight layout, after which its engine is dropped: ``savefig`` would otherwise draw it once more
+    (without rendering) to lay it out again, and that pass costs as much as the layout itself. A
+    figure made with an engine (e.g. ``layout="constrained"``) is laid out by ``savefig``."""
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
+        fig.set_layout_engine(None)
     fig.savefig(path, dpi=DPI)
-    plt.close(fig)
+    pyplot = sys.modules.get("matplotlib.pyplot")  # only pyplot's figures need closing
+    if pyplot is not None:
+        pyplot.close(fig)
 
 
 def render_section(section: Section, fig_rel: str) -> list[str]:

@@ -1,0 +1,64 @@
+"""Helpers of the report figures: figures made without ``matplotlib.pyplot`` (its import and
+figure manager cost time and nothing here needs them) and a min/max envelope of long time traces
+so a figure draws a few thousand points instead of every sample.
+
+``new_figure`` gives a ``matplotlib.figure.Figure`` on the Agg canvas, as ``pyplot.subplots``
+would; ``report.markdown.save_figure`` gives it the tight layout and draws it once.
+``plot_trace`` draws ``envelope(t, y)``: the trace cut into ``ENVELOPE_BINS`` runs of consecutive
+samples, of which each keeps its first, smallest, largest and last sample in time order. Every
+extreme of every run is a sample of the drawn line, so no peak or trough is lost or moved, and
+consecutive runs are joined from the last sample of one to the first of the next, as in the full
+trace (a line at 7 in and 90 dpi spans about 630 pixel columns: 1500 runs are more than two per
+column, and at most 6000 samples are drawn).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+#: Runs of samples a long trace is cut into by ``envelope`` (each keeps at most four samples).
+ENVELOPE_BINS = 1500
+
+
+def envelope(t, y, bins: int = ENVELOPE_BINS) -> tuple[np.ndarray, np.ndarray]:
+    """(t, y) reduced to the first, smallest, largest and last sample of each of ``bins`` runs of
+    consecutive samples, in time order; a trace of at most ``4 * bins`` samples is returned as
+    given. A run with non-finite values keeps its first one too (the gap stays a gap) and its
+    extremes are those of its finite values."""
+    t, y = np.asarray(t), np.asarray(y)
+    n = y.shape[0]
+    if n <= 4 * bins or t.shape != y.shape or y.ndim != 1:
+        return t, y
+    size = -(-n // bins)  # samples per run; the last run may be shorter
+    runs = -(-n // size)
+    # pad the last run with its last sample: it can neither be a new extreme nor move one
+    padded = np.concatenate([y, np.full(runs * size - n, y[-1])]).reshape(runs, size)
+    start = np.arange(runs) * size
+    keep = [start, np.minimum(start + size - 1, n - 1)]
+    finite = np.isfinite(padded)
+    if finite.all():
+        keep += [start + np.argmin(padded, axis=1), start + np.argmax(padded, axis=1)]
+    else:
+        keep += [
+            start + np.argmin(np.where(finite, padded, np.inf), axis=1),
+            start + np.argmax(np.where(finite, padded, -np.inf), axis=1),
+            start + np.argmin(finite, axis=1),  # the first non-finite sample (or the first)
+        ]
+    index = np.unique(np.minimum(np.concatenate(keep), n - 1))
+    return t[index], y[index]
+
+
+def plot_trace(ax, t, y, *style, **kwargs):
+    """``ax.plot(t, y, *style, **kwargs)`` of the trace's ``envelope``; returns the Line2D."""
+    (line,) = ax.plot(*envelope(t, y), *style, **kwargs)
+    return line
+
+
+def new_figure(figsize, nrows: int = 1, ncols: int = 1, **subplots_kwargs):
+    """(figure, axes) as ``pyplot.subplots`` gives them, without pyplot: a figure of ``figsize``
+    inches on the Agg canvas, laid out by ``report.markdown.save_figure``."""
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **subplots_kwargs)

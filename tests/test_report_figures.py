@@ -1,0 +1,169 @@
+"""Report figures: the min/max envelope of long traces keeps every extreme, figures are saved at
+their size without pyplot, and the current limits drawn are the scenario's."""
+
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from acdrive.frames import K_PEAK
+from acdrive.report import dfim_figures
+from acdrive.report.dfim_figures import current_limits, drive_figures
+from acdrive.report.markdown import DPI, save_figure
+from acdrive.report.plotting import ENVELOPE_BINS, envelope, new_figure
+from acdrive.sim.result import LOG_NAMES, N_LOG, DriveResult
+
+# --- the envelope ----------------------------------------------------------------------------
+
+
+def _kept_indices(t, t_kept):
+    """Indices into the original trace of the kept samples (times are unique there)."""
+    index = np.searchsorted(t, t_kept)
+    assert np.array_equal(t[index], t_kept), "a kept time is not a time of the trace"
+    return index
+
+
+def _check_envelope(t, y, bins):
+    t_kept, y_kept = envelope(t, y, bins)
+    index = _kept_indices(t, t_kept)
+    assert np.all(np.diff(t_kept) > 0), "times must be strictly increasing"
+    assert np.array_equal(y_kept, y[index], equal_nan=True), "kept values are the trace's own"
+    assert y_kept.size <= 4 * bins
+    assert np.nanmax(y_kept) == np.nanmax(y) and np.nanmin(y_kept) == np.nanmin(y)
+    # the runs as documented: ceil(n / bins) consecutive samples each, the last one shorter
+    size = math.ceil(y.size / bins)
+    kept = set(index.tolist())
+    for lo in range(0, y.size, size):
+        hi = min(lo + size, y.size)
+        assert lo in kept and hi - 1 in kept, "first and last sample of every run are kept"
+        inside = y[sorted(i for i in range(lo, hi) if i in kept)]
+        run = y[lo:hi]
+        if np.any(np.isfinite(run)):
+            drawn = inside[np.isfinite(inside)]
+            assert drawn.max() == run[np.isfinite(run)].max()
+            assert drawn.min() == run[np.isfinite(run)].min()
+        if not np.all(np.isfinite(run)):
+            assert not np.all(np.isfinite(inside)), "a gap (NaN) in a run stays a gap"
+    return t_kept, y_kept
+
+
+@pytest.mark.parametrize(("n", "bins"), [(140_000, ENVELOPE_BINS), (140_001, 1500), (12_345, 7)])
+def test_envelope_keeps_every_run_extreme_in_time_order(n, bins):
+    rng = np.random.default_rng(n)
+    t = 1e-4 * np.arange(n)
+    y = np.sin(2 * np.pi * 3 * t) + 0.2 * rng.standard_normal(n)
+    size = math.ceil(n / bins)  # one-sample peaks and troughs, at most one per run
+    runs = rng.choice(n // size, min(40, n // size), replace=False)
+    spikes = runs * size + rng.integers(0, size, runs.size)
+    y[spikes] += rng.choice([-5.0, 5.0], spikes.size) * rng.uniform(1, 2, spikes.size)
+    t_kept, y_kept = _check_envelope(t, y, bins)
+    assert set(spikes) <= set(_kept_indices(t, t_kept)), "every spike is drawn, at its time"
+    assert y_kept.size < n / 4
+
+
+def test_envelope_of_steps_and_gaps():
+    n = 50_000
+    t = np.linspace(0.0, 5.0, n)
+    y = (t > 1.2345).astype(float)  # a relay closing: the step is kept at its sample
+    t_kept, y_kept = _check_envelope(t, y, 100)
+    assert t_kept[np.argmax(y_kept)] == t[np.argmax(y)]
+    y = np.cos(t)
+    y[20_000:20_050] = np.nan
+    y[33_333] = np.inf
+    _check_envelope(t, y, 100)
+
+
+def test_short_traces_are_drawn_as_given():
+    t = np.arange(4 * ENVELOPE_BINS) * 1e-3
+    y = np.sin(t)
+    t_kept, y_kept = envelope(t, y)
+    assert t_kept is t and y_kept is y
+
+
+# --- saving ----------------------------------------------------------------------------------
+
+
+def test_saved_figure_has_its_size_and_no_pyplot_figure_stays_open(tmp_path):
+    import matplotlib.pyplot as plt
+
+    fig, ax = new_figure((7, 3.5))
+    ax.plot([0, 1], [0, 1], label="x")
+    ax.set(xlabel="time (s)", ylabel="y", title="t")
+    ax.legend()
+    save_figure(tmp_path / "a.png", fig)
+    assert Image.open(tmp_path / "a.png").size == (7 * DPI, round(3.5 * DPI))
+    fig, ax = plt.subplots(figsize=(4, 3))  # the reproduction reports still draw with pyplot
+    ax.plot([0, 1], [1, 0])
+    number = fig.number
+    save_figure(tmp_path / "b.png", fig)
+    assert Image.open(tmp_path / "b.png").size == (4 * DPI, 3 * DPI)
+    assert not plt.fignum_exists(number)
+
+
+# --- the current limits of the figures ---------------------------------------------------------
+
+
+def _result(n=20_000, dt=1e-4):
+    t = dt * np.arange(n)
+    signals = np.zeros((n, 1, N_LOG))
+    rng = np.random.default_rng(3)
+    signals[:, 0, LOG_NAMES.index("w")] = 150.0 * t
+    signals[:, 0, LOG_NAMES.index("w_ref")] = 150.0 * t
+    signals[:, 0, LOG_NAMES.index("i_s_mag")] = K_PEAK * (3.0 + rng.uniform(0, 1, n))
+    signals[:, 0, LOG_NAMES.index("i_r_mag")] = K_PEAK * (4.0 + rng.uniform(0, 1, n))
+    signals[12_345, 0, LOG_NAMES.index("i_r_mag")] = K_PEAK * 6.789  # one-sample peak
+    return DriveResult("synthetic", t, signals, dt, np.zeros(1))
+
+
+def _limit_lines(fig):
+    """label -> y of the horizontal limit lines of the currents figure."""
+    (ax,) = fig.axes
+    legend = [text.get_text() for text in ax.get_legend().get_texts()]
+    out = {}
+    for line in ax.get_lines():
+        y = np.asarray(line.get_ydata(), dtype=float)
+        if "limit" in line.get_label():
+            assert line.get_label() in legend
+            assert y.size == 2 and y[0] == y[1]
+            out[line.get_label()] = float(y[0])
+    return out
+
+
+def test_currents_figure_draws_the_given_limits_and_the_true_peak():
+    result = _result()
+    figures = drive_figures(result, 1.0e9, {"stator": 4.5, "rotor": 7.25})
+    fig = figures["fig6_currents.png"]
+    assert _limit_lines(fig) == {"4.5 A stator limit": 4.5, "7.25 A rotor limit": 7.25}
+    rotor = next(line for line in fig.axes[0].get_lines() if line.get_label() == "rotor")
+    assert np.max(rotor.get_ydata()) == np.max(result.peak("i_r_mag"))  # the peak is drawn
+    same = drive_figures(result, 1.0e9, {"stator": 5.5, "rotor": 5.5})["fig6_currents.png"]
+    assert _limit_lines(same) == {"5.5 A limit (stator and rotor)": 5.5}
+
+
+def test_a_scenario_limit_reaches_the_currents_figure(tmp_path, monkeypatch):
+    from acdrive.report.drive_outputs import write_outcome
+    from acdrive.scenarios.loader import load_scenario
+    from acdrive.sim.outcome import run_scenario
+
+    path = tmp_path / "limits.toml"
+    path.write_text("""
+name = "limits"
+[simulation]
+duration = 0.1
+[[motor]]
+speed_reference_rpm = [[0, 0], [0.1, 50]]
+[motor.controller]
+speed_bandwidth = 100.0
+stator_current_limit_pk = 4.75
+rotor_current_limit_pk = 7.5
+""")
+    setup = load_scenario(path)
+    assert current_limits(setup) == {"stator": 4.75, "rotor": 7.5}
+    saved = {}
+    monkeypatch.setattr(dfim_figures, "save_figure", lambda p, fig: saved.setdefault(p.name, fig))
+    write_outcome(run_scenario(setup), tmp_path / "out")
+    assert _limit_lines(saved["fig6_currents.png"]) == {
+        "4.75 A stator limit": 4.75,
+        "7.5 A rotor limit": 7.5,
+    }
