@@ -58,6 +58,16 @@ from acdrive.sim.outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
 from acdrive.sim.result import OSCILLATION_BAND_HZ
 from acdrive.sim.system import STATUS_OK, System
 
+__all__ = [
+    "BatchResult",
+    "Reducer",
+    "default_reducers",
+    "dfim_reducers",
+    "im_reducers",
+    "prepare_variant",
+    "simulate_batch",
+]
+
 RPM_PER_RAD_S = 30.0 / math.pi
 #: sqrt(3/2): space-vector magnitude of a balanced three-phase set per peak phase value
 SQRT_3_2 = math.sqrt(1.5)

@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING
 
 from acdrive.errors import InputError
 
+__all__ = ["DEFAULT_FORMAT", "FORMATS", "Column", "check_names", "read_units", "write_table"]
+
 if TYPE_CHECKING:  # numpy is imported where data is written: `acdrive run --help` stays light
     import numpy as np
 

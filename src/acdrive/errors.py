@@ -2,6 +2,8 @@
 
 import re
 
+__all__ = ["InputError", "Notice", "SimulationDiverged"]
+
 
 class InputError(ValueError):
     """Invalid user input (parameter, scenario field or CLI argument).
