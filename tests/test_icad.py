@@ -177,6 +177,36 @@ def test_icad_quantities_scalar_identity():
     np.testing.assert_allclose(qb["c"][0, 0], q["c"], rtol=1e-12)
 
 
+def test_icad_quantities_match_the_definitions_on_random_data():
+    """The kernel's division-safe forms and reciprocals against numpy's direct evaluation of
+    (3)-(6) on random plant and controller values: controller values shared by every row (one
+    frequency grid), one set per row, and broadcast along the frequency axis; rows scaled by
+    1e80 and 1e-80 make |g11 g22|^2 overflow or underflow (the complex-division branch)."""
+    rng = np.random.default_rng(7)
+
+    def values(shape, decades):
+        size = 10.0 ** rng.uniform(-decades, decades, shape)
+        return size * np.exp(1j * rng.uniform(-np.pi, np.pi, shape))
+
+    G = values((3, 5, 2, 2), 3.0)
+    G[0, :2] *= 1e80
+    G[1, :2] *= 1e-80
+    shared, per_row, per_freq = values((5,), 2.0), values((3, 5), 2.0), values((3, 1), 2.0)
+    g11, g12, g21, g22 = G[..., 0, 0], G[..., 0, 1], G[..., 1, 0], G[..., 1, 1]
+    for k1, k2 in ((shared, shared), (shared, per_row), (per_row, per_freq)):
+        q = icad_quantities(G, k1, k2)
+        gamma = g12 * g21 / (g11 * g22)
+        kg1, kg2 = k1 * g11, k2 * g22
+        h1, h2 = kg1 / (1 + kg1), kg2 / (1 + kg2)
+        c1, c2 = kg1 * (1 - gamma * h2), kg2 * (1 - gamma * h1)
+        coupling = (g12 / g22 * h2 / (1 + c1), g21 / g11 * h1 / (1 + c2))
+        np.testing.assert_allclose(q["gamma"], gamma, rtol=1e-12)
+        np.testing.assert_allclose(q["h"], np.stack([h1, h2], axis=-1), rtol=1e-12)
+        np.testing.assert_allclose(q["c"], np.stack([c1, c2], axis=-1), rtol=1e-10)
+        np.testing.assert_allclose(q["coupling"], np.stack(coupling, axis=-1), rtol=1e-10)
+        np.testing.assert_allclose(q["S"], 1 / (1 + np.stack([c1, c2], axis=-1)), rtol=1e-10)
+
+
 # --- closed forms ------------------------------------------------------------------------------
 
 

@@ -67,25 +67,41 @@ INFINITE_EIG = 1e8  # generalised eigenvalues above this times the pencil norm a
 # batched frequency data
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _reciprocal(z):
+    """1 / z as conj(z) / |z|^2: one real division instead of a complex one (numba's complex
+    division branches and divides twice). Where |z|^2 would overflow or underflow, and for
+    inf, nan or 0, it is the complex division itself, so only the rounding differs."""
+    size2 = z.real * z.real + z.imag * z.imag
+    if 1e-300 < size2 < 1e300:
+        f = 1.0 / size2
+        return complex(z.real * f, -z.imag * f)
+    return 1.0 / z
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
-    """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring (points
-    in parallel on all cores). The controller values repeat with the period of their length
-    (k of shape (K,) for G of shape (nb * K, 2, 2): the same frequency grid at every speed)."""
-    K1, K2 = k1.size, k2.size
-    for idx in prange(G.shape[0]):
-        a, b = k1[idx % K1], k2[idx % K2]
-        g11, g12, g21, g22 = G[idx, 0, 0], G[idx, 0, 1], G[idx, 1, 0], G[idx, 1, 1]
-        det = g11 * g22 - g12 * g21
-        kg1, kg2 = a * g11, b * g22
-        r1, r2 = 1.0 / (1.0 + kg1), 1.0 / (1.0 + kg2)  # 1 / (1 + k_i g_ii)
-        c1 = a * (g11 + b * det) * r2
-        c2 = b * (g22 + a * det) * r1
-        gamma[idx] = (g12 * g21) / (g11 * g22)
-        h[idx, 0], h[idx, 1] = kg1 * r1, kg2 * r2
-        c[idx, 0], c[idx, 1] = c1, c2
-        coupling[idx, 0] = g12 * b * r2 / (1.0 + c1)
-        coupling[idx, 1] = g21 * a * r1 / (1.0 + c2)
+    """Per point: Ugalde-Loo (3)-(6) in the division-safe forms of the module docstring.
+
+    G (rows, K, 2, 2) and the outputs (rows, K[, 2]): a row is one plant (speed) over the
+    frequency grid. The controller values k (nk, K) repeat with the period of their rows: row r
+    takes k[r % nk] (nk = 1: the same frequency grid at every speed). Rows run in parallel on all
+    cores; every output is written once, and each reciprocal is computed once per point."""
+    for r in prange(G.shape[0]):
+        k1r, k2r = k1[r % k1.shape[0]], k2[r % k2.shape[0]]
+        for j in range(G.shape[1]):
+            a, b = k1r[j], k2r[j]
+            g11, g12, g21, g22 = G[r, j, 0, 0], G[r, j, 0, 1], G[r, j, 1, 0], G[r, j, 1, 1]
+            det = g11 * g22 - g12 * g21
+            kg1, kg2 = a * g11, b * g22
+            r1, r2 = _reciprocal(1.0 + kg1), _reciprocal(1.0 + kg2)  # 1 / (1 + k_i g_ii)
+            c1 = a * (g11 + b * det) * r2
+            c2 = b * (g22 + a * det) * r1
+            gamma[r, j] = (g12 * g21) * _reciprocal(g11 * g22)
+            h[r, j, 0], h[r, j, 1] = kg1 * r1, kg2 * r2
+            c[r, j, 0], c[r, j, 1] = c1, c2
+            coupling[r, j, 0] = g12 * b * r2 * _reciprocal(1.0 + c1)
+            coupling[r, j, 1] = g21 * a * r1 * _reciprocal(1.0 + c2)
 
 
 def _derived(key: str, G, k1, k2, gamma, h, c) -> np.ndarray:
@@ -110,21 +126,28 @@ def _kernel_outputs(G, k1, k2):
     k1, k2 = np.asarray(k1, dtype=complex), np.asarray(k2, dtype=complex)
     shape = np.broadcast_shapes(G.shape[:-2], k1.shape, k2.shape)
     N = int(np.prod(shape))
-    G_flat = np.ascontiguousarray(np.broadcast_to(G, shape + (2, 2))).reshape(N, 2, 2)
+    K = shape[-1] if shape else 1  # a row: the last axis (the frequency grid)
+    rows = int(np.prod(shape[:-1]))
+    G_rows = np.ascontiguousarray(np.broadcast_to(G, shape + (2, 2))).reshape(rows, K, 2, 2)
 
     def periodic(k):
-        """k as the kernel takes it: its own values if they repeat along the leading axes (the
-        frequency grid of every speed), else broadcast to every point."""
+        """k as the kernel takes it, rows of K values: its own values if they repeat along the
+        leading axes (the frequency grid of every speed), else broadcast to every point."""
         if k.ndim >= 1 and shape[len(shape) - k.ndim :] == k.shape:
-            return np.ascontiguousarray(k).reshape(-1)
-        return np.ascontiguousarray(np.broadcast_to(k, shape)).reshape(N)
+            return np.ascontiguousarray(k).reshape(-1, K)
+        return np.ascontiguousarray(np.broadcast_to(k, shape)).reshape(rows, K)
 
-    gamma = np.empty(N, dtype=complex)
-    h, c, coupling = (np.empty((N, 2), dtype=complex) for _ in range(3))
-    call_interruptible(_icad_kernel, G_flat, periodic(k1), periodic(k2), gamma, h, c, coupling)
+    # all outputs in one allocation, each a contiguous part: a single block of fresh pages
+    block = np.empty(7 * N, dtype=complex)
+    gamma = block[:N].reshape(rows, K)
+    h, c, coupling = (
+        block[(2 * i + 1) * N : (2 * i + 3) * N].reshape(rows, K, 2) for i in range(3)
+    )
+    if N:
+        call_interruptible(_icad_kernel, G_rows, periodic(k1), periodic(k2), gamma, h, c, coupling)
     two = shape + (2,)
     k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
-    G = G_flat.reshape(shape + (2, 2))
+    G = G_rows.reshape(shape + (2, 2))
     return G, k1, k2, gamma.reshape(shape), h.reshape(two), c.reshape(two), coupling.reshape(two)
 
 
