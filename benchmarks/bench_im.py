@@ -1,6 +1,6 @@
 """The matched cage-induction-motor cases against motulator 0.18 (averaged converter and PWM).
 
-A thin wrapper: the implementation is the benchmark suite, ``acdrive.bench.motulator_im``
+A thin wrapper: the implementation is the benchmark suite, ``acdrive._bench.motulator_im``
 (see ``acdrive bench --help`` and docs/design.md, "Benchmark suite"). Same as
 
     acdrive bench --json --only motulator_averaged motulator_pwm [--quick] [--no-peers] ...

@@ -29,12 +29,12 @@ HERE = Path(__file__).resolve().parent
 IMPORTS = {
     "simulate_previous_engine": f"import sys; sys.path.insert(0, {str(HERE)!r}); "
     "from previous_engine import simulate_previous_engine as run",
-    "simulate": "from acdrive.sim.setup import simulate as run",
+    "simulate": "from acdrive.sim._setup import simulate as run",
 }
 START_SNIPPET = """
 import time; t0 = time.perf_counter()
 import dataclasses
-from acdrive.scenarios.loader import load_scenario
+from acdrive.scenarios import load_scenario
 {import_line}
 s = dataclasses.replace(load_scenario("bodson-step"), duration=0.01)
 t1 = time.perf_counter(); run(s); t2 = time.perf_counter()
@@ -70,8 +70,8 @@ def steps_per_second(engines: dict, setup) -> dict:
 
 
 def main() -> None:
-    from acdrive.scenarios.loader import load_scenario
-    from acdrive.sim.setup import simulate
+    from acdrive.scenarios import load_scenario
+    from acdrive.sim import simulate
 
     sys.path.insert(0, str(HERE))
     from previous_engine import simulate_previous_engine

@@ -1,11 +1,11 @@
-"""Compare the parts-built DFIM drive (``acdrive.sim.dfim_drive``) with the previous engine
+"""Compare the parts-built DFIM drive (``acdrive.sim._dfim_drive``) with the previous engine
 (frozen in ``benchmarks/previous_engine``) on the nine built-in scenarios it knows (``ORIGINAL``; the
 fault scenarios added later use parts it does not have): prints JSON with, per scenario and mode,
 the largest difference of each logged signal relative to that signal's peak magnitude.
 
 Run: ACDRIVE_STRICT_MATH=1 python benchmarks/compare_engines.py [scenario ...]
 
-With ACDRIVE_STRICT_MATH=1 both are compiled with strict IEEE arithmetic (``acdrive.jit``), so any
+With ACDRIVE_STRICT_MATH=1 both are compiled with strict IEEE arithmetic (``acdrive._jit``), so any
 difference comes from the order of operations in the two sources alone; with the default
 fast-math build the compiler's contraction choices differ between the two (last-bit differences
 that a quantised encoder can turn into one count now and then).
@@ -22,10 +22,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from previous_engine import simulate_previous_engine
 
-from acdrive.jit import STRICT_MATH
-from acdrive.scenarios.loader import load_scenario
-from acdrive.sim import dfim_drive
-from acdrive.sim.result import LOG_NAMES
+from acdrive._jit import STRICT_MATH
+from acdrive.scenarios import load_scenario
+from acdrive.sim import _dfim_drive as dfim_drive
+from acdrive.sim._result import LOG_NAMES
 
 TOLERANCE = 1e-12
 #: the built-in scenarios the previous engine can run (its parts: balanced source, fixed DC link,

@@ -51,7 +51,19 @@ html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "footer_start": ["copyright"],
+    # three short links in the header, the long theory and reproduction titles under "More"
+    "header_links_before_dropdown": 3,
+    # gallery pages: the code needs the width more than an "on this page" list of two headings
+    # (patterns may not overlap: "*" stops at a "/")
+    "secondary_sidebar_items": {
+        "*": ["page-toc", "sourcelink"],
+        "guide/*": ["page-toc", "sourcelink"],
+        "reproduction/*": ["page-toc", "sourcelink"],
+        "auto_examples/*": [],
+    },
 }
+# the landing page and the API page have no sibling pages to navigate
+html_sidebars = {"index": [], "api": []}
 html_static_path: list[str] = []
 
 sphinx_gallery_conf = {

@@ -10,8 +10,8 @@ zero torque.
 
 import matplotlib.pyplot as plt
 
-from acdrive.scenarios.loader import load_scenario
-from acdrive.sim.setup import simulate
+from acdrive.scenarios import load_scenario
+from acdrive.sim import simulate
 
 result = simulate(load_scenario("bodson-sync"))
 

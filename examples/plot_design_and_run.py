@@ -11,16 +11,11 @@ rotor locked, a 300 rad/s sinusoidal current reference.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.analysis.icad import analyse
-from acdrive.analysis.plants import plant_for
-from acdrive.control.current import CurrentProgram, StationaryCurrentController
-from acdrive.control.lti import FIG17_PI_FAMILY, PAPER_PI
-from acdrive.machines.cage_part import CageInductionMachine
-from acdrive.machines.registry import machine_params
-from acdrive.plant.inverter import Inverter
-from acdrive.plant.mechanics import PrescribedSpeed
-from acdrive.plant.sources import DCSource
-from acdrive.sim.system import System
+from acdrive.analysis import analyse, plant_for
+from acdrive.control import FIG17_PI_FAMILY, PAPER_PI, CurrentProgram, StationaryCurrentController
+from acdrive.machines import CageInductionMachine, machine_params
+from acdrive.plant import DCSource, Inverter, PrescribedSpeed
+from acdrive.sim import System
 
 # %%
 # The analysis: phase margin and bandwidth of channel 1 for every candidate.

@@ -10,13 +10,10 @@ zero rotor-voltage program) and compiled once for this topology.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.control.open_loop import ComplexProgram
-from acdrive.machines.dfim import BODSON_DFIM
-from acdrive.machines.dfim_part import DoublyFedMachine
-from acdrive.plant.mechanics import Shaft
-from acdrive.plant.network import RelayCommand
-from acdrive.plant.sources import ThreePhaseSource
-from acdrive.sim.system import System
+from acdrive.control import ComplexProgram
+from acdrive.machines import BODSON_DFIM, DoublyFedMachine
+from acdrive.plant import RelayCommand, Shaft, ThreePhaseSource
+from acdrive.sim import System
 
 grid = ThreePhaseSource("grid", V_pk=11.1, f=60.0)
 relay = RelayCommand("relay", close_at=0.0)

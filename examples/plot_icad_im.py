@@ -10,9 +10,8 @@ margins with the paper's controller (20) on both channels.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.analysis.icad import analyse, icad_response
-from acdrive.analysis.plants import plants_for
-from acdrive.control.lti import PAPER_20
+from acdrive.analysis import analyse, icad_response, plants_for
+from acdrive.control import PAPER_20
 
 speeds = [0.0, 150.0, 300.0]  # electrical rotor speed [rad/s]
 w = np.logspace(0, 4.5, 800)

@@ -10,9 +10,8 @@ speeds.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.analysis.icad import icad_response
-from acdrive.analysis.plants import plants_for
-from acdrive.control.lti import LTI
+from acdrive.analysis import icad_response, plants_for
+from acdrive.control import LTI
 
 speeds = np.linspace(50.0, 400.0, 8)
 w = np.logspace(0, 4, 600)

@@ -10,7 +10,7 @@ largest real part (the stability theory page explains the lightly damped stator-
 
 import matplotlib.pyplot as plt
 
-from acdrive.analysis.drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive.analysis import DriveModel, OperatingPoint, linearize
 
 point = OperatingPoint(speed=150.0, load_torque=0.05)  # rad/s, N m
 fig, ax = plt.subplots(figsize=(6, 4))

@@ -16,8 +16,8 @@ from acdrive.batch import (
     prepare_variant,
     simulate_batch,
 )
-from acdrive.scenarios.loader import read_scenario
-from acdrive.sim.dfim_drive import DFIMDrive
+from acdrive.scenarios._loader import read_scenario
+from acdrive.sim._dfim_drive import DFIMDrive
 
 BASE = "bodson-ramp"
 SHORT = {"simulation.duration": 0.12}
@@ -151,7 +151,7 @@ def test_machine_parameter_override_expands_the_built_in_machine():
 
 
 def test_cage_im_variants_equal_single_runs():
-    from acdrive.sim.im_drive import IMDrive
+    from acdrive.sim._im_drive import IMDrive
 
     variants = [
         {"simulation.duration": 0.01, "machine.J": 0.0015},

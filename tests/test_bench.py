@@ -12,9 +12,9 @@ from contextlib import redirect_stderr, redirect_stdout
 import numpy as np
 import pytest
 
-from acdrive.bench import gem_dfim, venvs
-from acdrive.bench.reference import accuracy, error_verdicts
-from acdrive.bench.suite import TARGETS, summarise
+from acdrive._bench import gem_dfim, venvs
+from acdrive._bench.reference import accuracy, error_verdicts
+from acdrive._bench.suite import TARGETS, summarise
 
 
 @pytest.fixture(scope="module")

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import acdrive
+from acdrive._progress import Progress
 from acdrive.cli import build_parser, main
-from acdrive.progress import Progress
 
 OWN_COMMANDS = ("run", "scenarios", "limits", "icad", "stability", "reproduce")
 HEAVY = ("numba", "numpy", "scipy", "pandas", "matplotlib", "pyarrow", "tqdm")
@@ -75,9 +75,9 @@ def test_the_lazy_table_says_what_each_command_says():
 
 
 def test_icad_help_constants_match_the_analysis():
-    from acdrive.analysis import icad as analysis
-    from acdrive.analysis.plants import MACHINES
-    from acdrive.commands import icad as command
+    from acdrive._commands import icad as command
+    from acdrive.analysis import _icad as analysis
+    from acdrive.analysis._plants import MACHINES
 
     assert command.MACHINES == tuple(MACHINES)
     assert command.CONTROLLER_NAMES == tuple(analysis.CONTROLLER_NAMES)
@@ -139,7 +139,7 @@ def test_first_compile_notice_once_per_loop(tmp_path):
     code = """
         import sys, warnings
         from acdrive.errors import Notice
-        from acdrive.sim import codegen
+        from acdrive.sim import _codegen as codegen
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             module = codegen.load_module({source!r})
@@ -169,13 +169,13 @@ def test_first_compile_notice_once_per_loop(tmp_path):
 
 
 def _ramp_and_stop():
-    from acdrive.scenarios.loader import load_scenario
+    from acdrive.scenarios._loader import load_scenario
 
     return load_scenario("bodson-ramp")  # 0 -> 2700 rpm ramp, abrupt stop at 11 s
 
 
 def _result(setup, t, w, relay=None):
-    from acdrive.sim.result import LOG_NAMES, N_LOG, DriveResult
+    from acdrive.sim._result import LOG_NAMES, N_LOG, DriveResult
 
     times, values = setup.motors[0].speed_reference
     signals = np.zeros((t.size, 1, N_LOG))
@@ -187,9 +187,9 @@ def _result(setup, t, w, relay=None):
 
 
 def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth():
-    from acdrive.frames import K_PEAK
-    from acdrive.machines.dfim import machine_vector, torque_limits_case1
-    from acdrive.sim.outcome import SETTLE_TIME_CONSTANTS, SLEW_MARGIN, tracking_windows
+    from acdrive._frames import K_PEAK
+    from acdrive.machines._dfim import machine_vector, torque_limits_case1
+    from acdrive.sim._outcome import SETTLE_TIME_CONSTANTS, SLEW_MARGIN, tracking_windows
 
     setup = _ramp_and_stop()
     m = setup.motors[0]
@@ -221,7 +221,7 @@ def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth()
 
 
 def test_an_open_relay_is_not_tracking():
-    from acdrive.sim.outcome import tracking_windows
+    from acdrive.sim._outcome import tracking_windows
 
     setup = _ramp_and_stop()
     t = np.arange(0.0, 2.0, 1e-3)

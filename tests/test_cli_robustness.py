@@ -16,9 +16,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from acdrive._output import finite_or_null, strict_json
 from acdrive.cli import main
 from acdrive.errors import SimulationDiverged
-from acdrive.output import finite_or_null, strict_json
 
 MOTOR = "[[motor]]\nspeed_reference_rpm = [[0, 0], [{d}, 100]]\n"
 

@@ -9,9 +9,9 @@ import pytest
 
 control = pytest.importorskip("control")
 
-from acdrive.analysis.icad import analyse, icad_response
-from acdrive.analysis.plants import plant_for
-from acdrive.control.lti import (
+from acdrive.analysis._icad import analyse, icad_response
+from acdrive.analysis._plants import plant_for
+from acdrive.control._lti import (
     FIG18_PI,
     LTI,
     PAPER_20,

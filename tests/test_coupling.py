@@ -1,5 +1,5 @@
 """Coupling between the current channels measured in simulation against ICAD's (10)
-(``acdrive.analysis.coupling``; Amezquita-Brooks et al. (10), Fig. 8; Ugalde-Loo et al. (6))."""
+(``acdrive.analysis._coupling``; Amezquita-Brooks et al. (10), Fig. 8; Ugalde-Loo et al. (6))."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.analysis.coupling import (
+from acdrive.analysis._coupling import (
     VOLTAGE_LIMIT,
     CouplingSetup,
     closed_loop,
@@ -18,10 +18,10 @@ from acdrive.analysis.coupling import (
     pmsg_pi,
     stationary_equivalent,
 )
-from acdrive.control.lti import LTI, PAPER_20
+from acdrive.control._lti import LTI, PAPER_20
 from acdrive.errors import InputError
-from acdrive.machines.induction import DELORENZO_IM
-from acdrive.machines.pmsm import PMSG_2MW
+from acdrive.machines._induction import DELORENZO_IM
+from acdrive.machines._pmsm import PMSG_2MW
 
 #: simulated coupling against (10) at frequencies well below the 50 kHz sampling rate
 #: (<= 1000 rad/s, 1/300 of 2 pi 50 kHz): relative complex difference

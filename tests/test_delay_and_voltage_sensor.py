@@ -5,12 +5,12 @@ through it applies each command one period later."""
 import numpy as np
 import pytest
 
-from acdrive.control.delay import ComputationDelay
-from acdrive.control.open_loop import ComplexProgram
+from acdrive.control._delay import ComputationDelay
+from acdrive.control._open_loop import ComplexProgram
 from acdrive.errors import InputError
-from acdrive.plant.converter import AveragedConverter
-from acdrive.plant.sensors import VoltageSensor
-from acdrive.sim.system import System
+from acdrive.plant._converter import AveragedConverter
+from acdrive.plant._sensors import VoltageSensor
+from acdrive.sim._system import System
 
 T_S = 1e-3
 

@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.control.speed import speed_pi
-from acdrive.machines.dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
-from acdrive.scenarios.loader import build_setup, load_scenario
-from acdrive.sim.dfim_drive import DFIMDrive, simulate_slow
-from acdrive.sim.setup import simulate
+from acdrive.control._speed import speed_pi
+from acdrive.machines._dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
+from acdrive.scenarios._loader import build_setup, load_scenario
+from acdrive.sim._dfim_drive import DFIMDrive, simulate_slow
+from acdrive.sim._setup import simulate
 
 
 def short_ramp(duration=0.1, **overrides):
@@ -47,7 +47,7 @@ class PlainPythonController:
     outputs, read and written through that part's declarations."""
 
     def __init__(self, params, gains, i_max, T_s, w_e):
-        from acdrive.machines.dfim import machine_vector
+        from acdrive.machines._dfim import machine_vector
 
         self.p, self.g, self.i_max, self.T_s, self.w_e = (
             machine_vector(params),
@@ -59,7 +59,7 @@ class PlainPythonController:
         self.e_int, self.theta_prev, self.w, self.started = 0.0, None, 0.0, False
 
     def step(self, t, T_s, u, p, s, y):
-        from acdrive.control.bodson import SpeedController
+        from acdrive.control._bodson import SpeedController
 
         inputs = SpeedController.INPUTS.unpack(u)
         theta_meas, v_s, w_ref = inputs["theta"], inputs["v_s"], inputs["w_ref"]
@@ -201,7 +201,7 @@ def test_batch_axis_runs_variants_in_parallel():
 
 
 def test_speed_oscillation_metric_recovers_a_known_sinusoid():
-    from acdrive.sim.result import LOG_NAMES, DriveResult
+    from acdrive.sim._result import LOG_NAMES, DriveResult
 
     t = np.arange(20000) * 200e-6
     signals = np.zeros((t.size, 1, len(LOG_NAMES)))
@@ -252,7 +252,7 @@ def test_paper_gains_limit_cycle_in_voltage_mode_only():
 def test_converter_loss_opposes_rotor_current():
     """First-harmonic dead-time / drop model: the applied rotor voltage differs from the command by
     sqrt(3/2) (4/pi) (V_dc t_d f_sw + V_drop) along -i_R / |i_R|."""
-    from acdrive.sim.setup import ConverterLosses
+    from acdrive.sim._setup import ConverterLosses
 
     losses = ConverterLosses(dead_time=2e-6, switching_frequency=1e4, device_drop=0.5)
     expected = np.sqrt(1.5) * 4 / np.pi * (30.0 * 2e-6 * 1e4 + 0.5)

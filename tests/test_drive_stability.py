@@ -1,4 +1,4 @@
-"""Whole-drive linearisation (acdrive.analysis.drive_stability): analytic limits of Bodson's
+"""Whole-drive linearisation (acdrive.analysis._drive_stability): analytic limits of Bodson's
 equations, consistency of the continuous and sampled-data models, and nonlinear simulation."""
 
 import dataclasses
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.analysis.drive_stability import (
+from acdrive.analysis._drive_stability import (
     RAD_S_PER_RPM,
     DriveModel,
     OperatingPoint,
@@ -19,13 +19,13 @@ from acdrive.analysis.drive_stability import (
 )
 from acdrive.cli import main
 from acdrive.errors import InputError
-from acdrive.machines.dfim import (
+from acdrive.machines._dfim import (
     BODSON_DFIM,
     electrical_poles,
     shifted_delta_z_coefficients,
 )
-from acdrive.scenarios.loader import build_setup
-from acdrive.sim.setup import simulate
+from acdrive.scenarios._loader import build_setup
+from acdrive.sim._setup import simulate
 
 W_E = 2 * math.pi * 60.0
 
@@ -261,7 +261,7 @@ def test_cli_map_writes_figure_and_bandwidths(tmp_path, capsys):
 def test_stabilising_threshold_is_a_stability_boundary():
     """The smallest true inertia that stabilises the zero-load line: stable there, unstable
     0.05 J below; the same for an extra rotor resistance unknown to the controller."""
-    from acdrive.analysis.drive_stability import stabilising_thresholds
+    from acdrive.analysis._drive_stability import stabilising_thresholds
 
     speeds = np.linspace(0.0, 2700.0, 4)
     th = {t.name: t for t in stabilising_thresholds(n_speed=4, n_load=3)}

@@ -8,7 +8,7 @@ every part logged at every sample.
 Power scaling. Space vectors use the power-invariant transform of Bodson (1) (``frames.K_3C`` =
 sqrt(2/3)), so the instantaneous power of a three-phase set is p = Re(v conj(i)) with no 3/2
 factor (Bodson (5); checked below on three-phase sets). The DFIM part uses the same scaling:
-from its equations (``machines/dfim_part.py``, Bodson (9), stationary frame)
+from its equations (``machines/_dfim_part.py``, Bodson (9), stationary frame)
 
     dpsi_s/dt = v_s - R_s i_s
     dpsi_r/dt = v_r,applied - R_r i_r + j n_p w psi_r,   psi_s = L_s i_s + M i_r,
@@ -99,16 +99,16 @@ import pytest
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
-from acdrive.control.dfim import EVENT_NAMES
+from acdrive._frames import K_PEAK, abc_to_complex, complex_to_abc
+from acdrive.control._dfim import EVENT_NAMES
 from acdrive.errors import Notice
-from acdrive.frames import K_PEAK, abc_to_complex, complex_to_abc
-from acdrive.machines.dfim import BODSON_DFIM, currents_from_fluxes, electromagnetic_torque
-from acdrive.machines.dfim_part import LOSS_CURRENT_SCALE
-from acdrive.plant.converter import max_voltage_magnitude
-from acdrive.plant.mechanics import load_torque
-from acdrive.scenarios.loader import build_setup
-from acdrive.sim.dfim_drive import DFIMDrive
-from acdrive.sim.outcome import run_scenario
+from acdrive.machines._dfim import BODSON_DFIM, currents_from_fluxes, electromagnetic_torque
+from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
+from acdrive.plant._converter import max_voltage_magnitude
+from acdrive.plant._mechanics import load_torque
+from acdrive.scenarios._loader import build_setup
+from acdrive.sim._dfim_drive import DFIMDrive
+from acdrive.sim._outcome import run_scenario
 
 RPM = math.pi / 30.0  # rad/s per rpm
 #: the summary's tracking rule (``DriveResult.tracking_mask``, documented there): samples within

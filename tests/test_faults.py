@@ -33,24 +33,24 @@ import tomllib
 import numpy as np
 import pytest
 
-from acdrive.analysis.drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive._frames import K_PEAK, complex_to_abc
+from acdrive._jit import STRICT_MATH
+from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
 from acdrive.cli import main
-from acdrive.control.dfim import EVENT_NAMES
+from acdrive.control._dfim import EVENT_NAMES
 from acdrive.errors import InputError
-from acdrive.frames import K_PEAK, complex_to_abc
-from acdrive.jit import STRICT_MATH
-from acdrive.machines.dfim import BODSON_DFIM
-from acdrive.plant.converter import max_voltage_magnitude
-from acdrive.plant.sources import (
+from acdrive.machines._dfim import BODSON_DFIM
+from acdrive.plant._converter import max_voltage_magnitude
+from acdrive.plant._sources import (
     ThreePhaseSource,
     UnbalancedSource,
     source_state_outputs,
     unbalanced_state_outputs,
 )
-from acdrive.scenarios.loader import build_setup, builtin_names, builtin_text
-from acdrive.sim.dfim_drive import DFIMDrive
-from acdrive.sim.outcome import OSCILLATION_FINDING_RPM, run_scenario
-from acdrive.sim.result import LOG_NAMES, RPM_PER_RAD_S
+from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text
+from acdrive.sim._dfim_drive import DFIMDrive
+from acdrive.sim._outcome import OSCILLATION_FINDING_RPM, run_scenario
+from acdrive.sim._result import LOG_NAMES, RPM_PER_RAD_S
 
 ALPHA = np.exp(2j * np.pi / 3)
 #: a decaying mode is down to e^-5 (< 1 %) of its start after five of its time constants

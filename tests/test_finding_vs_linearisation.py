@@ -19,10 +19,10 @@ sensor fallback, a varying supply).
 import numpy as np
 import pytest
 
-from acdrive.analysis.drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
 from acdrive.errors import InputError
-from acdrive.scenarios.loader import load_scenario
-from acdrive.sim.outcome import run_scenario
+from acdrive.scenarios._loader import load_scenario
+from acdrive.sim._outcome import run_scenario
 
 SCENARIOS = ("bodson-ramp", "bodson-ramp-ideal", "bodson-step", "bodson-mixed-steps")
 

@@ -1,4 +1,4 @@
-"""Indirect field-oriented control, speed and position controllers (``acdrive.control.foc``):
+"""Indirect field-oriented control, speed and position controllers (``acdrive.control._foc``):
 the IFOC laws against the steady state of the cage machine part's own equations, the sampled
 kernels step by step, and closed loops in a ``System``."""
 
@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 from scipy.signal import lsim, lti
 
-from acdrive.control.bodson import SpeedEstimator
-from acdrive.control.foc import (
+from acdrive._jit import jit
+from acdrive.control._bodson import SpeedEstimator
+from acdrive.control._foc import (
     CURRENT_LIMIT,
     IFOC_OUTPUTS,
     J_ESTIMATE,
@@ -30,17 +31,16 @@ from acdrive.control.foc import (
     saturated_p_step,
     speed_pi_step,
 )
-from acdrive.control.speed import SpeedReference
-from acdrive.core.parts import SampledPart
-from acdrive.core.signals import Layout, cplx, real
+from acdrive.control._speed import SpeedReference
+from acdrive.core._parts import SampledPart
+from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
-from acdrive.jit import jit
-from acdrive.machines.cage_part import CageInductionMachine, cage_rhs, cage_state_outputs
-from acdrive.machines.induction import DELORENZO_IM, IMParams
-from acdrive.plant.converter import AveragedConverter
-from acdrive.plant.mechanics import Shaft
-from acdrive.plant.sensors import Encoder
-from acdrive.sim.system import System
+from acdrive.machines._cage_part import CageInductionMachine, cage_rhs, cage_state_outputs
+from acdrive.machines._induction import DELORENZO_IM, IMParams
+from acdrive.plant._converter import AveragedConverter
+from acdrive.plant._mechanics import Shaft
+from acdrive.plant._sensors import Encoder
+from acdrive.sim._system import System
 
 T_S = 2e-4  # 5 kHz: the paper's PWM frequency (section VI)
 OUT = {v.name: IFOC_OUTPUTS.slot(v.name) for v in IFOC_OUTPUTS}

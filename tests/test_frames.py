@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive import frames
+from acdrive import _frames as frames
 from acdrive.errors import InputError
 
 angle = st.floats(-20.0, 20.0, allow_nan=False)

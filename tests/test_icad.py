@@ -9,8 +9,8 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis.freqresp import LTI, evaluate_ss, freqresp_ss
-from acdrive.analysis.icad import (
+from acdrive.analysis._freqresp import LTI, evaluate_ss, freqresp_ss
+from acdrive.analysis._icad import (
     analyse,
     controller_for,
     gm_min,
@@ -25,10 +25,10 @@ from acdrive.analysis.icad import (
     structure_conditions,
     worst,
 )
-from acdrive.analysis.plants import Plant2x2, plant_for, plant_from_params, plants_for
+from acdrive.analysis._plants import Plant2x2, plant_for, plant_from_params, plants_for
 from acdrive.errors import InputError
-from acdrive.machines.induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams
-from acdrive.machines.pmsm import PMSG_2MW, PMSGParams
+from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams
+from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
 
 control = pytest.importorskip("control")
 
@@ -381,7 +381,7 @@ def test_channel_gain_margins_agree_with_closed_loop_eigenvalues():
 
 
 def _series(k: LTI, other: LTI):
-    from acdrive.analysis.freqresp import _series as series
+    from acdrive.analysis._freqresp import _series as series
 
     return series((k.A, k.B, k.C, k.D), (other.A, other.B, other.C, other.D))
 
@@ -430,7 +430,7 @@ def test_bad_inputs_raise_input_error():
 
 def test_loop_margins_of_textbook_loops():
     """K/(s(s+1)): PM = 90 - atan(w_c) deg; K/(s(s+1)(s+2)): GM = 6/K at w = sqrt(2)."""
-    from acdrive.analysis.margins import loop_margins
+    from acdrive.analysis._margins import loop_margins
 
     w = np.logspace(-3, 3, 2000)
     K = 4.0

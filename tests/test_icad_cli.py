@@ -5,10 +5,10 @@ import math
 
 import pytest
 
-from acdrive.analysis.icad import analyse, controller_for, gm_min
-from acdrive.analysis.plants import plant_for
+from acdrive.analysis._icad import analyse, controller_for, gm_min
+from acdrive.analysis._plants import plant_for
 from acdrive.cli import main
-from acdrive.machines.induction import DELORENZO_IM
+from acdrive.machines._induction import DELORENZO_IM
 
 KEYS = {
     "conditions",

@@ -13,17 +13,17 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis.design import (
+from acdrive.analysis._design import (
     PAPER_SPECS,
     Specifications,
     check_controller,
     propose_controller,
 )
-from acdrive.analysis.design_models import compare_design_models, design_models, ideal_other_loop
-from acdrive.analysis.freqresp import LTI
-from acdrive.analysis.plants import plant_from_params
+from acdrive.analysis._design_models import compare_design_models, design_models, ideal_other_loop
+from acdrive.analysis._freqresp import LTI
+from acdrive.analysis._plants import plant_from_params
 from acdrive.errors import InputError
-from acdrive.machines.induction import DELORENZO_IM, DELORENZO_IM_13, IMParams
+from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, IMParams
 
 control = pytest.importorskip("control")
 
@@ -267,7 +267,7 @@ def test_reproduce_dispatches_to_the_report_module(monkeypatch, tmp_path, capsys
 
     from acdrive.cli import main
 
-    module = importlib.import_module("acdrive.report.icad_reproduction")
+    module = importlib.import_module("acdrive._report.icad_reproduction")
     calls = []
 
     def fake(out_dir):  # writes the report's two items into the staging folder it is given
@@ -284,10 +284,10 @@ def test_reproduce_dispatches_to_the_report_module(monkeypatch, tmp_path, capsys
 
 
 def test_reproduce_missing_report_is_exit_2(monkeypatch, capsys):
+    from acdrive._commands import reproduce
     from acdrive.cli import main
-    from acdrive.commands import reproduce
 
-    monkeypatch.setitem(reproduce.REPORTS, "bodson", "acdrive.report.no_such_report_module")
+    monkeypatch.setitem(reproduce.REPORTS, "bodson", "acdrive._report.no_such_report_module")
     assert main(["reproduce", "bodson"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "bodson" in err[0]

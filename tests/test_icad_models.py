@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis.freqresp import evaluate_ss
-from acdrive.analysis.plants import (
+from acdrive.analysis._freqresp import evaluate_ss
+from acdrive.analysis._plants import (
     MACHINES,
     Plant2x2,
     as_plant,
@@ -18,8 +18,8 @@ from acdrive.analysis.plants import (
     plants_for,
 )
 from acdrive.errors import InputError
-from acdrive.machines.dfim import BODSON_DFIM, DFIMParams
-from acdrive.machines.induction import (
+from acdrive.machines._dfim import BODSON_DFIM, DFIMParams
+from acdrive.machines._induction import (
     DELORENZO_IM,
     DELORENZO_IM_13,
     UGALDE_IM_300W,
@@ -27,7 +27,7 @@ from acdrive.machines.induction import (
     params_from_stationary_matrix,
     stator_current_ss,
 )
-from acdrive.machines.pmsm import PMSG_2MW, PMSGParams, dq_current_ss
+from acdrive.machines._pmsm import PMSG_2MW, PMSGParams, dq_current_ss
 
 S_POINTS = np.array([0.3j, 7.0 + 40j, 120j, -3.0 + 900j, 5000j, 20.0 - 300j])
 

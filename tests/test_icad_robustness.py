@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.analysis.freqresp import LTI
-from acdrive.analysis.icad import analyse, gm_min
-from acdrive.analysis.plants import plant_from_params
-from acdrive.analysis.robustness import (
+from acdrive.analysis._freqresp import LTI
+from acdrive.analysis._icad import analyse, gm_min
+from acdrive.analysis._plants import plant_from_params
+from acdrive.analysis._robustness import (
     NOMINAL,
     PAPER_PERTURBATION,
     Perturbation,
@@ -20,7 +20,7 @@ from acdrive.analysis.robustness import (
     speed_sweep,
 )
 from acdrive.errors import InputError
-from acdrive.machines.induction import DELORENZO_IM, DELORENZO_IM_13
+from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13
 
 SPEEDS = np.array([0.0, 187.5, 375.0])
 

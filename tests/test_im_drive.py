@@ -20,14 +20,14 @@ import numpy as np
 import pytest
 from scipy.signal import lsim, lti
 
-from acdrive.analysis.plants import plant_from_params
+from acdrive._frames import complex_to_abc
+from acdrive._report.im_outputs import closed_loop_reference_ss, linear_step_response
+from acdrive.analysis._plants import plant_from_params
 from acdrive.cli import main
 from acdrive.errors import InputError, SimulationDiverged
-from acdrive.frames import complex_to_abc
-from acdrive.report.im_outputs import closed_loop_reference_ss, linear_step_response
-from acdrive.scenarios.im_loader import build_im_setup
-from acdrive.scenarios.loader import builtin_names, builtin_text, load_scenario
-from acdrive.sim.im_drive import (
+from acdrive.scenarios._im_loader import build_im_setup
+from acdrive.scenarios._loader import builtin_names, builtin_text, load_scenario
+from acdrive.sim._im_drive import (
     IMDrive,
     IMDriveResult,
     IMDriveSetup,
@@ -339,7 +339,7 @@ def test_step_responses_match_the_linear_loops_without_the_pwm_hold():
 
 
 def test_step_summary_and_the_papers_ordering(tmp_path, outcomes):
-    from acdrive.report.im_outputs import write_im_outcome
+    from acdrive._report.im_outputs import write_im_outcome
 
     outcome = outcomes["im-step-responses"]
     summary = write_im_outcome(outcome, tmp_path, figures=False)

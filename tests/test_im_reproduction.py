@@ -1,4 +1,4 @@
-"""The IM time-domain reproduction report (``acdrive.report.im_reproduction``): its verdicts are
+"""The IM time-domain reproduction report (``acdrive._report.im_reproduction``): its verdicts are
 computed from its numbers against its tolerances, and it prints the numbers it returns."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from acdrive.analysis.coupling import measure_coupling
-from acdrive.report import im_reproduction as rep
-from acdrive.report.markdown import fmt
+from acdrive._report import im_reproduction as rep
+from acdrive._report.markdown import fmt
+from acdrive.analysis._coupling import measure_coupling
 
 
 @pytest.fixture(scope="module")

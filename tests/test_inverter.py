@@ -1,4 +1,4 @@
-"""The two-level SVPWM inverter (plant/inverter.py) against physics and analytic results: the
+"""The two-level SVPWM inverter (plant/_inverter.py) against physics and analytic results: the
 volt-second balance, the exact switching instants of centred space-vector PWM, the overmodulation
 limit shared with the averaged converter, the mean error of dead time and device drops, and an
 RL load driven through a compiled system against the exact solution of its linear ODE over the
@@ -11,15 +11,15 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
-from acdrive.control.open_loop import VoltageProgram
-from acdrive.core.parts import ContinuousPart
-from acdrive.core.signals import Layout, cplx, real
+from acdrive._jit import jit_fast
+from acdrive.control._open_loop import VoltageProgram
+from acdrive.core._parts import ContinuousPart
+from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
-from acdrive.jit import jit_fast
-from acdrive.plant.converter import AVERAGED_OUTPUTS, AveragedConverter, averaged_segments
-from acdrive.plant.inverter import INPUTS, OUTPUTS, Inverter, inverter_segments
-from acdrive.plant.sources import DCSource
-from acdrive.sim.system import System
+from acdrive.plant._converter import AVERAGED_OUTPUTS, AveragedConverter, averaged_segments
+from acdrive.plant._inverter import INPUTS, OUTPUTS, Inverter, inverter_segments
+from acdrive.plant._sources import DCSource
+from acdrive.sim._system import System
 
 V_DC = 310.0
 F_PWM = 5000.0

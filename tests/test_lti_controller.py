@@ -10,17 +10,17 @@ import pytest
 import scipy.linalg
 import scipy.signal
 
-from acdrive.analysis.freqresp import LTI as ANALYSIS_LTI
-from acdrive.analysis.icad import analyse, controller_for
-from acdrive.analysis.plants import plant_from_params
-from acdrive.control.current import (
+from acdrive.analysis._freqresp import LTI as ANALYSIS_LTI
+from acdrive.analysis._icad import analyse, controller_for
+from acdrive.analysis._plants import plant_from_params
+from acdrive.control._current import (
     EVENT_PERIOD_MISMATCH,
     EVENT_SATURATED,
     CurrentProgram,
     StationaryCurrentController,
     current_controller_step,
 )
-from acdrive.control.lti import (
+from acdrive.control._lti import (
     BUILTIN,
     FIG17_K_I,
     FIG17_K_P,
@@ -36,11 +36,11 @@ from acdrive.control.lti import (
     tustin_constant,
 )
 from acdrive.errors import InputError
-from acdrive.machines.cage_part import CageInductionMachine
-from acdrive.machines.induction import DELORENZO_IM_13
-from acdrive.plant.converter import AveragedConverter, max_voltage_magnitude
-from acdrive.plant.mechanics import PrescribedSpeed
-from acdrive.sim.system import System
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._induction import DELORENZO_IM_13
+from acdrive.plant._converter import AveragedConverter, max_voltage_magnitude
+from acdrive.plant._mechanics import PrescribedSpeed
+from acdrive.sim._system import System
 
 #: The paper's DC source (sec. VI): 310 V, so |v| <= 310 / sqrt(2) V (linear SVPWM).
 V_DC = 310.0
@@ -215,7 +215,7 @@ def test_transfer_function_constructor():
 
 
 def test_builtin_controllers_are_the_papers_and_the_icad_ones():
-    from acdrive.report import icad_targets as targets
+    from acdrive._report import icad_targets as targets
 
     w = np.geomspace(1.0, 1e5, 40)
     num, den = tf_of_20()
@@ -239,7 +239,7 @@ def test_builtin_controllers_are_the_papers_and_the_icad_ones():
 
 def test_fig17_family_gains_solve_the_crossover_of_20():
     """The stored K_P give c_i the crossover of (20) at w_r = 375 (sec. VII), as re-solved."""
-    from acdrive.report.icad.pi_comparison import _pi_kp_for_crossover
+    from acdrive._report.icad.pi_comparison import _pi_kp_for_crossover
 
     plant = plant_from_params(DELORENZO_IM_13, W_R)
     wc20 = analyse(plant, PAPER_20, PAPER_20, verify=False).channels[0].margins.crossover_rad_s
@@ -545,3 +545,28 @@ def test_invalid_input_names_the_field():
     part = StationaryCurrentController("cc", PAPER_PI, 1e-4)
     with pytest.raises(InputError, match=r"^cc\.controller: has order 6; .* keep order 2"):
         part.with_params(controller=PAPER_20)
+
+
+def test_the_serial_modal_sum_has_its_own_cache_entry_and_the_same_result():
+    """The threaded and the single-model modal sums are compiled from one loop; each must cache
+    under its own name (numba's cache key ignores ``parallel``), and both give the same sums."""
+    from acdrive.control._lti import _modal_sum, _modal_sum_one
+
+    assert _modal_sum_one.targetoptions.get("parallel") is None
+    assert _modal_sum.targetoptions.get("parallel") is True
+    assert (
+        _modal_sum._cache._cache_file._index_name != _modal_sum_one._cache._cache_file._index_name
+    )
+    rng = np.random.default_rng(7)
+    s = 1j * np.geomspace(1.0, 1e4, 40)
+    lam = (-rng.uniform(1, 100, (1, 3)) + 1j * rng.uniform(-50, 50, (1, 3))).astype(complex)
+    R = (rng.normal(size=(1, 3, 4)) + 1j * rng.normal(size=(1, 3, 4))).astype(complex)
+    D = rng.normal(size=(1, 4)).astype(complex)
+    expected = D[0][None, :] + np.sum(
+        R[0][None, :, :] / (s[:, None, None] - lam[0][None, :, None]), axis=1
+    )
+    for kernel in (_modal_sum, _modal_sum_one):
+        out = np.empty((1, s.size, 4), complex)
+        lost = np.zeros((1, s.size), dtype=np.bool_)
+        kernel(s, lam, R, D, 1e6, out, lost)
+        np.testing.assert_allclose(out[0], expected, rtol=1e-12)

@@ -1,4 +1,4 @@
-"""The shaft (``plant/mechanics.py``): the eddy-current brake, friction, and the cage IM on it.
+"""The shaft (``plant/_mechanics.py``): the eddy-current brake, friction, and the cage IM on it.
 
 The runs use the cage-IM wiring of ``tests/test_system.py`` (same part names, same generated
 loop, compiled once). A de-energised cage motor (no voltage, no flux) exerts exactly zero torque,
@@ -8,16 +8,16 @@ so its shaft coasts freely: J dw/dt = -(B + k_b) w, w = w(0) exp(-(B + k_b) t / 
 import numpy as np
 import pytest
 
-from acdrive.control.open_loop import VoltageProgram
+from acdrive.control._open_loop import VoltageProgram
 from acdrive.errors import InputError
-from acdrive.machines import registry
-from acdrive.machines.cage_part import CageInductionMachine
-from acdrive.machines.induction import UGALDE_IM_300W, IMParams
-from acdrive.machines.pmsm_part import PermanentMagnetMachine
-from acdrive.plant.converter import AveragedConverter
-from acdrive.plant.mechanics import Shaft
-from acdrive.sim.reference import simulate_reference
-from acdrive.sim.system import System
+from acdrive.machines import _registry as registry
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._induction import UGALDE_IM_300W, IMParams
+from acdrive.machines._pmsm_part import PermanentMagnetMachine
+from acdrive.plant._converter import AveragedConverter
+from acdrive.plant._mechanics import Shaft
+from acdrive.sim._reference import simulate_reference
+from acdrive.sim._system import System
 
 
 def cage_drive(machine, shaft, V_pk=100.0, f=50.0, V_dc=310.0):

@@ -108,7 +108,7 @@ def test_icad_refuses_a_bad_out_before_any_analysis(tmp_path, case):
 def test_icad_default_folder_is_icad_machine(tmp_path, monkeypatch):
     from pathlib import Path
 
-    from acdrive.commands.icad import _figure_folder
+    from acdrive._commands.icad import _figure_folder
 
     monkeypatch.chdir(tmp_path)
     with _figure_folder(None, "pmsg-2mw") as output:
@@ -203,7 +203,7 @@ DRIVER = textwrap.dedent(
     """
     import os, sys, time
     from pathlib import Path
-    import acdrive.report.icad_reproduction as module
+    import acdrive._report.icad_reproduction as module
     from acdrive.cli import main
 
     def fake(out_dir):
@@ -333,8 +333,8 @@ def test_reproduce_refuses_a_bad_out_before_computing(tmp_path, case):
 
 
 def test_a_failed_swap_puts_the_old_entries_back(tmp_path, monkeypatch):
-    from acdrive import output as output_module
-    from acdrive.output import FILE, FOLDER, OutputEntries
+    from acdrive import _output as output_module
+    from acdrive._output import FILE, FOLDER, OutputEntries
 
     out = tmp_path / "out"
     _old_reports(out)
@@ -360,8 +360,8 @@ def test_a_failed_swap_puts_the_old_entries_back(tmp_path, monkeypatch):
 
 
 def test_entry_names_are_one_safe_component(tmp_path):
+    from acdrive._output import FILE, OutputEntries
     from acdrive.errors import InputError
-    from acdrive.output import FILE, OutputEntries
 
     for name in ("../x.md", ".hidden", "a/b", ""):
         with pytest.raises(InputError, match="paper"):
@@ -370,7 +370,7 @@ def test_entry_names_are_one_safe_component(tmp_path):
 
 
 def test_folders_created_for_out_are_removed_when_nothing_is_published(tmp_path):
-    from acdrive.output import FILE, OutputEntries, OutputFolder
+    from acdrive._output import FILE, OutputEntries, OutputFolder
 
     (tmp_path / "keep").mkdir()
     for make in (

@@ -19,16 +19,16 @@ import pytest
 
 from acdrive.cli import main
 from acdrive.errors import InputError, Notice
-from acdrive.plant.converter import max_voltage_magnitude
-from acdrive.scenarios.loader import (
+from acdrive.plant._converter import max_voltage_magnitude
+from acdrive.scenarios._loader import (
     build_setup,
     builtin_names,
     builtin_text,
     fastest_mode,
     load_scenario,
 )
-from acdrive.sim.setup import RK4_STEP_LIMIT, ConverterLosses, fastest_electrical_rate
-from acdrive.sim.system import MAX_SUBSTEPS
+from acdrive.sim._setup import RK4_STEP_LIMIT, ConverterLosses, fastest_electrical_rate
+from acdrive.sim._system import MAX_SUBSTEPS
 
 V_DC = 30.0  # the built-ins' DC link
 #: the largest phase loss V_dc t_d f_sw + V_drop whose fundamental the 30 V link can supply

@@ -1,4 +1,4 @@
-"""The PMSM/PMSG part (``machines/pmsm_part.py``, Ugalde-Loo et al. (7)-(8)).
+"""The PMSM/PMSG part (``machines/_pmsm_part.py``, Ugalde-Loo et al. (7)-(8)).
 
 * its linearised current subsystem at a fixed speed is ``machines.pmsm.dq_current_ss`` (9)-(11);
 * its currents agree with a Radau solution of (7) written here in the paper's own variables
@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson, solve_ivp
 
-from acdrive.control.open_loop import ComplexProgram
+from acdrive._frames import K_PEAK, complex_to_abc
+from acdrive.control._open_loop import ComplexProgram
 from acdrive.errors import InputError
-from acdrive.frames import K_PEAK, complex_to_abc
-from acdrive.machines.pmsm import PMSG_2MW, PMSGParams, dq_current_ss
-from acdrive.machines.pmsm_part import PermanentMagnetMachine
-from acdrive.plant.mechanics import PrescribedSpeed, Shaft, brake_torque, load_torque
-from acdrive.sim.system import System
+from acdrive.machines._pmsm import PMSG_2MW, PMSGParams, dq_current_ss
+from acdrive.machines._pmsm_part import PermanentMagnetMachine
+from acdrive.plant._mechanics import PrescribedSpeed, Shaft, brake_torque, load_torque
+from acdrive.sim._system import System
 
 #: generator speed of PMSG_2MW at its rated 50 Hz (n_P = 2) [rad/s]
 W_RATED = 2.0 * math.pi * 50.0 / PMSG_2MW.n_p

@@ -14,6 +14,8 @@ PACKAGES = (
     "acdrive.analysis",
     "acdrive.sim",
     "acdrive.scenarios",
+    "acdrive.core",
+    "acdrive.sweep",
 )
 
 
@@ -31,12 +33,12 @@ def test_every_public_name_resolves_and_is_listed(package):
 
 def test_public_names_are_the_defining_modules_objects():
     from acdrive.analysis import analyse
-    from acdrive.analysis.icad import analyse as analyse_def
+    from acdrive.analysis._icad import analyse as analyse_def
     from acdrive.control import LTI, PAPER_20
-    from acdrive.control.lti import LTI as LTI_def
-    from acdrive.control.lti import PAPER_20 as PAPER_20_def
+    from acdrive.control._lti import LTI as LTI_def
+    from acdrive.control._lti import PAPER_20 as PAPER_20_def
     from acdrive.machines import BODSON_DFIM
-    from acdrive.machines.dfim import BODSON_DFIM as BODSON_def
+    from acdrive.machines._dfim import BODSON_DFIM as BODSON_def
 
     assert analyse is analyse_def and LTI is LTI_def and PAPER_20 is PAPER_20_def
     assert BODSON_DFIM is BODSON_def
@@ -55,3 +57,30 @@ def test_importing_the_namespaces_does_not_import_numba():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
     )
     assert out.stdout.strip() == "False"
+
+
+#: the modules a user imports; every other module has a name component starting with "_"
+PUBLIC_MODULES = {"acdrive", *PACKAGES, "acdrive.batch", "acdrive.cli", "acdrive.columns",
+                  "acdrive.errors"}  # fmt: skip
+
+
+def test_every_other_module_is_private_by_name():
+    import pkgutil
+
+    import acdrive
+
+    found = {"acdrive"}
+    for info in pkgutil.walk_packages(acdrive.__path__, "acdrive."):
+        found.add(info.name)
+        if info.name not in PUBLIC_MODULES:
+            private = any(p.startswith("_") for p in info.name.split(".")[1:])
+            assert private, f"{info.name} is neither a public module nor private by name"
+    assert found >= PUBLIC_MODULES  # every listed public module exists
+
+
+@pytest.mark.parametrize("module_name", ["acdrive.batch", "acdrive.columns", "acdrive.errors"])
+def test_the_flat_public_modules_export_what_they_list(module_name):
+    module = importlib.import_module(module_name)
+    assert module.__all__
+    for name in module.__all__:
+        assert getattr(module, name) is not None

@@ -26,7 +26,7 @@ def test_parts_example_runs_and_the_shorted_dfim_runs_up_to_synchronous_speed():
     # a shorted-rotor DFIM is a cage motor: it runs up to just below synchronous speed, no load
     assert 0.99 * synchronous < w[-1] < synchronous
     # near synchronous speed the rotor carries almost nothing: i_s = v_s / (R_s + j w_e L_s) (19)
-    from acdrive.machines.dfim import BODSON_DFIM as p
+    from acdrive.machines import BODSON_DFIM as p
 
     no_load = math.sqrt(1.5) * 11.1 / abs(p.R_s + 1j * 2 * math.pi * 60.0 * p.L_s)
     i_s = np.abs(result.signal(dfim.out.i_s))
@@ -39,10 +39,10 @@ def test_scenario_example_runs_every_mode_and_saves_into_new_folders(tmp_path, m
     folder (the scenario is shortened here; the code is the README's)."""
     import dataclasses
 
-    from acdrive.scenarios import loader
+    from acdrive.scenarios import _loader as loader
 
     text = README.read_text()
-    code = re.search(r"```python\n(from acdrive.scenarios.loader.*?)```", text, re.DOTALL).group(1)
+    code = re.search(r"```python\n(from acdrive.scenarios import.*?)```", text, re.DOTALL).group(1)
     original = loader.load_scenario
     monkeypatch.setattr(
         loader, "load_scenario", lambda name: dataclasses.replace(original(name), duration=0.2)

@@ -10,15 +10,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from acdrive.report import bodson_reproduction as B
-from acdrive.report import converter_effect as C
-from acdrive.report import verdicts as V
-from acdrive.report.icad.delorenzo import gm_min_note
-from acdrive.report.icad.design_models import MODEL_GAIN_TOL_DB, design_model_verdict
-from acdrive.report.icad.pi_comparison import pi_family_trend
+from acdrive._report import bodson_reproduction as B
+from acdrive._report import converter_effect as C
+from acdrive._report import verdicts as V
+from acdrive._report.icad.delorenzo import gm_min_note
+from acdrive._report.icad.design_models import MODEL_GAIN_TOL_DB, design_model_verdict
+from acdrive._report.icad.pi_comparison import pi_family_trend
 
 # ---------------------------------------------------------------------------------------------
-# generic helpers (acdrive.report.verdicts)
+# generic helpers (acdrive._report.verdicts)
 
 
 def test_within_abs_flips_at_the_tolerance_and_states_it():
@@ -198,7 +198,7 @@ def test_transient_and_oscillation_verdicts_flip():
 
 
 # ---------------------------------------------------------------------------------------------
-# bench converter side effect (acdrive.report.converter_effect)
+# bench converter side effect (acdrive._report.converter_effect)
 
 
 def _effect(q_s=0.0, tau_com=0.01, tau_e=0.01, oscillation=0.0):
@@ -292,9 +292,9 @@ def test_measure_averages_the_steady_part_only():
 
 
 def test_summary_json_states_the_side_effect_only_with_a_bench_converter(tmp_path):
-    from acdrive.report.drive_outputs import write_outcome
-    from acdrive.scenarios.loader import load_scenario
-    from acdrive.sim.outcome import run_scenario
+    from acdrive._report.drive_outputs import write_outcome
+    from acdrive.scenarios._loader import load_scenario
+    from acdrive.sim._outcome import run_scenario
 
     text = """
 name = "short"

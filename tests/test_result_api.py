@@ -11,9 +11,9 @@ import pytest
 
 matplotlib.use("Agg")
 
-from acdrive.scenarios.loader import load_scenario
-from acdrive.sim.im_drive import IMDrive
-from acdrive.sim.setup import simulate
+from acdrive.scenarios._loader import load_scenario
+from acdrive.sim._im_drive import IMDrive
+from acdrive.sim._setup import simulate
 
 
 @pytest.fixture(scope="module")
@@ -65,12 +65,12 @@ def test_im_repr_and_plot(im_result):
 
 @pytest.fixture(scope="module")
 def system_result():
-    from acdrive.control.open_loop import VoltageProgram
-    from acdrive.machines.cage_part import CageInductionMachine
-    from acdrive.machines.induction import UGALDE_IM_300W
-    from acdrive.plant.converter import AveragedConverter
-    from acdrive.plant.mechanics import PrescribedSpeed
-    from acdrive.sim.system import System
+    from acdrive.control._open_loop import VoltageProgram
+    from acdrive.machines._cage_part import CageInductionMachine
+    from acdrive.machines._induction import UGALDE_IM_300W
+    from acdrive.plant._converter import AveragedConverter
+    from acdrive.plant._mechanics import PrescribedSpeed
+    from acdrive.sim._system import System
 
     im = CageInductionMachine.from_params("im", UGALDE_IM_300W)
     shaft = PrescribedSpeed("shaft", w=0.0)

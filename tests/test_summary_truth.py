@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.scenarios.loader import build_setup
-from acdrive.sim.outcome import run_scenario
-from acdrive.sim.result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
+from acdrive.scenarios._loader import build_setup
+from acdrive.sim._outcome import run_scenario
+from acdrive.sim._result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
 
 
 def synthetic(t, w_ref, w, i_r_pk=None):

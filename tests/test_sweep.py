@@ -16,9 +16,9 @@ import pandas as pd
 import pytest
 
 from acdrive.cli import main
-from acdrive.sweep import variants as V
-from acdrive.sweep.engine import read_table, run_sweep
-from acdrive.sweep.spec import build_spec, load_sweep
+from acdrive.sweep import _variants as V
+from acdrive.sweep._engine import read_table, run_sweep
+from acdrive.sweep._spec import build_spec, load_sweep
 
 TINY = """
 name = "tiny"

@@ -6,19 +6,19 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.control.open_loop import ComplexProgram, VoltageProgram
-from acdrive.core.signals import Layout, real
+from acdrive.control._open_loop import ComplexProgram, VoltageProgram
+from acdrive.core._signals import Layout, real
 from acdrive.errors import InputError
-from acdrive.machines.cage_part import CageInductionMachine
-from acdrive.machines.dfim import BODSON_DFIM, machine_vector, steady_state_currents
-from acdrive.machines.dfim_part import DoublyFedMachine
-from acdrive.machines.induction import DELORENZO_IM, UGALDE_IM_300W
-from acdrive.plant.converter import AveragedConverter
-from acdrive.plant.mechanics import PrescribedSpeed, Shaft
-from acdrive.plant.network import RelayCommand
-from acdrive.plant.sources import ThreePhaseSource
-from acdrive.sim.reference import simulate_reference
-from acdrive.sim.system import System
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._dfim import BODSON_DFIM, machine_vector, steady_state_currents
+from acdrive.machines._dfim_part import DoublyFedMachine
+from acdrive.machines._induction import DELORENZO_IM, UGALDE_IM_300W
+from acdrive.plant._converter import AveragedConverter
+from acdrive.plant._mechanics import PrescribedSpeed, Shaft
+from acdrive.plant._network import RelayCommand
+from acdrive.plant._sources import ThreePhaseSource
+from acdrive.sim._reference import simulate_reference
+from acdrive.sim._system import System
 
 SQRT_3_2 = math.sqrt(1.5)
 
@@ -187,8 +187,8 @@ def test_a_diverging_system_stops_with_the_time_and_the_state():
 # --- cache keys ---------------------------------------------------------------------------------
 _USER_PART = """
 from numba import njit
-from acdrive.core.parts import ContinuousPart
-from acdrive.core.signals import Layout, real
+from acdrive.core._parts import ContinuousPart
+from acdrive.core._signals import Layout, real
 
 @njit
 def level_outputs(t, x, p, y):

@@ -6,12 +6,12 @@ import time
 
 import numpy as np
 
+from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.errors import SimulationDiverged
-from acdrive.frames import K_PEAK as SQRT_3_2
-from acdrive.machines.dfim import machine_vector
-from acdrive.plant.converter import max_voltage_magnitude
-from acdrive.sim.result import DriveResult
-from acdrive.sim.setup import DriveSetup, MotorSetup, Supply, divergence_hint
+from acdrive.machines._dfim import machine_vector
+from acdrive.plant._converter import max_voltage_magnitude
+from acdrive.sim import DriveResult
+from acdrive.sim._setup import DriveSetup, MotorSetup, Supply, divergence_hint
 
 from . import controller as ctl
 from . import engine

@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive.control.speed import speed_pi
-from acdrive.jit import jit
-from acdrive.machines.dfim import (
+from acdrive._jit import jit
+from acdrive.control._speed import speed_pi
+from acdrive.machines._dfim import (
     L_S,
     M_SR,
     N_P,

@@ -31,8 +31,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive.jit import jit_fast
-from acdrive.machines.dfim import (
+from acdrive._jit import jit_fast
+from acdrive.machines._dfim import (
     B_VISCOUS,
     J_INERTIA,
     L_R,
@@ -55,9 +55,9 @@ PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA, ROT_RE, ROT_IM = range(STA
 THETA_G, SUP_RE, SUP_IM = range(3)
 #: speed scale of the smooth Coulomb friction tau_c tanh(w / W_COULOMB) [rad/s]
 W_COULOMB = 0.5
-from acdrive.frames import K_PEAK as SQRT_3_2  # Bodson (8)
+from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8)
 
-# per-motor plant data: the machine vector (acdrive.machines.dfim) followed by the converter's
+# per-motor plant data: the machine vector (acdrive.machines._dfim) followed by the converter's
 # fundamental voltage loss against the rotor current [V, space-vector magnitude]
 CONVERTER_LOSS = N_MACHINE_PARAMS
 N_MOTOR_DATA = N_MACHINE_PARAMS + 1

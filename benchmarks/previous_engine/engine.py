@@ -13,14 +13,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from acdrive.frames import complex_to_abc_nb
-from acdrive.jit import jit, jit_fast
-from acdrive.machines.dfim import electromagnetic_torque
-from acdrive.plant.converter import converter_output
-from acdrive.plant.sensors import encoder_angle
+from acdrive._frames import complex_to_abc_nb
+from acdrive._jit import jit, jit_fast
+from acdrive.machines._dfim import electromagnetic_torque
+from acdrive.plant._converter import converter_output
+from acdrive.plant._sensors import encoder_angle
 
 # fmt: off
-from acdrive.sim.result import N_LOG
+from acdrive.sim._result import N_LOG
 
 from .controller import (
     CS_I_R_COM,

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive.jit import jit
+from acdrive._jit import jit
 
 
 @jit

@@ -30,7 +30,7 @@ def _configure_numba_cache() -> None:
     for path in sorted(package.rglob("*.py")):
         digest.update(path.relative_to(package).as_posix().encode())
         digest.update(path.read_bytes())
-    if os.environ.get("ACDRIVE_STRICT_MATH") == "1":  # see acdrive.jit.STRICT_MATH
+    if os.environ.get("ACDRIVE_STRICT_MATH") == "1":  # see acdrive._jit.STRICT_MATH
         digest.update(b"strict math")
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     folder = base / "acdrive" / f"numba-{digest.hexdigest()[:16]}"

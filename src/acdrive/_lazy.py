@@ -1,7 +1,7 @@
 """Lazy public namespaces for acdrive's subpackages (PEP 562).
 
 A subpackage's ``__init__`` lists its public names and the module each lives in; the module is
-imported on first access of the name. Importing ``acdrive.machines.dfim`` therefore does not
+imported on first access of the name. Importing ``acdrive.machines._dfim`` therefore does not
 import every other machine module (nor numba), the import order between subpackages cannot form a
 cycle, and ``from acdrive.machines import DFIMParams`` works as users expect.
 """

@@ -50,13 +50,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from acdrive.core.parts import SampledPart
-from acdrive.core.signals import Layout, cplx, real
+from acdrive._jit import jit
+from acdrive.core._parts import SampledPart
+from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
-from acdrive.jit import jit
-from acdrive.sim.outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
-from acdrive.sim.result import OSCILLATION_BAND_HZ
-from acdrive.sim.system import STATUS_OK, System
+from acdrive.sim._outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
+from acdrive.sim._result import OSCILLATION_BAND_HZ
+from acdrive.sim._system import STATUS_OK, System
 
 __all__ = [
     "BatchResult",
@@ -95,18 +95,27 @@ _inline = njit(cache=True, error_model="numpy", inline="always")
 
 
 @_inline
-def _reduced_value(u, p):
-    """The quantity a reducer reads: signal minus reference (if any); for a space vector the
-    magnitude of that difference."""
-    if p[_CPLX] > 0.5:
-        re, im = u[0], u[1]
-        if p[_REF] > 0.5:
-            re -= u[2]
-            im -= u[3]
+def _difference(u, at, ref_at, is_space_vector):
+    """The quantity every reducer reads: the signal at input slot ``at`` minus the reference at
+    ``ref_at`` (none if negative); for a space vector (two slots each) the magnitude of that
+    difference. Signed for a real signal."""
+    if is_space_vector:
+        re, im = u[at], u[at + 1]
+        if ref_at >= 0:
+            re -= u[ref_at]
+            im -= u[ref_at + 1]
         return math.sqrt(re * re + im * im)
-    if p[_REF] > 0.5:
-        return u[0] - u[1]
-    return u[0]
+    if ref_at >= 0:
+        return u[at] - u[ref_at]
+    return u[at]
+
+
+@_inline
+def _reduced_value(u, p):
+    """The signal a one-signal reducer part reads: its input ``x`` minus its input ``ref``."""
+    is_space_vector = p[_CPLX] > 0.5
+    ref_at = (2 if is_space_vector else 1) if p[_REF] > 0.5 else -1
+    return _difference(u, 0, ref_at, is_space_vector)
 
 
 #: every peak / mean / rms / exceed / final metric of a system is served by one "stats" part
@@ -138,17 +147,7 @@ def stats_step(t, T_s, u, p, s, y):
     for c in range(int(p[0])):
         q = 1 + _NP * c
         if p[q] <= t <= p[q + 1]:
-            o, r = int(p[q + 4]), int(p[q + 5])
-            if p[q + 3] > 0.5:
-                re, im = u[o], u[o + 1]
-                if r >= 0:
-                    re -= u[r]
-                    im -= u[r + 1]
-                v = math.sqrt(re * re + im * im)
-            else:
-                v = u[o]
-                if r >= 0:
-                    v -= u[r]
+            v = _difference(u, int(p[q + 4]), int(p[q + 5]), p[q + 3] > 0.5)
             a = abs(v)
             k = _NS * c
             s[k] += 1.0
@@ -415,7 +414,7 @@ _PARAMS_FIELDS = {
 def _expand_machine(table: dict, root: dict, path: str) -> None:
     """Replace ``machine = "<built-in>"`` in ``table`` by its ``params`` (the required fields of
     its parameter class), so one of them can be changed."""
-    from acdrive.machines import registry
+    from acdrive.machines import _registry as registry
 
     if "params" in table:
         return
@@ -496,7 +495,7 @@ def _split(overrides: dict) -> tuple[dict, dict, dict]:
 
 def _base_data(base):
     """(parsed scenario dict or None, setup or None) of ``base``."""
-    from acdrive.scenarios.loader import read_scenario
+    from acdrive.scenarios._loader import read_scenario
 
     if isinstance(base, dict):
         return copy.deepcopy(base), None
@@ -509,19 +508,19 @@ def _base_data(base):
 
 def build_variant_setup(data: dict):
     """The setup of a parsed scenario (DFIM or cage IM), validated by the scenario loaders."""
-    from acdrive.scenarios.loader import build_setup
+    from acdrive.scenarios._loader import build_setup
 
     if "drive" in data:
         if data["drive"] != "cage-im":
             raise InputError("drive", 'must be "cage-im" (omit it for a DFIM scenario)')
-        from acdrive.scenarios.im_loader import build_im_setup
+        from acdrive.scenarios._im_loader import build_im_setup
 
         return build_im_setup(data)
     return build_setup(data)
 
 
 def _drive_of(setup):
-    from acdrive.sim.im_drive import IMDrive, IMDriveSetup
+    from acdrive.sim._im_drive import IMDrive, IMDriveSetup
 
     if isinstance(setup, IMDriveSetup):
         if setup.runs() and len(setup.runs()) > 1:
@@ -529,7 +528,7 @@ def _drive_of(setup):
         return IMDrive(setup)
     if setup.compare_modes:
         raise InputError("compare_modes", "a batch runs one mode per variant: no comparisons")
-    from acdrive.sim.dfim_drive import DFIMDrive
+    from acdrive.sim._dfim_drive import DFIMDrive
 
     return DFIMDrive(setup)
 
@@ -563,7 +562,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
     signal, reference and window share one channel of the one "stats" part (at most one exceed
     limit per channel); each oscillation has its own part.
     ``replaced[name]`` is a re-parametrised copy of part ``name`` used in its place."""
-    from acdrive.core.parts import Port
+    from acdrive.core._parts import Port
 
     base = drive.system
     replaced = replaced or {}

@@ -1,6 +1,6 @@
 """The ``acdrive`` command.
 
-Each subcommand lives in ``acdrive.commands.<name>`` and exposes ``register(subparsers)``,
+Each subcommand lives in ``acdrive._commands.<name>`` and exposes ``register(subparsers)``,
 which adds its parser and sets ``handler`` (a function of the parsed namespace returning an
 exit code). Invalid input anywhere (``InputError`` / ``ValueError`` raised while validating)
 becomes one line on stderr and exit code 2, never a traceback.
@@ -17,8 +17,8 @@ import sys
 import warnings
 
 from acdrive import __version__
+from acdrive._progress import ACTIVE_BARS
 from acdrive.errors import InputError, Notice, SimulationDiverged, call_interruptible
-from acdrive.progress import ACTIVE_BARS
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
 
@@ -61,8 +61,8 @@ class _OneLineParser(argparse.ArgumentParser):
 
 
 def _exists(name: str) -> bool:
-    """Whether ``acdrive.commands.<name>`` exists (found without importing it)."""
-    return importlib.util.find_spec(f"acdrive.commands.{name}") is not None
+    """Whether ``acdrive._commands.<name>`` exists (found without importing it)."""
+    return importlib.util.find_spec(f"acdrive._commands.{name}") is not None
 
 
 def chosen_command(argv: list[str]) -> str | None:
@@ -87,7 +87,7 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
         if not _exists(name):
             continue  # subcommand not built yet
         if argv is None or name == chosen:
-            importlib.import_module(f"acdrive.commands.{name}").register(sub)
+            importlib.import_module(f"acdrive._commands.{name}").register(sub)
         else:
             sub.add_parser(name, help=help_line)
     return parser

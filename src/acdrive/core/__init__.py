@@ -1,1 +1,23 @@
-"""Foundations shared by every layer: signal declarations and compiled table lookup."""
+"""Building blocks of a part: declared quantities (``real``, ``cplx``, ``table`` in a
+``Layout``), the part kinds a system is made of (``ContinuousPart``, ``SampledPart``,
+``Modulator``) with their ports, and the compiled profile lookup a kernel uses (``table_at``)."""
+
+from acdrive._lazy import namespace
+
+__all__, __getattr__, __dir__ = namespace(
+    __name__,
+    {
+        "Var": "._signals",
+        "Layout": "._signals",
+        "real": "._signals",
+        "cplx": "._signals",
+        "table": "._signals",
+        "Part": "._parts",
+        "ContinuousPart": "._parts",
+        "SampledPart": "._parts",
+        "Modulator": "._parts",
+        "Port": "._parts",
+        "table_at": "._tables",
+        "table_offset": "._tables",
+    },
+)

@@ -5,9 +5,9 @@ from acdrive._lazy import namespace
 __all__, __getattr__, __dir__ = namespace(
     __name__,
     {
-        "load_scenario": ".loader",
-        "build_setup": ".loader",
-        "builtin_names": ".files",
-        "read_scenario": ".files",
+        "load_scenario": "._loader",
+        "build_setup": "._loader",
+        "builtin_names": "._files",
+        "read_scenario": "._files",
     },
 )

@@ -6,3 +6,18 @@ each atomically, resumes after an interruption and refuses a sweep too large for
 ``report`` writes the markdown report and its figures. The simulation itself is
 ``acdrive.batch.simulate_batch``.
 """
+
+from acdrive._lazy import namespace
+
+__all__, __getattr__, __dir__ = namespace(
+    __name__,
+    {
+        "SweepSpec": "._spec",
+        "load_sweep": "._spec",
+        "builtin_sweeps": "._spec",
+        "estimate": "._engine",
+        "run_sweep": "._engine",
+        "read_table": "._engine",
+        "write_report": "._report",
+    },
+)

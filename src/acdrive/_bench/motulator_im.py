@@ -1,0 +1,583 @@
+"""The matched cage-induction-motor cases against motulator 0.18: averaged converter and PWM.
+
+The case is motulator's 2.2 kW speed drive (``peers/motulator_im.py`` says how it is taken from
+motulator's example), run by motulator in its own virtualenv and by acdrive from parts with the
+same machine, sample time (125 us), model time (1.5 s), speed reference and load (``MATCHED``
+lists every number and every difference). Two converters:
+
+* ``averaged`` (``ratio_vs_motulator``): motulator's ``pwm=False`` (the duty ratios held over the
+  sample); acdrive's ``plant.converter.AveragedConverter``, the inverter's averaged counterpart
+  (the command held over the sample within the linear range |v| <= V_dc / sqrt(2)) at the same
+  540 V; one held segment per sample on both sides;
+* ``pwm`` (``ratio_vs_motulator_pwm``): motulator's ``pwm=True`` (carrier comparison, exact
+  switching instants); acdrive's ``plant.inverter.Inverter`` (centred SVPWM, exact switching
+  instants) at the same 4 kHz carrier (N = 2 control samples per carrier period; N = 1 is reported
+  as a variant).
+
+Both simulators' accuracy is measured against references of the same plant equations
+(``IMEquations``, machines.cage_part's equations plus the shaft) driven by each simulator's own
+segment sequence from its own initial state (``acdrive._bench.reference``): Radau at rtol 1e-10,
+and an extended-precision sixth-order reference where both errors lie below the Radau
+reference's own resolution.
+
+Integration on acdrive's side: one step of the sixth-order method (``System(method="rk6")``) per
+held segment (``INTEGRATOR``, ``SUBSTEPS``; the measurements behind the choice are in
+docs/design.md, "Benchmark suite").
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+
+import numpy as np
+
+from acdrive._bench.common import best_of, public
+from acdrive._bench.reference import accuracy, error_verdicts, short_errors
+from acdrive._bench.venvs import run_peer_script
+
+#: integration of the matched cases: one step of the sixth-order method per held segment
+INTEGRATOR = "rk6"
+SUBSTEPS = 1
+K = math.sqrt(1.5)  # |space vector| power-invariant / peak-value scaling (frames.K_PEAK)
+
+# --- the matched case (motulator's numbers: peers/motulator_im.py) ---------------------------
+T_S = 125e-6  # s
+DURATION = 1.5  # s
+U_DC = 540.0  # V
+J = 0.015  # kg m^2
+N_P = 2
+# inverse-Gamma parameters of motulator's 2.2 kW machine [ohm, H]
+R_S, R_R, L_SGM, L_M = 3.7, 2.1, 0.021, 0.224
+# the same machine as acdrive's T-model (machines.cage_part): an inverse-Gamma model is a T-model
+# with no rotor leakage, so L_m = L_r = L_M, L_s = L_M + L_sgm, R_r = R_R; then sigma L_s = L_sgm,
+# R_s + (L_m/L_r)^2 R_r = R_s + R_R, L_r/R_r = L_M/R_R and acdrive's rotor flux psi_r is
+# motulator's psi_R. Impedances do not depend on the space-vector scaling; voltages, currents and
+# fluxes are sqrt(3/2) times larger in acdrive's power-invariant scaling.
+MACHINE = {"R_s": R_S, "R_r": R_R, "L_s": L_M + L_SGM, "L_r": L_M, "L_m": L_M, "n_p": N_P}
+NOM_TAU = 14.6  # N m, rated torque
+BASE_I = math.sqrt(2.0) * 5.0  # A, peak (motulator's base current)
+BASE_PSI = math.sqrt(2.0 / 3.0) * 400.0 / (2 * math.pi * 50.0)  # V s, peak
+W_REF = 0.5 * 2 * math.pi * 50.0 / N_P  # rad/s, 0.5 p.u. mechanical
+T_STEP = 0.2 + 0.5 * T_S  # s
+T_LOAD, LOAD_RAMP = 0.75, 1e-3  # s
+# control: motulator's current reference generator gives i_sd = psi_s_nom / (L_M + L_sgm) with
+# psi_s_nom = 0.95 psi_base, limited to i_s_max = 1.5 i_base (peak); in acdrive's IFOC the flux
+# reference is the rotor flux L_M i_sd (power-invariant), the same current
+I_SD = 0.95 * BASE_PSI / (L_M + L_SGM)  # A, peak
+PSI_REF = K * L_M * I_SD  # Wb, power-invariant
+I_MAX = K * 1.5 * BASE_I  # A, power-invariant
+# largest torque within the current limit at that flux (where motulator's current limit caps the
+# speed PI's torque); acdrive's speed PI clamps there, a hair below, so its own anti-windup acts
+TAU_MAX = 0.999 * N_P * PSI_REF * math.sqrt(I_MAX**2 - (K * I_SD) ** 2)
+# motulator's 2DOF complex-vector PI current controller, alpha_c = 2 pi 200 rad/s:
+# u = k_t i_ref - k_p i + (k_i + j w_c k_t)/s (i_ref - i) in synchronous coordinates
+ALPHA_C = 2 * math.pi * 200.0
+K_T, K_PC, K_IC = ALPHA_C * L_SGM, 2 * ALPHA_C * L_SGM, ALPHA_C**2 * L_SGM
+W0 = N_P * W_REF  # rad/s, electrical frequency at the reference speed, no load
+
+CONVERTERS = ("averaged", "pwm")
+
+MATCHED = {
+    "source": "motulator 0.18 examples/drive/current_vector/plot_2kw_im_sat_cvc.py "
+    "(acdrive/_bench/peers/motulator_im.py)",
+    "machine": {
+        "motulator_inverse_gamma": {"R_s": R_S, "R_R": R_R, "L_sgm": L_SGM, "L_M": L_M, "n_p": N_P},
+        "acdrive_T_model": MACHINE,
+        "conversion": "inverse-Gamma = T-model without rotor leakage: L_m = L_r = L_M, "
+        "L_s = L_M + L_sgm, R_r = R_R (identical equations: sigma L_s = L_sgm, "
+        "R_s + (L_m/L_r)^2 R_r = R_s + R_R, L_r/R_r = L_M/R_R, psi_r = psi_R); parameters are "
+        "scaling-free, signals are sqrt(3/2) times motulator's peak-value space vectors; "
+        "torque 1.5 n_p Im(psi* i) (peak) = n_p Im(psi* i) (power-invariant)",
+        "J_kg_m2": J,
+        "note": "the example's saturated Gamma model replaced by its own unsaturated "
+        "inverse-Gamma alternative on both sides",
+    },
+    "dc_link_v": U_DC,
+    "sample_time_s": T_S,
+    "duration_s": DURATION,
+    "speed_reference": f"0 until {T_STEP:g} s, then 0.5 p.u. = {W_REF:.6g} rad/s (step at the "
+    "first sample after 0.2 s)",
+    "load": f"0 until {T_LOAD} s, ramp over {LOAD_RAMP * 1e3:g} ms to the rated {NOM_TAU} N m "
+    "(motulator's example: a step at 0.75 s)",
+    "converter": {
+        "averaged": {
+            "motulator": "pwm=False: the duty ratios held over the sample (zero-order hold), one "
+            "sample computational delay in the control system",
+            "acdrive": "plant.converter.AveragedConverter (V_dc = 540 V): the command held over "
+            "the sample within |v| <= V_dc / sqrt(2) (the inverter's averaged counterpart), no "
+            "computational delay",
+        },
+        "pwm": {
+            "motulator": "pwm=True: carrier comparison, carrier period 2 T_s = 250 us (4 kHz), "
+            "duty ratios updated every T_s (double update), one sample computational delay, "
+            "duties quantised to 2^-12; at most 3 switching instants per sample",
+            "acdrive": "plant.inverter.Inverter, centred SVPWM, carrier period N T_s; primary "
+            "N = 2 (250 us, 4 kHz, the same pulse pattern: one edge per leg per sample, at most 3 "
+            "instants per sample), command latched once per carrier period (single update), no "
+            "computational delay; variant N = 1 (125 us, 8 kHz: command updated every sample as "
+            "motulator's, twice the switching instants)",
+        },
+    },
+    "control": {
+        "motulator": "sensored current-vector control: reduced-order flux observer (measured "
+        "speed), rotor-flux orientation, 2DOF complex PI current controller in synchronous "
+        "coordinates (alpha_c = 2 pi 200 rad/s, angle advance 1.5 T_s w_c), "
+        "i_sd = 0.95 psi_base/(L_M + L_sgm), |i_s| <= 1.5 i_base, speed PI k_p = 1, k_i = 10 "
+        "(anti-windup on the current-limited torque)",
+        "acdrive": "control.foc.IndirectFOC (flux model, same i_d and current limit) -> "
+        "control.current.StationaryCurrentController running motulator's current controller "
+        "with its integrator turning at the fixed frequency w0 = n_p w_ref (stationary frame: "
+        "K(s) = k_p + (k_i + j w0 k_t)/(s - j w0) on the error, k_p = 2 alpha_c L_sgm, "
+        "k_t = alpha_c L_sgm, k_i = alpha_c^2 L_sgm; Tustin pre-warped at w0; back-calculation "
+        "anti-windup) <- control.foc.SpeedPI (K_P = 1, K_I = 10, clamping at the torque the "
+        "current limit allows) <- shaft speed sampled ideally, encoder angle ideal",
+        "differences": [
+            (
+                "indirect FOC (rotor-flux model from the current reference) instead of "
+                "motulator's observer on the measured current and voltage"
+            ),
+            (
+                "current controller on the error only (1DOF) with a fixed-frequency integrator; "
+                "motulator's integrator turns at the estimated synchronous frequency and its "
+                "reference path has the gain k_t"
+            ),
+            (
+                "no computational delay in acdrive (the command applies from the sample "
+                "instant); motulator delays the duty ratios by one sample and advances the "
+                "voltage angle"
+            ),
+            (
+                "acdrive's speed PI clamps its integral at a torque limit; motulator's "
+                "integrates the torque the current limit realised"
+            ),
+            (
+                "pwm only: single update of the duty ratios per carrier period (N = 2) instead "
+                "of double update"
+            ),
+        ],
+    },
+}
+
+
+# --- acdrive's side ----------------------------------------------------------------------------
+def current_controller_lti():
+    """motulator's complex PI (error path) with its integrator at the fixed frequency W0, as a
+    2 x 2 real stationary-frame LTI: dx/dt = j W0 x + e, v = k_p e + (k_i + j W0 k_t) x."""
+    from acdrive.control._lti import LTIMatrix
+
+    A = [[0.0, -W0], [W0, 0.0]]
+    C = [[K_IC, -W0 * K_T], [W0 * K_T, K_IC]]
+    return LTIMatrix.ss(A, np.eye(2), C, K_PC * np.eye(2), name="complex-pi-w0")
+
+
+def build_foc_drive(
+    machine,
+    J,
+    v_dc,
+    f_pwm,
+    T_s,
+    controller,
+    method,
+    prewarp,
+    speed_pi,
+    ifoc,
+    w_ref,
+    load,
+    integrator="rk4",
+    converter="pwm",
+):
+    """dc -> converter -> cage machine -> shaft; encoder; speed reference -> speed PI (ideal
+    speed sample) -> IFOC -> stationary current controller -> converter. ``converter``: "pwm"
+    (``plant.inverter.Inverter`` at ``f_pwm``, fed from a ``DCSource``) or "averaged"
+    (``plant.converter.AveragedConverter`` with the fixed DC-link voltage ``v_dc``; ``f_pwm``
+    unused). Returns (System, parts by role)."""
+    from acdrive.control._current import StationaryCurrentController
+    from acdrive.control._foc import IndirectFOC, SpeedPI
+    from acdrive.control._speed import SpeedReference
+    from acdrive.machines._cage_part import CageInductionMachine
+    from acdrive.plant._converter import AveragedConverter
+    from acdrive.plant._inverter import Inverter
+    from acdrive.plant._mechanics import Shaft
+    from acdrive.plant._sensors import Encoder
+    from acdrive.plant._sources import DCSource
+    from acdrive.sim._system import System
+
+    if converter not in CONVERTERS:
+        raise ValueError(f"converter must be one of {CONVERTERS}")
+    p = {
+        "im": CageInductionMachine("im", **machine),
+        "shaft": Shaft("shaft", J=J, load=load),
+        "encoder": Encoder("encoder"),
+        "ref": SpeedReference("ref", w=w_ref),
+        "speed_pi": SpeedPI("speed_pi", **(speed_pi or {})),
+        "ifoc": IndirectFOC(
+            "ifoc",
+            R_r=machine["R_r"],
+            L_r=machine["L_r"],
+            L_m=machine["L_m"],
+            n_p=machine["n_p"],
+            **ifoc,
+        ),
+        "current": StationaryCurrentController(
+            "current", controller, T_s, method, prewarp, v_max=v_dc / math.sqrt(2.0)
+        ),
+    }
+    if converter == "pwm":
+        p["dc"] = DCSource("dc", V=v_dc)
+        p["inverter"] = Inverter("inverter", f_pwm=f_pwm)
+    else:
+        p["inverter"] = AveragedConverter("inverter", V_dc=v_dc)
+    im, shaft, pi, ifoc_, cc, inv = (
+        p[k] for k in ("im", "shaft", "speed_pi", "ifoc", "current", "inverter")
+    )
+    wires = [
+        (shaft.out.w, im.inp.w),
+        (im.out.tau_e, shaft.inp.tau_e),
+        (shaft.out.theta, p["encoder"].inp.theta),
+        (p["ref"].out.w_ref, pi.inp.w_ref),
+        (shaft.out.w, pi.inp.w),
+        (pi.out.tau_ref, ifoc_.inp.tau_ref),
+        (p["encoder"].out.theta, ifoc_.inp.theta),
+        (ifoc_.out.i_s_ref, cc.inp.i_ref),
+        (im.out.i_s, cc.inp.i_meas),
+        (cc.out.v_ref, inv.inp.v_ref),
+        (inv.out.v, im.inp.v_s),
+    ]
+    if converter == "pwm":
+        wires += [(p["dc"].out.v_dc, inv.inp.v_dc), (im.out.i_s, inv.inp.i_s)]
+    return System(list(p.values()), wires, method=integrator), p
+
+
+def matched_acdrive_system(converter: str = "pwm", integrator: str = INTEGRATOR):
+    """acdrive's side of the matched case (module docstring, ``MATCHED``)."""
+    return build_foc_drive(
+        machine=MACHINE,
+        J=J,
+        v_dc=U_DC,
+        f_pwm=1.0 / (2 * T_S),
+        T_s=T_S,
+        controller=current_controller_lti(),
+        method="tustin",
+        prewarp=W0,
+        speed_pi={"K_P": 1.0, "K_I": 10.0, "K_F": 1.0, "tau_max": TAU_MAX},
+        ifoc={"i_max": I_MAX, "psi_ref": PSI_REF},
+        w_ref=[[0.0, 0.0], [T_STEP, 0.0], [T_STEP, W_REF]],
+        load=[[0.0, 0.0], [T_LOAD, 0.0], [T_LOAD + LOAD_RAMP, NOM_TAU]],
+        integrator=integrator,
+        converter=converter,
+    )
+
+
+def log_ports(p) -> list:
+    return [
+        p["im"].out.i_s,
+        p["im"].out.psi_r,
+        p["shaft"].out.w,
+        p["current"].out.v_ref,
+        p["ifoc"].out.i_s_ref,
+    ]
+
+
+def bench_acdrive(
+    converter: str,
+    repeats: int,
+    duration: float,
+    integrator: str = INTEGRATOR,
+    substeps: int = SUBSTEPS,
+    log=None,
+) -> dict:
+    """Best-of-``repeats`` control steps per second of acdrive's side. pwm: carrier N = 2
+    (primary) and N = 1; averaged: one variant. ``log``: progress lines."""
+    say = log or (lambda _m: None)
+    system, p = matched_acdrive_system(converter, integrator)
+    ports = log_ports(p)
+    start = time.perf_counter()
+    compiled = system.compile()
+    compiled.run(min(0.01, duration), T_S, substeps=substeps, log=ports)
+    out = {
+        "integrator": integrator,
+        "substeps": substeps,
+        "variants": {},
+        "first_run_s": time.perf_counter() - start,
+    }
+    carriers = (2, 1) if converter == "pwm" else (None,)
+    for n_carrier in carriers:
+        modulator = (
+            p["inverter"]
+            if n_carrier is None
+            else p["inverter"].with_params(f_pwm=1.0 / (n_carrier * T_S))
+        )
+
+        def run(modulator=modulator):
+            return compiled.run(duration, T_S, substeps=substeps, log=ports, parts=[modulator])
+
+        say(f"acdrive {converter} {'' if n_carrier is None else f'N = {n_carrier} '}timing")
+        run()  # warm-up
+        wall, raw = best_of(run, repeats)
+        i_s = raw.signal(p["im"].out.i_s)
+        name = "averaged" if n_carrier is None else f"N{n_carrier}"
+        out["variants"][name] = {
+            "carrier_samples": n_carrier,
+            "pwm_frequency_hz": None if n_carrier is None else 1.0 / (n_carrier * T_S),
+            "control_steps": raw.steps,
+            "wall_s": wall,
+            "steps_per_s": raw.steps / wall,
+            "real_time_factor": duration / wall,
+            "final_speed_rad_s": float(raw.signal(p["shaft"].out.w)[-1]),
+            "peak_current_a_peak_scaling": float(np.max(np.abs(i_s)) / K),
+            "events": raw.events,
+            "_raw": raw,
+            "_modulator": modulator,
+        }
+    out["primary"] = "N2" if converter == "pwm" else "averaged"
+    out["_ports"] = p
+    out["_system"] = system
+    return out
+
+
+def acdrive_segments(raw, ports, modulator) -> dict:
+    """Every segment of every sample: the logged command sequence run again through the
+    modulator's own kernel (the compiled loop logs only the first segment of each sample)."""
+    from acdrive.plant._converter import AveragedConverter, averaged_segments
+    from acdrive.plant._inverter import inverter_segments
+
+    averaged = isinstance(modulator, AveragedConverter)
+    kernel = averaged_segments if averaged else inverter_segments
+    v_ref = raw.signal(ports["current"].out.v_ref)
+    n = v_ref.size
+    s = modulator.initial_state()
+    p = modulator.p
+    dt = np.zeros(modulator.MAX_SEGMENTS)
+    v = np.zeros((modulator.MAX_SEGMENTS, modulator.OUTPUTS.size()))
+    u = np.zeros(modulator.INPUTS.size())
+    counts = np.zeros(n, dtype=np.int64)
+    seg_dt, seg_v = [], []
+    for k in range(n):
+        u[0], u[1] = v_ref[k].real, v_ref[k].imag
+        if not averaged:
+            u[2] = U_DC  # the inverter's v_dc input; i_s has no effect without t_d and drop
+        m, _ = kernel(T_S, u, p, s, dt, v)
+        counts[k] = m
+        seg_dt.extend(dt[:m])
+        seg_v.extend(v[:m, 0] + 1j * v[:m, 1])
+    return {"t": raw.t.copy(), "counts": counts, "dt": np.array(seg_dt), "v": np.array(seg_v)}
+
+
+def final_plant_state(system, X: np.ndarray) -> np.ndarray:
+    """(Re i_s, Im i_s, Re psi_r, Im psi_r, w) of the machine and shaft in a state vector X."""
+    a, _ = system.slots["im"].x
+    s, _ = system.slots["shaft"].x
+    return np.array([X[a], X[a + 1], X[a + 2], X[a + 3], X[s]])
+
+
+def acdrive_states(variant: dict, ports: dict, system) -> np.ndarray:
+    raw = variant["_raw"]
+    i_s = raw.signal(ports["im"].out.i_s)
+    psi = raw.signal(ports["im"].out.psi_r)
+    w = raw.signal(ports["shaft"].out.w)
+    states = np.column_stack([i_s.real, i_s.imag, psi.real, psi.imag, w])
+    return np.vstack([states, final_plant_state(system, raw.final_state)])
+
+
+# --- the reference equations -------------------------------------------------------------------
+def _load(t: float) -> float:
+    return NOM_TAU * min(max((t - T_LOAD) / LOAD_RAMP, 0.0), 1.0)
+
+
+class IMEquations:
+    """machines.cage_part's equations (power-invariant, stationary frame) plus the shaft with the
+    matched load, y = (Re i_s, Im i_s, Re psi_r, Im psi_r, w), the stator voltage held per
+    segment: the right-hand side, its Jacobian and the same in extended precision."""
+
+    def __init__(self, params: dict = MACHINE):
+        R_s, R_r, L_s, L_r, L_m, n_p = (
+            params[k] for k in ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p")
+        )
+        self.c = {
+            "sls": L_s - L_m * L_m / L_r,
+            "r_sig": R_s + L_m * L_m * R_r / (L_r * L_r),
+            "k_r": L_m / L_r,
+            "a": R_r / L_r,
+            "b": L_m * R_r / L_r,
+            "n_p": n_p,
+        }
+
+    def rhs(self, t, y, v_re, v_im):
+        c = self.c
+        i_r, i_i, p_r, p_i, w = y
+        wm = c["n_p"] * w
+        k_r, a, sls = c["k_r"], c["a"], c["sls"]
+        return np.array(
+            [
+                (v_re - c["r_sig"] * i_r + k_r * (a * p_r + wm * p_i)) / sls,
+                (v_im - c["r_sig"] * i_i + k_r * (a * p_i - wm * p_r)) / sls,
+                c["b"] * i_r - a * p_r - wm * p_i,
+                c["b"] * i_i - a * p_i + wm * p_r,
+                (c["n_p"] * k_r * (p_r * i_i - p_i * i_r) - _load(t)) / J,
+            ]
+        )
+
+    def jac(self, t, y, v_re, v_im):
+        c = self.c
+        i_r, i_i, p_r, p_i, w = y
+        n_p, k_r, a, b, sls, r_sig = (c[k] for k in ("n_p", "k_r", "a", "b", "sls", "r_sig"))
+        wm = n_p * w
+        kt = n_p * k_r / J
+        return np.array(
+            [
+                [-r_sig / sls, 0.0, k_r * a / sls, k_r * wm / sls, k_r * n_p * p_i / sls],
+                [0.0, -r_sig / sls, -k_r * wm / sls, k_r * a / sls, -k_r * n_p * p_r / sls],
+                [b, 0.0, -a, -wm, -n_p * p_i],
+                [0.0, b, wm, -a, n_p * p_r],
+                [-kt * p_i, kt * p_r, kt * i_i, -kt * i_r, 0.0],
+            ]
+        )
+
+    def rhs_ld(self, t, y, v_re, v_im):
+        ld = np.longdouble
+        c = {k: ld(v) for k, v in self.c.items()}
+        i_r, i_i, p_r, p_i, w = y
+        wm = c["n_p"] * w
+        k_r, a, sls = c["k_r"], c["a"], c["sls"]
+        load = ld(NOM_TAU) * min(max((t - ld(T_LOAD)) / ld(LOAD_RAMP), ld(0)), ld(1))
+        return np.array(
+            [
+                (v_re - c["r_sig"] * i_r + k_r * (a * p_r + wm * p_i)) / sls,
+                (v_im - c["r_sig"] * i_i + k_r * (a * p_i - wm * p_r)) / sls,
+                c["b"] * i_r - a * p_r - wm * p_i,
+                c["b"] * i_i - a * p_i + wm * p_r,
+                (c["n_p"] * k_r * (p_r * i_i - p_i * i_r) - load) / ld(J),
+            ],
+            dtype=ld,
+        )
+
+    def inputs(self, seg: dict, extended: bool):
+        v = seg["v"]
+        if extended:
+            ld = np.longdouble
+            return lambda j, y: (ld(v[j].real), ld(v[j].imag))
+        return lambda j, y: (float(v[j].real), float(v[j].imag))
+
+
+# --- motulator's side ---------------------------------------------------------------------------
+def run_motulator(
+    python: str, converter: str, seconds: float, record_path: str | None, repeats: int = 1
+) -> dict:
+    """motulator's run of the case in its venv (``peers/motulator_im.py``), best of
+    ``repeats`` timed runs."""
+    args = ["--converter", converter, "--seconds", repr(seconds), "--repeats", str(repeats)]
+    if record_path:
+        args += ["--out", record_path]
+    return run_peer_script(python, "motulator_im.py", args, cwd=tempfile.gettempdir())
+
+
+def motulator_states(rec) -> tuple[np.ndarray, dict]:
+    """motulator's recorded states at its sampling instants (plus the final state) as
+    power-invariant (i_s, psi_R, w_M) rows, and its segment sequence as voltages."""
+    g = L_M / (L_M + L_SGM)
+    psi_s = np.append(rec["psi_s"], rec["final_psi_s"])
+    psi_R = g * np.append(rec["psi_r"], rec["final_psi_r"])  # inverse-Gamma rotor flux
+    i_s = (psi_s - psi_R) / L_SGM  # psi_s = L_sgm i_s + psi_R
+    w = np.append(rec["w_M"], rec["final_w_M"])
+    states = np.column_stack([K * i_s.real, K * i_s.imag, K * psi_R.real, K * psi_R.imag, w])
+    q = rec["q"]
+    alpha = np.exp(2j * np.pi / 3)
+    u_peak = float(rec["u_dc"]) * (2.0 / 3.0) * (q[:, 0] + alpha * q[:, 1] + alpha**2 * q[:, 2])
+    seg = {"t": rec["t"], "counts": rec["n"], "dt": rec["dt"], "v": K * u_peak}
+    return states, seg
+
+
+def compare_trajectories(a_states: np.ndarray, m_states: np.ndarray) -> dict:
+    """Do the two simulators run the same case? Speed and current magnitude of both (peak-value
+    scaling) at a few instants, the speed dip under the load, their largest speed difference."""
+    n = min(a_states.shape[0], m_states.shape[0]) - 1
+    after = np.arange(n) * T_S >= T_LOAD
+    out = {
+        "compared_samples": n,
+        "max_speed_difference_rad_s": float(np.max(np.abs(a_states[:n, 4] - m_states[:n, 4]))),
+    }
+    for name, s in (("acdrive", a_states), ("motulator", m_states)):
+        w = s[:n, 4]
+        i = np.abs(s[:n, 0] + 1j * s[:n, 1]) / K
+        out[name] = {
+            "speed_rad_s_at": {
+                f"{t:g}": float(w[round(t / T_S)])
+                for t in (0.21, 0.25, 0.3, 0.7, 1.0, 1.49)
+                if round(t / T_S) < n
+            },
+            "peak_speed_rad_s": float(np.max(w)),
+            "min_speed_after_load_rad_s": float(np.min(w[after])) if after.any() else None,
+            "current_a_peak_at": {
+                f"{t:g}": float(i[round(t / T_S)]) for t in (0.19, 0.7, 1.49) if round(t / T_S) < n
+            },
+        }
+    return out
+
+
+# --- the case ----------------------------------------------------------------------------------
+def run_case(
+    converter: str,
+    peer: dict,
+    repeats: int,
+    duration: float,
+    reference: bool,
+    extended_substeps: int = 4,
+    peer_repeats: int = 1,
+    log=None,
+) -> dict:
+    """The matched case with ``converter``: acdrive timed, motulator timed (if ``peer`` is
+    available), both simulators' errors (if ``reference``), their ratio. ``peer`` is
+    ``venvs.ensure_venv``'s answer for motulator."""
+    say = log or (lambda _m: None)
+    out: dict = {"converter": converter, "duration_s": duration, "sample_time_s": T_S}
+    acd = bench_acdrive(converter, repeats, duration, log=say)
+    primary = acd["variants"][acd["primary"]]
+    out["acdrive"] = {
+        "integrator": acd["integrator"],
+        "substeps_per_segment": acd["substeps"],
+        "first_run_s": acd["first_run_s"],
+        "primary": acd["primary"],
+        "variants": {k: public(v) for k, v in acd["variants"].items()},
+        "steps_per_s": primary["steps_per_s"],
+    }
+    tmp = tempfile.mkdtemp(prefix="acdrive_bench_")
+    record = os.path.join(tmp, "motulator_run.npz") if reference else None
+    if peer.get("available"):
+        say(f"motulator {converter}: timing{' and recording' if record else ''}")
+        mot = run_motulator(peer["python"], converter, duration, record, peer_repeats)
+    else:
+        mot = {"available": False, "reason": peer.get("reason", "not run")}
+    out["motulator"] = mot
+    if mot.get("available"):
+        out["ratio"] = primary["steps_per_s"] / mot["steps_per_s"]
+        if converter == "pwm":
+            out["ratio_N1"] = acd["variants"]["N1"]["steps_per_s"] / mot["steps_per_s"]
+    if reference:
+        model = IMEquations()
+        system = acd["_system"]
+        say(f"acdrive {converter}: accuracy against the references")
+        a_states = acdrive_states(primary, acd["_ports"], system)
+        a_seg = acdrive_segments(primary["_raw"], acd["_ports"], primary["_modulator"])
+        n = a_seg["t"].size
+        a_err = accuracy(a_states, a_seg, n, model, extended_substeps=extended_substeps)
+        out["acdrive"]["error"] = a_err
+        out["acdrive"]["error_summary"] = short_errors(a_err)
+        if mot.get("available"):
+            say(f"motulator {converter}: accuracy against the references")
+            rec = dict(np.load(record))
+            m_states, m_seg = motulator_states(rec)
+            m_err = accuracy(
+                m_states, m_seg, m_seg["t"].size, model, extended_substeps=extended_substeps
+            )
+            mot["error"] = m_err
+            mot["error_summary"] = short_errors(m_err)
+            out["error_verdicts"] = error_verdicts(a_err, m_err)
+            out["trajectories"] = compare_trajectories(a_states, m_states)
+    for name in os.listdir(tmp):
+        os.remove(os.path.join(tmp, name))
+    os.rmdir(tmp)
+    out["matched_case"] = MATCHED
+    return out

@@ -1,0 +1,68 @@
+"""``acdrive bench``: the benchmark suite (``acdrive._bench.suite``) against motulator 0.18 and
+gym-electric-motor 3.0.3, measured in one run on this machine, plus the ICAD timing."""
+
+from __future__ import annotations
+
+CASE_NAMES = ("motulator_averaged", "motulator_pwm", "gem_dfim", "icad")
+
+
+def register(subparsers):
+    p = subparsers.add_parser(
+        "bench",
+        help="benchmark suite: speed ratios against motulator and gym-electric-motor with "
+        "both sides' accuracy, and the ICAD timing",
+    )
+    p.add_argument("--json", action="store_true", help="print one JSON document to stdout")
+    p.add_argument("--quick", action="store_true", help="short model times (a smoke test)")
+    p.add_argument("--no-peers", action="store_true", help="measure acdrive only")
+    p.add_argument("--no-reference", action="store_true", help="skip the accuracy references")
+    p.add_argument("--only", nargs="+", metavar="NAME", help=f"cases: {', '.join(CASE_NAMES)}")
+    p.add_argument(
+        "--peers-dir",
+        help="folder of the peers' virtualenvs (default $XDG_CACHE_HOME/acdrive/peers or "
+        "~/.cache/acdrive/peers)",
+    )
+    p.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    import json
+    import sys
+    from pathlib import Path
+
+    from acdrive._bench.common import finite
+    from acdrive._bench.suite import Options, run_suite, table
+    from acdrive.errors import InputError
+
+    only = tuple(args.only or CASE_NAMES)
+    for name in only:
+        if name not in CASE_NAMES:
+            raise InputError(
+                "--only", f"each name must be one of {', '.join(CASE_NAMES)}, got {name!r}"
+            )
+    peers_dir = None
+    if args.peers_dir is not None:
+        if not args.peers_dir.strip():
+            raise InputError("--peers-dir", "must be a folder path")
+        peers_dir = Path(args.peers_dir).expanduser().resolve()
+        if peers_dir.exists() and not peers_dir.is_dir():
+            raise InputError("--peers-dir", f"{peers_dir} exists and is not a folder")
+
+    def log(message: str) -> None:
+        sys.stderr.write(message + "\n")
+        sys.stderr.flush()
+
+    options = Options(
+        quick=args.quick,
+        peers=not args.no_peers,
+        reference=not args.no_reference,
+        only=only,
+        peers_dir=peers_dir,
+        log=log,
+    )
+    report = run_suite(options)
+    if args.json:
+        print(json.dumps(finite(report), indent=2, allow_nan=False))
+    else:
+        print(table(report))
+    return 0

@@ -1,0 +1,108 @@
+"""``acdrive run`` for a cage induction motor drive (``drive = "cage-im"``): simulate every run of
+the scenario, write data, figures and summary.json (``report.im_outputs``) and print the headline
+figures computed from the runs. ``commands.run`` dispatches here on the setup's type."""
+
+from __future__ import annotations
+
+from acdrive._output import OutputFolder
+
+
+def _rows(summary: dict, setup) -> list[tuple[str, str]]:
+    """Headline rows from the numbers of the summary (nothing here is a fixed verdict)."""
+    rows = []
+    runs = summary["runs"]
+    several = len(runs) > 1
+    for label, run in runs.items():
+        who = f"{label} ({run['controller']})" if several else run["controller"]
+        rel = run["current_rms_error_relative"]
+        rows.append(
+            (
+                f"current RMS error, {who}",
+                (
+                    f"{run['current_rms_error_a']:.3g} A ({rel:.1%} of the "
+                    f"{run['current_rms_reference_a']:.3g} A reference) from "
+                    f"{run['metrics_from_s']:g} s"
+                ),
+            )
+        )
+        if "ramp" in run:
+            r = run["ramp"]
+            rows.append(
+                (
+                    f"speed ramp, {who}",
+                    (
+                        f"error {r['speed_ramp_error_rad_s']:.3g} rad/s RMS, slope "
+                        f"{r['ramp_slope_rad_s2']:.0f} rad/s^2 (ideal tau_max/J "
+                        f"{r['ideal_slope_rad_s2']:.0f})"
+                    ),
+                )
+            )
+        if "speed_final_rad_s" in run:
+            text = (
+                f"{run['speed_final_rad_s']:.2f} rad/s for "
+                f"{run['speed_reference_final_rad_s']:.2f} rad/s"
+            )
+            for change in run["load_changes"]:
+                if "max_deviation_rad_s" in change:
+                    text += (
+                        f"; load change at {change['time_s']:g} s: "
+                        f"{change['max_deviation_rad_s']:+.3g} rad/s"
+                    )
+            rows.append((f"final speed, {who}", text))
+        if "position_final_rad" in run:
+            text = f"error {run['position_final_error_rad']:.3g} rad"
+            for change in run["load_changes"]:
+                if "max_deviation_rad" in change:
+                    text += (
+                        f"; load change at {change['time_s']:g} s: "
+                        f"{change['max_deviation_rad']:+.3g} rad"
+                    )
+            rows.append((f"final position, {who}", text))
+        if f"step_overshoot_{label}" in summary:
+            rows.append(
+                (
+                    f"step overshoot, {who}",
+                    (
+                        f"{summary[f'step_overshoot_{label}']:.1%} (linear ICAD model "
+                        f"{summary[f'linear_step_overshoot_{label}']:.1%})"
+                    ),
+                )
+            )
+        events = ", ".join(f"{k} {v}" for k, v in run["events"].items() if v) or "none"
+        rows.append((f"events (samples), {label}" if several else "events (samples)", events))
+    return rows
+
+
+def run_im(args, setup) -> int:
+    from acdrive._progress import Progress
+    from acdrive._report.im_outputs import write_im_outcome
+    from acdrive.columns import print_headline
+    from acdrive.sim import _codegen as codegen
+    from acdrive.sim._im_drive import run_im_scenario
+
+    n = len(list(setup.runs()))
+    with (
+        OutputFolder(args.out, setup.name) as output,  # --out checked before the simulation
+        Progress(2, f"run {setup.name}") as bar,
+    ):
+        bar.phase(f"simulating ({n} run{'s' * (n > 1)})")
+        outcome = run_im_scenario(setup)
+        codegen.record_compile_times()
+        bar.advance()
+        bar.phase("writing data" + (" and figures" if not args.no_figures else ""))
+        summary = write_im_outcome(
+            outcome, output.staging, figures=not args.no_figures, fmt=args.format
+        )
+        target = output.publish()
+        bar.advance()
+    wall = sum(r.wall_time for r in outcome.results.values())
+    n = len(outcome.results)
+    inv = setup.inverter
+    print(
+        f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s "
+        f"({n} run{'s' * (n > 1)}, mode {setup.mode}, {inv.model} inverter at "
+        f"{inv.f_pwm:g} Hz, sampling {1.0 / setup.sample_time:g} Hz)"
+    )
+    rows = _rows(summary, setup)
+    print_headline(rows, summary, target, args.format)
+    return 0

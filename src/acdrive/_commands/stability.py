@@ -1,0 +1,327 @@
+"""``acdrive stability``: small-signal stability of the whole DFIM speed drive.
+
+``acdrive stability --mode {voltage,current} --speed-rpm S --load-nm T [--bandwidth A] --json``
+linearises the closed loop at one operating point and prints its eigenvalues;
+``acdrive stability --map [--out DIR] [--json]`` maps the stable and unstable regions over
+speed x load for both modes at the given velocity bandwidth (default: the paper's 314 rad/s),
+draws them (PNG) and reports the largest velocity bandwidth each mode tolerates on that grid;
+``acdrive stability --bench [--json]`` evaluates the effects the paper's test bench may have had
+(voltage command) and how large each must be to remove the instability.
+Method and results: docs/stability.md.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+from acdrive._output import strict_json
+from acdrive.errors import InputError, require_between, require_finite, require_positive
+
+HELP = """Linearised closed loop of Bodson's DFIM speed drive (machine (9), torque law (20)+(22)
+or rotor current loop (43)-(47), speed PI (25)-(27), mechanics (26)). --model continuous uses the
+continuous-time law; --model sampled linearises the simulator's own sampled-data loop (5 kHz,
+zero-order hold, encoder backward difference; --delay-samples 1 adds a computation delay)."""
+
+PAPER_BANDWIDTH = 314.0  # a_D,VEL of Bodson IV-A [rad/s]
+UPPER_BANDWIDTH = 20000.0  # search limit of the tolerated a_D,VEL [rad/s]
+
+#: Accepted range of each numeric flag: generous for this 0.27 N m laboratory machine, and narrow
+#: enough that the equilibrium and the linearisation stay within float64 (so an error names the
+#: flag that is out of range, not a failed equilibrium).
+RANGES = {
+    "--bandwidth": (1e-3, 1e6),  # rad/s
+    "--load-nm": (-1e3, 1e3),  # N m
+    "--speed-filter-tau": (0.0, 10.0),  # s
+    "--supply-resistance": (0.0, 1e3),  # ohm
+    "--supply-inductance": (0.0, 10.0),  # H
+    "--viscous-friction": (0.0, 1e3),  # N m s/rad
+    "--inertia": (1e-9, 1e3),  # kg m^2
+    "--rotor-resistance": (1e-6, 1e3),  # ohm
+    "--converter-loss": (0.0, 1e3),  # V
+}
+MAX_GRID = 60  # speeds or loads of --map
+
+
+def _flag(name: str, value) -> float:
+    """``value`` of the numeric flag ``name``, checked against ``RANGES``."""
+    if name in ("--bandwidth", "--inertia", "--rotor-resistance"):
+        require_positive(name, value)
+    return require_between(name, value, *RANGES[name])
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "stability", help="drive stability (eigenvalues, map)", description=HELP
+    )
+    task = p.add_mutually_exclusive_group()
+    task.add_argument("--map", action="store_true", help="map speed x load for both modes")
+    task.add_argument("--bench", action="store_true", help="test-bench candidates (voltage mode)")
+    p.add_argument("--mode", choices=("voltage", "current"), default="voltage")
+    p.add_argument("--speed-rpm", type=float, default=None, help="shaft speed [rpm]")
+    p.add_argument("--load-nm", type=float, default=0.0, help="load torque [N m]")
+    p.add_argument("--bandwidth", type=float, default=PAPER_BANDWIDTH, help="a_D,VEL [rad/s] (314)")
+    p.add_argument("--model", choices=("continuous", "sampled"), default="continuous")
+    p.add_argument("--delay-samples", type=int, default=0, help="0 or 1 (sampled model)")
+    p.add_argument("--speed-filter-tau", type=float, default=0.0, help="speed filter [s]")
+    p.add_argument("--supply-resistance", type=float, default=0.0, help="supply R [ohm]")
+    p.add_argument("--supply-inductance", type=float, default=0.0, help="supply L [H]")
+    p.add_argument("--viscous-friction", type=float, default=0.0, help="B [N m s/rad]")
+    p.add_argument("--inertia", type=float, default=None, help="true J [kg m^2] (design: 3.5e-4)")
+    p.add_argument(
+        "--rotor-resistance", type=float, default=None, help="true R_r [ohm] (controller: 0.94)"
+    )
+    p.add_argument(
+        "--converter-loss", type=float, default=0.0, help="converter fundamental voltage loss [V]"
+    )
+    p.add_argument(
+        "--out", default="stability-map", help="folder the --map figure is written into (created)"
+    )
+    p.add_argument(
+        "--grid", type=int, nargs=2, default=(13, 7), metavar=("N_SPEED", "N_LOAD"),
+        help="map grid: speeds 0..2700 rpm, loads over 90%% of the torque window",
+    )  # fmt: skip
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(handler=run)
+
+
+def _model(args, mode: str):
+    from acdrive.analysis._drive_stability import DriveModel
+    from acdrive.machines._dfim import BODSON_DFIM
+
+    bandwidth = _flag("--bandwidth", args.bandwidth)
+    B = _flag("--viscous-friction", args.viscous_friction)
+    machine = dataclasses.replace(BODSON_DFIM, B=B)
+    if args.inertia is not None:
+        machine = dataclasses.replace(machine, J=_flag("--inertia", args.inertia))
+    if args.rotor_resistance is not None:
+        R_r = _flag("--rotor-resistance", args.rotor_resistance)
+        machine = dataclasses.replace(machine, R_r=R_r)
+    if args.delay_samples not in (0, 1):
+        raise InputError("--delay-samples", "must be 0 or 1")
+    return DriveModel(
+        mode=mode,
+        machine=machine,
+        controller_params=BODSON_DFIM,
+        design_inertia=BODSON_DFIM.J,
+        speed_bandwidth=bandwidth,
+        supply_resistance=_flag("--supply-resistance", args.supply_resistance),
+        supply_inductance=_flag("--supply-inductance", args.supply_inductance),
+        speed_filter_tau=_flag("--speed-filter-tau", args.speed_filter_tau),
+        delay_samples=args.delay_samples,
+        converter_loss=_flag("--converter-loss", args.converter_loss),
+    )
+
+
+def _pairs(values) -> list[list[float]]:
+    return [[float(v.real), float(v.imag)] for v in values]
+
+
+def run(args) -> int:
+    if args.map:
+        return _map(args)
+    if args.bench:
+        return _bench(args)
+    from acdrive.analysis._drive_stability import (
+        RAD_S_PER_RPM,
+        OperatingPoint,
+        check_point,
+        linearize,
+    )
+
+    if args.speed_rpm is None:
+        raise InputError("--speed-rpm", "is required (or give --map)")
+    model = _model(args, args.mode)
+    speed = require_finite("--speed-rpm", args.speed_rpm) * RAD_S_PER_RPM
+    load = _flag("--load-nm", args.load_nm)
+    point = OperatingPoint(speed, load)
+    try:
+        check_point(model, point)
+        r = linearize(model, point, args.model)
+    except InputError as exc:
+        name = {"speed": "--speed-rpm", "load_torque": "--load-nm"}.get(exc.field, exc.field)
+        raise InputError(name, exc.rule) from None
+    out = {
+        "mode": args.mode,
+        "model": args.model,
+        "speed_rpm": args.speed_rpm,
+        "load_nm": load,
+        "bandwidth_rad_s": model.speed_bandwidth,
+        "max_real_part": r.max_real_part,
+        "stable": r.stable,
+        "dominant": [r.dominant.real, r.dominant.imag],
+        "torque_command_nm": r.torque_command,
+        "within_torque_limits": r.within_limits,
+        "eigenvalues": _pairs(r.eigenvalues),
+    }
+    if args.json:
+        print(strict_json(out))
+    else:
+        for key in ("mode", "model", "speed_rpm", "load_nm", "bandwidth_rad_s"):
+            print(f"{key:22s} {out[key]}")
+        print(f"{'stable':22s} {r.stable}")
+        print(f"{'max_real_part':22s} {r.max_real_part:.3f} 1/s")
+        print("eigenvalues [1/s]:")
+        for s in r.eigenvalues:
+            print(f"  {s.real:12.3f} {s.imag:+12.3f}j")
+    return 0
+
+
+def _map(args) -> int:
+    import numpy as np
+
+    from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
+
+    n_speed, n_load = args.grid
+    if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
+        raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
+    from acdrive._progress import Progress
+
+    maps, report = {}, {}
+    models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
+    bar = Progress(7, "stability map")
+    for mode, model in models.items():
+        speeds, loads = default_grid(model, n_speed, n_load)
+        bar.phase(f"{mode} command: {n_speed} x {n_load} operating points")
+        m = stability_map(model, speeds, loads, args.model)
+        bar.advance()
+        maps[mode] = m
+        fields = {f.name: getattr(model, f.name) for f in dataclasses.fields(model)}
+        fields = {k: v for k, v in fields.items() if k not in ("mode", "speed_bandwidth")}
+        bar.phase(f"{mode} command: largest stable a_D,VEL")
+        tolerated = max_stable_bandwidth(
+            mode, speeds, loads, kind=args.model, upper=UPPER_BANDWIDTH, **fields
+        )
+        bar.advance()
+        bar.phase(f"{mode} command: largest stable a_D,VEL without load")
+        unloaded = max_stable_bandwidth(
+            mode, speeds, [0.0], kind=args.model, upper=UPPER_BANDWIDTH, **fields
+        )
+        bar.advance()
+        graded = np.where(m.feasible, m.max_real_part, -np.inf)
+        worst = np.unravel_index(np.argmax(graded), graded.shape)
+        report[mode] = {
+            "stable_everywhere": m.all_stable,
+            "unstable_points": int(np.count_nonzero(~m.stable & m.feasible)),
+            "points": int(np.count_nonzero(m.feasible)),
+            "worst_max_real_part": float(m.max_real_part[worst]),
+            "worst_speed_rpm": float(speeds[worst[0]]),
+            "worst_load_nm": float(loads[worst[1]]),
+            "max_stable_bandwidth_rad_s": tolerated,
+            "max_stable_bandwidth_zero_load_rad_s": unloaded,
+        }
+    bar.phase("drawing")
+    path = _draw(maps, Path(args.out), args)
+    bar.close()
+    out = {
+        "bandwidth_rad_s": args.bandwidth,
+        "model": args.model,
+        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
+        "modes": report,
+        "figure": str(path),
+    }
+    if args.json:
+        print(strict_json(out, indent=2))
+    else:
+        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
+        for mode, r in report.items():
+            print(
+                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
+                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
+                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
+                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
+                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
+            )
+    return 0
+
+
+def _bench(args) -> int:
+    from acdrive.analysis._drive_stability import (
+        bench_candidates,
+        evaluate_candidate,
+        stabilising_thresholds,
+    )
+
+    bandwidth = _flag("--bandwidth", args.bandwidth)
+    results = [evaluate_candidate(c) for c in bench_candidates(bandwidth)]
+    if args.delay_samples not in (0, 1):
+        raise InputError("--delay-samples", "must be 0 or 1")
+    thresholds = stabilising_thresholds(
+        bandwidth, kind=args.model, delay_samples=args.delay_samples
+    )
+
+    def num(x):
+        return float(x) if math.isfinite(x) else None
+
+    out = {
+        "bandwidth_rad_s": bandwidth,
+        "threshold_model": args.model,
+        "threshold_delay_samples": args.delay_samples,
+        "candidates": [
+            {
+                "name": r.candidate.name,
+                "model": r.candidate.kind,
+                "max_real_part_900rpm_0nm": r.max_real_part_900,
+                "worst_zero_load": r.worst_zero_load,
+                "worst_grid": r.worst_grid,
+                "stable_zero_load": r.stable_zero_load,
+                "stable_grid": r.stable_grid,
+            }
+            for r in results
+        ],
+        "thresholds": [
+            {"name": t.name, "unit": t.unit, "zero_load": num(t.zero_load), "grid": num(t.grid)}
+            for t in thresholds
+        ],
+    }
+    if args.json:
+        print(strict_json(out, indent=2))
+        return 0
+    print(f"voltage command, a_D,VEL = {bandwidth:g} rad/s: max Re(s) [1/s]")
+    print(f"{'candidate':58s} {'900rpm':>8s} {'no load':>8s} {'grid':>8s}")
+    for r in results:
+        print(
+            f"{r.candidate.name:58s} {r.max_real_part_900:8.1f} {r.worst_zero_load:8.1f} "
+            f"{r.worst_grid:8.1f}"
+        )
+    print(
+        f"smallest value that makes the drive stable (no load / grid; {args.model} model, "
+        f"delay {args.delay_samples}):"
+    )
+    for t in thresholds:
+        print(f"  {t.name:28s} {t.zero_load:10.4g} / {t.grid:10.4g} {t.unit}")
+    return 0
+
+
+def _draw(maps, out: Path, args) -> Path:
+    import matplotlib
+    import numpy as np
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
+    limit = max(float(np.nanmax(np.abs(m.max_real_part), initial=1.0)) for m in maps.values())
+    for ax, (mode, m) in zip(axes, maps.items()):
+        X, Y = np.meshgrid(m.loads_nm, m.speeds_rpm)
+        pc = ax.pcolormesh(
+            X, Y, m.max_real_part, cmap="RdBu_r", vmin=-limit, vmax=limit, shading="nearest"
+        )
+        if np.any(m.stable) and np.any(~m.stable):
+            ax.contour(X, Y, m.max_real_part, levels=[0.0], colors="k", linewidths=1.5)
+        ax.plot(X[~m.stable & m.feasible], Y[~m.stable & m.feasible], "kx", ms=4, label="unstable")
+        ax.plot(X[m.stable & m.feasible], Y[m.stable & m.feasible], "k.", ms=3, label="stable")
+        if not np.all(m.feasible):
+            ax.plot(X[~m.feasible], Y[~m.feasible], "s", mfc="none", mec="0.5", ms=5,
+                    label="outside limits")  # fmt: skip
+        ax.set_title(f"{mode} command, a_D,VEL = {args.bandwidth:g} rad/s ({args.model})")
+        ax.set_xlabel("load torque [N m]")
+        ax.legend(loc="upper right", fontsize=8)
+    axes[0].set_ylabel("speed [rpm]")
+    fig.colorbar(pc, ax=axes, label="max Re(s) [1/s]")
+    path = out / f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

@@ -1,0 +1,259 @@
+"""The bench converter's side effect on the stator reactive power and on the torque command.
+
+Bodson's voltage-command law ((20) with the stator current command (22)) computes the rotor
+voltage that makes the stator absorb the commanded reactive power Q_COM while the machine
+produces tau_COM, assuming the converter applies that voltage. A rotor converter with dead time
+and device drops (``acdrive.sim._setup.ConverterLosses.fundamental_loss``) applies less, against
+the rotor current. In steady state the stator then absorbs a reactive power Q_S = Im(v_S i_S*)
+(Bodson (5)) other than Q_COM, and the speed PI (25) settles on a torque command other than the
+torque tau_e the machine produces. The current-command mode closes a loop on the rotor current
+((43)-(47)) and is not expected to show either effect.
+
+The functions below measure both effects from a run (logged ``q_s``, ``tau_com``, ``tau_e`` of
+``DriveResult``) over its steady part, state them against named tolerances, and compare them with
+the same scenario run with an ideal converter when that run is given.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive._frames import K_PEAK
+from acdrive._report.verdicts import Verdict, within_abs
+from acdrive.sim._outcome import OSCILLATION_FINDING_RPM
+from acdrive.sim._setup import ConverterLosses, DriveSetup
+
+#: A sample is steady once the speed reference has been constant for this long [s] with the
+#: stator relay closed (the speed loop's transient after a step or a ramp end has settled).
+STEADY_SETTLE_S = 0.5
+#: Q_S counts as the commanded Q_COM within this fraction of the magnetising reactive power
+#: v_S^2 / (w_e L_S): what the stator absorbs when it alone magnetises the machine (i_R = 0,
+#: R_S neglected), the Q_COM that maximises the case-2 rotor-current torque limit (Bodson (42)).
+Q_TOLERANCE_FRACTION = 0.1
+#: The torque command counts as the produced torque within this [N m] (about 0.4 % of the
+#: paper's tau_LIM = 0.274 N m; the two motors of Bodson Fig. 13 differ by a few mN m).
+TORQUE_TOLERANCE_NM = 1e-3
+
+
+def magnetising_reactive_power(L_s: float, v_s: float, w_e: float) -> float:
+    """v_S^2 / (w_e L_S) [var]: the reactive power of a stator that magnetises the machine alone
+    (v_S: space-vector magnitude, Bodson (8); the optimum Q_COM of (42))."""
+    return v_s**2 / (w_e * L_s)
+
+
+def converter_loss(setup: DriveSetup, motor: int = 0) -> float:
+    """Fundamental voltage [V, space vector] the rotor converter of ``motor`` loses."""
+    m = setup.motors[motor]
+    return m.converter.fundamental_loss(m.dc_link_voltage)
+
+
+def uses_bench_converter(setup: DriveSetup) -> bool:
+    """Whether any motor's rotor converter has dead time or device drops."""
+    return any(converter_loss(setup, k) > 0.0 for k in range(len(setup.motors)))
+
+
+def ideal_converter(setup: DriveSetup) -> DriveSetup:
+    """The same drive with an ideal rotor converter on every motor."""
+    motors = tuple(dataclasses.replace(m, converter=ConverterLosses()) for m in setup.motors)
+    return dataclasses.replace(setup, motors=motors)
+
+
+def steady_mask(result, motor: int = 0, settle_s: float = STEADY_SETTLE_S) -> np.ndarray:
+    """Samples at least ``settle_s`` after the start and after the last change of the speed
+    reference, with the stator relay closed."""
+    ref = result.signal("w_ref", motor)
+    changing = np.r_[True, np.abs(np.diff(ref)) > 0.0]
+    last_change = np.maximum.accumulate(np.where(changing, result.t, -np.inf))
+    return (result.t - last_change >= settle_s) & (result.signal("relay_closed", motor) > 0)
+
+
+@dataclass(frozen=True)
+class SideEffect:
+    """Steady-state means of one motor in one run (``mode``): Q_S and its command [var], the
+    torque command and the electromagnetic torque [N m]; ``samples``: steady samples used (the
+    means are NaN without any); ``q_tolerance`` [var]: Q_TOLERANCE_FRACTION of the magnetising
+    reactive power at the nominal supply; ``oscillation_rpm``: the run's speed-error RMS in the
+    limit-cycle band (``DriveResult.speed_oscillation``)."""
+
+    mode: str
+    motor: int
+    samples: int
+    q_s: float
+    q_com: float
+    tau_com: float
+    tau_e: float
+    q_tolerance: float
+    oscillation_rpm: float
+
+    @property
+    def torque_offset(self) -> float:
+        return self.tau_com - self.tau_e
+
+    def reactive_power(self) -> Verdict:
+        """Q_S against Q_COM within ``q_tolerance``."""
+        return within_abs(
+            self.q_s,
+            self.q_com,
+            self.q_tolerance,
+            " var",
+            yes="holds Q_COM",
+            no="departs from Q_COM",
+        )
+
+    def torque(self) -> Verdict:
+        """The torque command against the torque produced within TORQUE_TOLERANCE_NM."""
+        return torque_verdict(self.tau_com, self.tau_e)
+
+    @property
+    def limit_cycles(self) -> bool:
+        """The run's speed oscillates above the summary's finding threshold: its means are taken
+        over a limit cycle."""
+        return self.oscillation_rpm > OSCILLATION_FINDING_RPM
+
+    def q_against(self, ideal: SideEffect) -> Verdict:
+        """Q_S of this (bench) run against the same run with an ideal converter."""
+        return within_abs(
+            self.q_s,
+            ideal.q_s,
+            self.q_tolerance,
+            " var",
+            yes="same as with an ideal converter",
+            no="differs from the ideal converter's",
+        )
+
+    def torque_against(self, ideal: SideEffect) -> Verdict:
+        """tau_COM - tau_e of this (bench) run against the same run with an ideal converter."""
+        return within_abs(
+            1e3 * self.torque_offset,
+            1e3 * ideal.torque_offset,
+            1e3 * TORQUE_TOLERANCE_NM,
+            " mN m",
+            yes="same as with an ideal converter",
+            no="differs from the ideal converter's",
+        )
+
+
+def torque_verdict(tau_com: float, tau_e: float) -> Verdict:
+    """tau_COM against the produced tau_e within TORQUE_TOLERANCE_NM."""
+    return within_abs(
+        1e3 * tau_com,
+        1e3 * tau_e,
+        1e3 * TORQUE_TOLERANCE_NM,
+        " mN m",
+        yes="matches the torque produced",
+        no="is offset from the torque produced",
+    )
+
+
+def q_tolerance(setup: DriveSetup, motor: int = 0) -> float:
+    """Q_TOLERANCE_FRACTION of v_S^2/(w_e L_S) at the supply's first voltage and frequency."""
+    v_s = K_PEAK * float(setup.supply.voltage_pk[1][0])
+    w_e = 2.0 * np.pi * float(setup.supply.frequency_hz[1][0])
+    return Q_TOLERANCE_FRACTION * magnetising_reactive_power(
+        setup.motors[motor].machine.L_s, v_s, w_e
+    )
+
+
+def measure(outcome) -> list[SideEffect]:
+    """The side effect of every motor in every run of a ``ScenarioOutcome``."""
+    setup = outcome.setup
+    out = []
+    for mode, result in outcome.results.items():
+        for k in range(result.n_motors):
+            steady = steady_mask(result, k)
+            n = int(np.count_nonzero(steady))
+
+            def mean(name, result=result, steady=steady, k=k, n=n):
+                return float(np.mean(result.signal(name, k)[steady])) if n else float("nan")
+
+            out.append(
+                SideEffect(
+                    mode=mode,
+                    motor=k,
+                    samples=n,
+                    q_s=mean("q_s"),
+                    q_com=setup.motors[k].controller.reactive_power,
+                    tau_com=mean("tau_com"),
+                    tau_e=mean("tau_e"),
+                    q_tolerance=q_tolerance(setup, k),
+                    oscillation_rpm=result.speed_oscillation(k)[0],
+                )
+            )
+    return out
+
+
+def _who(e: SideEffect, n_motors: int) -> str:
+    return f"{e.mode} command" + (f", motor {e.motor + 1}" if n_motors > 1 else "")
+
+
+def describe(
+    bench: list[SideEffect], ideal: list[SideEffect] | None, setup: DriveSetup
+) -> list[str]:
+    """Markdown lines: for each run and motor, Q_S and the torque command over the steady part
+    with their verdicts, and where ``ideal`` is given the same figures with an ideal converter
+    and whether the converter accounts for the difference."""
+    n_motors = len(setup.motors)
+    losses = sorted({round(converter_loss(setup, k), 3) for k in range(n_motors)})
+    lines = [
+        "- bench converter side effect (rotor converter loss "
+        + ", ".join(f"{v:.2f} V" for v in losses)
+        + f" of fundamental; means over the steady part: reference constant for {STEADY_SETTLE_S:g} s"
+        " or more, relay closed):"
+    ]
+    twins = {(e.mode, e.motor): e for e in ideal or []}
+    for e in bench:
+        who = _who(e, n_motors)
+        if e.samples == 0:
+            lines.append(f"  - {who}: no steady samples")
+            continue
+        line = (
+            f"  - {who} ({e.samples} samples): stator reactive power Q_S = {e.q_s:+.2f} var against "
+            f"Q_COM = {e.q_com:g} var, {e.reactive_power()}; torque command "
+            f"{1e3 * e.tau_com:+.2f} mN m against tau_e = {1e3 * e.tau_e:+.2f} mN m, {e.torque()}"
+        )
+        twin = twins.get((e.mode, e.motor))
+        if twin is not None and twin.samples:
+            line += (
+                f". Ideal converter: Q_S = {twin.q_s:+.2f} var, torque command "
+                f"{1e3 * twin.tau_com:+.2f} mN m against tau_e = {1e3 * twin.tau_e:+.2f} mN m "
+                f"(speed oscillation {twin.oscillation_rpm:.1f} rpm RMS"
+                + (
+                    f" above the {OSCILLATION_FINDING_RPM:g} rpm threshold: means over a limit cycle"
+                    if twin.limit_cycles
+                    else ""
+                )
+                + f"); Q_S {e.q_against(twin)}; tau_COM - tau_e {e.torque_against(twin)}"
+            )
+        lines.append(line)
+    return lines
+
+
+def summary(outcome) -> dict | None:
+    """The bench side effect of ``outcome`` as JSON-ready numbers and verdict sentences (None
+    when every converter is ideal)."""
+    setup = outcome.setup
+    if not uses_bench_converter(setup):
+        return None
+    return {
+        "converter_loss_v": [converter_loss(setup, k) for k in range(len(setup.motors))],
+        "steady_settle_s": STEADY_SETTLE_S,
+        "torque_tolerance_nm": TORQUE_TOLERANCE_NM,
+        "runs": [
+            {
+                "mode": e.mode,
+                "motor": e.motor + 1,
+                "steady_samples": e.samples,
+                "q_s_mean_var": e.q_s,
+                "q_com_var": e.q_com,
+                "q_tolerance_var": e.q_tolerance,
+                "tau_com_mean_nm": e.tau_com,
+                "tau_e_mean_nm": e.tau_e,
+                "reactive_power": e.reactive_power().text if e.samples else None,
+                "torque_command": e.torque().text if e.samples else None,
+            }
+            for e in measure(outcome)
+        ],
+    }

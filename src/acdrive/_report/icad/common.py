@@ -1,0 +1,75 @@
+"""What the sections of the ICAD reproduction report share: the speed and frequency grids, the
+tolerances used by more than one section, and two evaluations of a plant that several tables
+and figures rest on.
+
+Speeds are electrical rotor speeds w_r [rad/s]: seed 002 (Amezquita-Brooks et al.) runs from 0
+to w_r,max = 375 rad/s, seed 001 (Ugalde-Loo et al.) takes the 300 W IM over the same range and
+the 2 MW PMSG from 0 to its rated 50 Hz. A tolerance used by one section only lives in that
+section's module.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from acdrive._report import icad_targets as targets
+from acdrive.analysis._freqresp import LTI, evaluate_ss
+from acdrive.analysis._icad import icad_quantities
+
+#: Speeds of the seed-002 families [rad/s, electrical] (0 ... w_r,max = 375).
+SPEEDS_002 = np.array([0.0, 75.0, 150.0, 225.0, 300.0, 375.0])
+#: Speeds of the seed-001 IM figures (same range) and of the PMSG (0 ... rated 50 Hz).
+SPEEDS_001_IM = np.array([0.0, 100.0, 200.0, 300.0, 375.0])
+SPEEDS_PMSG = 2.0 * np.pi * 50.0 * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+#: Frequency grids [rad/s] of the Bode and of the Nyquist plots.
+W_BODE = np.logspace(0, 5, 2000)
+W_NYQ = np.logspace(-1, 5, 3000)
+#: Speed of the single-speed checks of seed 002: w_r,max = 375 rad/s.
+W_R = targets.W_R_MAX
+
+# --- tolerances used by several sections (each printed in the sentence that uses it) ---------
+#: A machine parameter or an exact structural coefficient as built in against its printed value.
+EXACT_REL_TOL = 1e-12
+#: A closed-form frequency response against the state-space response evaluated directly.
+FREQRESP_REL_TOL = 1e-8
+#: A frequency found by bisection (brentq) against the root it should equal.
+ROOT_REL_TOL = 1e-6
+#: Phase and gain margins quoted as whole degrees / decibels (67, 77, 80 deg; 20, 27 dB).
+PM_TOL_DEG = 1.0
+GM_TOL_DB = 1.0
+#: Open-loop gains quoted as 'approximately' / 'near' a value (approx 20 dB at the resonance,
+#: sec. VII; PI 'dropping near 0 dB around 375 rad/s', sec. VI-D).
+APPROX_GAIN_TOL_DB = 2.0
+
+
+def channel_response(plant, k: LTI, w: np.ndarray) -> dict[str, np.ndarray]:
+    """The ICAD quantities (``icad_quantities``: gamma, c_i, k_i g_ii, gamma h_j, coupling, ...)
+    of ``plant`` with ``k`` on both channels at the frequencies ``w`` [rad/s]."""
+    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * w)
+    kv = k.freqresp(w)
+    return icad_quantities(G, kv, kv)
+
+
+def gamma_real_axis_crossing(plant, w=W_NYQ) -> tuple[float, float]:
+    """(x_max, frequency) of the positive-real-axis crossings of gamma (x_max = 0 if none)."""
+    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * w)
+    gam = G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
+    idx = np.flatnonzero((np.sign(gam.imag[:-1]) != np.sign(gam.imag[1:])) & (gam.real[:-1] > 0))
+    if idx.size == 0:
+        return 0.0, math.nan
+
+    def im(x):
+        Gx = evaluate_ss(plant.A, plant.B, plant.C, plant.D, np.array([1j * x]))[0]
+        return float((Gx[0, 1] * Gx[1, 0] / (Gx[0, 0] * Gx[1, 1])).imag)
+
+    best = (0.0, math.nan)
+    for i in idx:
+        wx = brentq(im, w[i], w[i + 1], xtol=1e-10)
+        Gx = evaluate_ss(plant.A, plant.B, plant.C, plant.D, np.array([1j * wx]))[0]
+        x = float((Gx[0, 1] * Gx[1, 0] / (Gx[0, 0] * Gx[1, 1])).real)
+        if x > best[0]:
+            best = (x, wx)
+    return best

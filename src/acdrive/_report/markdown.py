@@ -1,0 +1,96 @@
+"""Markdown building blocks of the reproduction reports: comparison tables, number formatting
+and figure files.
+
+A report is a list of ``Section``s, each with an introductory paragraph, a comparison table of
+``Row``s (the paper's value beside acdrive's, with the verdict or the reason in the note), text
+after the table and figures with their captions; ``render_section`` writes one as Markdown and
+``save_figure`` writes the PNG a section links to. The verdict sentences themselves come from
+``acdrive._report.verdicts``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+#: Resolution of the report figures [dots per inch].
+DPI = 90
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of a comparison table: the paper's value and acdrive's, with the reason."""
+
+    quantity: str
+    where: str
+    paper: str
+    acdrive: str
+    note: str = ""
+
+
+@dataclass
+class Section:
+    """One ``##`` section of a report: ``text`` before the table of ``rows``, ``after`` it,
+    then ``figures`` as (file name, caption)."""
+
+    title: str
+    text: str = ""
+    rows: list[Row] = field(default_factory=list)
+    figures: list[tuple[str, str]] = field(default_factory=list)  # (file name, caption)
+    after: str = ""
+
+
+def fmt(x, digits: int = 4) -> str:
+    """Compact number formatting (``digits`` significant digits, complex as a + jb, inf / nan
+    spelled out)."""
+    if isinstance(x, complex):
+        return f"{fmt(x.real, digits)} {'+' if x.imag >= 0 else '-'} j{fmt(abs(x.imag), digits)}"
+    x = float(x)
+    if math.isnan(x):
+        return "n/a"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:.{digits}g}"
+
+
+def db(x: float) -> float:
+    """A gain in decibels, 20 log10 x."""
+    return 20.0 * math.log10(x)
+
+
+def save_figure(path: Path, fig) -> None:
+    """Write ``fig`` to ``path`` at ``DPI`` and close it.
+
+    A figure without a layout engine (``pyplot.subplots``, ``report.plotting.new_figure``) gets the
+    tight layout, after which its engine is dropped: ``savefig`` would otherwise draw it once more
+    (without rendering) to lay it out again, and that pass costs as much as the layout itself. A
+    figure made with an engine (e.g. ``layout="constrained"``) is laid out by ``savefig``."""
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
+        fig.set_layout_engine(None)
+    fig.savefig(path, dpi=DPI)
+    pyplot = sys.modules.get("matplotlib.pyplot")  # only pyplot's figures need closing
+    if pyplot is not None:
+        pyplot.close(fig)
+
+
+def render_section(section: Section, fig_rel: str) -> list[str]:
+    """The Markdown lines of ``section``: heading, text, comparison table (``|`` in cells
+    escaped), text after the table, and each figure (linked from the folder ``fig_rel``) with
+    its caption."""
+    out = [f"## {section.title}", ""]
+    if section.text:
+        out += [section.text, ""]
+    if section.rows:
+        out += ["| quantity | where | paper | acdrive | note |", "|---|---|---|---|---|"]
+        for r in section.rows:
+            cells = [r.quantity, r.where, r.paper, r.acdrive, r.note]
+            out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
+        out.append("")
+    if section.after:
+        out += [section.after, ""]
+    for name, cap in section.figures:
+        out += [f"![{cap}]({fig_rel}/{name})", "", f"*{cap}*", ""]
+    return out

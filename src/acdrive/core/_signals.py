@@ -1,0 +1,245 @@
+"""Signal declarations: every parameter, state, input and output of a part is declared once here.
+
+A :class:`Var` names one quantity with its unit, its kind and a one-line doc. A :class:`Layout` is
+an ordered tuple of them and derives everything else: the slot of each quantity in a flat float64
+array, the array size, the column names and units of result tables. Compiled kernels read their
+slots from module-level integer constants taken from a layout (``STATES.slot("psi_s")``), which
+numba folds into the machine code; nothing is numbered by hand, and every array size comes from
+the same declaration that its kernel reads, so a size mismatch cannot exist.
+
+Kinds:
+
+* ``real``: one float.
+* ``complex``: a space vector (Bodson (6)) stored as two floats, real then imaginary part.
+* ``table``: a piecewise-linear profile of ``[time_s, value]`` points, stored at the *end* of a
+  parameter layout as ``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]``; its length is chosen per instance,
+  so kernels find it with :func:`acdrive.core.table_at` from a fixed start slot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive.errors import InputError
+
+KINDS = ("real", "complex", "table")
+#: value rules a real quantity may declare, checked whenever values are packed
+RULES = {
+    "": "",
+    "positive": "must be > 0",
+    "nonnegative": "must be >= 0",
+    "count": "must be a positive integer",
+}
+
+
+@dataclass(frozen=True)
+class Var:
+    """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
+    ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity, a value
+    ``rule`` (one of ``RULES``) that packing enforces."""
+
+    name: str
+    unit: str
+    doc: str
+    kind: str = "real"
+    rule: str = ""
+
+    def __post_init__(self):
+        if not self.name.isidentifier():
+            raise ValueError(f"Var name {self.name!r} must be an identifier")
+        if self.kind not in KINDS:
+            raise ValueError(f"Var {self.name}: kind must be one of {', '.join(KINDS)}")
+        if not self.doc:
+            raise ValueError(f"Var {self.name}: a one-line doc is required")
+        if self.rule not in RULES or (self.rule and self.kind != "real"):
+            raise ValueError(f"Var {self.name}: rule must be one of {list(RULES)} on a real")
+
+    def check(self, field: str, value: float) -> float:
+        """``value`` if it obeys the declared rule, else an InputError naming ``field``."""
+        ok = {
+            "": True,
+            "positive": value > 0.0,
+            "nonnegative": value >= 0.0,
+            "count": value >= 1.0 and value == int(value),
+        }[self.rule]
+        if not ok:
+            raise InputError(field, f"{RULES[self.rule]}, got {value:g}")
+        return value
+
+    @property
+    def width(self) -> int:
+        """Floats taken by a real or complex quantity (tables are sized per instance)."""
+        return 2 if self.kind == "complex" else 1
+
+
+def real(name: str, unit: str, doc: str, rule: str = "") -> Var:
+    return Var(name, unit, doc, "real", rule)
+
+
+def cplx(name: str, unit: str, doc: str) -> Var:
+    return Var(name, unit, doc, "complex")
+
+
+def table(name: str, unit: str, doc: str) -> Var:
+    return Var(name, unit, doc, "table")
+
+
+class Layout:
+    """Ordered declarations and the flat float64 slots they occupy.
+
+    Tables, if any, must come after every real and complex quantity: the fixed part of the layout
+    then has the same slots for every instance, whatever the table lengths.
+    """
+
+    def __init__(self, *variables: Var):
+        self.vars = tuple(variables)
+        names = [v.name for v in self.vars]
+        duplicates = {n for n in names if names.count(n) > 1}
+        if duplicates:
+            raise ValueError(f"duplicate declarations: {', '.join(sorted(duplicates))}")
+        seen_table = False
+        self._slots: dict[str, int] = {}
+        offset = 0
+        for v in self.vars:
+            if v.kind == "table":
+                seen_table = True
+                continue
+            if seen_table:
+                raise ValueError(
+                    f"{v.name}: tables must come after every real and complex quantity"
+                )
+            self._slots[v.name] = offset
+            offset += v.width
+        self.fixed_size = offset
+        self.tables = tuple(v for v in self.vars if v.kind == "table")
+
+    def __iter__(self):
+        return iter(self.vars)
+
+    def __len__(self) -> int:
+        return len(self.vars)
+
+    def __contains__(self, name: str) -> bool:
+        return any(v.name == name for v in self.vars)
+
+    def var(self, name: str) -> Var:
+        for v in self.vars:
+            if v.name == name:
+                return v
+        raise KeyError(name)
+
+    def slot(self, name: str) -> int:
+        """First slot of a real or complex quantity."""
+        if name in self._slots:
+            return self._slots[name]
+        if name in self:
+            raise KeyError(f"{name} is a table: use the table start slot")
+        raise KeyError(name)
+
+    @property
+    def table_start(self) -> int:
+        """Slot at which the first table begins (tables are stored one after another)."""
+        return self.fixed_size
+
+    def size(self, table_lengths: dict[str, int] | None = None) -> int:
+        """Floats needed for this layout with the given number of points per table."""
+        lengths = table_lengths or {}
+        return self.fixed_size + sum(1 + 2 * lengths.get(v.name, 1) for v in self.tables)
+
+    def columns(self, prefix: str = "") -> list[tuple[str, str, str, int]]:
+        """(column name, unit, kind, first slot) per float of the fixed part: a complex
+        quantity gives ``name.re`` and ``name.im``."""
+        out = []
+        for v in self.vars:
+            if v.kind == "table":
+                continue
+            full = f"{prefix}{v.name}"
+            s = self._slots[v.name]
+            if v.kind == "complex":
+                out += [(f"{full}.re", v.unit, "real", s), (f"{full}.im", v.unit, "real", s + 1)]
+            else:
+                out.append((full, v.unit, "real", s))
+        return out
+
+    def pack(self, owner: str, values: dict, defaults: dict | None = None) -> np.ndarray:
+        """Flat array of ``values`` (name -> number, complex number or (times, values) table).
+
+        Every declared quantity must be given (or have a default); an unknown name, a non-finite
+        number, or a malformed table is an ``InputError`` naming ``owner.name``.
+        """
+        merged = dict(defaults or {})
+        merged.update(values)
+        unknown = sorted(set(merged) - {v.name for v in self.vars})
+        if unknown:
+            raise InputError(
+                f"{owner}.{unknown[0]}",
+                f"is not declared by {owner} ({', '.join(v.name for v in self.vars)})",
+            )
+        fixed = np.zeros(self.fixed_size)
+        tables = []
+        for v in self.vars:
+            field = f"{owner}.{v.name}"
+            if v.name not in merged:
+                raise InputError(field, "must be given")
+            value = merged[v.name]
+            if v.kind == "table":
+                tables.append(pack_table(field, value))
+                continue
+            s = self._slots[v.name]
+            if v.kind == "complex":
+                z = _number(field, value, allow_complex=True)
+                fixed[s], fixed[s + 1] = z.real, z.imag
+            else:
+                fixed[s] = v.check(field, _number(field, value, allow_complex=False))
+        return np.concatenate([fixed, *tables]) if tables else fixed
+
+    def unpack(self, array: np.ndarray) -> dict:
+        """name -> value (float or complex) for the fixed part of ``array``."""
+        out = {}
+        for v in self.vars:
+            if v.kind == "table":
+                continue
+            s = self._slots[v.name]
+            out[v.name] = (
+                complex(array[s], array[s + 1]) if v.kind == "complex" else float(array[s])
+            )
+        return out
+
+
+def _number(field: str, value, allow_complex: bool):
+    if isinstance(value, bool) or not isinstance(value, (int, float, complex, np.number)):
+        raise InputError(field, f"must be a number, got {type(value).__name__}")
+    if isinstance(value, (complex, np.complexfloating)):
+        if not allow_complex:
+            raise InputError(field, "must be a real number")
+        z = complex(value)
+        if not (np.isfinite(z.real) and np.isfinite(z.imag)):
+            raise InputError(field, "must be finite (not NaN or infinite)")
+        return z
+    x = float(value)
+    if not np.isfinite(x):
+        raise InputError(field, "must be finite (not NaN or infinite)")
+    return complex(x) if allow_complex else x
+
+
+def pack_table(field: str, value) -> np.ndarray:
+    """``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]`` from a number (constant), a (times, values) pair
+    or a sequence of [time, value] points; times finite, >= 0 and non-decreasing."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        times, values = np.array([0.0]), np.array([_number(field, value, False)])
+    elif isinstance(value, tuple) and len(value) == 2 and np.ndim(value[0]) == 1:
+        times, values = np.asarray(value[0], dtype=float), np.asarray(value[1], dtype=float)
+    else:
+        points = np.asarray(value, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 2:
+            raise InputError(field, "must be a number or a list of [time_s, value] points")
+        times, values = points[:, 0], points[:, 1]
+    if times.size == 0 or times.shape != values.shape:
+        raise InputError(field, "must have as many times as values, at least one")
+    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
+        raise InputError(field, "must be finite (not NaN or infinite)")
+    if times[0] < 0 or np.any(np.diff(times) < 0):
+        raise InputError(field, "times must be >= 0 and non-decreasing")
+    return np.concatenate([[float(times.size)], times, values])

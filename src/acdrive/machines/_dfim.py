@@ -1,0 +1,273 @@
+"""Doubly-fed induction machine (DFIM): parameters, complex model, steady state.
+
+All relations follow M. Bodson, "Speed Control for Doubly-Fed Induction Motors With and Without
+Current Feedback" (called "Bodson" below). Space vectors are complex numbers in the
+power-invariant scaling of Bodson (1)-(8); rotor quantities are referred to the stator frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive._jit import jit, jit_fast
+from acdrive.errors import InputError, require_leakage, require_nonnegative, require_positive
+
+
+@dataclass(frozen=True)
+class DFIMParams:
+    """Electrical and mechanical parameters of a DFIM (Bodson (9), (26)).
+
+    R_s, R_r: stator and rotor resistances [ohm]; L_s, L_r: stator and rotor self inductances [H];
+    M: stator-rotor mutual inductance [H]; n_p: pole pairs; J: inertia of motor and load [kg m^2];
+    B: viscous friction [N m s/rad]; tau_c: Coulomb friction [N m].
+    """
+
+    R_s: float
+    R_r: float
+    L_s: float
+    L_r: float
+    M: float
+    n_p: int
+    J: float
+    B: float = 0.0
+    tau_c: float = 0.0
+
+    def __post_init__(self):
+        for name in ("R_s", "R_r", "L_s", "L_r", "M", "J"):
+            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
+        for name in ("B", "tau_c"):
+            object.__setattr__(self, name, require_nonnegative(name, getattr(self, name)))
+        n_p = self.n_p
+        if isinstance(n_p, bool) or not isinstance(n_p, (int, float, np.integer, np.floating)):
+            raise InputError("n_p", "must be a positive integer")
+        if not math.isfinite(float(n_p)) or float(n_p) != int(n_p) or int(n_p) < 1:
+            raise InputError("n_p", f"must be a positive integer, got {n_p}")
+        object.__setattr__(self, "n_p", int(n_p))
+        require_leakage("M", self.L_s, self.L_r, self.M)
+
+    @property
+    def sigma(self) -> float:
+        """Leakage factor sigma = 1 - M^2 / (L_s L_r) (Bodson, after (45))."""
+        return 1.0 - self.M**2 / (self.L_s * self.L_r)
+
+
+#: The laboratory DFIM of Bodson section III-D / IV-A (standstill estimates, J of motor + DC load).
+BODSON_DFIM = DFIMParams(R_s=0.66, R_r=0.94, L_s=13.1e-3, L_r=9.8e-3, M=9.7e-3, n_p=2, J=3.5e-4)
+
+
+# ---------------------------------------------------------------------------------------------
+# Parameter vector used by compiled code. Index names are module constants (compile-time
+# constants for numba), so compiled code reads ``p[R_S]`` like the paper reads R_S.
+# ---------------------------------------------------------------------------------------------
+R_S, R_R, L_S, L_R, M_SR, N_P, J_INERTIA, B_VISCOUS, TAU_COULOMB = range(9)
+N_MACHINE_PARAMS = 9
+
+
+def machine_vector(params: DFIMParams) -> np.ndarray:
+    """Pack ``params`` in the float64 layout read by the compiled functions below."""
+    p = np.empty(N_MACHINE_PARAMS)
+    p[R_S], p[R_R], p[L_S], p[L_R], p[M_SR] = (
+        params.R_s,
+        params.R_r,
+        params.L_s,
+        params.L_r,
+        params.M,
+    )
+    p[N_P], p[J_INERTIA], p[B_VISCOUS], p[TAU_COULOMB] = (
+        params.n_p,
+        params.J,
+        params.B,
+        params.tau_c,
+    )
+    return p
+
+
+@jit_fast
+def currents_from_fluxes(p, psi_s, psi_r):
+    """(i_s, i_r) from the flux linkages: the inverse of psi_s = L_s i_s + M i_r,
+    psi_r = M i_s + L_r i_r (Bodson (9)), with a real determinant (no complex division)."""
+    inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
+    return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (
+        p[L_S] * psi_r - p[M_SR] * psi_s
+    ) * inv_det
+
+
+@jit
+def impedances(p, w_e, w_m):
+    """Z_S, Z_MS, Z_R, Z_MR of Bodson (11) at electrical frequency w_e and shaft speed w_m."""
+    w_slip = w_e - p[N_P] * w_m
+    Z_S = p[R_S] + 1j * w_e * p[L_S]
+    Z_MS = 1j * w_e * p[M_SR]
+    Z_R = p[R_R] + 1j * w_slip * p[L_R]
+    Z_MR = 1j * w_slip * p[M_SR]
+    return Z_S, Z_MS, Z_R, Z_MR
+
+
+@jit
+def rotor_voltage_for(p, w_e, w_m, v_s, i_s):
+    """Steady-state rotor voltage that gives stator current ``i_s`` (Bodson (20))."""
+    Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
+    return (Z_R * v_s - (Z_S * Z_R - Z_MS * Z_MR) * i_s) / Z_MS
+
+
+@jit
+def rotor_current_for(p, w_e, v_s, i_s):
+    """Steady-state rotor current that gives stator current ``i_s`` (Bodson (43), from (19))."""
+    Z_S = p[R_S] + 1j * w_e * p[L_S]
+    Z_MS = 1j * w_e * p[M_SR]
+    return (v_s - Z_S * i_s) / Z_MS
+
+
+@jit
+def steady_state_currents(p, w_e, w_m, v_s, v_r):
+    """Solve the steady-state equations (19) for (i_s, i_r) given both voltages."""
+    Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
+    det = Z_S * Z_R - Z_MS * Z_MR
+    i_s = (Z_R * v_s - Z_MS * v_r) / det
+    i_r = (Z_S * v_r - Z_MR * v_s) / det
+    return i_s, i_r
+
+
+@jit
+def electromagnetic_torque(p, i_s, i_r):
+    """tau_e = n_p M Im(i_s i_r*) (Bodson (9), third line)."""
+    return p[N_P] * p[M_SR] * (i_s * np.conj(i_r)).imag
+
+
+@jit
+def stator_current_command(p, w_e, v_s, tau, Q):
+    """Stator current giving torque ``tau`` and reactive power ``Q`` with real ``v_s`` > 0.
+
+    Bodson (22) (and (24) for Q = 0). The root with the minus sign is evaluated in the
+    cancellation-free form b / (a + sqrt(a^2 - b)), a = v_s / (2 R_s). Where the radicand is
+    negative no stator current achieves the command; the radicand is then clamped to zero (the
+    largest achievable power) and ``limited`` is True.
+    Returns (i_s, limited).
+    """
+    a = v_s / (2.0 * p[R_S])
+    b = w_e * tau / (p[N_P] * p[R_S]) + Q * Q / (v_s * v_s)
+    radicand = a * a - b
+    limited = radicand < 0.0
+    if limited:
+        radicand = 0.0
+        b = a * a
+    i_d = b / (a + np.sqrt(radicand))
+    return i_d - 1j * Q / v_s, limited
+
+
+@jit
+def stator_current_lossless(p, w_e, v_s, tau, Q):
+    """Stator current for torque ``tau`` and reactive power ``Q`` when R_s = 0 (Bodson (38));
+    with (20) it gives the control law (39)."""
+    return w_e * tau / (v_s * p[N_P]) - 1j * Q / v_s
+
+
+@jit
+def _torque_at_stator_current(p, w_e, v_s, i_d):
+    """Torque for a real stator current i_d (Q = 0), from (31): n_p/w_e (v_s i_d - R_s i_d^2)."""
+    return p[N_P] / w_e * (v_s * i_d - p[R_S] * i_d * i_d)
+
+
+@jit
+def torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max):
+    """Torque limits with Q = 0 (Bodson case 1, (29)-(37)), for motoring and generating torque.
+
+    Returns (tau_max_1, tau_max_2, tau_max_3, tau_min_2, tau_min_3, feasible):
+    tau_max_1 (30) keeps the root of (24) real; tau_max_2 (32) / tau_min_2 keep |i_s| <= i_s_max;
+    tau_max_3 (37) / tau_min_3 keep |i_r| <= i_r_max through (33)-(36). Generating limits use the
+    other root of the same quadratics (the paper's "slightly different" negative limits); there is
+    no generating counterpart of tau_max_1 since (24) is real for every tau < 0.
+    ``feasible`` is False when the rotor current limit is below the magnetising current the
+    stator voltage needs (a_2^2 + a_1 a_3 < 0): no torque then keeps |i_r| <= i_r_max, and the
+    rotor limits collapse to zero.
+    """
+    n_p, R_s, M = p[N_P], p[R_S], p[M_SR]
+    tau_max_1 = n_p / w_e * v_s * v_s / (4.0 * R_s)
+    tau_max_2 = _torque_at_stator_current(p, w_e, v_s, i_s_max)
+    tau_min_2 = _torque_at_stator_current(p, w_e, v_s, -i_s_max)
+    wM2 = w_e * w_e * M * M
+    a_1 = (R_s * R_s + w_e * w_e * p[L_S] * p[L_S]) / wM2
+    a_2 = R_s * v_s / wM2
+    a_3 = i_r_max * i_r_max - v_s * v_s / wM2
+    disc = a_2 * a_2 + a_1 * a_3
+    feasible = disc >= 0.0 and a_3 >= 0.0
+    if not feasible:
+        return tau_max_1, tau_max_2, 0.0, tau_min_2, 0.0, False
+    i_s_rmax = (a_2 + np.sqrt(disc)) / a_1
+    i_s_rmin = (a_2 - np.sqrt(disc)) / a_1
+    # beyond the peak of (31) at i_d = v_s/(2 R_s) the torque falls again: clip to the peak
+    i_peak = v_s / (2.0 * R_s)
+    tau_max_3 = _torque_at_stator_current(p, w_e, v_s, min(i_s_rmax, i_peak))
+    tau_min_3 = _torque_at_stator_current(p, w_e, v_s, i_s_rmin)
+    return tau_max_1, tau_max_2, tau_max_3, tau_min_2, tau_min_3, True
+
+
+@jit
+def torque_window(p, w_e, v_s, i_s_max, i_r_max):
+    """Admissible torque interval [tau_lo, tau_hi] with Q = 0, the tightest of case 1 limits.
+
+    Returns (tau_lo, tau_hi, feasible). Bodson uses the smallest of (30), (32), (37) on line.
+    """
+    t1, t2, t3, m2, m3, feasible = torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max)
+    tau_hi = min(t1, min(t2, t3))
+    tau_lo = max(m2, m3)
+    return tau_lo, tau_hi, feasible
+
+
+@jit
+def torque_limit_case2(p, w_e, v_s, Q, i_s_max, i_r_max):
+    """Torque limits for R_s = 0 and any Q (Bodson case 2, (40)-(42)).
+
+    Returns (tau_max_2, tau_max_3): the largest |tau| allowed by the stator current constraint (40)
+    and by the rotor current constraint (42) at reactive power Q (negative if Q alone violates it).
+    """
+    k = w_e / (v_s * p[N_P])
+    rest_s = i_s_max * i_s_max - (Q / v_s) ** 2
+    tau_max_2 = np.sqrt(rest_s) / k if rest_s >= 0.0 else -1.0
+    m = p[L_S] / p[M_SR]
+    rest_r = i_r_max * i_r_max - (v_s / (w_e * p[M_SR]) - m * Q / v_s) ** 2
+    tau_max_3 = np.sqrt(rest_r) / (m * k) if rest_r >= 0.0 else -1.0
+    return tau_max_2, tau_max_3
+
+
+def delta_z_coefficients(params: DFIMParams, w_e: float, w_m: float) -> np.ndarray:
+    """Coefficients [c2, c1, c0] of Delta Z(s) (Bodson (13)), highest power first (complex)."""
+    p = machine_vector(params)
+    Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
+    L_s, L_r, M = params.L_s, params.L_r, params.M
+    return np.array(
+        [L_s * L_r - M * M, L_s * Z_R + L_r * Z_S - M * (Z_MR + Z_MS), Z_S * Z_R - Z_MR * Z_MS]
+    )
+
+
+def electrical_poles(params: DFIMParams, w_e: float, w_m: float) -> np.ndarray:
+    """The two electrical poles, roots of Delta Z(s) (Bodson (13))."""
+    return np.roots(delta_z_coefficients(params, w_e, w_m))
+
+
+def shifted_delta_z_coefficients(params: DFIMParams, w_m: float) -> np.ndarray:
+    """Coefficients of Delta Z(s - j w_e) = a0 s^2 + (a1 + j b1) s + a2 + j b2 (Bodson (15)-(16))."""
+    L_s, L_r, M, R_s, R_r, n_p = (
+        params.L_s,
+        params.L_r,
+        params.M,
+        params.R_s,
+        params.R_r,
+        params.n_p,
+    )
+    a0 = L_s * L_r - M * M
+    a1 = L_s * R_r + L_r * R_s
+    a2 = R_s * R_r
+    b1 = -n_p * w_m * a0
+    b2 = -n_p * w_m * L_r * R_s
+    return np.array([a0, a1 + 1j * b1, a2 + 1j * b2])
+
+
+def stator_current_per_rotor_voltage(params: DFIMParams, w_e: float, w_m: float, s):
+    """Transfer function i_s / v_r = (-s M - Z_MS) / Delta Z(s) (Bodson (14)), at complex ``s``."""
+    s = np.asarray(s, dtype=complex)
+    c2, c1, c0 = delta_z_coefficients(params, w_e, w_m)
+    return (-s * params.M - 1j * w_e * params.M) / ((c2 * s + c1) * s + c0)

@@ -1,0 +1,154 @@
+"""Scenario files: reading a built-in or a TOML file, and the validated view of its tables.
+
+``Section`` wraps one TOML table: every field read through it is checked (type, finiteness, the
+rule given) and named by its path in an ``InputError``; ``done()`` reports keys nobody read. The
+drive-specific loaders (``scenarios.loader`` for the DFIM drive, ``scenarios.im_loader`` for the
+cage induction motor drive) build their setups with it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.errors import InputError, require_finite, require_nonnegative
+from acdrive.machines import _registry as registry
+from acdrive.sim._setup import constant
+
+
+def builtin_names() -> list[str]:
+    folder = resources.files("acdrive.scenarios") / "builtin"
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def builtin_text(name: str) -> str:
+    return (resources.files("acdrive.scenarios") / "builtin" / f"{name}.toml").read_text()
+
+
+def read_scenario(source: str | Path) -> dict:
+    """Parse a scenario: a built-in name or a path to a TOML file."""
+    source = str(source)
+    if source in builtin_names():
+        text, origin = builtin_text(source), source
+    else:
+        path = Path(source)
+        if not path.is_file():
+            raise InputError(
+                "scenario",
+                f"'{source}' is neither a built-in scenario ({', '.join(builtin_names())}) nor a file",
+            )
+        try:
+            text, origin = path.read_text(encoding="utf-8"), str(path)
+        except UnicodeDecodeError:
+            raise InputError("scenario", f"{path} is not a UTF-8 text file") from None
+        except OSError as exc:
+            raise InputError("scenario", f"cannot read {path} ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError("scenario", f"{origin} is not valid TOML ({exc})") from None
+
+
+class Section:
+    """A TOML table being validated: tracks the keys read so unknown keys can be reported."""
+
+    def __init__(self, data, path: str):
+        if not isinstance(data, dict):
+            raise InputError(path, "must be a table")
+        self.data, self.path, self.used = data, path, set()
+
+    def field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def get(self, key, default=None):
+        self.used.add(key)
+        return self.data.get(key, default)
+
+    def has(self, key) -> bool:
+        return key in self.data
+
+    def number(self, key, default, rule=require_finite):
+        value = self.get(key, default)
+        return rule(self.field(key), value)
+
+    def integer(self, key, default, minimum=1, maximum=None):
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise InputError(self.field(key), f"must be an integer >= {minimum}")
+        if maximum is not None and value > maximum:
+            raise InputError(self.field(key), f"must be an integer <= {maximum}, got {value}")
+        return value
+
+    def boolean(self, key, default):
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise InputError(self.field(key), "must be true or false")
+        return value
+
+    def text(self, key, default=None, choices=None):
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            raise InputError(self.field(key), "must be a string")
+        if choices is not None and value not in choices:
+            raise InputError(self.field(key), f"must be one of {', '.join(choices)}")
+        return value
+
+    def profile(self, key, scale=1.0, rule=require_finite):
+        """A list of [t, value] pairs with non-decreasing t >= 0, as (times, values) arrays."""
+        value = self.get(key)
+        name = self.field(key)
+        if not isinstance(value, list) or not value:
+            raise InputError(name, "must be a non-empty list of [time_s, value] pairs")
+        times, values = [], []
+        for i, pair in enumerate(value):
+            if not isinstance(pair, list) or len(pair) != 2:
+                raise InputError(f"{name}[{i}]", "must be a [time_s, value] pair")
+            times.append(require_nonnegative(f"{name}[{i}][0]", pair[0]))
+            values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
+        if any(b < a for a, b in itertools.pairwise(times)):
+            raise InputError(name, "times must be non-decreasing")
+        return np.array(times), np.array(values)
+
+    def constant_or_profile(self, key, default, scale=1.0, rule=require_finite):
+        if self.has(key) and self.has(f"{key}_profile"):
+            raise InputError(self.field(key), f"give either {key} or {key}_profile, not both")
+        if self.has(f"{key}_profile"):
+            return self.profile(f"{key}_profile", scale, rule)
+        return constant(self.number(key, default, rule) * scale)
+
+    def done(self):
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise InputError(self.field(unknown[0]), "unknown key")
+
+
+def machine_from(
+    section: Section,
+    kind: type,
+    fields: tuple[str, ...],
+    default: str,
+    params_label: str = "[params]",
+):
+    """The machine of ``section``: a built-in name (``machine``, of parameter class ``kind``) or
+    the table ``params`` holding ``fields``, validated by ``kind`` itself; not both."""
+    if section.has("machine") and section.has("params"):
+        raise InputError(
+            section.field("machine"), f"give either machine or {params_label}, not both"
+        )
+    if section.has("params"):
+        params = Section(section.get("params"), section.field("params"))
+        values = {k: params.get(k) for k in fields}
+        params.done()
+        missing = [k for k, v in values.items() if v is None]
+        if missing:
+            raise InputError(params.field(missing[0]), "is required")
+        try:
+            return kind(**values)
+        except InputError as exc:
+            raise InputError(params.field(exc.field), exc.rule) from None
+    name = section.text("machine", default, choices=registry.names(kind))
+    return registry.MACHINES[name]

@@ -1,0 +1,337 @@
+"""Running a scenario: one or several simulations, their headline figures and their files.
+
+``run_scenario`` runs a ``DriveSetup`` (once, or once per controller mode for comparisons) and
+returns a ``ScenarioOutcome``: the results and the summary (summary.json);
+``acdrive._report.drive_outputs.write_outcome`` saves data, figures and summary.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acdrive.sim._result import OSCILLATION_BAND_HZ, RPM_PER_RAD_S, DriveResult
+from acdrive.sim._setup import DriveSetup, simulate
+
+MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
+#: speed-error RMS in the 20-200 Hz band above which the summary states a limit-cycle finding
+OSCILLATION_FINDING_RPM = 1.0
+#: the end of the run in which an oscillation is also looked for [s]: the shortest stretch the
+#: estimate accepts (five periods of the band's lowest frequency), so a late or growing
+#: oscillation is not averaged away over a quiet start
+LATE_WINDOW_S = 5.0 / OSCILLATION_BAND_HZ[0]
+
+
+def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict | None:
+    """Relay closing time, stator current transient after closing, and the encoder alignment.
+
+    The transient is the largest peak stator phase current within 0.1 s of closing (Bodson (8)),
+    also given as a fraction of the stator current limit. ``theta_adj_error_rad`` is theta_adj
+    minus the encoder's electrical offset n_p x offset, wrapped to (-pi, pi]: what the
+    synchroniser left unidentified (a few hundredths of a radian after a synchronised closing: the
+    phase errors of the law it compensates, converter loss and hold). With a
+    ``relay_forced_close_time`` the summary adds that time and ``closed_by_force``: whether the
+    relay was still open by the synchroniser's command then.
+    """
+    closed = result.signal("relay_closed", motor)
+    m = setup.motors[motor]
+    if not m.controller.sync.enabled:
+        return None
+    if not closed.any():
+        return {"relay_closed": False}
+    i = int(np.argmax(closed > 0))
+    # the logged relay state is the plant's at t_k, read with the command held from the previous
+    # sample: the contact closed at the sample before the first closed row (exact with log_every
+    # = 1, within one logging interval otherwise)
+    t_close = float(result.t[i]) - result.sample_time
+    after = (result.t >= result.t[i]) & (result.t < result.t[i] + 0.1)
+    peak = float(np.max(result.peak("i_s_mag", motor)[after]))
+    expected = math.remainder(m.machine.n_p * m.encoder_offset, 2 * math.pi)
+    theta_adj = float(result.signal("theta_adj", motor)[i])
+    forced = (
+        {
+            "relay_forced_close_time_s": m.relay_forced_close_time,
+            "closed_by_force": _closed_by_force(result, setup, motor),
+        }
+        if math.isfinite(m.relay_forced_close_time)
+        else {}
+    )
+    return {
+        "relay_closed": True,
+        **forced,
+        "closing_time_s": t_close,
+        "closing_stator_current_peak_a": peak,
+        "closing_current_fraction_of_limit": peak / m.controller.stator_current_limit_pk,
+        "voltage_mismatch_at_closing": float(result.signal("v_mismatch", motor)[max(i - 1, 0)]),
+        "theta_adj_rad": theta_adj,
+        "encoder_offset_electrical_rad": expected,
+        "theta_adj_error_rad": math.remainder(theta_adj - expected, 2 * math.pi),
+        "m_adj": float(result.signal("m_adj", motor)[i]),
+    }
+
+
+def _late_oscillation(results: dict) -> tuple | None:
+    """(mode, motor, RMS [rpm], frequency [Hz], whole-run RMS) of the first speed oscillation
+    above the finding threshold over the last ``LATE_WINDOW_S`` of a run, or None."""
+    for mode, result in results.items():
+        tail = result.t >= result.t[-1] - LATE_WINDOW_S * (1 - 1e-9)
+        end = DriveResult(result.name, result.t[tail], result.signals[tail], result.sample_time,
+                          result.final_state)  # fmt: skip
+        for k in range(result.n_motors):
+            rms, hz = end.speed_oscillation(k)
+            if rms > OSCILLATION_FINDING_RPM:
+                return mode, k, rms, hz, result.speed_oscillation(k)[0]
+    return None
+
+
+def _open_relay_reasons(result: DriveResult, motor: int = 0) -> str:
+    """Why a synchroniser may not have closed the relay, from the events of the run: a saturated
+    rotor converter (the open-stator voltage of (28) at this speed needs more than the DC link
+    gives) or a lost supply (synchronising suspended)."""
+    events = result.events(motor)
+    reasons = ""
+    if events["converter_saturation"]:
+        reasons += (
+            f"; the rotor converter was saturated on {events['converter_saturation']} samples: "
+            "the rotor voltage that builds the grid's voltage on the open stator at this speed "
+            "(Bodson (28)) is beyond what the DC link gives"
+        )
+    if events["supply_lost"]:
+        reasons += f"; the supply was lost on {events['supply_lost']} samples"
+    return reasons
+
+
+def _closed_by_force(result: DriveResult, setup: DriveSetup, k: int) -> bool:
+    """True if motor k's relay was closed by ``relay_forced_close_time`` while its synchroniser
+    still held it open (the synchroniser's command, column ``phase``, open at that sample)."""
+    t_force = setup.motors[k].relay_forced_close_time
+    if not math.isfinite(t_force) or t_force > result.t[-1]:
+        return False
+    at = int(np.argmax(result.t >= t_force))
+    return bool(result.signal("phase", k)[at] == 0.0)
+
+
+def _forced_close_warning(result: DriveResult, setup: DriveSetup, k: int) -> str:
+    """The relay of motor k closed by force (``_closed_by_force``): when, how far from
+    synchronised, what the synchroniser left unidentified and where the speed ended up."""
+    m = setup.motors[k]
+    closed = result.signal("relay_closed", k)
+    i = int(np.argmax(closed > 0))
+    mismatch = float(result.signal("v_mismatch", k)[max(i - 1, 0)])
+    expected = m.machine.n_p * m.encoder_offset
+    error = math.remainder(float(result.signal("theta_adj", k)[i]) - expected, 2 * math.pi)
+    tail = result.t >= 0.9 * result.t[-1]
+    speed_error = float(np.max(np.abs(result.reference_rpm(k) - result.speed_rpm(k))[tail]))
+    return (
+        f"motor {k + 1}: relay closed by force at relay_forced_close_time = "
+        f"{m.relay_forced_close_time:g} s, unsynchronised: |v_s - v_g| was {mismatch:.0%} of the "
+        f"grid voltage just before; theta_adj then differs from the encoder's electrical offset by "
+        f"{error:+.3f} rad and the synchroniser cannot identify it any more (the stator carries "
+        f"the grid's voltage); speed error over the last 10 % of the run up to "
+        f"{speed_error:.1f} rpm"
+    )
+
+
+#: the drive may deliver less than its current-limit torque while slewing (converter voltage,
+#: losses): a step's slewing window is this many times the time at the limit torque
+SLEW_MARGIN = 2.0
+#: time constants 1 / a_D,VEL of the speed loop after slewing: both roots of (27) sit at
+#: -a_D,VEL, whose step error (1 + a t) e^{-a t} is below 2 % after 6 / a_D,VEL
+SETTLE_TIME_CONSTANTS = 6.0
+
+
+def _slew_torque(setup: DriveSetup, motor: int) -> float:
+    """The smaller of the motoring and generating torque limits [N m] of motor ``motor`` at the
+    nominal supply (Bodson (30)-(37), as ``acdrive limits``): the torque a reference step is
+    slewed with at most."""
+    from acdrive._frames import K_PEAK
+    from acdrive.machines._dfim import machine_vector, torque_limits_case1
+
+    m = setup.motors[motor]
+    c = m.controller
+    v_pk = float(setup.supply.voltage_pk[1][0])
+    w_e = 2.0 * math.pi * float(setup.supply.frequency_hz[1][0])
+    t1, t2, t3, m2, m3, _ = torque_limits_case1(
+        machine_vector(m.machine), w_e, K_PEAK * v_pk, K_PEAK * c.stator_current_limit_pk,
+        K_PEAK * c.rotor_current_limit_pk,
+    )  # fmt: skip
+    return min(abs(min(t1, t2, t3)), abs(max(m2, m3)))
+
+
+def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict:
+    """Where the speed of motor ``motor`` is expected to track its reference, and how well it did.
+
+    Not expected: while the stator relay is open (the speed is not controlled), and after each
+    change of the reference faster than the drive can follow (a step, or a segment steeper than
+    tau/J) and each relay closing, for SLEW_MARGIN x J |dw| / tau to slew at the torque limit
+    tau (``_slew_torque``) plus SETTLE_TIME_CONSTANTS / a_D,VEL for the speed loop to settle
+    (a_D,VEL = K_P / (2 J), (27)); dw is the step, or the speed error at closing. Returns the
+    ``rule`` (a sentence with the numbers), the excluded ``windows_s``, the ``tracked_fraction``
+    of the samples and the RMS and largest |error| [rpm] over the tracked samples, with when the
+    largest occurred (``None`` for all three if no sample is tracked)."""
+    m = setup.motors[motor]
+    J = m.machine.J
+    a = m.controller.gains.K_P / (2.0 * J)
+    tau = _slew_torque(setup, motor)
+    settle = SETTLE_TIME_CONSTANTS / a
+    times, values = (np.asarray(x, dtype=float) for x in m.speed_reference)
+    changes = []  # (time, |dw| [rad/s])
+    for i in range(1, times.size):
+        dt, dw = times[i] - times[i - 1], abs(values[i] - values[i - 1])
+        if dw > 0.0 and (dt <= 0.0 or dw / dt > tau / J):
+            changes.append((float(times[i - 1]), float(dw)))
+    t = result.t
+    err = result.reference_rpm(motor) - result.speed_rpm(motor)
+    closed = result.signal("relay_closed", motor) > 0
+    closings = np.flatnonzero(closed[1:] & ~closed[:-1]) + 1
+    for i in closings:
+        changes.append((float(t[i]), abs(float(err[i])) / RPM_PER_RAD_S))
+    mask = closed.copy()
+    windows = []
+    for start, dw in sorted(changes):
+        end = start + SLEW_MARGIN * J * dw / tau + settle
+        mask[(t >= start) & (t < end)] = False
+        windows.append([start, min(end, float(t[-1]))])
+    open_s = float(np.count_nonzero(~closed)) * (t[1] - t[0] if t.size > 1 else 0.0)
+    relay = f"relay closed ({open_s:.3g} s open excluded) and " if open_s > 0.0 else ""
+    rule = (
+        f"speed error where tracking is expected: {relay}not within {SLEW_MARGIN:g} x J |dw| / tau + {SETTLE_TIME_CONSTANTS:g} / a_D,VEL of "
+        f"a reference step or relay closing (J = {J:.3g} kg m^2, tau = {tau:.3g} N m at the "
+        f"nominal supply, a_D,VEL = {a:.0f} rad/s: {settle * 1e3:.1f} ms to settle)"
+    )
+    out = {"rule": rule, "windows_s": windows, "tracked_fraction": float(np.mean(mask))}
+    if mask.any():
+        k = int(np.argmax(np.where(mask, np.abs(err), -1.0)))
+        out["rms_error_rpm"] = float(np.sqrt(np.mean(err[mask] ** 2)))
+        out["max_abs_error_rpm"] = float(abs(err[k]))
+        out["max_abs_error_at_s"] = float(t[k])
+    else:
+        out["rms_error_rpm"] = out["max_abs_error_rpm"] = out["max_abs_error_at_s"] = None
+    return out
+
+
+@dataclass
+class ScenarioOutcome:
+    setup: DriveSetup
+    results: dict[str, DriveResult]  # label -> result ("main", or one per compared mode)
+    summary: dict = field(default_factory=dict)
+
+    @property
+    def main(self) -> DriveResult:
+        return next(iter(self.results.values()))
+
+
+def synchronous_rpm(setup: DriveSetup) -> float:
+    return 60.0 * float(setup.supply.frequency_hz[1][0]) / setup.motors[0].machine.n_p
+
+
+def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
+    """Simulate ``setup`` (once per mode if it compares modes) and summarise. ``on_run(mode)``,
+    if given, is called before each simulation (a progress display)."""
+    runs = (
+        [(mode, setup.with_mode(mode)) for mode in setup.compare_modes]
+        if setup.compare_modes
+        else [(setup.motors[0].controller.mode, setup)]
+    )
+    results = {}
+    for mode, run_setup in runs:
+        if on_run is not None:
+            on_run(mode)
+        results[mode] = simulate(run_setup)
+    summaries = {mode: result.summary() for mode, result in results.items()}  # once each
+    for mode, result in results.items():  # tracking where it is expected (the headline)
+        for k, motor_summary in enumerate(summaries[mode]["motors"]):
+            motor_summary["speed_tracking"] = tracking_windows(result, setup, k)
+        summaries[mode]["speed_tracking"] = summaries[mode]["motors"][0]["speed_tracking"]
+    first_mode, first = next(iter(results.items()))
+    summary = dict(summaries[first_mode])
+    motor = setup.motors[0]
+    K_PC, K_IC = motor.controller.current_gains(motor.machine)
+    summary["mode"] = first_mode
+    summary["gains"] = {
+        "K_P": motor.controller.gains.K_P,
+        "K_I": motor.controller.gains.K_I,
+        "K_F": motor.controller.gains.K_F,
+        "K_PC": K_PC,
+        "K_IC": K_IC,
+        "R_T": motor.controller.R_T,
+    }
+    if len(results) > 1:
+        for mode, s in summaries.items():
+            suffix = MODE_SUFFIX[mode]
+            summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
+            summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
+            summary[f"speed_tracking_{suffix}"] = s["speed_tracking"]
+            summary[f"limit_events_{suffix}"] = s["limit_events"]
+    for mode, s in summaries.items():
+        worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
+        if worst["speed_oscillation_rms_rpm"] > OSCILLATION_FINDING_RPM:
+            low, high = OSCILLATION_BAND_HZ
+            summary["finding"] = (
+                f"{mode} command: the speed oscillates ({worst['speed_oscillation_rms_rpm']:.1f} rpm "
+                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
+                f"{OSCILLATION_FINDING_RPM:g} rpm threshold) at a_D,VEL = "
+                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
+                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+            )
+            break
+    if "finding" not in summary:
+        late = _late_oscillation(results)
+        if late is not None:
+            mode, k, rms, hz, whole = late
+            low, high = OSCILLATION_BAND_HZ
+            summary["finding"] = (
+                f"{mode} command: the speed oscillates at the end of the run (motor {k + 1}: "
+                f"{rms:.1f} rpm RMS at about {hz:.0f} Hz over its last {LATE_WINDOW_S:g} s in "
+                f"the {low:g}-{high:g} Hz band, above the {OSCILLATION_FINDING_RPM:g} rpm "
+                f"threshold; {whole:.1f} rpm over the whole run): an oscillation that starts late "
+                f"or is still growing, at a_D,VEL = "
+                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
+                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+            )
+    # the bench converter's first-harmonic voltage loss per motor (dead time and device drops,
+    # plant.converter / machines.dfim_part), which the scenario notes refer to
+    summary["converter_fundamental_loss_v"] = [
+        float(m.converter.fundamental_loss(m.dc_link_voltage)) for m in setup.motors
+    ]
+    if setup.note:
+        summary["note"] = setup.note
+    warnings = []
+    summary["limit_excursions"] = {}
+    for mode, result in results.items():
+        per_motor = []
+        for k, m in enumerate(setup.motors):
+            limits = {
+                "i_r_mag": m.controller.rotor_current_limit_pk,
+                "i_s_mag": m.controller.stator_current_limit_pk,
+            }
+            excursions = result.limit_excursions(k, limits)
+            per_motor.append(excursions)
+            for name, e in excursions.items():
+                if e["samples_above"]:
+                    what = "rotor" if name == "i_r_mag" else "stator"
+                    warnings.append(
+                        f"{mode} command, motor {k + 1}: {what} current above its "
+                        f"{e['limit_a']:g} A limit on {e['samples_above']} logged samples, peak "
+                        f"{e['peak_a']:.2f} A, first at {e['first_time_s']:.3f} s"
+                    )
+        summary["limit_excursions"][mode] = per_motor
+    sync = synchronisation_summary(first, setup)
+    if sync is not None:
+        summary["synchronisation"] = sync
+        if not sync["relay_closed"]:
+            warnings.append(
+                f"the synchroniser never closed the relay in {setup.duration:g} s: the stator "
+                "stayed open and the speed was not controlled" + _open_relay_reasons(first)
+            )
+    for k in range(len(setup.motors)):
+        if _closed_by_force(first, setup, k):
+            warnings.append(_forced_close_warning(first, setup, k))
+    if warnings:
+        summary["warnings"] = warnings
+    fallback = first.first_event_time("sensor_fallback")
+    if fallback is not None:
+        summary["sensor_fallback_time_s"] = fallback
+    return ScenarioOutcome(setup=setup, results=results, summary=summary)

@@ -1,0 +1,278 @@
+"""Typed simulation results: logged signals, derived metrics, export to pandas / CSV / Parquet."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8)
+from acdrive.columns import DEFAULT_FORMAT, Column, write_table
+from acdrive.control._dfim import EVENT_NAMES
+
+#: the signals of a DFIM drive run, per motor and logged sample (``DriveResult.signals``)
+LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
+             "i_ry", "flags", "i_r_com_mag", "q_s", "v_mismatch", "theta_adj", "m_adj", "phase",
+             "mode", "relay_closed", "i_r_com_d", "i_r_com_q", "i_r_d", "i_r_q")  # fmt: skip
+N_LOG = len(LOG_NAMES)
+
+_PK = "peak phase value (space-vector magnitude / sqrt(3/2), Bodson (8))"
+_SV = (
+    "power-invariant space-vector component in the stator-voltage frame (divide by sqrt(3/2) "
+    "for phase peak)"
+)
+#: the columns of the result files: (file name, signal of ``LOG_NAMES``, scale, unit, description).
+#: Magnitudes are written as peak phase values (suffix ``_pk``, as summary.json and the figures),
+#: components as power-invariant space vectors (suffix ``_sv``; ``acdrive.columns``).
+FILE_COLUMNS = (
+    ("w", "w", 1.0, "rad/s", "shaft speed (mechanical)"),
+    ("w_ref", "w_ref", 1.0, "rad/s", "speed reference (mechanical)"),
+    ("tau_com", "tau_com", 1.0, "N m", "torque command of the speed controller (25), limited"),
+    ("tau_e", "tau_e", 1.0, "N m", "electromagnetic torque"),
+    ("v_s_pk", "v_s_mag", 1.0 / SQRT_3_2, "V", f"stator terminal voltage, {_PK}"),
+    ("v_r_pk", "v_r_mag", 1.0 / SQRT_3_2, "V", f"rotor voltage applied by the converter, {_PK}"),
+    ("i_s_pk", "i_s_mag", 1.0 / SQRT_3_2, "A", f"stator current, {_PK}"),
+    ("i_r_pk", "i_r_mag", 1.0 / SQRT_3_2, "A", f"rotor current, {_PK}"),
+    ("i_rx", "i_rx", 1.0, "A", "rotor phase X current, instantaneous"),
+    ("i_ry", "i_ry", 1.0, "A", "rotor phase Y current, instantaneous"),
+    ("flags", "flags", 1.0, "",
+     "event bits raised on this sample: " + ", ".join(
+         f"{1 << b} {name}" for b, name in enumerate(EVENT_NAMES))),
+    ("i_r_com_pk", "i_r_com_mag", 1.0 / SQRT_3_2, "A", f"rotor current command (43), {_PK}"),
+    ("q_s", "q_s", 1.0, "var", "stator reactive power Im(v_s conj(i_s)) (Bodson (5))"),
+    ("v_mismatch", "v_mismatch", 1.0, "",
+     "|v_s - v_grid| / |v_grid|: stator voltage against the grid's (synchronisation)"),
+    ("theta_adj", "theta_adj", 1.0, "rad", "synchroniser's angle adjustment theta_adj"),
+    ("m_adj", "m_adj", 1.0, "", "synchroniser's magnitude adjustment m_adj"),
+    ("relay_command", "phase", 1.0, "", "synchroniser's relay command: 1 close, 0 open"),
+    ("mode", "mode", 1.0, "", "controller mode in use: 0 voltage command, 1 current command"),
+    ("relay_closed", "relay_closed", 1.0, "", "stator relay: 1 closed, 0 open"),
+    ("i_r_com_d_sv", "i_r_com_d", 1.0, "A", f"rotor current command (43), d: {_SV}"),
+    ("i_r_com_q_sv", "i_r_com_q", 1.0, "A", f"rotor current command (43), q: {_SV}"),
+    ("i_r_d_sv", "i_r_d", 1.0, "A", f"measured rotor current, d: {_SV}"),
+    ("i_r_q_sv", "i_r_q", 1.0, "A", f"measured rotor current, q: {_SV}"),
+)  # fmt: skip
+
+RPM_PER_RAD_S = 30.0 / np.pi
+#: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag
+OSCILLATION_BAND_HZ = (20.0, 200.0)
+
+
+@dataclass
+class DriveResult:
+    """Signals of every motor at every logged sample.
+
+    ``signals[i, k, j]`` is signal ``LOG_NAMES[j]`` of motor k at time ``t[i]``: speeds in rad/s,
+    torques in N m, voltage and current magnitudes as complex space-vector magnitudes (Bodson (8):
+    divide by sqrt(3/2) for the peak phase value), rotor phase currents X and Y in A, and the
+    event-flag bits of ``acdrive.control._dfim``.
+    """
+
+    name: str
+    t: np.ndarray
+    signals: np.ndarray
+    sample_time: float
+    final_state: np.ndarray
+    wall_time: float = 0.0
+
+    @property
+    def n_motors(self) -> int:
+        return self.signals.shape[1]
+
+    def signal(self, name: str, motor: int = 0) -> np.ndarray:
+        return self.signals[:, motor, LOG_NAMES.index(name)]
+
+    def speed_rpm(self, motor: int = 0) -> np.ndarray:
+        return self.signal("w", motor) * RPM_PER_RAD_S
+
+    def reference_rpm(self, motor: int = 0) -> np.ndarray:
+        return self.signal("w_ref", motor) * RPM_PER_RAD_S
+
+    def peak(self, name: str, motor: int = 0) -> np.ndarray:
+        """Peak phase value of a space-vector magnitude signal (Bodson (8))."""
+        return self.signal(name, motor) / SQRT_3_2
+
+    def events(self, motor: int = 0) -> dict[str, int]:
+        """Number of samples on which each event flag was raised."""
+        flags = self.signal("flags", motor).astype(np.int64)
+        return {
+            name: int(np.count_nonzero(flags & (1 << bit))) for bit, name in enumerate(EVENT_NAMES)
+        }
+
+    def first_event_time(self, name: str, motor: int = 0) -> float | None:
+        flags = self.signal("flags", motor).astype(np.int64)
+        hits = np.flatnonzero(flags & (1 << EVENT_NAMES.index(name)))
+        return float(self.t[hits[0]]) if hits.size else None
+
+    def tracking_mask(
+        self, motor: int = 0, settle_s: float = 0.5, jump_rpm: float = 10.0
+    ) -> np.ndarray:
+        """Samples where the speed is expected to track: not within ``settle_s`` after a reference
+        jump (a change larger than ``jump_rpm`` in one sample, such as the abrupt stop of Fig. 4)."""
+        ref = self.reference_rpm(motor)
+        jumps = np.flatnonzero(np.abs(np.diff(ref)) > jump_rpm) + 1
+        mask = np.ones(ref.size, dtype=bool)
+        for j in jumps:
+            mask[(self.t >= self.t[j]) & (self.t < self.t[j] + settle_s)] = False
+        return mask
+
+    def speed_oscillation(self, motor: int = 0, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float]:
+        """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz``.
+
+        Method: the longest stretch of consecutive tracking samples (``tracking_mask``; nothing is
+        zero-filled), its linear trend removed, a Hann window w applied against leakage from slow
+        transients, then Parseval on its FFT: mean square in the band = 2 sum |X_k|^2 / (N sum w^2)
+        over the band's bins. A stretch shorter than five periods of the band's
+        lowest frequency gives (0, 0): too short to tell a limit cycle from a transient."""
+        start, stop = _longest_run(self.tracking_mask(motor))
+        dt = self.t[1] - self.t[0] if self.t.size > 1 else self.sample_time
+        n = stop - start
+        if n < 16 or n * dt < 5.0 / band_hz[0]:
+            return 0.0, 0.0
+        t = self.t[start:stop]
+        err = (self.reference_rpm(motor) - self.speed_rpm(motor))[start:stop]
+        err = err - np.polyval(np.polyfit(t - t[0], err, 1), t - t[0])
+        window = np.hanning(n)
+        spectrum = np.fft.rfft(err * window)
+        freq = np.fft.rfftfreq(n, dt)
+        inside = (freq >= band_hz[0]) & (freq <= band_hz[1]) & (freq > 0) & (freq < 0.5 / dt)
+        power = np.abs(spectrum[inside]) ** 2
+        if power.size == 0:
+            return 0.0, 0.0
+        rms = float(np.sqrt(2.0 * power.sum() / (n * np.sum(window**2))))
+        return rms, float(freq[inside][np.argmax(power)])
+
+    def limit_excursions(self, motor: int, limits_pk: dict[str, float]) -> dict[str, dict]:
+        """For each current signal (``i_r_mag``, ``i_s_mag``) and its peak-phase limit [A]: the
+        number of logged samples above the limit, the largest peak and the first time above."""
+        out = {}
+        for name, limit in limits_pk.items():
+            peak = self.peak(name, motor)
+            above = np.flatnonzero(peak > limit)
+            out[name] = {
+                "limit_a": float(limit),
+                "samples_above": int(above.size),
+                "peak_a": float(np.max(peak)),
+                "first_time_s": float(self.t[above[0]]) if above.size else None,
+            }
+        return out
+
+    def summary(self) -> dict:
+        """Headline metrics (motor 0 at top level, every motor under ``motors``).
+
+        speed_rms_error_rpm is taken over ``tracking_mask`` samples (reference steps excluded for
+        0.5 s); speed_max_abs_error_whole_run_rpm over the whole run, including the intended
+        reference steps (``speed_max_abs_error_rpm``: the same number under its former name).
+        Tracking where it is expected, from the scenario's reference profile and the speed
+        loop's bandwidth: ``acdrive.sim._outcome.tracking_windows`` (``speed_tracking``)."""
+        per_motor = []
+        oscillation = [self.speed_oscillation(k) for k in range(self.n_motors)]
+        for k in range(self.n_motors):
+            err = self.reference_rpm(k) - self.speed_rpm(k)
+            tracking = self.tracking_mask(k)
+            per_motor.append(
+                {
+                    "speed_rms_error_rpm": float(np.sqrt(np.mean(err[tracking] ** 2))),
+                    "speed_max_abs_error_whole_run_rpm": float(np.max(np.abs(err))),
+                    "speed_max_abs_error_rpm": float(np.max(np.abs(err))),
+                    "peak_rotor_current_a": float(np.max(self.peak("i_r_mag", k))),
+                    "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
+                    "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
+                    "limit_events": self.events(k),
+                    "speed_oscillation_rms_rpm": oscillation[k][0],
+                    "speed_oscillation_hz": oscillation[k][1],
+                }
+            )
+        return {
+            "scenario": self.name,
+            **per_motor[0],
+            "motors": per_motor,
+            "duration_s": float(self.t[-1] + self.sample_time),
+            "wall_time_s": self.wall_time,
+        }
+
+    def columns(self) -> list[Column]:
+        """The columns of the result files (``FILE_COLUMNS``; for several motors every signal
+        once per motor, named ``<name>_m<k>`` for motor k = 1, 2, ...), with units and
+        descriptions."""
+        out = [Column("t", self.t, "s", "time of the logged sample")]
+        for k in range(self.n_motors):
+            suffix = "" if self.n_motors == 1 else f"_m{k + 1}"
+            who = "" if self.n_motors == 1 else f"motor {k + 1}: "
+            for name, log_name, scale, unit, description in FILE_COLUMNS:
+                values = self.signals[:, k, LOG_NAMES.index(log_name)]
+                if name == "flags":
+                    values = values.astype(np.int32)
+                elif scale != 1.0:
+                    values = values * scale
+                out.append(Column(name + suffix, values, unit, who + description))
+        return out
+
+    def to_dataframe(self):
+        """A pandas DataFrame of :meth:`columns` (the result files' table); units in
+        ``frame.attrs["units"]``, descriptions in ``frame.attrs["descriptions"]``."""
+        import pandas as pd
+
+        columns = self.columns()
+        frame = pd.DataFrame({c.name: c.values for c in columns})
+        frame.attrs["units"] = {c.name: c.unit for c in columns}
+        frame.attrs["descriptions"] = {c.name: c.description for c in columns}
+        return frame
+
+    def save(self, folder: Path, fmt: str = DEFAULT_FORMAT) -> list[Path]:
+        """Write the data as ``fmt`` (``acdrive.columns.FORMATS``: parquet, csv or mat) and
+        ``columns.md`` into ``folder`` (created if needed); return the paths written."""
+        return write_table(Path(folder), self.columns(), fmt, f"{self.name}: result columns")
+
+    def __repr__(self) -> str:
+        """One line for a notebook or a log: what ran and its headline numbers (computed)."""
+        duration = float(self.t[-1] + self.sample_time) if self.t.size else 0.0
+        speed = self.speed_rpm(0)
+        peaks = [float(np.max(self.peak("i_r_mag", k))) for k in range(self.n_motors)]
+        motors = f"{self.n_motors} motor{'s' * (self.n_motors > 1)}"
+        return (
+            f"<DriveResult {self.name!r}: {motors}, {duration:g} s in {self.t.size} samples; "
+            f"speed {float(np.min(speed)):.0f} to {float(np.max(speed)):.0f} rpm, "
+            f"peak rotor current {max(peaks):.3g} A (phase peak)>"
+        )
+
+    def plot(self, motor: int = 0, axes=None):
+        """Speed against its reference, rotor and stator current magnitudes (phase peak) and the
+        torque (command and electrical) of ``motor`` against time, on three stacked axes (or on
+        the three ``axes`` given); returns the matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        if axes is None:
+            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5))
+        else:
+            fig = axes[0].figure
+        ax_w, ax_i, ax_t = axes
+        ax_w.plot(self.t, self.reference_rpm(motor), "k--", lw=0.8, label="reference")
+        ax_w.plot(self.t, self.speed_rpm(motor), lw=0.8, label="speed")
+        ax_w.set_ylabel("speed [rpm]")
+        ax_w.legend(loc="best")
+        ax_i.plot(self.t, self.peak("i_r_mag", motor), lw=0.7, label="rotor |i_R|")
+        ax_i.plot(self.t, self.peak("i_s_mag", motor), lw=0.7, label="stator |i_S|")
+        ax_i.set_ylabel("current [A, phase peak]")
+        ax_i.legend(loc="best")
+        ax_t.plot(self.t, self.signal("tau_com", motor), lw=0.7, label="command")
+        ax_t.plot(self.t, self.signal("tau_e", motor), lw=0.7, label="electrical")
+        ax_t.set_ylabel("torque [N m]")
+        ax_t.set_xlabel("time [s]")
+        ax_t.legend(loc="best")
+        title = self.name if self.n_motors == 1 else f"{self.name}, motor {motor + 1}"
+        ax_w.set_title(title)
+        fig.tight_layout()
+        return fig
+
+
+def _longest_run(mask: np.ndarray) -> tuple[int, int]:
+    """(start, stop) of the longest stretch of True in ``mask`` ((0, 0) if there is none)."""
+    padded = np.concatenate([[False], mask.astype(bool), [False]])
+    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
+    starts, stops = edges[0::2], edges[1::2]
+    if starts.size == 0:
+        return 0, 0
+    k = int(np.argmax(stops - starts))
+    return int(starts[k]), int(stops[k])

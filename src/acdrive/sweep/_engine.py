@@ -1,0 +1,430 @@
+"""Running a sweep: chunks, the Parquet dataset, resuming, size checks and backends.
+
+Output folder ``<out>/<name>/``:
+
+* ``sweep.json`` -- the manifest: the sweep's digest (``SweepSpec.digest``), the number of
+  variants and the chunk size, written (atomically) before the first chunk;
+* ``table/chunk-NNNNNN.parquet`` -- one file per chunk of ``chunk`` consecutive variants,
+  written to a temporary file in the same folder, flushed to disk and renamed into place
+  (``os.replace``), so a chunk file exists complete or not at all;
+* ``traces/chunk-NNNNNN.parquet`` -- decimated traces, if asked for (written before the chunk's
+  table file, which is the chunk's "done" mark);
+* ``report.md`` and ``figures/*.png`` (``sweep.report``).
+
+**Resume.** Running the same sweep into the same folder again reads the manifest (a different
+digest is refused: it would mix two sweeps), deletes left-over temporary files, checks each
+finished chunk file (readable, holding exactly the variant ids expected for its index) and runs
+only the missing chunks. A kill at any moment loses at most the chunks in progress and never
+leaves a partial or duplicated one.
+
+**Bounded memory.** A chunk holds one row of scalars per variant (plus its decimated traces if
+asked for); the batch loop logs nothing per sample otherwise (``acdrive.batch``). Before anything
+runs, ``estimate`` sizes the table, the traces and the memory of a chunk, and the sweep is
+refused (one-line ``InputError``) beyond ``[limits]`` or the free disk space.
+
+**Backends.** ``local`` runs the chunks one after another in this process, each in the compiled
+batch loop on all cores (numba ``prange`` over the chunk's variants). ``dask`` sends chunks to an
+existing ``distributed`` scheduler (``--scheduler tcp://host:port``; at most two chunks in flight
+per worker thread), connecting within ``timeout`` seconds or failing with one line; results come
+back to this process, which alone writes the folder. A chunk's table does not depend on where it
+ran (the same compiled loop, the same variant -> result function).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import sys
+from pathlib import Path
+
+from acdrive.errors import InputError
+from acdrive.sweep import _variants as V
+from acdrive.sweep._spec import SweepSpec, spec_from_payload
+
+MANIFEST = "sweep.json"
+CONNECT_TIMEOUT_S = 10.0
+#: estimated bytes of one table row besides its metrics: ids, status, reason, event counts
+ROW_OVERHEAD_BYTES = 8 * 40 + 200
+
+
+def _chunk_name(c: int) -> str:
+    return f"chunk-{c:06d}.parquet"
+
+
+# --- one chunk -------------------------------------------------------------------------------
+
+
+def _reducer_factory(spec: SweepSpec):
+    from acdrive.batch import default_reducers
+
+    def make(setup):
+        return (default_reducers(setup) if spec.default_metrics else []) + list(spec.reducers)
+
+    return make
+
+
+def _pluck(summary: dict, path: str):
+    from acdrive.batch import _segments
+
+    node = summary
+    for key, index in _segments(path):
+        if not isinstance(node, dict) or key not in node:
+            return math.nan
+        node = node[key]
+        if index is not None:
+            if not isinstance(node, list) or index >= len(node):
+                return math.nan
+            node = node[index]
+    if isinstance(node, bool):
+        return float(node)
+    if isinstance(node, (int, float)):
+        return float(node)
+    return json.dumps(node) if node is not None else math.nan
+
+
+def _summary_metrics(spec: SweepSpec, overrides: dict) -> dict:
+    """The ``summary.json`` keys of one variant: a full single run (``sim.outcome``)."""
+    import dataclasses
+
+    from acdrive.batch import apply_overrides, build_variant_setup
+    from acdrive.sim._outcome import run_scenario
+
+    setup = build_variant_setup(apply_overrides(spec.base_data, overrides))
+    changes = {}
+    if spec.integrator:
+        changes["integrator"] = spec.integrator
+    if spec.substeps:
+        changes["substeps"] = spec.substeps
+    setup = dataclasses.replace(setup, **changes) if changes else setup
+    summary = run_scenario(setup).summary
+    return {f"summary.{key}": _pluck(summary, key) for key in spec.summary}
+
+
+def run_chunk(payload: dict, c: int):
+    """(table, traces or None) of chunk ``c`` as pandas DataFrames: a pure function of the
+    sweep's payload and the chunk index (it runs on any backend)."""
+    import numpy as np
+    import pandas as pd
+
+    from acdrive.batch import simulate_batch
+
+    spec = spec_from_payload(payload)
+    n = V.count(spec)
+    grids = [V.grid_values(v) for v in spec.vary] if spec.method == "grid" else None
+    indices = list(V.chunk_range(spec, c, n))
+    varied = [V.variant(spec, i, grids) for i in indices]
+    overrides = [{**spec.fixed, **v} for v in varied]
+    result = simulate_batch(
+        spec.base_data,
+        overrides,
+        reducers=_reducer_factory(spec),
+        log=list(spec.traces) or None,
+        log_every=spec.trace_every or None,
+        integrator=spec.integrator,
+        substeps=spec.substeps,
+    )
+    rows = []
+    for i, v, row, o in zip(indices, varied, result.rows, overrides, strict=True):
+        out = {"variant_id": V.variant_id(i, v), "variant": i}
+        out.update({f"vary.{k}": value for k, value in v.items()})
+        out.update({k: value for k, value in row.items() if k != "variant"})
+        if spec.summary:
+            if row["status"] == "ok":
+                out.update(_summary_metrics(spec, o))
+            else:
+                out.update({f"summary.{k}": math.nan for k in spec.summary})
+        rows.append(out)
+    table = pd.DataFrame(rows)
+    for name in table.columns:
+        if name == "stable":
+            table[name] = table[name].astype("boolean")
+        elif name.startswith("events.") or (
+            name not in ("variant", "valid")
+            and pd.api.types.is_numeric_dtype(table[name])
+            and not pd.api.types.is_bool_dtype(table[name])
+        ):
+            table[name] = table[name].astype(np.float64)
+    traces = None
+    if spec.traces:
+        parts = []
+        for i, v in zip(indices, varied, strict=True):
+            tr = result.traces.get(i - indices[0])
+            if tr is None:
+                continue
+            frame = pd.DataFrame(tr.data, columns=tr.columns)
+            frame.insert(0, "t", tr.t)
+            frame.insert(0, "variant_id", V.variant_id(i, v))
+            parts.append(frame)
+        traces = pd.concat(parts, ignore_index=True) if parts else None
+    return table, traces
+
+
+# --- sizes -----------------------------------------------------------------------------------
+
+
+def _base_timing(spec: SweepSpec) -> tuple[float, float]:
+    """(longest duration, sample time) of the sweep's runs, from the base, the fixed overrides
+    and the varied fields (the largest value a varied duration may take)."""
+    from acdrive.batch import apply_overrides, get_field
+
+    fixed = {k: v for k, v in spec.fixed.items() if not k.startswith(("part:", "initial:"))}
+    data = apply_overrides(spec.base_data, fixed)
+    duration = get_field(data, "simulation.duration")
+    duration = 1.0 if duration is None else duration  # the loaders' default
+    sample_time = get_field(data, "simulation.sample_time") or 200e-6
+    for v in spec.vary:
+        if v.field == "simulation.duration":
+            top = max(V.grid_values(v)) if v.values is not None else v.high
+            duration = max(duration, top)
+    return float(duration), float(sample_time)
+
+
+def estimate(spec: SweepSpec, n: int | None = None) -> dict:
+    """Bytes of the table, of the traces and of memory, estimated before anything runs."""
+    n = V.count(spec) if n is None else n
+    metrics = 3 * len(spec.reducers) + len(spec.summary) + (30 if spec.default_metrics else 0)
+    row = ROW_OVERHEAD_BYTES + 8 * (metrics + len(spec.vary))
+    table = n * row
+    traces = 0
+    per_chunk_traces = 0
+    if spec.traces:
+        duration, sample_time = _base_timing(spec)
+        rows = math.ceil(duration / sample_time / spec.trace_every)
+        per_variant = rows * (2 * len(spec.traces) + 2) * 8 + rows * 40
+        traces = n * per_variant
+        per_chunk_traces = min(spec.chunk, n) * per_variant * 3  # log, frame, Parquet buffer
+    memory = table + per_chunk_traces  # the report reads the whole table back
+    return {"variants": n, "table_bytes": table, "trace_bytes": traces, "memory_bytes": memory}
+
+
+def check_size(spec: SweepSpec, folder: Path, n: int) -> dict:
+    """Refuse a sweep beyond ``[limits]`` or the free disk space (``InputError``)."""
+    field = "sampling.samples" if spec.method == "random" else "vary"
+    limits = spec.limits
+    if n > limits["max_variants"]:
+        raise InputError(
+            field, f"{n:.4g} variants exceed limits.max_variants = {limits['max_variants']}"
+        )
+    e = estimate(spec, n)
+    disk = e["table_bytes"] + e["trace_bytes"]
+    mb = 1024**2
+    if disk > limits["max_table_mb"] * mb:
+        raise InputError(
+            field,
+            f"{n:.4g} variants would write about {disk / mb:.4g} MB "
+            f"(limits.max_table_mb = {limits['max_table_mb']:g}): fewer variants or traces",
+        )
+    probe = folder
+    while not probe.exists():
+        probe = probe.parent
+    free = shutil.disk_usage(probe).free
+    if disk > 0.9 * free:
+        raise InputError(
+            field, f"{n:.4g} variants would write about {disk / mb:.4g} MB, more than 90 % of "
+            f"the {free / mb:.4g} MB free on {probe}"
+        )  # fmt: skip
+    if e["memory_bytes"] > limits["max_memory_mb"] * mb:
+        raise InputError(
+            field,
+            f"the sweep would need about {e['memory_bytes'] / mb:.4g} MB of memory "
+            f"(limits.max_memory_mb = {limits['max_memory_mb']:g}): fewer variants, a smaller "
+            "chunk or fewer traces",
+        )
+    return e
+
+
+# --- files -----------------------------------------------------------------------------------
+
+
+def write_atomic(frame, path: Path) -> None:
+    """Write ``frame`` as Parquet at ``path``: a temporary file in the same folder, flushed to
+    disk, then renamed over ``path`` (complete or absent, whenever the process dies)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    frame.to_parquet(tmp, index=False)
+    with open(tmp, "rb") as handle:
+        os.fsync(handle.fileno())
+    os.replace(tmp, path)
+
+
+def _write_json_atomic(value: dict, path: Path) -> None:
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(value, indent=2) + "\n")
+    os.replace(tmp, path)
+
+
+def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
+    """Create or reopen the output folder; returns the chunk size in force (the manifest's on
+    a resume, so chunk files stay aligned)."""
+    if folder.exists() and not folder.is_dir():
+        raise InputError("--out", f"{folder} exists and is not a folder")
+    if folder.is_symlink():
+        raise InputError("--out", f"{folder} is a symbolic link")
+    manifest = folder / MANIFEST
+    if manifest.exists():
+        try:
+            old = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            raise InputError("--out", f"{manifest} is unreadable: choose another --out") from None
+        if old.get("digest") != spec.digest() or old.get("variants") != n:
+            raise InputError(
+                "--out", f"{folder} holds a different sweep (its file or base scenario changed): "
+                "choose another --out or delete that folder"
+            )  # fmt: skip
+        chunk = int(old["chunk"])
+    else:
+        if folder.exists() and any(folder.iterdir()):
+            raise InputError("--out", f"{folder} is not empty and holds no sweep")
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError("--out", f"cannot create {folder} ({exc.strerror})") from None
+        chunk = spec.chunk
+        _write_json_atomic(
+            {"name": spec.name, "digest": spec.digest(), "variants": n, "chunk": chunk,
+             "base": spec.base},
+            manifest,
+        )  # fmt: skip
+    for sub in ("table", "traces"):
+        (folder / sub).mkdir(exist_ok=True)
+        for stale in (folder / sub).glob(".*.tmp"):
+            stale.unlink()
+    return chunk
+
+
+def finished_chunks(spec: SweepSpec, folder: Path, n: int) -> set[int]:
+    """Chunks whose table file holds exactly the expected variant ids (others are removed and
+    run again)."""
+    import pyarrow.parquet as pq
+
+    grids = [V.grid_values(v) for v in spec.vary] if spec.method == "grid" else None
+    n_chunks = math.ceil(n / spec.chunk)
+    done = set()
+    for path in sorted((folder / "table").glob("chunk-*.parquet")):
+        try:
+            c = int(path.stem.split("-")[1])
+            ids = pq.read_table(path, columns=["variant_id"]).column(0).to_pylist()
+        except (ValueError, OSError, KeyError, IndexError):
+            path.unlink()
+            continue
+        expected = [V.variant_id(i, V.variant(spec, i, grids)) for i in V.chunk_range(spec, c, n)]
+        if c >= n_chunks or ids != expected:
+            path.unlink()
+            continue
+        done.add(c)
+    return done
+
+
+def read_table(folder: Path):
+    """The sweep's table: every finished chunk, in variant order."""
+    import pandas as pd
+
+    files = sorted((Path(folder) / "table").glob("chunk-*.parquet"))
+    if not files:
+        return pd.DataFrame()
+    frames = [pd.read_parquet(f) for f in files]
+    table = pd.concat(frames, ignore_index=True)
+    return table.sort_values("variant", kind="stable").reset_index(drop=True)
+
+
+# --- backends --------------------------------------------------------------------------------
+
+
+def _local(payload, pending):
+    for c in pending:
+        yield c, run_chunk(payload, c)
+
+
+def connect(address: str, timeout: float = CONNECT_TIMEOUT_S):
+    """A ``distributed.Client`` of the scheduler at ``address``, or a one-line ``InputError``
+    after at most ``timeout`` seconds."""
+    if not isinstance(address, str) or not address.startswith(("tcp://", "tls://", "inproc://")):
+        raise InputError("--scheduler", "must be an address such as tcp://host:8786")
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError(
+            "--scheduler", "needs dask.distributed: pip install 'acdrive[dask]'"
+        ) from None
+    import logging
+
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)  # one line, not a log
+    try:
+        return Client(address, timeout=f"{timeout}s", set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise InputError(
+            "--scheduler",
+            f"no Dask scheduler answered at {address} within {timeout:g} s ({type(exc).__name__})",
+        ) from None
+
+
+def _dask(payload, pending, client):
+    from distributed import as_completed
+
+    threads = max(sum(client.nthreads().values()), 1)
+    queue = list(pending)
+    if not queue:
+        return
+    chunk_of = {}
+
+    def submit():
+        c = queue.pop(0)
+        future = client.submit(run_chunk, payload, c, pure=False)
+        chunk_of[future.key] = c
+        return future
+
+    with client.as_current():  # as_completed looks for the current client
+        window = as_completed([submit() for _ in range(min(2 * threads, len(queue)))])
+        for future in window:
+            c = chunk_of.pop(future.key)
+            result = future.result()
+            future.release()
+            if queue:
+                window.add(submit())
+            yield c, result
+
+
+# --- the sweep -------------------------------------------------------------------------------
+
+
+def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
+              timeout: float = CONNECT_TIMEOUT_S, progress: bool = True,
+              report: bool = True) -> Path:  # fmt: skip
+    """Run (or resume) ``spec`` into ``out/<name>``; returns that folder."""
+    folder = Path(out) / spec.name
+    n = V.count(spec)
+    if n < 1:
+        raise InputError("vary", "gives no variant")
+    check_size(spec, folder, n)
+    client = connect(scheduler, timeout) if scheduler else None  # fail before writing
+    try:
+        chunk = _prepare_folder(spec, folder, n)
+        if chunk != spec.chunk:
+            import dataclasses
+
+            spec = dataclasses.replace(spec, chunk=chunk)
+        done = finished_chunks(spec, folder, n)
+        n_chunks = math.ceil(n / spec.chunk)
+        pending = [c for c in range(n_chunks) if c not in done]
+        finished = sum(len(V.chunk_range(spec, c, n)) for c in done)
+        payload = spec.to_payload()
+        from tqdm import tqdm
+
+        bar = tqdm(total=n, initial=finished, unit="variant", file=sys.stderr,
+                   disable=not progress, desc=spec.name)  # fmt: skip
+        stream = _local(payload, pending) if client is None else _dask(payload, pending, client)
+        for c, (table, traces) in stream:
+            if traces is not None:
+                write_atomic(traces, folder / "traces" / _chunk_name(c))
+            write_atomic(table, folder / "table" / _chunk_name(c))
+            bar.update(len(table))
+        bar.close()
+    finally:
+        if client is not None:
+            client.close()
+    if report:
+        from acdrive.sweep._report import write_report
+
+        write_report(spec, folder, read_table(folder))
+    return folder

@@ -1,0 +1,238 @@
+"""The report of a sweep: ``report.md`` and ``figures/*.png`` (matplotlib, Agg).
+
+Sections: what ran (variants, valid, ok, diverged); the distribution of every metric (count,
+min, 5th percentile, median, 95th percentile, max; a histogram per metric); the worst cases
+(largest ``report.worst``); the invalid variants with their reasons; the variants that tripped
+a limit (any ``*_over_limit`` metric > 0, or a ``limit`` / ``saturat`` event counted on at least
+one sample); the unstable variants (``stable`` false: diverged, or late speed oscillation above
+``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
+speed-loop bandwidth per combination of the other varied fields, simulated against the
+linearised sampled drive (``analysis.drive_stability.max_stable_bandwidth``), with the verdict.
+
+**Cross-check verdict.** The bandwidth grid b_0 < b_1 < ... is the varied field. Simulated
+tolerance: the largest b_i such that every variant with bandwidth <= b_i is stable. Linearised
+tolerance: ``max_stable_bandwidth`` (bisection to 1 rad/s) at the variant's final reference
+speed, load torque and converter fundamental loss, sampled model with the scenario's sample
+time and substeps. They *agree* if the linearised value falls in the grid interval
+[b_(i - tol), b_(i + 1 + tol)) where tol is ``crosscheck.tolerance`` grid steps (default 1):
+a grid cannot place a boundary more finely than one step, and near the boundary the simulated
+oscillation grows slowly, so it may stay below the 1 rpm threshold for the run's length.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.sweep._spec import SweepSpec
+
+MAX_FIGURES = 16
+MAX_LISTED = 30
+LIMIT_WORDS = ("limit", "saturat")
+
+
+def metric_columns(table) -> list[str]:
+    import pandas as pd
+
+    out = []
+    for name in table.columns:
+        if name in ("variant",) or name.startswith(("vary.", "events.")):
+            continue
+        if pd.api.types.is_numeric_dtype(table[name]) and not pd.api.types.is_bool_dtype(
+            table[name]
+        ):
+            out.append(name)
+    return out
+
+
+def tripped(table):
+    """Boolean Series: the variant tripped a limit (an over-limit count or a limit event)."""
+    flags = np.zeros(len(table), dtype=bool)
+    for name in table.columns:
+        is_count = name.endswith("_over_limit")
+        is_event = name.startswith("events.") and any(w in name for w in LIMIT_WORDS)
+        if is_count or is_event:
+            flags |= table[name].fillna(0).to_numpy() > 0
+    return flags
+
+
+def _fmt(x) -> str:
+    if isinstance(x, (float, np.floating)):
+        return "nan" if not math.isfinite(x) else f"{x:.4g}"
+    return str(x)
+
+
+def _md_table(header: list[str], rows: list[list]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(_fmt(v).replace("|", "/") for v in r) + " |" for r in rows]
+    return lines
+
+
+def _figures(table, metrics, folder: Path) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = []
+    figures = folder / "figures"
+    figures.mkdir(exist_ok=True)
+    for name in metrics[:MAX_FIGURES]:
+        values = table[name].to_numpy(dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size == 0:
+            continue
+        fig, ax = plt.subplots(figsize=(5, 3.2))
+        ax.hist(values, bins=min(40, max(5, values.size // 3)))
+        ax.set_xlabel(name)
+        ax.set_ylabel("variants")
+        fig.tight_layout()
+        file = f"hist-{name.replace('/', '_')}.png"
+        fig.savefig(figures / file, dpi=90)
+        plt.close(fig)
+        out.append(file)
+    return out
+
+
+def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
+    """Per combination of the other varied fields: the simulated and the linearised tolerated
+    bandwidth and whether they agree (module docstring). Returns (rows, all agree)."""
+    from acdrive.analysis._drive_stability import max_stable_bandwidth
+    from acdrive.batch import apply_overrides, build_variant_setup
+
+    cc = spec.crosscheck
+    bw = f"vary.{cc['bandwidth_field']}"
+    others = [f"vary.{v.field}" for v in spec.vary if v.field != cc["bandwidth_field"]]
+    grid = sorted({float(b) for b in table[bw]})
+    rows = []
+    keys = [()] if not others else sorted({tuple(r) for r in table[others].itertuples(index=False)})
+    for key in keys:
+        sel = np.ones(len(table), dtype=bool)
+        for name, value in zip(others, key, strict=True):
+            sel &= (table[name] == value).to_numpy()
+        part = table[sel].sort_values(bw)
+        stable_at = {float(b): bool(s) for b, s in zip(part[bw], part["stable"].fillna(False),
+                                                        strict=True)}  # fmt: skip
+        i_sim = -1
+        for i, b in enumerate(grid):
+            if not stable_at.get(b, False):
+                break
+            i_sim = i
+        fields = {**spec.fixed, **dict(zip([o[5:] for o in others], key, strict=True))}
+        fields[cc["bandwidth_field"]] = grid[0]
+        setup = build_variant_setup(apply_overrides(spec.base_data, fields))
+        m = setup.motors[0]
+        speed_rpm = float(m.speed_reference[1][-1]) * 30 / math.pi
+        load = float(m.load_torque[1][-1])
+        loss = float(m.converter.fundamental_loss(m.dc_link_voltage))
+        linear = max_stable_bandwidth(
+            m.controller.mode, [speed_rpm], [load], kind="sampled",
+            lower=min(grid) / 2, upper=max(grid) * 2, tol=1.0,
+            machine=m.machine, K_F=m.controller.gains.K_F,
+            supply_voltage_pk=float(setup.supply.voltage_pk[1][0]),
+            supply_frequency_hz=float(setup.supply.frequency_hz[1][0]),
+            current_limit_pk=m.controller.stator_current_limit_pk,
+            sample_time=setup.sample_time, substeps=setup.substeps, converter_loss=loss,
+        )  # fmt: skip
+        j_lin = sum(1 for b in grid if b <= linear) - 1
+        tol = cc["tolerance"]
+        agree = abs(j_lin - i_sim) <= tol
+        rows.append({
+            **{o[5:]: v for o, v in zip(others, key, strict=True)},
+            "speed_rpm": speed_rpm, "load_nm": load, "converter_loss_v": loss,
+            "simulated_tolerated": grid[i_sim] if i_sim >= 0 else 0.0,
+            "simulated_first_unstable": grid[i_sim + 1] if i_sim + 1 < len(grid) else math.inf,
+            "linearised_tolerated": linear, "grid_step_difference": j_lin - i_sim,
+            "agree": agree,
+        })  # fmt: skip
+    return rows, (all(r["agree"] for r in rows) if rows else None)
+
+
+def write_report(spec: SweepSpec, folder: Path, table) -> Path:
+    """Write ``report.md`` and its figures into ``folder``; returns the report's path."""
+    folder = Path(folder)
+    lines = [f"# Sweep {spec.name}", ""]
+    if spec.description:
+        lines += [spec.description, ""]
+    n = len(table)
+    valid = table["valid"].to_numpy(dtype=bool) if n else np.zeros(0, dtype=bool)
+    ok = (table["status"] == "ok").to_numpy() if n else valid
+    lines += [
+        (
+            f"Base scenario: `{spec.base}`; {spec.method} of {n} variants "
+            f"({', '.join(v.field for v in spec.vary)}); valid {int(valid.sum())}, ran to the "
+            f"end {int(ok.sum())}, diverged {int((valid & ~ok).sum())}, invalid "
+            f"{int((~valid).sum())}."
+        ),
+        "",
+    ]
+    metrics = metric_columns(table) if n else []
+    if metrics:
+        lines += ["## Distributions", ""]
+        rows = []
+        for name in metrics:
+            v = table[name].to_numpy(dtype=float)
+            v = v[np.isfinite(v)]
+            if v.size == 0:
+                rows.append([name, 0, *["nan"] * 5])
+                continue
+            q = np.percentile(v, [5, 50, 95])
+            rows.append([name, v.size, v.min(), q[0], q[1], q[2], v.max()])
+        lines += _md_table(["metric", "n", "min", "p5", "median", "p95", "max"], rows) + [""]
+        files = _figures(table, metrics, folder)
+        lines += [f"![{f}](figures/{f})" for f in files] + [""]
+    worst = spec.worst or next((m for m in metrics if m.startswith("speed_error_rms")), None)
+    worst = worst or (metrics[0] if metrics else None)
+    if worst is not None and worst in table:
+        lines += [f"## Worst cases (largest {worst})", ""]
+        top = table[np.isfinite(table[worst].to_numpy(dtype=float))]
+        top = top.sort_values(worst, ascending=False).head(spec.worst_count)
+        cols = ["variant_id", *[c for c in table.columns if c.startswith("vary.")], worst]
+        lines += _md_table(cols, top[cols].values.tolist()) + [""]
+    lines += ["## Invalid variants", ""]
+    bad = table[~valid] if n else table
+    if len(bad):
+        lines += [f"{len(bad)} variants were not run:", ""]
+        lines += [f"- `{r.variant_id}`: {r.reason}" for r in bad.head(MAX_LISTED).itertuples()]
+    else:
+        lines.append("None.")
+    lines += ["", "## Variants that tripped a limit", ""]
+    trip = tripped(table) if n else np.zeros(0, dtype=bool)
+    lines.append(
+        f"{int(trip.sum())} of {n} (an `*_over_limit` count or a limit/saturation event > 0)"
+        + (":" if trip.any() else ".")
+    )
+    if trip.any():
+        lines += [""] + [f"- `{v}`" for v in table["variant_id"][trip].head(MAX_LISTED)]
+    lines += ["", "## Unstable variants", ""]
+    if "stable" in table:
+        unstable = table["stable"].eq(False).fillna(False).to_numpy(dtype=bool)
+        lines.append(
+            f"{int(unstable.sum())} of {n} (diverged, or late speed oscillation above 1 rpm RMS "
+            "in 20-200 Hz)" + (":" if unstable.any() else ".")
+        )
+        osc = [c for c in table.columns if c.startswith("speed_oscillation_rpm")]
+        for _, r in table[unstable].head(MAX_LISTED).iterrows():
+            values = ", ".join(f"{c} = {_fmt(r[c])}" for c in osc)
+            lines.append(f"- `{r['variant_id']}`: {r['status']}" + (f"; {values}" if osc else ""))
+    if spec.crosscheck and n:
+        rows, agree = crosscheck(spec, table)
+        lines += ["", "## Cross-check: tolerated bandwidth, simulation against linearisation", ""]
+        if rows:
+            header = list(rows[0])
+            lines += _md_table(header, [list(r.values()) for r in rows])
+        verdict = "AGREE" if agree else "DISAGREE"
+        lines += [
+            "",
+            (
+                f"Verdict: **{verdict}** (tolerance: {spec.crosscheck['tolerance']} grid step(s) "
+                "of the bandwidth grid; method in `acdrive.sweep._report`)."
+            ),
+        ]
+    path = folder / "report.md"
+    tmp = folder / ".report.md.tmp"
+    tmp.write_text("\n".join(lines) + "\n")
+    tmp.replace(path)
+    return path
