@@ -12,7 +12,7 @@ states) and a list of variants, each a dict of overrides in three forms:
 * ``"initial:shaft0.w": 100.0`` -- an initial state of one part (after the drive's own initial
   state, e.g. a perturbed speed).
 
-Every variant goes through the same validation as a single run (``scenarios.loader``): a bad one
+Every variant goes through the same validation as a single run (``scenarios._loader``): a bad one
 is recorded as invalid with the ``InputError`` text and the batch goes on. Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
 time, duration and substeps) and each group runs in one call of the compiled ``run_batch``
@@ -36,7 +36,7 @@ sweeps"). A variant in a batch equals the same variant alone in the same loop bi
 the speed error's RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-order high-pass
 sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run
 exceeds ``OSCILLATION_FINDING_RPM`` (1 rpm): the threshold of the single run's limit-cycle
-finding (``sim.outcome``). The ratio of that RMS to the one over the 0.25 s before
+finding (``sim._outcome``). The ratio of that RMS to the one over the 0.25 s before
 (``speed_oscillation_growth``) tells a growing oscillation from a settled limit cycle.
 """
 
@@ -404,7 +404,7 @@ def _default_machine(data: dict) -> str:
     return "delorenzo-im" if data.get("drive") == "cage-im" else "bodson-dfim"
 
 
-#: the fields of a scenario's [params] table per machine class (scenarios.loader, im_loader)
+#: the fields of a scenario's [params] table per machine class (scenarios._loader, im_loader)
 _PARAMS_FIELDS = {
     "DFIMParams": ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J"),
     "IMParams": ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p"),

@@ -11,9 +11,9 @@ commands for the same model time:
   x u_sup / 2 (well inside their limits here); acdrive's parts take the same voltages as
   space vectors, ``acdrive_voltages`` (power-invariant: sqrt(3/2) times GEM's amplitude-invariant
   vectors; the parameters are scaling-free);
-* acdrive: ``bench.parts.HeldSequence`` (the command of each control period, by index) ->
-  ``machines.dfim_part.DoublyFedMachine`` (stator connected from the start) <->
-  ``plant.mechanics.Shaft`` (J, viscous B); GEM: ``Cont-SC-DFIM-v0`` with a ``PolynomialStaticLoad``
+* acdrive: ``_bench.parts.HeldSequence`` (the command of each control period, by index) ->
+  ``machines.DoublyFedMachine`` (stator connected from the start) <->
+  ``plant.Shaft`` (J, viscous B); GEM: ``Cont-SC-DFIM-v0`` with a ``PolynomialStaticLoad``
   of the same J and B (``peers/gem_dfim.py``).
 
 **The one difference in the equations.** A rotor converter holds its voltage in *rotor*
@@ -176,7 +176,7 @@ def gem_states(rec) -> np.ndarray:
 
 
 class DFIMEquations:
-    """The DFIM (``machines.dfim_part``'s equations in the variables i_s, psi_r) with the shaft,
+    """The DFIM (``machines._dfim_part``'s equations in the variables i_s, psi_r) with the shaft,
     y = (Re i_s, Im i_s, Re psi_r, Im psi_r, w, theta), power-invariant, stationary frame:
 
         dpsi_s/dt = v_s - R_s i_s,  dpsi_r/dt = v_r' - R_r i_r + j n_p w psi_r,

@@ -3,7 +3,7 @@ frequencies.
 
 "Full ICAD" is gamma, both channels c_i, both h_i, k_i g_ii, gamma h_j, S_i, T_i and the
 coupling (10), batched over the (speed, frequency) grid from state-space data
-(``analysis.icad.icad_response_arrays``). The optional peer is python-control's
+(``analysis._icad.icad_response_arrays``). The optional peer is python-control's
 ``frequency_response`` computing only the plant G(jw) of the same grid (one call per speed), timed
 in the same run when python-control is importable.
 """

@@ -6,16 +6,16 @@ same machine, sample time (125 us), model time (1.5 s), speed reference and load
 lists every number and every difference). Two converters:
 
 * ``averaged`` (``ratio_vs_motulator``): motulator's ``pwm=False`` (the duty ratios held over the
-  sample); acdrive's ``plant.converter.AveragedConverter``, the inverter's averaged counterpart
+  sample); acdrive's ``plant.AveragedConverter``, the inverter's averaged counterpart
   (the command held over the sample within the linear range |v| <= V_dc / sqrt(2)) at the same
   540 V; one held segment per sample on both sides;
 * ``pwm`` (``ratio_vs_motulator_pwm``): motulator's ``pwm=True`` (carrier comparison, exact
-  switching instants); acdrive's ``plant.inverter.Inverter`` (centred SVPWM, exact switching
+  switching instants); acdrive's ``plant.Inverter`` (centred SVPWM, exact switching
   instants) at the same 4 kHz carrier (N = 2 control samples per carrier period; N = 1 is reported
   as a variant).
 
 Both simulators' accuracy is measured against references of the same plant equations
-(``IMEquations``, machines.cage_part's equations plus the shaft) driven by each simulator's own
+(``IMEquations``, machines._cage_part's equations plus the shaft) driven by each simulator's own
 segment sequence from its own initial state (``acdrive._bench.reference``): Radau at rtol 1e-10,
 and an extended-precision sixth-order reference where both errors lie below the Radau
 reference's own resolution.
@@ -51,7 +51,7 @@ J = 0.015  # kg m^2
 N_P = 2
 # inverse-Gamma parameters of motulator's 2.2 kW machine [ohm, H]
 R_S, R_R, L_SGM, L_M = 3.7, 2.1, 0.021, 0.224
-# the same machine as acdrive's T-model (machines.cage_part): an inverse-Gamma model is a T-model
+# the same machine as acdrive's T-model (machines._cage_part): an inverse-Gamma model is a T-model
 # with no rotor leakage, so L_m = L_r = L_M, L_s = L_M + L_sgm, R_r = R_R; then sigma L_s = L_sgm,
 # R_s + (L_m/L_r)^2 R_r = R_s + R_R, L_r/R_r = L_M/R_R and acdrive's rotor flux psi_r is
 # motulator's psi_R. Impedances do not depend on the space-vector scaling; voltages, currents and
@@ -106,7 +106,7 @@ MATCHED = {
         "averaged": {
             "motulator": "pwm=False: the duty ratios held over the sample (zero-order hold), one "
             "sample computational delay in the control system",
-            "acdrive": "plant.converter.AveragedConverter (V_dc = 540 V): the command held over "
+            "acdrive": "plant.AveragedConverter (V_dc = 540 V): the command held over "
             "the sample within |v| <= V_dc / sqrt(2) (the inverter's averaged counterpart), no "
             "computational delay",
         },
@@ -114,7 +114,7 @@ MATCHED = {
             "motulator": "pwm=True: carrier comparison, carrier period 2 T_s = 250 us (4 kHz), "
             "duty ratios updated every T_s (double update), one sample computational delay, "
             "duties quantised to 2^-12; at most 3 switching instants per sample",
-            "acdrive": "plant.inverter.Inverter, centred SVPWM, carrier period N T_s; primary "
+            "acdrive": "plant.Inverter, centred SVPWM, carrier period N T_s; primary "
             "N = 2 (250 us, 4 kHz, the same pulse pattern: one edge per leg per sample, at most 3 "
             "instants per sample), command latched once per carrier period (single update), no "
             "computational delay; variant N = 1 (125 us, 8 kHz: command updated every sample as "
@@ -127,12 +127,12 @@ MATCHED = {
         "coordinates (alpha_c = 2 pi 200 rad/s, angle advance 1.5 T_s w_c), "
         "i_sd = 0.95 psi_base/(L_M + L_sgm), |i_s| <= 1.5 i_base, speed PI k_p = 1, k_i = 10 "
         "(anti-windup on the current-limited torque)",
-        "acdrive": "control.foc.IndirectFOC (flux model, same i_d and current limit) -> "
-        "control.current.StationaryCurrentController running motulator's current controller "
+        "acdrive": "control.IndirectFOC (flux model, same i_d and current limit) -> "
+        "control.StationaryCurrentController running motulator's current controller "
         "with its integrator turning at the fixed frequency w0 = n_p w_ref (stationary frame: "
         "K(s) = k_p + (k_i + j w0 k_t)/(s - j w0) on the error, k_p = 2 alpha_c L_sgm, "
         "k_t = alpha_c L_sgm, k_i = alpha_c^2 L_sgm; Tustin pre-warped at w0; back-calculation "
-        "anti-windup) <- control.foc.SpeedPI (K_P = 1, K_I = 10, clamping at the torque the "
+        "anti-windup) <- control.SpeedPI (K_P = 1, K_I = 10, clamping at the torque the "
         "current limit allows) <- shaft speed sampled ideally, encoder angle ideal",
         "differences": [
             (
@@ -191,8 +191,8 @@ def build_foc_drive(
 ):
     """dc -> converter -> cage machine -> shaft; encoder; speed reference -> speed PI (ideal
     speed sample) -> IFOC -> stationary current controller -> converter. ``converter``: "pwm"
-    (``plant.inverter.Inverter`` at ``f_pwm``, fed from a ``DCSource``) or "averaged"
-    (``plant.converter.AveragedConverter`` with the fixed DC-link voltage ``v_dc``; ``f_pwm``
+    (``plant.Inverter`` at ``f_pwm``, fed from a ``DCSource``) or "averaged"
+    (``plant.AveragedConverter`` with the fixed DC-link voltage ``v_dc``; ``f_pwm``
     unused). Returns (System, parts by role)."""
     from acdrive.control._current import StationaryCurrentController
     from acdrive.control._foc import IndirectFOC, SpeedPI
@@ -388,7 +388,7 @@ def _load(t: float) -> float:
 
 
 class IMEquations:
-    """machines.cage_part's equations (power-invariant, stationary frame) plus the shaft with the
+    """machines._cage_part's equations (power-invariant, stationary frame) plus the shaft with the
     matched load, y = (Re i_s, Im i_s, Re psi_r, Im psi_r, w), the stator voltage held per
     segment: the right-hand side, its Jacobian and the same in extended precision."""
 

@@ -2,7 +2,7 @@
 
 ``HeldSequence`` outputs values[k] at the k-th sample it runs (the last value once the sequence
 is exhausted), read by index from a counter in its state: O(1) per sample, reading the
-parameter array front to back. ``control.open_loop.ComplexProgram`` gives the same command from
+parameter array front to back. ``control.ComplexProgram`` gives the same command from
 a time table (a staircase with its steps between the sample instants) but searches the table at
 every sample: over
 10,000 samples and two tables that search, and its cache misses, took about a quarter of the

@@ -3,15 +3,15 @@
 Cases (``CASES``; ``--only`` picks some):
 
 * ``motulator_averaged``: the 2.2 kW cage-IM speed drive against motulator 0.18 with an averaged
-  converter (``bench.motulator_im``) -> ``ratio_vs_motulator``;
+  converter (``_bench.motulator_im``) -> ``ratio_vs_motulator``;
 * ``motulator_pwm``: the same drive with switching PWM -> ``ratio_vs_motulator_pwm``;
-* ``gem_dfim``: the open-loop DFIM against gym-electric-motor 3.0.3 (``bench.gem_dfim``) ->
+* ``gem_dfim``: the open-loop DFIM against gym-electric-motor 3.0.3 (``_bench.gem_dfim``) ->
   ``ratio_vs_gem``;
-* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``bench.icad``) -> ``icad_ms``.
+* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``.
 
 Each ratio is acdrive's control steps per second over the peer's, both measured in this run on
-this machine, the peer in its own virtualenv (``bench.venvs``); each simulator's error is taken
-against references of the same equations (``bench.reference``), so that speed is never bought
+this machine, the peer in its own virtualenv (``_bench.venvs``); each simulator's error is taken
+against references of the same equations (``_bench.reference``), so that speed is never bought
 with error. The verdicts (``target_checks``) are computed from those numbers: ``None`` where a
 number is missing (a peer that could not be installed, ``--no-reference``), and ``targets_met``
 is true only if every check is true.

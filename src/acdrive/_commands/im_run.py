@@ -1,6 +1,6 @@
 """``acdrive run`` for a cage induction motor drive (``drive = "cage-im"``): simulate every run of
-the scenario, write data, figures and summary.json (``report.im_outputs``) and print the headline
-figures computed from the runs. ``commands.run`` dispatches here on the setup's type."""
+the scenario, write data, figures and summary.json (``_report.im_outputs``) and print the headline
+figures computed from the runs. ``_commands.run`` dispatches here on the setup's type."""
 
 from __future__ import annotations
 

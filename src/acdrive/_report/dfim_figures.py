@@ -1,7 +1,7 @@
 """Figures of a DFIM drive run, matching Bodson Figs. 4-7 (and 12-13 for several motors).
 
 Long traces are drawn as their min/max envelope and the figures are made without pyplot
-(``report.plotting``); the current limits drawn are the scenario's (``current_limits``)."""
+(``_report.plotting``); the current limits drawn are the scenario's (``current_limits``)."""
 
 from __future__ import annotations
 

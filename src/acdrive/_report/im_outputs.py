@@ -1,7 +1,7 @@
-"""The files of one cage-IM drive run (``sim.im_drive``): data (Parquet, CSV or .mat, with
+"""The files of one cage-IM drive run (``sim._im_drive``): data (Parquet, CSV or .mat, with
 columns.md), figures and summary.json, and the linear closed-loop step responses of the ICAD model beside simulated steps.
 
-Layout as the DFIM drive's (``report.drive_outputs``): one run writes into the folder itself;
+Layout as the DFIM drive's (``_report.drive_outputs``): one run writes into the folder itself;
 several runs (compared controllers) each into ``<folder>/<label>/``, with the comparison figures
 and the one summary.json in the folder. Figures follow Amezquita-Brooks et al.: currents with
 references (Figs. 11, 13(c), 14(c), 23), speed (13(a)), load torque (13(b), 14(b)), the phase-a
@@ -10,7 +10,7 @@ ramp and the superimposed alpha currents (16(a), (b)), step responses (18, 20). 
 labels are built from the scenario and the computed numbers. Space vectors are drawn in the
 paper's amplitude-invariant alpha-beta scaling (peak phase amperes: acdrive's power-invariant
 vector over sqrt(3/2), Bodson (8)). Time traces are drawn as their min/max envelope, every peak
-kept (``report.plotting``).
+kept (``_report.plotting``).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def _save(fig, path: Path) -> Path:
 
 
 def closed_loop_reference_ss(plant, k):
-    """(A, B, C) of r -> (i_alpha, i_beta) for the plant ``plant`` (``analysis.plants.Plant2x2``,
+    """(A, B, C) of r -> (i_alpha, i_beta) for the plant ``plant`` (``analysis.Plant2x2``,
     D = 0) with the diagonal controller diag(k, k) on e = r - y (Amezquita-Brooks (5)-(6))."""
     A, B, C = plant.A, plant.B, plant.C
     Ak, Bk, Ck = (scipy.linalg.block_diag(M, M) for M in (k.A, k.B, k.C))
@@ -51,7 +51,7 @@ def closed_loop_reference_ss(plant, k):
 
 def linear_step_response(params, w_mech: float, k, t: np.ndarray) -> np.ndarray:
     """(i_alpha, i_beta) per unit step of r_1 at t = 0 over ``t`` (continuous, no sampling):
-    the stator-current plant (1) at electrical speed n_p w (``analysis.plants``) in closed loop
+    the stator-current plant (1) at electrical speed n_p w (``analysis._plants``) in closed loop
     with diag(k, k)."""
     plant = plant_from_params(params, params.n_p * w_mech)
     A, B, C = closed_loop_reference_ss(plant, k)

@@ -2,18 +2,18 @@
 domain (``acdrive reproduce im`` -> ``im-current-control.md``).
 
 Every experiment of the paper's time-domain half (Figs. 11, 13, 14, 16, 18, 20, 23) is run as a
-built-in scenario (``scenarios/builtin/im-*.toml``) through ``sim.im_drive.run_im_scenario``,
+built-in scenario (``scenarios/builtin/im-*.toml``) through ``sim.run_im_scenario``,
 and the coupling between the two current channels is measured in simulation and set beside the
-ICAD prediction (10) (``analysis.coupling``; the last paragraph of the issue "Cage induction
+ICAD prediction (10) (``analysis._coupling``; the last paragraph of the issue "Cage induction
 motor drives in the time domain"). The paper prints few numbers for these experiments; where it
 prints one (a gain, a reference, a perturbation factor), acdrive's value is compared with it;
 where it only shows a figure, the report states what the figure shows and the quantity acdrive
 measures for it, with a verdict computed against a stated tolerance (``TOLERANCES``; helpers of
-``report.verdicts``).
+``_report.verdicts``).
 
 Flow: ``run_experiments`` (the outcomes) and ``measure_couplings`` -> ``compute_numbers`` (a
 flat dict of every number the report prints) -> ``compute_verdicts(numbers, tolerances)`` ->
-``build_sections`` (``report.markdown.Section``) -> ``render``. ``build_report`` returns the
+``build_sections`` (``_report.markdown.Section``) -> ``render``. ``build_report`` returns the
 text, the numbers and the verdicts; ``write_report`` writes the Markdown and the figures.
 """
 
@@ -87,7 +87,7 @@ class PrintedValue:
         return float(self.text)
 
 
-#: Numbers printed in secs. VI-VIII (the frequency-domain ones live in ``report.icad_targets``).
+#: Numbers printed in secs. VI-VIII (the frequency-domain ones live in ``_report.icad_targets``).
 PRINTED = {
     "dc_link": PrintedValue("310", "sec. VI", "V"),
     "pwm": PrintedValue("5", "sec. VI", "kHz"),
@@ -547,7 +547,7 @@ FIGURES = {
 
 
 def write_figures(outcomes: dict[str, IMOutcome], fig_dir: Path) -> dict[str, list]:
-    """Draw every run's figures (``report.im_outputs``) in a scratch folder and copy those of
+    """Draw every run's figures (``_report.im_outputs``) in a scratch folder and copy those of
     ``FIGURES`` into ``fig_dir`` as ``<experiment>_<name>``; returns experiment -> [(file,
     caption)]."""
     out: dict[str, list] = {}
@@ -660,7 +660,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             "controller (20) = (22)",
             "(20), (22)",
             "326.5 (s+1000)/s (s+400)^2/(s^2+100s+42500)",
-            "control.lti PAPER_20",
+            "control._lti PAPER_20",
             "frequency response at 10, 375, 3000 rad/s: " + str(v["controller_20"]),
         ),
     ]
@@ -1065,7 +1065,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             f"{fmt(n['coupling_im_peak_at_rad_s'], 5)} rad/s, where |(10)| peaks. For the PMSG the "
             "difference does not vanish at low frequencies: the stationary hold also turns the "
             "dq voltage back by w_e N T_s / 2 (the frame turns during the hold), which the "
-            "delayed prediction puts into the plant (`analysis.coupling`)."
+            "delayed prediction puts into the plant (`analysis._coupling`)."
         )
         s.figures.append(
             (

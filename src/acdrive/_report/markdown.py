@@ -63,7 +63,7 @@ def db(x: float) -> float:
 def save_figure(path: Path, fig) -> None:
     """Write ``fig`` to ``path`` at ``DPI`` and close it.
 
-    A figure without a layout engine (``pyplot.subplots``, ``report.plotting.new_figure``) gets the
+    A figure without a layout engine (``pyplot.subplots``, ``_report.plotting.new_figure``) gets the
     tight layout, after which its engine is dropped: ``savefig`` would otherwise draw it once more
     (without rendering) to lay it out again, and that pass costs as much as the layout itself. A
     figure made with an engine (e.g. ``layout="constrained"``) is laid out by ``savefig``."""

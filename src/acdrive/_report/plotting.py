@@ -3,7 +3,7 @@ figure manager cost time and nothing here needs them) and a min/max envelope of 
 so a figure draws a few thousand points instead of every sample.
 
 ``new_figure`` gives a ``matplotlib.figure.Figure`` on the Agg canvas, as ``pyplot.subplots``
-would; ``report.markdown.save_figure`` gives it the tight layout and draws it once.
+would; ``_report.markdown.save_figure`` gives it the tight layout and draws it once.
 ``plot_trace`` draws ``envelope(t, y)``: the trace cut into ``ENVELOPE_BINS`` runs of consecutive
 samples, of which each keeps its first, smallest, largest and last sample in time order. Every
 extreme of every run is a sample of the drawn line, so no peak or trough is lost or moved, and
@@ -58,7 +58,7 @@ def plot_trace(ax, t, y, *style, **kwargs):
 
 def new_figure(figsize, nrows: int = 1, ncols: int = 1, **subplots_kwargs):
     """(figure, axes) as ``pyplot.subplots`` gives them, without pyplot: a figure of ``figsize``
-    inches on the Agg canvas, laid out by ``report.markdown.save_figure``."""
+    inches on the Agg canvas, laid out by ``_report.markdown.save_figure``."""
     fig = Figure(figsize=figsize)
     FigureCanvasAgg(fig)
     return fig, fig.subplots(nrows, ncols, **subplots_kwargs)

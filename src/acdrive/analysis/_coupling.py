@@ -6,17 +6,17 @@ output i to the reference of the other channel j,
 
     y_i / r_j = S_i (g_ij / g_jj) h_j,   S_i = 1 / (1 + c_i)                         (10)
 
-(``analysis.icad``; Fig. 8 draws |y_1 / r_2| over w_r). This module measures the same quantity on
-the sampled, nonlinear drive simulator (``sim.system``): the machine part held at w_r by a
-dynamometer (``plant.mechanics.PrescribedSpeed``), the current controller as a sampled part
-(``control.current.StationaryCurrentController``, Tustin at ``sample_time``), its command latched
-once per carrier period (``plant.inverter.CarrierLatch``, N = ``hold_samples`` control samples)
+(``analysis._icad``; Fig. 8 draws |y_1 / r_2| over w_r). This module measures the same quantity on
+the sampled, nonlinear drive simulator (``sim._system``): the machine part held at w_r by a
+dynamometer (``plant.PrescribedSpeed``), the current controller as a sampled part
+(``control.StationaryCurrentController``, Tustin at ``sample_time``), its command latched
+once per carrier period (``plant.CarrierLatch``, N = ``hold_samples`` control samples)
 and applied as an ideal voltage; a sinusoidal reference r_1 = A cos(W t) on channel 1, r_2 = 0;
 after ``settle`` seconds the sinusoidal component at W of y_2 (and of y_1) is fitted by least
 squares (cos, sin and a constant) over an integer number of periods and divided by that of r_1.
 
 Within the linear range of the paper's 310 V link (|v| <= v_dc / sqrt(2), checked: ``peak_voltage``
-against ``VOLTAGE_LIMIT``) the latched ideal voltage *is* the averaged inverter of ``sim.im_drive``
+against ``VOLTAGE_LIMIT``) the latched ideal voltage *is* the averaged inverter of ``sim._im_drive``
 (the carrier-period average of the SVPWM bridge), so no converter part is needed.
 
 **Frames.** The cage IM (Amezquita-Brooks (1)) is controlled in the stationary frame (sec. VI):
@@ -112,7 +112,7 @@ def _plant_response(params, w_e: float, w: np.ndarray, delay: float) -> np.ndarr
 
 
 def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarray:
-    """y_2 / r_1 of (10) (``analysis.icad.icad_quantities``) at the frequencies ``w`` [rad/s] for
+    """y_2 / r_1 of (10) (``analysis._icad.icad_quantities``) at the frequencies ``w`` [rad/s] for
     the plant of ``params`` at electrical speed ``w_e`` with k on both channels, k multiplied by
     e^{-j w delay} (module docstring; in the dq frame the plant also takes the rotation of
     ``_plant_response``)."""

@@ -14,8 +14,8 @@ Both linearisations use the simulator's parts-built drive (``acdrive.sim.DFIMDri
 and its compiled loop; they are kept clearly apart:
 
 ``continuous``  the controller as the continuous-time law of the paper, evaluated with the
-                functions the sampled controller uses (``machines.dfim``, ``control.speed.speed_pi``,
-                ``control.bodson.rotor_current_loop`` with the ``SpeedController`` part's parameter
+                functions the sampled controller uses (``machines._dfim``, ``control._speed.speed_pi``,
+                ``control._bodson.rotor_current_loop`` with the ``SpeedController`` part's parameter
                 and state arrays). The plant is the compiled system's own right-hand side
                 (``derivatives``) with the converter's output held at the law's rotor voltage and
                 the relay closed, evaluated in the frame that rotates with the supply (the
@@ -248,7 +248,7 @@ class StabilityResult:
 
 def speed_range(model: DriveModel) -> tuple[float, float]:
     """(lowest, highest) speed [rad/s] the drive can hold (converter rotor-voltage limit,
-    ``sim.setup.speed_range``)."""
+    ``sim._setup.speed_range``)."""
     return setup_speed_range(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
 
 
@@ -420,7 +420,7 @@ def _current_law(p, s, i_int, w_e, w_hat, v_s_mag, tau_com, i_s, i_r, z):
     """Rotor current loop (46)-(47) around the command (43), continuous time; returns
     (v_r, d z / dt) in the stator-voltage frame, z being the integral of the current error.
 
-    The sampled controller's own ``rotor_current_loop`` (control.bodson) is evaluated on the
+    The sampled controller's own ``rotor_current_loop`` (control._bodson) is evaluated on the
     ``SpeedController``'s parameter array ``p`` without voltage limit (prepared so by the caller)
     and its state array ``s`` (the integral at ``s[i_int]``), with a unit step: one forward-Euler
     step of length 1 then returns the integrand, d z / dt = (z after the step) - z.

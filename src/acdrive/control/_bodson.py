@@ -48,14 +48,14 @@ from acdrive.machines._windings import winding_params
 
 MODE_VOLTAGE, MODE_CURRENT = 0.0, 1.0
 
-#: the controller's estimates of the machine, in the slots machines.dfim's functions read
+#: the controller's estimates of the machine, in the slots machines._dfim's functions read
 ESTIMATES = tuple(winding_params("M", "stator-rotor mutual inductance (controller's estimate)"))
 
 
 def _check_estimate_slots(layout: Layout) -> None:
     slots = tuple(layout.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p"))
     if slots != (dfim.R_S, dfim.R_R, dfim.L_S, dfim.L_R, dfim.M_SR, dfim.N_P):
-        raise ImportError("controller estimates no longer match machines.dfim's parameter slots")
+        raise ImportError("controller estimates no longer match machines._dfim's parameter slots")
 
 
 @jit

@@ -37,7 +37,7 @@ to a PI whose integrator state is known, and it suits a magnitude (vector) limit
 acts along the direction the limiter removed.
 
 The limit v_max is the parameter ``v_max``, or, with ``v_dc_input=True``, v_dc / sqrt(2) from an
-input ``v_dc`` (``plant.converter.max_voltage_magnitude``, the converter's linear SVPWM range),
+input ``v_dc`` (``plant._converter.max_voltage_magnitude``, the converter's linear SVPWM range),
 read at the sample instant. A run at a sample time other than the ``T_s`` the matrices were
 computed for is refused before it starts (``check_run``, an ``InputError`` naming ``<part>.T_s``).
 Events: ``saturated`` (the command was limited) and ``period_mismatch`` (a kernel-level guard for

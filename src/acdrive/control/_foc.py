@@ -4,16 +4,16 @@
 Fig. 12 is the cascade of a drive: position loop -> speed loop -> IFOC (torque and flux to
 stator-current references) -> stator current controller -> inverter. The parts here are the
 outer blocks; the current controller is a separate part, and the speed is measured from the
-encoder angle with ``plant.sensors.Encoder`` and ``control.bodson.SpeedEstimator`` (backward
+encoder angle with ``plant.Encoder`` and ``control.SpeedEstimator`` (backward
 difference, optional low-pass), which suit any shaft.
 
 * :class:`IndirectFOC`: torque reference and rotor-flux reference -> stationary-frame stator
   current reference, field angle from the encoder angle plus the integrated slip frequency.
 * :class:`SaturatedSpeedP`: the saturated proportional speed controller (21).
-* :class:`SpeedPI`: speed PI with clamping anti-windup and a torque limit (``control.speed``).
+* :class:`SpeedPI`: speed PI with clamping anti-windup and a torque limit (``control._speed``).
 * :class:`PositionP`: P position loop giving the speed reference of a ``SpeedPI`` (P-PI cascade).
 
-**Field orientation, derived from the plant model** (``machines.cage_part``, Amezquita-Brooks
+**Field orientation, derived from the plant model** (``machines._cage_part``, Amezquita-Brooks
 (1)-(2) in acdrive's power-invariant scaling). The rotor-flux equation in the stationary frame,
 
     dpsi_r/dt = (L_m R_r / L_r) i_s - (R_r / L_r - j w_r) psi_r,      w_r = n_p w,
@@ -66,7 +66,7 @@ from acdrive.machines._induction import UGALDE_IM_300W
 # --- default numbers, from the DeLorenzo DL10115A1 machine of the paper --------------------------
 
 #: Nameplate of the DeLorenzo DL10115A1 IM (Amezquita-Brooks et al. section VI; parameters in
-#: their Appendix, ``machines.induction.DELORENZO_IM``): 300 W, 380 V rms line-to-line, 3450 rpm,
+#: their Appendix, ``machines.DELORENZO_IM``): 300 W, 380 V rms line-to-line, 3450 rpm,
 #: 2 poles (so 60 Hz: synchronous speed 3600 rpm, slip 4.2 %).
 RATED_POWER, RATED_VOLTAGE_LL_RMS, RATED_SPEED_RPM, RATED_FREQUENCY = 300.0, 380.0, 3450.0, 60.0
 #: rated mechanical speed [rad/s] (361.3 rad/s)
@@ -82,7 +82,7 @@ RATED_TORQUE = RATED_POWER / RATED_SPEED
 #: (|i_s| = 0.968 A; ``tests/test_foc.py`` recomputes it). Steady state, i_d = psi_ref / L_m =
 #: 0.68 A. Field-oriented steady state needs v_dq = (R_s + j w_e sigma L_s) i_dq +
 #: j w_e (L_m / L_r) psi_d, so with the paper's 310 V DC link (|v| <= V_dc / sqrt 2 = 219 V,
-#: ``plant.converter``) this flux is held up to w_e = 224 rad/s at no load and 209 rad/s at rated
+#: ``plant._converter``) this flux is held up to w_e = 224 rad/s at no load and 209 rad/s at rated
 #: torque; faster runs need a lower flux (``psi_ref`` as a table: field weakening), which is the
 #: user's choice and not guessed here.
 RATED_FLUX = 0.964
@@ -334,7 +334,7 @@ _PI_EINT = SPEED_PI_STATES.slot("e_int")
 def speed_pi_step(t, T_s, u, p, s, y):
     """tau_ref = K_F K_P w_ref - K_P w + K_I int(w_ref - w) within [-tau_max, tau_max]; the
     integral advances (forward Euler) only while the output is inside the limits (clamping),
-    ``control.speed.speed_pi``."""
+    ``control._speed.speed_pi``."""
     tau, s[_PI_EINT], limited = speed_pi(p[_PI_KP], p[_PI_KI], p[_PI_KF], s[_PI_EINT],
                                          u[_W_REF], u[_W], -p[_PI_TMAX], p[_PI_TMAX],
                                          T_s)  # fmt: skip

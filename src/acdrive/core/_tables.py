@@ -1,4 +1,4 @@
-"""Piecewise-linear tables stored inside a part's flat parameter array (see ``core.signals``).
+"""Piecewise-linear tables stored inside a part's flat parameter array (see ``core._signals``).
 
 A table occupies ``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]``; tables follow one another after the
 fixed parameters, so the k-th table starts where the (k-1)-th ends.

@@ -87,6 +87,6 @@ class CageInductionMachine(InductionWindings):
     @classmethod
     def from_params(cls, name, params) -> CageInductionMachine:
         """From an ``acdrive.machines.IMParams`` (e.g. ``DELORENZO_IM``,
-        ``DELORENZO_IM_13``; its J goes to a ``plant.mechanics.Shaft``)."""
+        ``DELORENZO_IM_13``; its J goes to a ``plant.Shaft``)."""
         return cls(name, R_s=params.R_s, R_r=params.R_r, L_s=params.L_s, L_r=params.L_r,
                    L_m=params.L_m, n_p=params.n_p)  # fmt: skip

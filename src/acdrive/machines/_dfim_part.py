@@ -17,7 +17,7 @@ The stator relay is the input ``connected`` (0 or 1, held between samples). An o
 i_s = 0: psi_s = M i_r and the open stator's terminal voltage is (M/L_r) dpsi_r/dt (output
 ``v_open``, what a synchroniser compares with the grid).
 
-A shared supply impedance (``plant.network.SupplyBus``) is solved exactly: with the stator
+A shared supply impedance (``plant.SupplyBus``) is solved exactly: with the stator
 connected, di_s/dt = a v_s + b is affine in the stator voltage, a = L_r / (L_s L_r - M^2) and
 b = -(L_r R_s i_s + M dpsi_r/dt) / (L_s L_r - M^2) (from the flux equations above); the machine
 outputs a and b, the bus sums them over its machines.
@@ -57,7 +57,7 @@ _R_S, _R_R, _L_S, _L_R, _M, _N_P = (
     PARAMS.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p")
 )
 _V_LOSS = PARAMS.slot("V_loss")
-# machines.dfim's compiled torque and current functions, reused here, read the same slots
+# machines._dfim's compiled torque and current functions, reused here, read the same slots
 if (_R_S, _R_R, _L_S, _L_R, _M, _N_P) != (
     dfim.R_S,
     dfim.R_R,
@@ -66,7 +66,7 @@ if (_R_S, _R_R, _L_S, _L_R, _M, _N_P) != (
     dfim.M_SR,
     dfim.N_P,
 ):
-    raise ImportError("DoublyFedMachine.PARAMS no longer matches machines.dfim's parameter slots")
+    raise ImportError("DoublyFedMachine.PARAMS no longer matches machines._dfim's parameter slots")
 STATES = Layout(
     cplx("psi_s", "Wb", "stator flux linkage, stationary frame"),
     cplx("psi_r", "Wb", "rotor flux linkage referred to the stator, stationary frame"),

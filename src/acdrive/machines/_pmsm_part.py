@@ -16,9 +16,9 @@ n_P w_gen). Space vectors in acdrive's power-invariant scaling (``acdrive._frame
 **Sign convention: motor (consumer) reference arrows**, i.e. (7) exactly as printed: rearranged,
 (7) reads v_d = R_s i_d + L_d di_d/dt - w_r L_q i_q and v_q = R_s i_q + L_q di_q/dt + w_r psi_d,
 the voltage equation v = R_s i + dpsi/dt + j w_r psi with the current flowing INTO the terminals.
-Its linear part is (9)-(11), ``machines.pmsm.dq_current_ss``. With these currents the torque
+Its linear part is (9)-(11), ``machines._pmsm.dq_current_ss``. With these currents the torque
 formula of (8) is the torque the machine exerts on its rotor in the direction of rotation
-(positive: motoring), which is what ``plant.mechanics.Shaft`` takes (J dw/dt = tau_e - load).
+(positive: motoring), which is what ``plant.Shaft`` takes (J dw/dt = tau_e - load).
 Power balance (power-invariant, no 3/2):
 
     Re(v_s conj(i_s)) = R_s |i_s|^2 + dW/dt + tau_e w,   W = (L_d i_d^2 + L_q i_q^2) / 2
@@ -38,7 +38,7 @@ n_p psi_pm i_q without the 3/2. Currents and voltages of a balanced set have |x|
 (Bodson (8)).
 
 No trigonometry in the right-hand side: e_r is a state (de_r/dt = j w_r e_r), reset from theta
-onto the unit circle at every sample by ``project`` (as in ``machines.dfim_part``).
+onto the unit circle at every sample by ``project`` (as in ``machines._dfim_part``).
 """
 
 from __future__ import annotations
@@ -130,7 +130,7 @@ def pmsm_project(x, p):
 
 class PermanentMagnetMachine(ContinuousPart):
     """PMSM/PMSG, Ugalde-Loo et al. (7)-(8), motor reference arrows (module docstring);
-    parameters as ``machines.pmsm.PMSGParams`` (its J goes to a ``Shaft``)."""
+    parameters as ``machines.PMSGParams`` (its J goes to a ``Shaft``)."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"n_p": 1}

@@ -7,7 +7,7 @@
 * ``pmsg-2mw``: the 2 MW permanent-magnet generator of Ugalde-Loo et al.
 
 ``machine_part`` makes the continuous plant part of a built-in machine (its electrical model; the
-inertia and friction go to a ``plant.mechanics.Shaft``).
+inertia and friction go to a ``plant.Shaft``).
 """
 
 from __future__ import annotations

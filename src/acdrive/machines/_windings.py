@@ -2,7 +2,7 @@
 
 Both the cage IM (Amezquita-Brooks et al. (1)) and the DFIM (Bodson (9)) are a stator and a rotor
 winding with resistances, self inductances, a mutual inductance and a pole-pair count; only the
-mutual inductance's symbol differs (L_m, M). The value rules are declared (``core.signals``); the
+mutual inductance's symbol differs (L_m, M). The value rules are declared (``core._signals``); the
 cross-field rule sigma > 0 is ``errors.require_leakage``, shared with ``IMParams``/``DFIMParams``.
 """
 
@@ -14,7 +14,7 @@ from acdrive.errors import require_leakage
 
 
 def winding_params(mutual: str, mutual_doc: str) -> Layout:
-    """R_s, R_r, L_s, L_r, ``mutual``, n_p in this order (the order of ``machines.dfim``'s
+    """R_s, R_r, L_s, L_r, ``mutual``, n_p in this order (the order of ``machines._dfim``'s
     parameter vector, whose compiled functions the DFIM part reuses)."""
     return Layout(
         real("R_s", "ohm", "stator resistance", "positive"),

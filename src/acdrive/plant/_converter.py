@@ -6,7 +6,7 @@ i.e. a space-vector magnitude of sqrt(3/2) V_dc / sqrt(3) = V_dc / sqrt(2) (Bods
 beyond it is scaled back along its own direction.
 
 Two parts, one formula: ``AveragedConverter`` has a fixed DC-link voltage (parameter ``V_dc``);
-``DCFedConverter`` reads it as an input ``v_dc`` from a continuous part (``plant.sources.DCSource``,
+``DCFedConverter`` reads it as an input ``v_dc`` from a continuous part (``plant.DCSource``,
 a DC link whose voltage may drop), taken at the sample instant like its command. Both report a
 command beyond the limit with the event ``saturated``.
 """
@@ -88,7 +88,7 @@ def fed_segments(T_s, u, p, s, dt, v):
 
 class DCFedConverter(Modulator):
     """``AveragedConverter`` whose DC-link voltage is the input ``v_dc`` (from a
-    ``plant.sources.DCSource``) read at each sample instant: |v| <= v_dc / sqrt(2), a command
+    ``plant.DCSource``) read at each sample instant: |v| <= v_dc / sqrt(2), a command
     beyond it scaled back along its direction and reported as ``saturated``."""
 
     INPUTS, OUTPUTS = FED_INPUTS, AVERAGED_OUTPUTS

@@ -2,7 +2,7 @@
 
 The inverter of Amezquita-Brooks et al., section VI: a DC link (310 V, wired from a DC source's
 output), a two-level IGBT bridge switched by 5 kHz space-vector modulation, the controller
-sampling at 50 kHz. Where the averaged converter (``plant.converter``) holds the command over the
+sampling at 50 kHz. Where the averaged converter (``plant._converter``) holds the command over the
 sample, this part returns the switching pattern itself: the piecewise-constant voltage applied to
 an isolated-star load, with exact switching instants, which the system loop integrates segment by
 segment.
@@ -44,7 +44,7 @@ switching times come from the latched value, the applied voltages from the prese
 that sags between samples is seen with a delay of at most T_s).
 
 **Overmodulation.** A command beyond the circle inscribed in the hexagon, |v_ref| > v_dc / sqrt(2)
-(``plant.converter.max_voltage_magnitude``), is scaled back along its own direction to that
+(``plant._converter.max_voltage_magnitude``), is scaled back along its own direction to that
 magnitude, the rule of the averaged converter, so both apply the same mean voltage. The part
 reports the event ``overmodulation`` on every sample of a carrier period whose command was
 limited. (Min-max modulation could reach the hexagon's corners; the circle keeps the output
@@ -293,7 +293,7 @@ class Inverter(Modulator):
         return 1.0 / self.values["f_pwm"]
 
     def check_run(self, sample_time: float) -> None:
-        """Before every run (``core.parts.Part.check_run``): the sample time divides the carrier
+        """Before every run (``core.Part.check_run``): the sample time divides the carrier
         period."""
         self.check_sample_time(sample_time)
 
@@ -335,7 +335,7 @@ _LA_K, _LA_V = LATCH_STATES.slot("k"), LATCH_STATES.slot("v")
 @jit
 def latch_step(t, T_s, u, p, s, y):
     """At the first sample of each carrier period take the command; hold it for N samples (the
-    rule of ``plant.inverter.inverter_segments``, same N)."""
+    rule of ``plant._inverter.inverter_segments``, same N)."""
     n = carrier_samples(p[_LA_F], T_s)
     j = s[_LA_K]
     if j < 0.0 or j >= n:
@@ -349,7 +349,7 @@ def latch_step(t, T_s, u, p, s, y):
 
 class CarrierLatch(SampledPart):
     """The PWM unit's shadow register: the controller's command taken once per carrier period
-    1 / f_pwm (N = T_pwm / T_s samples) and held, as ``plant.inverter.Inverter`` latches it; in
+    1 / f_pwm (N = T_pwm / T_s samples) and held, as ``plant.Inverter`` latches it; in
     front of an averaged converter it makes the carrier-period average of the inverter."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = LATCH_PARAMS, LATCH_STATES, LATCH_INPUTS, LATCH_OUTPUTS

@@ -2,7 +2,7 @@
 
 ``Section`` wraps one TOML table: every field read through it is checked (type, finiteness, the
 rule given) and named by its path in an ``InputError``; ``done()`` reports keys nobody read. The
-drive-specific loaders (``scenarios.loader`` for the DFIM drive, ``scenarios.im_loader`` for the
+drive-specific loaders (``scenarios._loader`` for the DFIM drive, ``scenarios._im_loader`` for the
 cage induction motor drive) build their setups with it.
 """
 

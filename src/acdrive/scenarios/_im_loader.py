@@ -1,7 +1,7 @@
 """Scenario files of cage induction motor drives (``drive = "cage-im"``) -> ``IMDriveSetup``.
 
-``scenarios.loader.load_scenario`` hands a file that says ``drive = "cage-im"`` to
-:func:`build_im_setup`. Every field is checked on load with ``scenarios.files.Section``;
+``scenarios.load_scenario`` hands a file that says ``drive = "cage-im"`` to
+:func:`build_im_setup`. Every field is checked on load with ``scenarios._files.Section``;
 a bad one raises ``InputError("<path.to.field>", "<rule>")``, which the command prints as one line
 (exit code 2) before any simulation or output. Schema (all tables optional except [reference];
 units in the key names where not SI; defaults in brackets):
@@ -11,7 +11,7 @@ units in the key names where not SI; defaults in brackets):
                   the label names its results (e.g. { icad = "paper-20", pi = "paper-pi" })
     [simulation]  duration [0.2], sample_time [2e-5: the paper's 50 kHz], substeps [4] (steps
                   of the integrator per held segment), integrator ("rk4" | "rk6": classical
-                  fourth-order or Butcher's sixth-order Runge-Kutta, ``sim.system.INTEGRATORS``)
+                  fourth-order or Butcher's sixth-order Runge-Kutta, ``sim.INTEGRATORS``)
                   ["rk4"], log_every [1], metrics_from (s; start of the current-error window) [0]
     [machine]     machine ["delorenzo-im"; a built-in cage IM] or [machine.params]
                   (R_s, R_r, L_s, L_r, L_m, n_p): the nominal machine the controllers are
@@ -24,7 +24,7 @@ units in the key names where not SI; defaults in brackets):
     [inverter]    model ("averaged" | "switching") ["averaged"], dc_link_voltage |
                   dc_link_voltage_profile [310], pwm_frequency_hz [5000], dead_time_s and
                   device_drop_v (switching model only) [0]
-    [current_control]  controller (``control.lti.BUILTIN``) ["paper-20"], discretisation
+    [current_control]  controller (``control._lti.BUILTIN``) ["paper-20"], discretisation
                   ("tustin" | "zoh") ["tustin"], prewarp_rad_s (Tustin only), anti_windup_gain [1]
     [reference]   mode ("current" | "speed-p" | "speed-pi" | "position"), and by mode:
                   current: waveform ("sine" | "step") ["sine"], amplitude_pk_a [1],
@@ -35,10 +35,10 @@ units in the key names where not SI; defaults in brackets):
                   current_limit_pk_a (phase peak) [foc.CURRENT_LIMIT / sqrt(3/2)],
                   min_flux_wb [foc.MIN_FLUX], magnetised (start magnetised) [true]
     [foc.estimates]  R_r, L_r, L_m: the IFOC's parameter estimates [the nominal machine's]
-    [speed_controller]  speed-p: k_p, tau_max [control.foc defaults]; speed-pi and position:
+    [speed_controller]  speed-p: k_p, tau_max [control._foc defaults]; speed-pi and position:
                   K_P, K_I (or bandwidth_rad_s: both roots of J s^2 + K_P s + K_I there), K_F,
-                  tau_max [control.foc.SpeedPI defaults]
-    [position_controller]  (position) K_theta, w_max [control.foc.PositionP defaults]
+                  tau_max [control.SpeedPI defaults]
+    [position_controller]  (position) K_theta, w_max [control.PositionP defaults]
     [sensors]     encoder_counts_per_rev [0: ideal], encoder_offset_rad [0], speed_filter_tau_s [0]
 
 Rules checked before the run, each naming its field:
@@ -48,9 +48,9 @@ Rules checked before the run, each naming its field:
   latches one command per period);
 - ``inverter.dead_time_s``: shorter than half the switching period (each leg switches twice per
   carrier period, and every edge is delayed by the dead time), and only with the switching model;
-- the controller's discretisation at the sample time (``control.lti.discretise``: an unstable
+- the controller's discretisation at the sample time (``control.discretise``: an unstable
   discretisation, a pre-warping frequency beyond the Nyquist frequency) and its anti-windup;
-- the sampled current loop (``sim.im_drive.current_loop_radius``: plant (1) of the simulated
+- the sampled current loop (``sim._im_drive.current_loop_radius``: plant (1) of the simulated
   machine held over each sample, the discretised controller, the command latched for the carrier
   period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
   is unstable without the latch) or ``inverter.pwm_frequency_hz`` (the latch's delay) is refused;
@@ -103,7 +103,7 @@ from acdrive.sim._im_drive import (
 from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 DRIVE = "cage-im"
-#: relative tolerance of "the sample time divides the carrier period" (as plant.inverter)
+#: relative tolerance of "the sample time divides the carrier period" (as plant._inverter)
 _N_TOLERANCE = 1e-9
 #: speeds (fractions of the run's top speed) at which the sampled current loop is checked
 _CHECK_SPEEDS = np.linspace(0.0, 1.0, 5)

@@ -9,7 +9,7 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   frequency_hz_profile, resistance, inductance,
                   phase_a_scale | phase_a_scale_profile, and the same for phases b and c (each
                   phase EMF's magnitude as a fraction of voltage_pk, 0 to 1; any of them gives an
-                  unbalanced source, ``plant.sources.UnbalancedSource``, e.g. a collapsed phase)
+                  unbalanced source, ``plant.UnbalancedSource``, e.g. a collapsed phase)
     [[motor]]     machine (built-in name) or [motor.params] (R_s, R_r, L_s, L_r, M, n_p, J),
                   viscous_friction, coulomb_friction, load_torque | load_torque_profile,
                   speed_reference_rpm = [[t, rpm], ...], initial_speed_rpm,
@@ -80,7 +80,7 @@ from acdrive.sim._setup import (
 )
 from acdrive.sim._system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
-__all__ = [  # the reading functions of scenarios.files are offered here too
+__all__ = [  # the reading functions of scenarios._files are offered here too
     "build_setup",
     "builtin_names",
     "builtin_text",
@@ -98,7 +98,7 @@ DEFAULT_SUBSTEPS = 4
 
 def load_scenario(source: str | Path) -> DriveSetup:
     """Read, validate and build a scenario into a ``DriveSetup`` (a file that says
-    ``drive = "cage-im"``: an ``IMDriveSetup``, ``scenarios.im_loader``)."""
+    ``drive = "cage-im"``: an ``IMDriveSetup``, ``scenarios._im_loader``)."""
     data = read_scenario(source)
     if isinstance(data, dict) and "drive" in data:
         if data["drive"] != "cage-im":
@@ -255,7 +255,7 @@ def _forced_close(section: _Section, duration: float) -> float:
 
 
 def _flux_rate(machine: DFIMParams, R_s: float, L_s: float, R_r: float, w_el: float) -> float:
-    """Largest |eigenvalue| [1/s] of the flux equations of ``machines.dfim_part`` at a fixed electrical
+    """Largest |eigenvalue| [1/s] of the flux equations of ``machines._dfim_part`` at a fixed electrical
     rotor speed ``w_el``: d psi_s/dt = -R_s i_s, d psi_r/dt = -R_r i_r + j w_el psi_r in the
     stationary frame (the rotor-side mode turns at w_el there)."""
     with np.errstate(all="ignore"):
@@ -355,7 +355,7 @@ def choose_substeps(setup: DriveSetup, given: bool) -> int:
     """Substeps per sample for ``setup``: refuse, raise or keep, against its fastest mode.
 
     RK4 with step h = sample_time / substeps is stable for h |lambda| up to about 2.8; the
-    integration step must satisfy h x rate <= RK4_STEP_LIMIT (2.5, ``sim.setup``) for the rate of
+    integration step must satisfy h x rate <= RK4_STEP_LIMIT (2.5, ``sim._setup``) for the rate of
     :func:`fastest_mode`, i.e. substeps >= need = ceil(sample_time x rate / RK4_STEP_LIMIT).
 
     Decision (the issue allows refusing, or choosing enough substeps and saying so):

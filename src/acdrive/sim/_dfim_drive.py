@@ -306,7 +306,7 @@ def simulate(setup, divergence_hint=None) -> DriveResult:
 
 def simulate_slow(setup, method: str = "RK4", python_steps: dict | None = None,
                   rtol: float = 1e-10, atol: float = 1e-12) -> DriveResult:  # fmt: skip
-    """Run ``setup`` on the slow path (``sim.reference``): the same compiled pieces stepped from
+    """Run ``setup`` on the slow path (``sim._reference``): the same compiled pieces stepped from
     Python, integrated by the loop's own RK4 (``method="RK4"``) or by ``solve_ivp`` (e.g.
     "Radau"); ``python_steps[part name]`` replaces a sampled part (e.g. ``"controller0"``) by a
     Python function with the signature of its compiled step."""

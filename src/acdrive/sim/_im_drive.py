@@ -1,44 +1,44 @@
 """The cage induction motor drive of Amezquita-Brooks et al. (sections VI-VIII) built from parts.
 
-Data flow (as the DFIM drive, ``sim.dfim_drive``): scenario (TOML, ``scenarios.im_loader``) ->
-``IMDriveSetup`` (frozen dataclasses) -> ``IMDrive`` (parts and wires) -> ``sim.system.System``
+Data flow (as the DFIM drive, ``sim._dfim_drive``): scenario (TOML, ``scenarios._im_loader``) ->
+``IMDriveSetup`` (frozen dataclasses) -> ``IMDrive`` (parts and wires) -> ``sim.System``
 -> compiled loop -> ``IMDriveResult`` (named signals with units, events, ``summary()``) ->
-``run_im_scenario`` (one run per compared current controller) -> ``report.im_outputs`` (data,
+``run_im_scenario`` (one run per compared current controller) -> ``_report.im_outputs`` (data,
 figures, summary.json).
 
 **Parts** (names as in the logs and event counts):
 
-* plant: ``dc`` (``plant.sources.DCSource``, the paper's unregulated 310 V link, a profile), the
-  inverter (``inverter``), the machine ``machine`` (``machines.cage_part``, (1)-(2); the
+* plant: ``dc`` (``plant.DCSource``, the paper's unregulated 310 V link, a profile), the
+  inverter (``inverter``), the machine ``machine`` (``machines._cage_part``, (1)-(2); the
   *plant's* parameters, perturbed in the sec. VIII scenario) and the shaft ``shaft``
-  (``plant.mechanics.Shaft``: inertia, viscous and Coulomb friction, active load profile,
+  (``plant.Shaft``: inertia, viscous and Coulomb friction, active load profile,
   eddy-current brake coefficient profile; or ``PrescribedSpeed`` for a locked rotor or a
   dynamometer-held speed);
-* sensors: ``encoder`` (``plant.sensors.Encoder``) and ``speed`` (``control.bodson
+* sensors: ``encoder`` (``plant.Encoder``) and ``speed`` (``control._bodson
   .SpeedEstimator``, backward difference of the encoder angle);
-* control (Fig. 12): ``current`` (``control.current.StationaryCurrentController``: a built-in LTI
+* control (Fig. 12): ``current`` (``control.StationaryCurrentController``: a built-in LTI
   controller by name on both stationary axes, discretised by ZOH or Tustin at the control
   sample time, limited to v_dc / sqrt(2) from the DC link with back-calculation anti-windup) and
   the reference generation of the mode:
 
-  - ``current``: ``reference`` (``control.current.CurrentProgram``), a balanced sinusoidal
+  - ``current``: ``reference`` (``control.CurrentProgram``), a balanced sinusoidal
     current reference (the locked-rotor test, Fig. 11; Fig. 23) or a step on the alpha axis
     (Figs. 18, 20), tabulated at every control sample;
-  - ``speed-p``: ``speed_reference`` -> ``speed_controller`` (``control.foc.SaturatedSpeedP``,
-    (21)) -> ``ifoc`` (``control.foc.IndirectFOC``) -> ``current`` (Fig. 16);
-  - ``speed-pi``: the same with ``control.foc.SpeedPI`` (Fig. 13);
-  - ``position``: ``position_controller`` (``control.foc.PositionP``) -> ``SpeedPI`` -> IFOC
+  - ``speed-p``: ``speed_reference`` -> ``speed_controller`` (``control.SaturatedSpeedP``,
+    (21)) -> ``ifoc`` (``control.IndirectFOC``) -> ``current`` (Fig. 16);
+  - ``speed-pi``: the same with ``control.SpeedPI`` (Fig. 13);
+  - ``position``: ``position_controller`` (``control.PositionP``) -> ``SpeedPI`` -> IFOC
     (Fig. 14).
 
-**Inverter models.** ``switching``: ``plant.inverter.Inverter``, the two-level SVPWM bridge with
+**Inverter models.** ``switching``: ``plant.Inverter``, the two-level SVPWM bridge with
 exact switching instants, dead time and device drops; it latches the command once per carrier
 period T_pwm = N T_s. ``averaged``: the same inverter's carrier-period average, i.e. the command
 latched at the carrier period start (``CarrierLatch``, the PWM unit's shadow register) and held
-for the whole period by ``plant.converter.DCFedConverter`` within its linear range
+for the whole period by ``plant.DCFedConverter`` within its linear range
 |v| <= v_dc / sqrt(2). Feeding the averaged converter straight from the 50 kHz controller would
 model a 50 kHz PWM, with a tenth of the real hold delay; with the latch, the mean of the switching
 pattern over each carrier period is exactly the averaged model's voltage (the volt-second balance
-of ``plant.inverter``), and the two models differ only by the ripple (``tests/test_im_drive.py``).
+of ``plant._inverter``), and the two models differ only by the ripple (``tests/test_im_drive.py``).
 The latch is defined here rather than in ``plant/`` because this work may not edit that layer; it
 belongs beside ``DCFedConverter``.
 
@@ -140,7 +140,7 @@ STEADY_MIN_S = 0.05
 
 
 def profile_at(profile: Profile, t) -> np.ndarray:
-    """Value of a piecewise-linear profile at times ``t``, as ``core.tables.table_at`` computes
+    """Value of a piecewise-linear profile at times ``t``, as ``core.table_at`` computes
     it in the loop (held outside its range; a repeated time is a vertical step, the later value
     from that time on)."""
     times, values = (np.asarray(a, dtype=float) for a in profile)
@@ -172,7 +172,7 @@ def profile_changes(profile: Profile) -> list[float]:
 
 @dataclass(frozen=True)
 class Mechanics:
-    """The shaft (``plant.mechanics``): inertia J [kg m^2], viscous friction B [N m s/rad],
+    """The shaft (``plant._mechanics``): inertia J [kg m^2], viscous friction B [N m s/rad],
     Coulomb friction tau_c [N m] (smoothed over W_COULOMB), the active load torque profile [N m]
     and the eddy-current brake coefficient profile k_b [N m s/rad] (torque k_b w); or a
     ``prescribed_speed`` profile [rad/s] (a locked rotor is 0): then the shaft is held there and
@@ -194,7 +194,7 @@ class Mechanics:
         return profile_at(self.load, t) + profile_at(self.brake, t) * w
 
     def friction_torque(self, w) -> np.ndarray:
-        """B w + tau_c tanh(w / W_COULOMB), as ``plant.mechanics.load_torque`` computes it."""
+        """B w + tau_c tanh(w / W_COULOMB), as ``plant._mechanics.load_torque`` computes it."""
         return self.B * w + self.tau_c * np.tanh(np.asarray(w) / W_COULOMB)
 
 
@@ -218,8 +218,8 @@ class InverterSetup:
 @dataclass(frozen=True)
 class CurrentControl:
     """The stationary-frame current controller: a built-in LTI controller by name
-    (``control.lti.BUILTIN``), its discretisation ("tustin" or "zoh"), an optional Tustin
-    pre-warping frequency [rad/s] and the anti-windup gain (``control.current``)."""
+    (``control._lti.BUILTIN``), its discretisation ("tustin" or "zoh"), an optional Tustin
+    pre-warping frequency [rad/s] and the anti-windup gain (``control._current``)."""
 
     controller: str = "paper-20"
     method: str = "tustin"
@@ -255,7 +255,7 @@ class CurrentReference:
 
 @dataclass(frozen=True)
 class FOCSetup:
-    """Indirect FOC (``control.foc.IndirectFOC``): rotor-flux reference profile [Wb], stator
+    """Indirect FOC (``control.IndirectFOC``): rotor-flux reference profile [Wb], stator
     current limit [A, space-vector magnitude], the flux below which no torque current is given,
     the magnetised start, and the controller's estimates of R_r, L_r, L_m (None: the nominal
     machine's)."""
@@ -269,7 +269,7 @@ class FOCSetup:
 
 @dataclass(frozen=True)
 class SpeedPSetup:
-    """(21): gain k_p [N m s/rad] and torque limit tau_max [N m] (``control.foc`` defaults)."""
+    """(21): gain k_p [N m s/rad] and torque limit tau_max [N m] (``control._foc`` defaults)."""
 
     k_p: float = speed_p_gain(J_ESTIMATE, SPEED_P_BANDWIDTH)
     tau_max: float = RATED_TORQUE
@@ -280,7 +280,7 @@ _PI_DEFAULT = SpeedPI.DEFAULTS
 
 @dataclass(frozen=True)
 class SpeedPISetup:
-    """Speed PI (``control.foc.SpeedPI``): K_P, K_I, K_F and tau_max (its defaults)."""
+    """Speed PI (``control.SpeedPI``): K_P, K_I, K_F and tau_max (its defaults)."""
 
     K_P: float = _PI_DEFAULT["K_P"]
     K_I: float = _PI_DEFAULT["K_I"]
@@ -296,7 +296,7 @@ class SpeedPISetup:
 
 @dataclass(frozen=True)
 class PositionSetup:
-    """P position loop (``control.foc.PositionP``): K_theta [1/s], speed reference limit."""
+    """P position loop (``control.PositionP``): K_theta [1/s], speed reference limit."""
 
     K_theta: float = POSITION_GAIN
     w_max: float = RATED_SPEED
@@ -408,7 +408,7 @@ class IMDriveSetup:
 def modulation_signals(v: np.ndarray, v_dc: np.ndarray) -> np.ndarray:
     """Phase modulation signals 2 d_x - 1 (rows a, b, c) of centred SVPWM for the limited
     voltage vectors ``v`` on DC links ``v_dc``: the min-max zero sequence added to the phase
-    values (Bodson (2)), over v_dc / 2, as ``plant.inverter`` sets its duty cycles."""
+    values (Bodson (2)), over v_dc / 2, as ``plant._inverter`` sets its duty cycles."""
     x = np.array(complex_to_abc(np.asarray(v, dtype=complex)))
     offset = -0.5 * (x.max(axis=0) + x.min(axis=0))
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -292,7 +292,7 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
                 "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
             )
     # the bench converter's first-harmonic voltage loss per motor (dead time and device drops,
-    # plant.converter / machines.dfim_part), which the scenario notes refer to
+    # plant._converter / machines._dfim_part), which the scenario notes refer to
     summary["converter_fundamental_loss_v"] = [
         float(m.converter.fundamental_loss(m.dc_link_voltage)) for m in setup.motors
     ]

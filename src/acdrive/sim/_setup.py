@@ -1,7 +1,7 @@
 """Typed description of a DFIM drive simulation.
 
 ``DriveSetup`` holds validated physical data (machines, supply, loads, sensors, controllers,
-references); ``simulate`` runs it on the drive built from parts (``sim.dfim_drive``) and returns
+references); ``simulate`` runs it on the drive built from parts (``sim._dfim_drive``) and returns
 a ``DriveResult``.
 """
 
@@ -33,7 +33,7 @@ class Supply:
     series R-L impedance shared by every motor on it (Bodson's transformer).
 
     ``phase_scales``: None for a balanced source, else the magnitude profiles (k_a, k_b, k_c) of
-    the three phase EMFs as fractions of ``voltage_pk`` (``plant.sources.UnbalancedSource``)."""
+    the three phase EMFs as fractions of ``voltage_pk`` (``plant.UnbalancedSource``)."""
 
     voltage_pk: Profile = field(default_factory=lambda: constant(11.1))
     frequency_hz: Profile = field(default_factory=lambda: constant(60.0))
@@ -103,9 +103,9 @@ class MotorSetup:
 
     ``dc_link_voltage`` is the converter's nominal DC-link voltage (the controller's rotor-voltage
     limit and the converter loss are computed from it); ``dc_link_profile``, if given, is the DC
-    link's voltage over time (``plant.sources.DCSource``), which limits the applied rotor voltage,
+    link's voltage over time (``plant.DCSource``), which limits the applied rotor voltage,
     and starts at ``dc_link_voltage``. ``relay_forced_close_time``: the stator relay closes then
-    whatever the synchroniser commands (a mis-operation; ``plant.network.ForcedRelay``)."""
+    whatever the synchroniser commands (a mis-operation; ``plant.ForcedRelay``)."""
 
     machine: DFIMParams
     controller: DFIMController
@@ -137,7 +137,7 @@ class DriveSetup:
     duration: float = 1.0
     sample_time: float = 200e-6
     substeps: int = 4
-    integrator: str = "rk4"  # sim.system.INTEGRATORS
+    integrator: str = "rk4"  # sim.INTEGRATORS
     log_every: int = 1
     name: str = "custom"
     compare_modes: tuple[str, ...] = ()  # run once per controller mode (Bodson Figs. 8-11)
@@ -224,7 +224,7 @@ def divergence_hint(setup: DriveSetup) -> str:
 
 
 def simulate(setup: DriveSetup) -> DriveResult:
-    """Run ``setup`` on its parts-built system (``sim.dfim_drive``) and return its typed result.
+    """Run ``setup`` on its parts-built system (``sim._dfim_drive``) and return its typed result.
 
     Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
     the state stops being finite (a simulation never returns NaN silently).

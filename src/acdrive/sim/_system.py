@@ -13,10 +13,10 @@ Per control sample t_k = t_0 + k T_s (the structure of Bodson's bench and of eve
    classical fourth-order method, or Butcher's seven-stage sixth-order one, ``INTEGRATORS``);
 6. a state that stops being finite stops the run with the time at which it happened.
 
-Every slot is derived from the parts' declarations (``core.signals``); a wiring mistake (unknown
+Every slot is derived from the parts' declarations (``core._signals``); a wiring mistake (unknown
 port, output to output, kind or unit mismatch, an input wired twice or not at all, an algebraic
 loop) is an ``InputError`` at construction naming both ends. ``System.compile`` generates the loop
-for this topology (``sim.codegen``), cached on disk. The compiled system offers ``run``,
+for this topology (``sim._codegen``), cached on disk. The compiled system offers ``run``,
 ``run_batch`` (a leading batch axis over variants, on all cores), the held-input right-hand side
 ``derivatives`` and the pieces of one sample (``sample_instant``, ``record``, ``integrate``); the
 slow path uses those, as the linearisation will.
@@ -293,7 +293,7 @@ class System:
         # runs without numba's reference counting (_nrt=False): the array view it takes per part
         # and per evaluation then costs nothing (it was a third of the loop's time for two motors).
         # Plant kernels and modulators therefore must not allocate arrays; sampled parts may.
-        emit("# plant side: fast-math, no reference counting (sim.system.System.source)")
+        emit("# plant side: fast-math, no reference counting (sim.System.source)")
         emit('_jit_plant = njit(cache=True, error_model="numpy", _nrt=False)')
         emit(
             f'_jit_plant_fast = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False)'
@@ -475,7 +475,7 @@ class System:
         emit("    IDX = np.zeros(N_MOD, dtype=np.int64)")
         emit("    LEFT = np.zeros(N_MOD)")
         emit(
-            "    # borrowed views (sim.borrow): the per-part slices below cost no reference counting"
+            "    # borrowed views (sim._borrow): the per-part slices below cost no reference counting"
         )
         emit(
             "    Xb, Pb, Sb, Yb, Ub = borrowed(X), borrowed(P), borrowed(S), borrowed(Y), borrowed(U)"

@@ -9,7 +9,7 @@ Output folder ``<out>/<name>/``:
   (``os.replace``), so a chunk file exists complete or not at all;
 * ``traces/chunk-NNNNNN.parquet`` -- decimated traces, if asked for (written before the chunk's
   table file, which is the chunk's "done" mark);
-* ``report.md`` and ``figures/*.png`` (``sweep.report``).
+* ``report.md`` and ``figures/*.png`` (``sweep._report``).
 
 **Resume.** Running the same sweep into the same folder again reads the manifest (a different
 digest is refused: it would mix two sweeps), deletes left-over temporary files, checks each
@@ -85,7 +85,7 @@ def _pluck(summary: dict, path: str):
 
 
 def _summary_metrics(spec: SweepSpec, overrides: dict) -> dict:
-    """The ``summary.json`` keys of one variant: a full single run (``sim.outcome``)."""
+    """The ``summary.json`` keys of one variant: a full single run (``sim._outcome``)."""
     import dataclasses
 
     from acdrive.batch import apply_overrides, build_variant_setup

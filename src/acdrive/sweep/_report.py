@@ -7,7 +7,7 @@ a limit (any ``*_over_limit`` metric > 0, or a ``limit`` / ``saturat`` event cou
 one sample); the unstable variants (``stable`` false: diverged, or late speed oscillation above
 ``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
 speed-loop bandwidth per combination of the other varied fields, simulated against the
-linearised sampled drive (``analysis.drive_stability.max_stable_bandwidth``), with the verdict.
+linearised sampled drive (``analysis.max_stable_bandwidth``), with the verdict.
 
 **Cross-check verdict.** The bandwidth grid b_0 < b_1 < ... is the varied field. Simulated
 tolerance: the largest b_i such that every variant with bandwidth <= b_i is stable. Linearised

@@ -83,7 +83,7 @@ def builtin_sweeps() -> list[str]:
 
 
 class _Table(Section):
-    """One TOML table under validation (``scenarios.files.Section``: every key read is recorded,
+    """One TOML table under validation (``scenarios._files.Section``: every key read is recorded,
     unknown keys refused), with the sweep file's own rules for numbers, integers and text."""
 
     def __init__(self, data, path: str):
