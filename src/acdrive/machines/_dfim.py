@@ -90,9 +90,9 @@ def currents_from_fluxes(p, psi_s, psi_r):
     """(i_s, i_r) from the flux linkages: the inverse of psi_s = L_s i_s + M i_r,
     psi_r = M i_s + L_r i_r (Bodson (9)), with a real determinant (no complex division)."""
     inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
-    return (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det, (
-        p[L_S] * psi_r - p[M_SR] * psi_s
-    ) * inv_det
+    i_s = (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det
+    i_r = (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
+    return i_s, i_r
 
 
 @jit
