@@ -58,9 +58,7 @@ html_theme_options = {
     # gallery pages: the code needs the width more than an "on this page" list of two headings
     # (patterns may not overlap: "*" stops at a "/")
     "secondary_sidebar_items": {
-        "*": ["page-toc", "sourcelink"],
-        "guide/*": ["page-toc", "sourcelink"],
-        "reproduction/*": ["page-toc", "sourcelink"],
+        **{pattern: ["page-toc", "sourcelink"] for pattern in ("*", "guide/*", "reproduction/*")},
         "auto_examples/*": [],
     },
 }

@@ -1,9 +1,10 @@
 """Parameter sweeps: many variants of one scenario, run in chunks into a Parquet dataset.
 
-``spec`` reads and validates a sweep file; ``variants`` turns it into variants (grid or seeded
-random, computed on demand); ``engine`` runs the chunks (locally or on a Dask cluster), writes
-each atomically, resumes after an interruption and refuses a sweep too large for the limits;
-``report`` writes the markdown report and its figures. The simulation itself is
+``load_sweep`` reads and validates a sweep file into a ``SweepSpec`` (its variants: a grid or
+seeded random, computed on demand); ``run_sweep`` runs the chunks (locally or on a Dask
+cluster), writes each atomically, resumes after an interruption and refuses a sweep too large
+for the limits (``estimate`` says how large); ``read_table`` reads the results back and
+``write_report`` writes the markdown report and its figures. The simulation itself is
 ``acdrive.batch.simulate_batch``.
 """
 
