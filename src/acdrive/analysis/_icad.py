@@ -864,6 +864,14 @@ def im_msf_closed_form(p: IMParams, w_r: float, w) -> np.ndarray:
     """gamma(j w) of the IM, Ugalde-Loo et al. (60)-(61) (real numerator over d_gamma^2)."""
     w_r = require_finite("w_r", w_r)
     w = np.asarray(w, dtype=float)
+    re, im = im_dgamma_re_im(p, w_r, w)
+    Lr, Lm, Rr = p.L_r, p.L_m, p.R_r
+    return Lr**2 * Lm**4 * Rr**2 * w_r**2 * w**2 / (re + 1j * im) ** 2
+
+
+def im_dgamma_re_im(p: IMParams, w_r: float, w):
+    """(Re, Im) of d_gamma(j w), Ugalde-Loo et al. (61), the denominator of the IM's
+    multivariable structure function (60); ``w`` a number or an array."""
     sig, Ls, Lr, Lm, Rs, Rr = p.sigma, p.L_s, p.L_r, p.L_m, p.R_s, p.R_r
     re = (
         -(Lr**3) * Rs * w_r**2
@@ -879,7 +887,7 @@ def im_msf_closed_form(p: IMParams, w_r: float, w) -> np.ndarray:
         - 2 * w * Lr**2 * Rs * Rr
         - w * Lm**2 * Rr**2
     )
-    return Lr**2 * Lm**4 * Rr**2 * w_r**2 * w**2 / (re + 1j * im) ** 2
+    return re, im
 
 
 def im_msf_at_rotor_speed(p: IMParams, w_r: float) -> complex:

@@ -36,7 +36,12 @@ from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, fmt, save_figure
 from acdrive._report.verdicts import at_most, error_within, within_rel
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import icad_response, im_msf_closed_form, structure_conditions
+from acdrive.analysis._icad import (
+    icad_response,
+    im_dgamma_re_im,
+    im_msf_closed_form,
+    structure_conditions,
+)
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._induction import UGALDE_IM_300W, IMParams, stator_current_ss
 
@@ -109,26 +114,6 @@ def _printed_closed_forms(p: IMParams, w_r: float) -> dict[str, float]:
     out["c1_F2"] = -Rs * (Rr**4 + (Rr * wr * Lr) ** 2) / Om**3 * c1a
     out["c1_F3"] = Rr**2 / (sg**2 * Ls**2 * Lr**4) * c1a
     return out
-
-
-def _re_im_dgamma(p: IMParams, w_r: float, w: float) -> tuple[float, float]:
-    """re_dgamma, im_dgamma of Ugalde-Loo et al. (61)."""
-    Rs, Rr, Ls, Lr, Lm, sg = p.R_s, p.R_r, p.L_s, p.L_r, p.L_m, p.sigma
-    re = (
-        -(Lr**3) * Rs * w_r**2
-        + 2 * w**2 * sg * Ls * Lr**2 * Rr
-        + w**2 * Lr**3 * Rs
-        - Lr * Rs * Rr**2
-        + w**2 * Lr * Lm**2 * Rr
-    )
-    im = (
-        -w * sg * Ls * Lr**3 * w_r**2
-        + w**3 * sg * Ls * Lr**3
-        - w * sg * Ls * Lr * Rr**2
-        - 2 * w * Lr**2 * Rs * Rr
-        - w * Lm**2 * Rr**2
-    )
-    return re, im
 
 
 def section_ugalde_im(fig_dir: Path) -> Section:
@@ -236,8 +221,8 @@ def section_ugalde_im(fig_dir: Path) -> Section:
             "sigma L_s L_r^3 w_r^2",
         )
     )
-    f2 = brentq(lambda x: _re_im_dgamma(p, w_r, x)[0], 1e-6, 1e6)
-    f3 = brentq(lambda x: _re_im_dgamma(p, w_r, x)[1], 1e-3, 1e6)
+    f2 = brentq(lambda x: im_dgamma_re_im(p, w_r, x)[0], 1e-6, 1e6)
+    f3 = brentq(lambda x: im_dgamma_re_im(p, w_r, x)[1], 1e-3, 1e6)
     s.rows.append(
         Row(
             "F(2): root of re_dgamma",
@@ -278,7 +263,7 @@ def section_ugalde_im(fig_dir: Path) -> Section:
         )
     )
     for key, wx_, where in (("c1_F2", f2, "(75)"), ("c1_F3", f3, "(78)")):
-        re, im = _re_im_dgamma(p, w_r, wx_)
+        re, im = im_dgamma_re_im(p, w_r, wx_)
         s.rows.append(
             Row(
                 f"c_1 = re^2 - im^2 at F({key[-1]})",
