@@ -155,9 +155,9 @@ def _figure_folder(out: str | None, machine: str):
     analysis. ``--out`` names the folder itself, so its last component must be a safe name."""
     from pathlib import Path
 
-    from acdrive._output import OutputFolder
+    from acdrive._output import OutputFolder, require_out
 
-    target = Path(out if out is not None else f"icad-{machine}")
+    target = require_out("--out", out) if out is not None else Path(f"icad-{machine}")
     return OutputFolder(target.parent, target.name, field="--out", name_field="--out")
 
 

@@ -169,17 +169,47 @@ def run(args) -> int:
 
 
 def _map(args) -> int:
-    import numpy as np
-
-    from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
+    from acdrive._output import OutputFile
 
     n_speed, n_load = args.grid
     if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
         raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
-    from acdrive._progress import Progress
 
     maps, report = {}, {}
     models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
+    name = f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+    with OutputFile(args.out, name, field="--out") as output:  # --out checked before the map
+        path = _map_and_figure(args, models, maps, report, output, n_speed, n_load)
+    out = {
+        "bandwidth_rad_s": args.bandwidth,
+        "model": args.model,
+        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
+        "modes": report,
+        "figure": str(path),
+    }
+    if args.json:
+        print(strict_json(out, indent=2))
+    else:
+        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
+        for mode, r in report.items():
+            print(
+                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
+                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
+                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
+                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
+                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
+            )
+    return 0
+
+
+def _map_and_figure(args, models, maps, report, output, n_speed, n_load) -> Path:
+    """Compute both modes' maps and tolerated bandwidths into ``maps`` and ``report``, draw the
+    figure into ``output`` and publish it; returns the figure's path."""
+    import numpy as np
+
+    from acdrive._progress import Progress
+    from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
+
     bar = Progress(7, "stability map")
     for mode, model in models.items():
         speeds, loads = default_grid(model, n_speed, n_load)
@@ -212,28 +242,9 @@ def _map(args) -> int:
             "max_stable_bandwidth_zero_load_rad_s": unloaded,
         }
     bar.phase("drawing")
-    path = _draw(maps, Path(args.out), args)
+    _draw(maps, output.path, args)
     bar.close()
-    out = {
-        "bandwidth_rad_s": args.bandwidth,
-        "model": args.model,
-        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
-        "modes": report,
-        "figure": str(path),
-    }
-    if args.json:
-        print(strict_json(out, indent=2))
-    else:
-        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
-        for mode, r in report.items():
-            print(
-                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
-                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
-                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
-                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
-                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
-            )
-    return 0
+    return output.publish()
 
 
 def _bench(args) -> int:
@@ -294,14 +305,16 @@ def _bench(args) -> int:
     return 0
 
 
-def _draw(maps, out: Path, args) -> Path:
+def _draw(maps, path: Path, args) -> Path:
+    """Draw the two modes' maps side by side into the PNG file ``path`` (with acdrive's mark)."""
     import matplotlib
     import numpy as np
+
+    from acdrive._output import png_metadata
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
     limit = max(float(np.nanmax(np.abs(m.max_real_part), initial=1.0)) for m in maps.values())
     for ax, (mode, m) in zip(axes, maps.items()):
@@ -321,7 +334,6 @@ def _draw(maps, out: Path, args) -> Path:
         ax.legend(loc="upper right", fontsize=8)
     axes[0].set_ylabel("speed [rpm]")
     fig.colorbar(pc, ax=axes, label="max Re(s) [1/s]")
-    path = out / f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, metadata=png_metadata("acdrive stability --map"))
     plt.close(fig)
     return path

@@ -35,12 +35,13 @@ def register(subparsers) -> None:
 def run(args) -> int:
     import dataclasses
     import math
-    from pathlib import Path
 
+    from acdrive._output import require_out
     from acdrive.errors import InputError
     from acdrive.sweep._engine import run_sweep
     from acdrive.sweep._spec import MAX_CHUNK, load_sweep
 
+    out = require_out("--out", args.out)  # before anything else: "" would mean "here"
     spec = load_sweep(args.sweep)
     if args.chunk is not None:
         if not 1 <= args.chunk <= MAX_CHUNK:
@@ -48,7 +49,7 @@ def run(args) -> int:
         spec = dataclasses.replace(spec, chunk=args.chunk)
     if not (math.isfinite(args.timeout) and 0 < args.timeout <= 600):
         raise InputError("--timeout", "must be a number of seconds in (0, 600]")
-    folder = run_sweep(spec, Path(args.out), scheduler=args.scheduler, timeout=args.timeout,
+    folder = run_sweep(spec, out, scheduler=args.scheduler, timeout=args.timeout,
                        progress=not args.quiet, report=not args.no_report)  # fmt: skip
     print(folder)
     return 0

@@ -254,32 +254,88 @@ def _write_json_atomic(value: dict, path: Path) -> None:
     os.replace(tmp, path)
 
 
-def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
-    """Create or reopen the output folder; returns the chunk size in force (the manifest's on
-    a resume, so chunk files stay aligned)."""
+LOCK = ".acdrive-lock"
+
+
+def _open_folder(folder: Path) -> None:
+    """Check the sweep folder ``folder`` (``<out>/<name>``) and create it: it must not be a
+    symbolic link (``--out`` itself may be one) and, if it exists, be a folder acdrive wrote (its
+    marker, or the manifest of a sweep written before markers existed) or empty."""
+    from acdrive._output import MARKER, is_acdrive_folder, not_ours
+
+    if folder.is_symlink():
+        raise InputError("--out", f"{folder} is a symbolic link; refusing to write through it")
     if folder.exists() and not folder.is_dir():
         raise InputError("--out", f"{folder} exists and is not a folder")
-    if folder.is_symlink():
-        raise InputError("--out", f"{folder} is a symbolic link")
+    if folder.exists() and not is_acdrive_folder(folder):
+        legacy = (folder / MANIFEST).is_file()
+        if not legacy and any(folder.iterdir()):
+            raise not_ours("--out", folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError("--out", f"cannot create {folder} ({exc.strerror})") from None
+    if not (folder / MARKER).exists():
+        from acdrive._output import write_marker
+
+        write_marker(folder)
+
+
+class _Lock:
+    """An exclusive lock on a sweep folder for the whole run (``flock`` on its file
+    :data:`LOCK`, released by the system when the process ends, however it ends): a second sweep
+    into the same folder is refused with one line and touches nothing."""
+
+    def __init__(self, folder: Path):
+        import fcntl
+
+        self.path = folder / LOCK
+        self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(self._fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.read(self._fd, 32).decode(errors="replace").strip() or "unknown"
+            os.close(self._fd)
+            raise InputError(
+                "--out", f"{folder} is in use by another sweep (process {holder}): wait for it to "
+                "finish or choose another --out"
+            ) from None  # fmt: skip
+        os.ftruncate(self._fd, 0)
+        os.write(self._fd, str(os.getpid()).encode())
+
+    def release(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the descriptor releases the flock
+            self._fd = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
+    """Open the (locked) sweep folder: write or check its manifest and remove the temporary
+    files of an interrupted run; returns the chunk size in force (the manifest's on a resume,
+    so chunk files stay aligned). A manifest of a different sweep is refused unless the folder
+    holds no finished chunk yet (then nothing of value is lost: the sweep starts over)."""
     manifest = folder / MANIFEST
+    chunk = None
     if manifest.exists():
         try:
             old = json.loads(manifest.read_text())
         except (OSError, ValueError):
             raise InputError("--out", f"{manifest} is unreadable: choose another --out") from None
-        if old.get("digest") != spec.digest() or old.get("variants") != n:
+        started = any((folder / "table").glob("chunk-*.parquet"))
+        if old.get("digest") == spec.digest() and old.get("variants") == n:
+            chunk = int(old["chunk"])
+        elif started:
             raise InputError(
                 "--out", f"{folder} holds a different sweep (its file or base scenario changed): "
                 "choose another --out or delete that folder"
             )  # fmt: skip
-        chunk = int(old["chunk"])
-    else:
-        if folder.exists() and any(folder.iterdir()):
-            raise InputError("--out", f"{folder} is not empty and holds no sweep")
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError("--out", f"cannot create {folder} ({exc.strerror})") from None
+    if chunk is None:
         chunk = spec.chunk
         _write_json_atomic(
             {"name": spec.name, "digest": spec.digest(), "variants": n, "chunk": chunk,
@@ -290,6 +346,8 @@ def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
         (folder / sub).mkdir(exist_ok=True)
         for stale in (folder / sub).glob(".*.tmp"):
             stale.unlink()
+    for stale in folder.glob(".*.tmp"):
+        stale.unlink()
     return chunk
 
 
@@ -392,13 +450,18 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
               timeout: float = CONNECT_TIMEOUT_S, progress: bool = True,
               report: bool = True) -> Path:  # fmt: skip
     """Run (or resume) ``spec`` into ``out/<name>``; returns that folder."""
-    folder = Path(out) / spec.name
+    from acdrive._output import require_out
+
+    folder = require_out("--out", out) / spec.name
     n = V.count(spec)
     if n < 1:
         raise InputError("vary", "gives no variant")
     check_size(spec, folder, n)
     client = connect(scheduler, timeout) if scheduler else None  # fail before writing
+    lock = None
     try:
+        _open_folder(folder)
+        lock = _Lock(folder)
         chunk = _prepare_folder(spec, folder, n)
         if chunk != spec.chunk:
             import dataclasses
@@ -420,11 +483,13 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
             write_atomic(table, folder / "table" / _chunk_name(c))
             bar.update(len(table))
         bar.close()
+        if report:
+            from acdrive.sweep._report import write_report
+
+            write_report(spec, folder, read_table(folder))
     finally:
         if client is not None:
             client.close()
-    if report:
-        from acdrive.sweep._report import write_report
-
-        write_report(spec, folder, read_table(folder))
+        if lock is not None:
+            lock.release()
     return folder

@@ -151,8 +151,13 @@ def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
 
 
 def write_report(spec: SweepSpec, folder: Path, table) -> Path:
-    """Write ``report.md`` and its figures into ``folder``; returns the report's path."""
+    """Write ``report.md`` and its figures into the sweep folder ``folder`` (one acdrive wrote:
+    its marker, else InputError naming ``folder``); returns the report's path."""
+    from acdrive._output import is_acdrive_folder, not_ours
+
     folder = Path(folder)
+    if not is_acdrive_folder(folder):
+        raise not_ours("folder", folder)
     lines = [f"# Sweep {spec.name}", ""]
     if spec.description:
         lines += [spec.description, ""]
