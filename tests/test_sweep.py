@@ -132,6 +132,37 @@ def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
     pd.testing.assert_frame_equal(resumed, whole)
 
 
+def test_repeated_sigkills_at_random_moments_lose_and_duplicate_nothing(tmp_path):
+    """SIGKILL at seeded random moments (during start-up, a chunk, a write or the report), run
+    after run, then one run to the end: every variant is in the table exactly once, the table
+    equals an uninterrupted run's, and no temporary file or staging is left."""
+    rng = np.random.default_rng(19)
+    spec_path = _tiny(tmp_path, chunk=1, duration=1.0, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
+    out = tmp_path / "out"
+    argv = [sys.executable, "-m", "acdrive.cli", "sweep", str(spec_path), "--out", str(out),
+            "--quiet"]  # fmt: skip
+    kills = 0
+    for delay in rng.uniform(0.2, 8.0, size=6):
+        proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            proc.wait(timeout=delay)
+        except subprocess.TimeoutExpired:
+            proc.send_signal(signal.SIGKILL)
+            proc.wait()
+            kills += 1
+    assert kills >= 3, "the sweep finished before it could be killed: lengthen it"
+    final = _cli("sweep", str(spec_path), "--out", str(out), "--quiet")
+    assert final.returncode == 0, final.stderr
+    table = read_table(out / "tiny")
+    assert list(table["variant"]) == list(range(10))  # each variant once, in order
+    assert table["variant_id"].is_unique
+    assert not list((out / "tiny").rglob("*.tmp"))
+    assert (out / "tiny" / "report.md").is_file()
+    spec = load_sweep(str(spec_path))
+    whole = read_table(run_sweep(spec, tmp_path / "whole", progress=False, report=False))
+    pd.testing.assert_frame_equal(table, whole)
+
+
 def test_local_and_dask_backends_give_the_same_table(tmp_path):
     distributed = pytest.importorskip("distributed")
     spec = load_sweep(str(_tiny(tmp_path)))
