@@ -349,7 +349,8 @@ class SpeedPI(SampledPart):
     the defaults put both roots at -SPEED_PI_BANDWIDTH = -50 rad/s for J = J_ESTIMATE
     (``SpeedPIGains.design``, Bodson (27)): K_P = 2 a J = 0.0711 N m s/rad, K_I = a^2 J =
     1.78 N m/rad. ``K_F = 1`` is the plain PI on the error (a step overshoots by e^-2 = 13.5 %
-    while unsaturated); Bodson's K_F = 2/3 removes that overshoot. ``tau_max`` = RATED_TORQUE.
+    while unsaturated); Bodson's K_F = 2/3 reduces it to e^-4 / 3 = 0.61 %, and K_F <= 1/2
+    removes it (``SpeedPIGains.step_overshoot``). ``tau_max`` = RATED_TORQUE.
     The clamping freezes the integral whenever the output is limited, so after a saturated step
     the integral holds what it had and the loop leaves the limit without a windup delay.
     """
