@@ -822,7 +822,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             "Fig. 13(a)",
             "150 rad/s held under load",
             f"{fmt(n['fig13_speed_final_rad_s'], 6)} rad/s (mean over the last "
-            f"{fmt(n['fig13_steady_window_s'])} s; drift {fmt(n['fig13_speed_drift_rad_s'], 2)} "
+            f"{fmt(n['fig13_steady_window_s'], 2)} s; drift {fmt(n['fig13_speed_drift_rad_s'], 2)} "
             "rad/s across it)",
             f"{v['fig13_final']} (settled: drift at most {fmt(t['settled_speed_abs'])} rad/s)",
         ),
@@ -886,7 +886,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             "Fig. 14(a)",
             "6.28 rad",
             f"{fmt(n['fig14_position_final_rad'], 6)} rad (mean over the last "
-            f"{fmt(n['fig14_steady_window_s'])} s; drift {fmt(n['fig14_position_drift_rad'], 2)} "
+            f"{fmt(n['fig14_steady_window_s'], 2)} s; drift {fmt(n['fig14_position_drift_rad'], 2)} "
             "rad across it)",
             f"{v['fig14_final']} (settled: drift at most {fmt(t['settled_position_abs'])} rad); "
             f"overshoot {fmt(n['fig14_overshoot_rad'])} rad",
@@ -926,7 +926,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         "response with a large steady-state error for the PI near 370 rad/s. acdrive runs "
         f"`im-icad-vs-pi` for {fmt(n['fig16_duration_s'])} s, long enough for both speeds to "
         "settle (the steady-state errors are judged over the last "
-        f"{fmt(n['fig16_steady_window_s'])} s, where each speed must drift by at most "
+        f"{fmt(n['fig16_steady_window_s'], 2)} s, where each speed must drift by at most "
         f"{fmt(t['settled_speed_abs'])} rad/s): k_p = 0.0711 N m s/rad and tau_max = 0.5 N m (assumed), and a rotor "
         f"flux of {fmt(n['fig16_flux_wb'])} Wb instead of the rated 0.964 Wb: the 310 V link "
         "cannot hold the rated flux at 376 rad/s (the scenario's note gives the numbers), so the "
@@ -979,7 +979,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             f"{fmt(n['fig16_steady_error_pi_rad_s'])} rad/s (finals "
             f"{fmt(n['fig16_final_speed_icad_rad_s'], 5)} / "
             f"{fmt(n['fig16_final_speed_pi_rad_s'], 5)} rad/s; drift across the last "
-            f"{fmt(n['fig16_steady_window_s'])} s: (20) "
+            f"{fmt(n['fig16_steady_window_s'], 2)} s: (20) "
             f"{fmt(n['fig16_speed_drift_icad_rad_s'], 2)}, PI "
             f"{fmt(n['fig16_speed_drift_pi_rad_s'], 2)} rad/s)",
             str(v["fig16_pi_steady"]) + "; (21) has no integral action, so both keep an error",

@@ -165,8 +165,8 @@ def transcription(verdict: Verdict) -> Verdict:
 
 def headline(verdicts) -> str:
     """The report's headline sentence: result checks and input checks counted separately
-    (``Verdict.kind``), e.g. "26 of 30 result checks hold; 17 of 18 inputs taken from the paper
-    agree with the printed numbers"."""
+    (``Verdict.kind``): "<n> of <m> result checks hold; <k> of <l> inputs taken from the paper
+    agree with the printed numbers (...)", the second part only if there are input checks."""
     verdicts = list(verdicts)
     results = [v for v in verdicts if v.kind != INPUT]
     inputs = [v for v in verdicts if v.kind == INPUT]
