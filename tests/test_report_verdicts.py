@@ -367,8 +367,8 @@ def test_settling_drift_is_slope_times_window_and_ignores_a_fast_ripple():
 
 def test_when_settled_says_not_settled_and_never_holds():
     holds = V.Verdict(True, "agrees")
-    still = V.judge_settling(370.0, 3.0, 0.16, 0.02)
-    done = V.judge_settling(374.6, 0.001, 0.16, 0.02)
+    still = V.judge_settling(3.0, 0.16, 0.02)
+    done = V.judge_settling(0.001, 0.16, 0.02, 374.6)
     assert V.when_settled(holds, {"speed": done}) is holds
     out = V.when_settled(holds, {"speed": done, "PI speed": still}, " rad/s")
     assert not out.holds and out.text.startswith("not settled")

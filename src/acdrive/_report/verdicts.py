@@ -220,9 +220,12 @@ def window_drift(t, x, window_s: float | None = None) -> tuple[float, float, flo
     return float(np.mean(x)), slope * span, span
 
 
-def judge_settling(mean: float, drift: float, window_s: float, tolerance: float) -> Settling:
-    """Settled when |drift| <= ``tolerance`` (the unit of the signal); ``window_drift`` gives the
-    other three numbers."""
+def judge_settling(
+    drift: float, window_s: float, tolerance: float, mean: float = math.nan
+) -> Settling:
+    """Settled when |drift| <= ``tolerance`` (the unit of the signal); ``window_drift`` gives
+    ``mean``, ``drift`` and ``window_s`` (a verdict that needs only the state need not pass the
+    mean)."""
     return Settling(abs(drift) <= tolerance, float(mean), float(drift), float(window_s), tolerance)
 
 
@@ -236,7 +239,8 @@ def settling(t, x, tolerance: float, window_s: float | None = None) -> Settling:
     the drift bounds that distance too; a ripple whose period is much shorter than the window
     adds almost nothing to the slope.
     """
-    return judge_settling(*window_drift(t, x, window_s), tolerance)
+    mean, drift, span = window_drift(t, x, window_s)
+    return judge_settling(drift, span, tolerance, mean)
 
 
 def when_settled(verdict: Verdict, settlings: dict[str, Settling], unit: str = "") -> Verdict:
