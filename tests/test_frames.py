@@ -203,3 +203,25 @@ def test_numba_versions_callable_from_njit_code():
     assert err < 1e-12
     assert abs(x - frames.abc_to_complex(1.5, -0.25, -1.25, 0.8)) < 1e-12
     assert abs(y - frames.rotor_abc_to_complex(1.5, -0.25, -1.25, 0.8, 0.3, 2)) < 1e-12
+
+
+# --- the limit's tolerance of a few ulps -------------------------------------------------------
+@pytest.mark.parametrize("limit", [1e-3, 1.0, 219.20310216782974, 3.7e5])
+def test_beyond_limit_ignores_a_few_ulps_and_counts_1e9_relative(limit):
+    assert frames.LIMIT_RTOL == frames.LIMIT_ULPS * np.finfo(float).eps
+    one_ulp = math.nextafter(limit, math.inf)
+    four_ulps = limit
+    for _ in range(frames.LIMIT_ULPS):
+        four_ulps = math.nextafter(four_ulps, math.inf)
+    for at_limit in (limit, one_ulp, 0.5 * limit):
+        assert not frames.beyond_limit(at_limit, limit)
+        assert frames.clip_magnitude(complex(0.0, at_limit), limit) == (
+            complex(0.0, at_limit),
+            False,
+        )
+    # LIMIT_ULPS ulps above are still at the limit (an ulp of x is at most eps |x|)
+    assert not frames.beyond_limit(four_ulps, limit)
+    beyond = limit * (1.0 + 1e-9)
+    assert frames.beyond_limit(beyond, limit)
+    clipped, limited = frames.clip_magnitude(complex(beyond, 0.0), limit)
+    assert limited and abs(clipped) == pytest.approx(limit, rel=1e-15)

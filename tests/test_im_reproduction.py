@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from acdrive._report import im_reproduction as rep
@@ -50,7 +51,11 @@ def test_report_prints_its_numbers_and_verdicts(report):
         assert fmt(row["measured_db"], 4) in text
     for verdict in v.values():
         assert str(verdict).replace("|", "/") in text
-    assert f"{sum(bool(x) for x in v.values())} of {len(v)} checks hold" in text
+    results = [x for x in v.values() if x.kind == "result"]
+    inputs = [x for x in v.values() if x.kind == "input"]
+    assert len(results) + len(inputs) == len(v)
+    assert f"{sum(map(bool, results))} of {len(results)} result checks hold" in text
+    assert f"{sum(map(bool, inputs))} of {len(inputs)} inputs taken from the paper" in text
     # every linked figure exists
     for line in text.splitlines():
         if line.startswith("![") and f"({rep.STEM}/" in line:
@@ -108,3 +113,36 @@ def test_reproduce_im_writes_the_named_report(monkeypatch, tmp_path, capsys):
     assert (tmp_path / "im-current-control.md").read_text() == "report\n"
     assert (tmp_path / "im-current-control").is_dir()
     assert "im-current-control.md" in capsys.readouterr().out
+
+
+def test_inputs_taken_from_the_paper_are_input_checks(report):
+    _, _, v, _ = report
+    for key in ("dc_link", "pwm", "sampling", "pi_kp", "controller_20", "fig16_reference",
+                "fig23_factor_R_s", "fig14_load_time"):  # fmt: skip
+        assert v[key].kind == "input", key
+    for key in ("fig11_tracking", "fig13_modulation", "fig16_pi_steady", "coupling_im"):
+        assert v[key].kind == "result", key
+
+
+def test_fig16_steady_state_is_judged_on_settled_speeds(inputs, report):
+    """The run is long enough: both speeds settle over the summary's steady window (their drift
+    is recomputed here from the logged speed), and the verdict reads the summary's errors."""
+    outcomes, _ = inputs
+    _, n, v, _ = report
+    tol = rep.TOLERANCES["settled_speed_abs"]
+    for label, result in outcomes["fig16"].results.items():
+        t, w = result.t, result.signal("w")
+        window = t >= t[-1] - max(0.1 * (t[-1] - t[0]), 0.05)  # the summary's: last 10 %
+        slope = np.polyfit(t[window], w[window], 1)[0]
+        drift = slope * (t[window][-1] - t[window][0])
+        assert drift == pytest.approx(n[f"fig16_speed_drift_{label}_rad_s"], rel=1e-6, abs=1e-9)
+        assert abs(drift) <= tol, label
+        run = outcomes["fig16"].summary["runs"][label]
+        assert n[f"fig16_steady_error_{label}_rad_s"] == run["speed_steady_error_rad_s"]
+        assert np.mean(w[window]) == pytest.approx(run["speed_final_rad_s"], rel=1e-12)
+    assert not str(v["fig16_pi_steady"]).startswith("not settled")
+    assert fmt(n["fig16_steady_error_pi_rad_s"], 3) in str(v["fig16_pi_steady"])
+    # the same numbers with the PI speed still drifting: "not settled", never "holds"
+    drifting = {**n, "fig16_speed_drift_pi_rad_s": 10 * tol}
+    w = rep.compute_verdicts(drifting)["fig16_pi_steady"]
+    assert not w.holds and str(w).startswith("not settled")

@@ -11,6 +11,7 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
+from acdrive import _frames as frames
 from acdrive._jit import jit_fast
 from acdrive.control._open_loop import VoltageProgram
 from acdrive.core._parts import ContinuousPart
@@ -336,3 +337,27 @@ def test_the_sixth_order_method_converges_at_order_six_over_the_same_segments(t_
 def test_an_unknown_integration_method_is_refused():
     with pytest.raises(InputError, match=r"^method: must be one of rk4, rk6"):
         System([DCSource("dc", V=V_DC)], [], method="euler")
+
+
+# --- the limit's tolerance of a few ulps (acdrive._frames.beyond_limit) ------------------------
+@pytest.mark.parametrize("angle", [0.0, 0.7, -2.2])
+def test_a_command_at_the_limit_to_rounding_is_not_counted_but_one_beyond_it_is(angle):
+    """A controller that limits its own command hands the inverter a magnitude that rounds a few
+    ulps above v_dc / sqrt(2): that is not overmodulation. 1e-9 above the limit is."""
+    limit = V_DC / math.sqrt(2.0)
+    direction = cmath.exp(1j * angle)
+    # the command as a controller limits it: scaled back from far outside, then rounded
+    rescaled = (3.0 * limit * direction) * (limit / abs(3.0 * limit * direction))
+    one_ulp = math.nextafter(limit, math.inf) * direction
+    for command in (rescaled, one_ulp, limit * direction):
+        assert abs(command) <= limit * (1.0 + frames.LIMIT_RTOL)
+        _, events, _ = run_kernel(Inverter("inv"), T_PWM, 1, command)
+        assert events == [0]
+        averaged = AveragedConverter("avg", V_dc=V_DC)
+        dt, v = np.zeros(1), np.zeros((1, AVERAGED_OUTPUTS.size()))
+        _, saturated = averaged_segments(T_PWM, np.array([command.real, command.imag]),
+                                         averaged.p, np.zeros(0), dt, v)  # fmt: skip
+        assert saturated == 0 and complex(v[0, 0], v[0, 1]) == command  # applied unchanged
+    beyond = (1.0 + 1e-9) * limit * direction
+    _, events, _ = run_kernel(Inverter("inv"), T_PWM, 1, beyond)
+    assert events == [1]

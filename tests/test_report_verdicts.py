@@ -325,3 +325,120 @@ speed_bandwidth = 100.0
         (run,) = effect["runs"]
         assert run["steady_samples"] > 0
         assert run["reactive_power"].split(" (")[0] in ("holds Q_COM", "departs from Q_COM")
+
+
+# ---------------------------------------------------------------------------------------------
+# steady state and headlines (acdrive._report.verdicts)
+
+
+def _first_order(t_end, final=375.0, tau=0.1, samples_per_s=10_000):
+    """Step response final (1 - exp(-t / tau)) sampled up to ``t_end``."""
+    t = np.linspace(0.0, t_end, int(t_end * samples_per_s) + 1)
+    return t, final * (1.0 - np.exp(-t / tau))
+
+
+def test_settling_of_a_first_order_step_response():
+    final, tau, window, tol = 375.0, 0.1, 0.1, 0.02
+    # sampled while still rising: the slope over the last window is about final/tau e^(-2.5)
+    early = V.settling(*_first_order(0.3, final, tau), tol, window)
+    assert not early.settled
+    expected = final * (np.exp(-0.2 / tau) - np.exp(-0.3 / tau))  # the rise across the window
+    assert early.drift == pytest.approx(expected, rel=0.05)
+    assert early.window_s == pytest.approx(window)
+    assert "not settled" in early.describe(" rad/s")
+    # sampled long after: settled, and the mean is the final value
+    late = V.settling(*_first_order(2.0, final, tau), tol, window)
+    assert late.settled and abs(late.drift) < 1e-5
+    assert late.mean == pytest.approx(final, abs=1e-5)
+    assert late.describe().startswith("settled")
+
+
+def test_settling_drift_is_slope_times_window_and_ignores_a_fast_ripple():
+    t = np.linspace(0.0, 1.0, 20001)
+    mean, drift, span = V.window_drift(t, 2.0 + 0.3 * t, 0.25)
+    assert drift == pytest.approx(0.3 * 0.25, rel=1e-9) and span == pytest.approx(0.25)
+    assert mean == pytest.approx(2.0 + 0.3 * 0.875, rel=1e-9)
+    ripple = 5.0 + 0.01 * np.sin(2 * np.pi * 500.0 * t)  # 125 periods in the window
+    assert V.settling(t, ripple, 1e-3, 0.25).settled
+    assert not V.settling(t, 2.0 + 0.3 * t, 0.07, 0.25).settled
+    with pytest.raises(ValueError):
+        V.window_drift(np.array([1.0]), np.array([2.0]))
+
+
+def test_when_settled_says_not_settled_and_never_holds():
+    holds = V.Verdict(True, "agrees")
+    still = V.judge_settling(3.0, 0.16, 0.02)
+    done = V.judge_settling(0.001, 0.16, 0.02, 374.6)
+    assert V.when_settled(holds, {"speed": done}) is holds
+    out = V.when_settled(holds, {"speed": done, "PI speed": still}, " rad/s")
+    assert not out.holds and out.text.startswith("not settled")
+    assert "PI speed" in out.text and "+3 rad/s" in out.text and "0.02 rad/s" in out.text
+    assert out.text.count("not settled (drift") == 1  # only the drifting state is named
+
+
+def test_headline_counts_results_and_inputs_separately():
+    verdicts = [
+        V.Verdict(True, "a"),
+        V.Verdict(False, "b"),
+        V.transcription(V.Verdict(True, "c")),
+        V.transcription(V.Verdict(True, "d")),
+        V.transcription(V.Verdict(False, "e")),
+    ]
+    assert verdicts[2].kind == V.INPUT and verdicts[0].kind == V.RESULT
+    text = V.headline(verdicts)
+    assert text.startswith("1 of 2 result checks hold; 2 of 3 inputs taken from the paper")
+    assert V.headline(verdicts[:2]) == "1 of 2 result checks hold"
+
+
+# ---------------------------------------------------------------------------------------------
+# IM report: Fig. 16's steady-state verdict (sec. VII)
+
+
+def _fig16_numbers(**changes):
+    from acdrive._report import im_reproduction as R
+
+    n = {
+        "fig16_speed_reference_rad_s": 376.0,
+        "fig16_ideal_slope_rad_s2": 703.0,
+        "fig16_slope_icad_rad_s2": 695.0,
+        "fig16_slope_pi_rad_s2": 500.0,
+        "fig16_steady_error_pi_rad_s": 1.41,
+        "fig16_steady_error_icad_rad_s": 0.27,
+        "fig16_speed_drift_pi_rad_s": 5e-5,
+        "fig16_speed_drift_icad_rad_s": -3e-5,
+        "fig16_steady_window_s": 0.16,
+    }
+    n.update(changes)
+    return R.fig16_steady_verdict(n, R.TOLERANCES), R.TOLERANCES
+
+
+def test_fig16_a_small_settled_pi_error_is_not_the_papers_large_one():
+    v, t = _fig16_numbers()
+    assert not v.holds
+    assert v.text.startswith(
+        "the PI's settled steady-state speed error is 1.41 rad/s (0.38 % of the reference) "
+        "against 0.27 for (20)"
+    )
+    assert '"large" steady-state error is not reproduced' in v.text
+    assert "its slow response is (" in v.text
+    assert f"{100 * t['large_steady_rel']:g} %" in v.text  # the tolerance is stated
+
+
+def test_fig16_a_large_settled_pi_error_is_reproduced():
+    t = _fig16_numbers()[1]
+    large = t["large_steady_rel"] * 376.0 * 1.01
+    v, _ = _fig16_numbers(fig16_steady_error_pi_rad_s=large)
+    assert v.holds and "error is reproduced" in v.text
+    v, _ = _fig16_numbers(fig16_steady_error_pi_rad_s=0.99 * large / 1.01)
+    assert not v.holds
+
+
+def test_fig16_a_drifting_speed_is_not_settled_whatever_the_error():
+    v, _ = _fig16_numbers(fig16_steady_error_pi_rad_s=13.0, fig16_speed_drift_pi_rad_s=28.9)
+    assert not v.holds and v.text.startswith("not settled")
+    assert "the PI's speed" in v.text and "(20)'s speed" not in v.text
+
+
+def test_fig16_slow_response_from_the_ramp_slopes():
+    v, _ = _fig16_numbers(fig16_slope_pi_rad_s2=690.0)  # within 5 % of the ideal: not slow
+    assert "its slow response is not (" in v.text

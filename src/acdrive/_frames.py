@@ -193,12 +193,31 @@ def complex_from_peak(peak, phase=0.0):
     return _unwrap(K_PEAK * peak * np.exp(1j * phase))
 
 
+#: How many units in the last place a magnitude may lie above its limit and still count as at
+#: the limit, not beyond it. A command already scaled back to a limit (x limit / |x|) comes out
+#: up to a few ulps above it after rounding; limiting it again must neither change it nor count
+#: the sample as limited (a controller that limits its command to the converter's range would
+#: otherwise make the converter report rounding as overmodulation).
+LIMIT_ULPS = 4
+#: The relative tolerance of every magnitude limit, LIMIT_ULPS machine epsilons
+#: (``beyond_limit``).
+LIMIT_RTOL = LIMIT_ULPS * float(np.finfo(np.float64).eps)
+
+
+@njit(cache=True, error_model="numpy")
+def beyond_limit(magnitude, limit):
+    """Is ``magnitude`` beyond ``limit`` by more than ``LIMIT_RTOL`` of it (a few ulps)? The one
+    test by which acdrive limits a space vector's magnitude and counts the sample as limited
+    (converter saturation, overmodulation, a current controller's saturation)."""
+    return magnitude > limit + LIMIT_RTOL * limit
+
+
 @njit(cache=True, error_model="numpy")
 def clip_magnitude(x, limit):
-    """(x, False) if |x| <= limit, else (x scaled back along its own direction to magnitude
-    ``limit``, True): a converter's voltage limit or a current command's limit on a space
-    vector."""
+    """(x, False) if |x| is not beyond ``limit`` (``beyond_limit``: a few ulps above it still
+    count as at it), else (x scaled back along its own direction to magnitude ``limit``, True):
+    a converter's voltage limit or a current command's limit on a space vector."""
     magnitude = np.abs(x)
-    if magnitude <= limit:
+    if not beyond_limit(magnitude, limit):
         return x, False
     return x * (limit / magnitude), True

@@ -4,21 +4,38 @@ Every helper compares a value with a reference (a printed number, a closed form,
 returns a ``Verdict``: whether the comparison holds and a sentence that names the verdict, the
 difference and the tolerance, so that the sentence changes when the numbers do. The tolerances
 themselves are named constants of the report modules that call these helpers.
+
+Two kinds of check (``Verdict.kind``): a *result* compares what acdrive computes or simulates
+with what the paper claims; an *input* check compares a setting acdrive took from the paper (a
+scenario's DC link, a printed gain) with the printed number, i.e. the transcription. A headline
+(``headline``) counts the two separately: an input check holding says nothing about the results.
+
+A steady-state claim is judged only on a settled state (``settling``, ``when_settled``): if the
+judged window still drifts by more than its tolerance, the verdict says "not settled".
 """
 
 from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+#: ``Verdict.kind`` of a check of what acdrive computes or simulates against the paper
+RESULT = "result"
+#: ``Verdict.kind`` of a check of an input taken from the paper against the printed number
+INPUT = "input"
 
 
 @dataclass(frozen=True)
 class Verdict:
-    """``holds``: the comparison is within its tolerance; ``text``: the sentence printed."""
+    """``holds``: the comparison is within its tolerance; ``text``: the sentence printed;
+    ``kind``: ``RESULT`` or ``INPUT`` (module docstring)."""
 
     holds: bool
     text: str
+    kind: str = RESULT
 
     def __str__(self) -> str:
         return self.text
@@ -135,3 +152,107 @@ def ratio_at_least(value: float, reference: float, factor: float, yes: str, no: 
     ratio = value / reference if reference else math.inf
     ok = ratio >= factor
     return Verdict(ok, f"{yes if ok else no} (ratio {num(ratio)}, threshold {factor:g})")
+
+
+# --- input checks and headlines ----------------------------------------------------------------
+
+
+def transcription(verdict: Verdict) -> Verdict:
+    """The same verdict marked as an input check (``INPUT``): a setting taken from the paper
+    compared with the printed number."""
+    return replace(verdict, kind=INPUT)
+
+
+def headline(verdicts) -> str:
+    """The report's headline sentence: result checks and input checks counted separately
+    (``Verdict.kind``): "<n> of <m> result checks hold; <k> of <l> inputs taken from the paper
+    agree with the printed numbers (...)", the second part only if there are input checks."""
+    verdicts = list(verdicts)
+    results = [v for v in verdicts if v.kind != INPUT]
+    inputs = [v for v in verdicts if v.kind == INPUT]
+    text = f"{sum(map(bool, results))} of {len(results)} result checks hold"
+    if inputs:
+        text += (
+            f"; {sum(map(bool, inputs))} of {len(inputs)} inputs taken from the paper agree with "
+            "the printed numbers (input checks: they test the transcription, not the results)"
+        )
+    return text
+
+
+# --- steady state ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Settling:
+    """A signal over a judging window: its ``mean``, its ``drift`` (least-squares slope times the
+    window length ``window_s``: how far the signal moves across the window) and whether
+    |drift| <= ``tolerance`` (``settled``)."""
+
+    settled: bool
+    mean: float
+    drift: float
+    window_s: float
+    tolerance: float
+
+    def describe(self, unit: str = "") -> str:
+        state = "settled" if self.settled else "not settled"
+        return (
+            f"{state} (drift {signed(self.drift)}{unit} over the last {num(self.window_s)} s, "
+            f"tolerance {num(self.tolerance)}{unit})"
+        )
+
+
+def window_drift(t, x, window_s: float | None = None) -> tuple[float, float, float]:
+    """(mean, drift, window length [s]) of ``x(t)`` over its last ``window_s`` seconds (all of
+    ``t`` if None): the drift is the least-squares slope of ``x`` over the window times the
+    window length, how far ``x`` moves across it."""
+    t = np.asarray(t, dtype=float)
+    x = np.asarray(x, dtype=float)
+    if t.shape != x.shape or t.ndim != 1 or t.size == 0:
+        raise ValueError("t and x must be one-dimensional arrays of the same non-zero length")
+    if window_s is not None:
+        keep = t >= t[-1] - window_s
+        t, x = t[keep], x[keep]
+    span = float(t[-1] - t[0])
+    if span <= 0.0:
+        raise ValueError("the judging window needs two samples at different times")
+    slope = float(np.polyfit(t - t[0], x, 1)[0])
+    return float(np.mean(x)), slope * span, span
+
+
+def judge_settling(
+    drift: float, window_s: float, tolerance: float, mean: float = math.nan
+) -> Settling:
+    """Settled when |drift| <= ``tolerance`` (the unit of the signal); ``window_drift`` gives
+    ``mean``, ``drift`` and ``window_s`` (a verdict that needs only the state need not pass the
+    mean)."""
+    return Settling(abs(drift) <= tolerance, float(mean), float(drift), float(window_s), tolerance)
+
+
+def settling(t, x, tolerance: float, window_s: float | None = None) -> Settling:
+    """Is ``x(t)`` settled over its last ``window_s`` seconds (all of ``t`` if None)?
+
+    Settled when the drift over the window (``window_drift``: least-squares slope times the
+    window length) is at most ``tolerance`` in magnitude; the mean over the same window is then
+    the settled value. For an exponential approach with time constant tau the distance still to
+    go is tau times the slope, so with a window at least as long as the slowest time constant
+    the drift bounds that distance too; a ripple whose period is much shorter than the window
+    adds almost nothing to the slope.
+    """
+    mean, drift, span = window_drift(t, x, window_s)
+    return judge_settling(drift, span, tolerance, mean)
+
+
+def when_settled(verdict: Verdict, settlings: dict[str, Settling], unit: str = "") -> Verdict:
+    """``verdict`` if every named state it judges is settled, otherwise a verdict that does not
+    hold and says "not settled", naming each drifting state, its drift and the tolerance."""
+    drifting = {name: s for name, s in settlings.items() if not s.settled}
+    if not drifting:
+        return verdict
+    return Verdict(
+        False,
+        "not settled: "
+        + "; ".join(f"{name} {s.describe(unit)}" for name, s in drifting.items())
+        + " (a steady-state claim is judged only on a settled state)",
+        verdict.kind,
+    )

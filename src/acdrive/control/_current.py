@@ -40,7 +40,8 @@ The limit v_max is the parameter ``v_max``, or, with ``v_dc_input=True``, v_dc /
 input ``v_dc`` (``plant._converter.max_voltage_magnitude``, the converter's linear SVPWM range),
 read at the sample instant. A run at a sample time other than the ``T_s`` the matrices were
 computed for is refused before it starts (``check_run``, an ``InputError`` naming ``<part>.T_s``).
-Events: ``saturated`` (the command was limited) and ``period_mismatch`` (a kernel-level guard for
+Events: ``saturated`` (the command was limited: its magnitude lay beyond v_max by more than a
+few ulps, ``_frames.beyond_limit``) and ``period_mismatch`` (a kernel-level guard for
 callers that bypass the check: the run's sample time differs from ``T_s``; the output is still
 computed with the stored matrices).
 
@@ -54,6 +55,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from acdrive._frames import beyond_limit
 from acdrive._jit import jit
 from acdrive.control._lti import LTI, DiscreteLTI, LTIMatrix, discretise
 from acdrive.control._open_loop import complex_program_step
@@ -154,7 +156,7 @@ def current_controller_step(t, T_s, u, p, s, y):
     events = 0
     w0, w1 = v0, v1
     magnitude = math.sqrt(v0 * v0 + v1 * v1)
-    if magnitude > v_max:
+    if beyond_limit(magnitude, v_max):
         scale = v_max / magnitude
         w0, w1 = v0 * scale, v1 * scale
         events |= EVENT_SATURATED

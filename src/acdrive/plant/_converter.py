@@ -8,7 +8,8 @@ beyond it is scaled back along its own direction.
 Two parts, one formula: ``AveragedConverter`` has a fixed DC-link voltage (parameter ``V_dc``);
 ``DCFedConverter`` reads it as an input ``v_dc`` from a continuous part (``plant.DCSource``,
 a DC link whose voltage may drop), taken at the sample instant like its command. Both report a
-command beyond the limit with the event ``saturated``.
+command beyond the limit with the event ``saturated`` (beyond it by more than a few ulps,
+``_frames.beyond_limit``: a command already limited to it is not counted again).
 """
 
 from __future__ import annotations

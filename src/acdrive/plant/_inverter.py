@@ -47,7 +47,10 @@ that sags between samples is seen with a delay of at most T_s).
 (``plant._converter.max_voltage_magnitude``), is scaled back along its own direction to that
 magnitude, the rule of the averaged converter, so both apply the same mean voltage. The part
 reports the event ``overmodulation`` on every sample of a carrier period whose command was
-limited. (Min-max modulation could reach the hexagon's corners; the circle keeps the output
+limited. A command within a few ulps above the limit (``_frames.beyond_limit``, relative
+tolerance ``_frames.LIMIT_RTOL``) is at the limit, not beyond it: a controller that limited its
+command to v_dc / sqrt(2) itself hands over such a rounded magnitude, which is neither changed
+nor counted. (Min-max modulation could reach the hexagon's corners; the circle keeps the output
 sinusoidal for a rotating command and equal to the averaged converter's.)
 
 **Dead time and device drops** (both default 0). Phase current i_x > 0 flows out of the leg into
