@@ -36,7 +36,7 @@ import numpy as np
 
 from acdrive._bench.reference import accuracy, error_verdicts, short_errors
 from acdrive._bench.venvs import PeerFailed, PeerProcess
-from acdrive._bench.windows import Clock, local_side, time_sides
+from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
 
 #: integration of the matched cases: one step of the sixth-order method per held segment
 INTEGRATOR = "rk6"
@@ -625,10 +625,10 @@ def run_case(
             mot["steps_per_cpu_s"] = t["sides"]["motulator"]["steps_per_cpu_s"]["median"]
             mot["per_run_cpu_s"] = t["sides"]["motulator"]["per_run_cpu_s"]
             out["ratio"] = t["ratios"]["acdrive_vs_motulator"]["ratio"]
-            out["ratio_spread"] = public_ratio(t["ratios"]["acdrive_vs_motulator"])
+            out["ratio_spread"] = ratio_spread(t["ratios"]["acdrive_vs_motulator"])
             if converter == "pwm":
                 out["ratio_N1"] = t["ratios"]["acdrive_N1_vs_motulator"]["ratio"]
-                out["ratio_N1_spread"] = public_ratio(t["ratios"]["acdrive_N1_vs_motulator"])
+                out["ratio_N1_spread"] = ratio_spread(t["ratios"]["acdrive_N1_vs_motulator"])
         out["motulator"] = mot
         primary = acd["variants"][acd["primary"]]
         system = acd["_system"]
@@ -662,8 +662,3 @@ def run_case(
         os.rmdir(tmp)
     out["matched_case"] = MATCHED
     return out
-
-
-def public_ratio(r: dict) -> dict:
-    """The spread of a ratio (min, median, max, rounds) without the per-round list."""
-    return {k: r[k] for k in ("min", "median", "max", "n")}

@@ -180,35 +180,6 @@ def _run_step(cmd: list[str], timeout: float = 600.0) -> str | None:
     return None
 
 
-def run_peer_script(
-    python: str, script: str, args: list[str], cwd: str | None = None, timeout: float = 3600.0
-) -> dict:
-    """Run ``peers/<script>`` with the peer's python; its last stdout line is JSON. Returns that
-    dict with ``available: True``, or ``{"available": False, "reason": ...}``."""
-    cmd = [python, str(PEER_SCRIPTS / script), *args]
-    try:
-        r = subprocess.run(
-            cmd,
-            check=False,
-            capture_output=True,
-            text=True,
-            env=clean_env(),
-            cwd=cwd,
-            timeout=timeout,
-        )
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        return {"available": False, "reason": f"{script} failed: {exc}"}
-    if r.returncode != 0:
-        tail = r.stderr.strip().splitlines()[-5:]
-        return {"available": False, "reason": f"{script} failed: " + " | ".join(tail)}
-    try:
-        result = dict(__import__("json").loads(r.stdout.strip().splitlines()[-1]))
-    except (ValueError, IndexError):
-        return {"available": False, "reason": f"{script} printed no JSON line"}
-    result["available"] = True
-    return result
-
-
 class PeerFailed(RuntimeError):
     """The peer's process ended, answered with an error or could not be started."""
 

@@ -197,6 +197,11 @@ def summarise_windows(windows: list[dict], pairs: dict, cores: int) -> dict:
     return out
 
 
+def ratio_spread(r: dict) -> dict:
+    """A ratio's spread (min, median, max, rounds) without its per-round list."""
+    return {k: r[k] for k in ("min", "median", "max", "n")}
+
+
 def load_warning(loaded: list, n_windows: int, others: dict, load: dict, cores: int):
     """The warning line for loaded windows (``LOAD_RULE``), None if no window was loaded."""
     if not loaded:
