@@ -508,3 +508,20 @@ def test_reply_prefix_is_the_same_on_both_sides():
     serve = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(serve)
     assert serve.REPLY_PREFIX == venvs.PeerProcess.REPLY_PREFIX
+
+
+def test_a_peers_model_building_is_not_counted_as_other_load():
+    """The peer times its simulation only (cpu_s) but reports its whole window's CPU time
+    (process_cpu_s, building included): the load accounting subtracts the whole of it."""
+    from acdrive._bench.windows import timed_window
+
+    m = FakeMachine(cores=2, others=0.5)
+
+    def window(runs):
+        m.work(0.1, here=False)  # building the model, untimed by the peer
+        m.work(0.2, here=False)  # the timed simulation
+        return {"cpu_s": 0.2, "process_cpu_s": 0.3, "steps_per_run": 10}
+
+    w = timed_window("peer", window, 1, m.clock())
+    assert w["per_run_cpu_s"] == 0.2
+    assert w["others_cpu_cores"] == pytest.approx(0.5)

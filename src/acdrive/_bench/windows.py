@@ -117,12 +117,16 @@ def calibrate(window, clock: Clock, min_cpu_s: float) -> float:
 def timed_window(name: str, window, runs: int, clock: Clock) -> dict:
     """One window of side ``name``: ``runs`` runs, its CPU time per run (reported by the side),
     wall time, and the load over it (``LOAD_RULE``). The benchmark's own CPU time over the
-    window is the side's reported CPU time plus this process's, if the side ran elsewhere."""
+    window is the side's reported CPU time, or for a side run elsewhere the CPU time of its
+    whole window (``process_cpu_s``, building included) plus this process's."""
     wall0, busy0, cpu0 = clock.wall(), clock.busy(), clock.cpu()
     got = window(runs)
     wall1, busy1, cpu1 = clock.wall(), clock.busy(), clock.cpu()
     wall = wall1 - wall0
-    own = got["cpu_s"] if got.get("in_process") else got["cpu_s"] + (cpu1 - cpu0)
+    if got.get("in_process"):
+        own = got["cpu_s"]
+    else:  # the peer's whole window (model building included, if it says) and the suite's wait
+        own = got.get("process_cpu_s", got["cpu_s"]) + (cpu1 - cpu0)
     others = None
     if busy0 is not None and busy1 is not None and wall > 0.0:
         others = max(0.0, (busy1 - busy0) - own) / wall
