@@ -9,8 +9,10 @@ Cases (``CASES``; ``--only`` picks some):
   ``ratio_vs_gem``;
 * ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``.
 
-Each ratio is acdrive's control steps per second over the peer's, both measured in this run on
-this machine, the peer in its own virtualenv (``_bench.venvs``); each simulator's error is taken
+Each ratio is acdrive's control steps per CPU second over the peer's, both measured in this run
+on this machine, the peer in its own virtualenv (``_bench.venvs``), in interleaved windows of
+similar length (``_bench.windows``: the median over the rounds, with its spread and the load of
+every window, ``warnings`` where it was high); each simulator's error is taken
 against references of the same equations (``_bench.reference``), so that speed is never bought
 with error. The verdicts (``target_checks``) are computed from those numbers: ``None`` where a
 number is missing (a peer that could not be installed, ``--no-reference``), and ``targets_met``
