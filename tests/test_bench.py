@@ -525,3 +525,19 @@ def test_a_peers_model_building_is_not_counted_as_other_load():
     w = timed_window("peer", window, 1, m.clock())
     assert w["per_run_cpu_s"] == 0.2
     assert w["others_cpu_cores"] == pytest.approx(0.5)
+
+
+def test_json_mode_repeats_the_load_warnings_on_stderr(monkeypatch):
+    from acdrive._bench import suite
+
+    case = _case(1200.0, 1e-13, 1e-12)
+    case["timing"] = {"warning": "machine loaded in 2 of 2 timed windows (a#1, b#1)"}
+    report = _report(motulator_averaged=case)
+    monkeypatch.setattr(suite, "run_suite", lambda options: report)
+    from acdrive.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err):
+        assert main(["bench", "--json", "--no-peers"]) == 0
+    assert "acdrive: warning: motulator_averaged: machine loaded in 2 of 2" in err.getvalue()
+    assert json.loads(out.getvalue())["warnings"] == report["warnings"]

@@ -63,6 +63,8 @@ def run(args) -> int:
     )
     report = run_suite(options)
     if args.json:
+        for warning in report["warnings"]:  # the table prints them itself
+            log(f"acdrive: warning: {warning} (rule: see load_rule)")
         print(json.dumps(finite(report), indent=2, allow_nan=False))
     else:
         print(table(report))
