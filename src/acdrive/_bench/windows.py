@@ -15,7 +15,7 @@ compares a best-of-few wall time of a 3 ms run with one of a 10 s run. It times 
   CPU second over the peer's in that round), and the report gives the spread (``spread``:
   min, median, max) of each side's per-run time and of the ratio; the headline ratio is the
   median of the rounds' ratios;
-* the machine's load is recorded at every window (``LoadProbe``): the 1-minute load average at
+* the machine's load is recorded at every window (``timed_window``): the 1-minute load average at
   its end and the CPU time used by *other* processes over it (all CPUs' busy time from
   ``/proc/stat`` minus the benchmark's own CPU time, as a number of cores). ``LOAD_RULE`` flags a
   window as loaded; the suite prints a warning naming the loaded windows.
