@@ -1,4 +1,4 @@
-"""Small helpers shared by the benchmark cases: timing, versions, JSON."""
+"""Small helpers shared by the benchmark cases: versions, load average, JSON."""
 
 from __future__ import annotations
 
@@ -6,22 +6,6 @@ import os
 from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
-
-
-def best_of(run, repeats: int) -> tuple[float, object]:
-    """(smallest wall time, its result) over ``repeats`` calls of ``run()``, which returns a
-    ``SystemResult`` (its ``wall_time`` is the compiled loop's own time)."""
-    best, kept = float("inf"), None
-    for _ in range(max(repeats, 1)):
-        raw = run()
-        if raw.wall_time < best:
-            best, kept = raw.wall_time, raw
-    return best, kept
-
-
-def public(d: dict) -> dict:
-    """``d`` without its private (``_``-prefixed) entries, e.g. raw results kept for later."""
-    return {k: v for k, v in d.items() if not k.startswith("_")}
 
 
 def package_version(name: str) -> str | None:

@@ -38,9 +38,9 @@ import time
 
 import numpy as np
 
-from acdrive._bench.common import best_of
 from acdrive._bench.reference import accuracy, error_verdicts, short_errors
-from acdrive._bench.venvs import run_peer_script
+from acdrive._bench.venvs import PeerFailed, PeerProcess
+from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
 
 K = math.sqrt(1.5)  # power-invariant / peak-value space-vector scaling
 T_S = 1e-4  # s, the issue's sample time for this case
@@ -261,16 +261,22 @@ class DFIMEquations:
 
 def run_case(
     peer: dict,
-    repeats: int,
+    rounds: int,
     duration: float,
     reference: bool,
     extended_substeps: int = 4,
-    peer_repeats: int = 3,
     log=None,
+    timing: dict | None = None,
+    clock: Clock | None = None,
 ) -> dict:
-    """acdrive timed; GEM timed (if ``peer`` is available); both simulators' integration errors
-    against references of their own equations (if ``reference``); the ratio."""
+    """acdrive and GEM (if ``peer`` is available) timed in ``rounds`` rounds of interleaved
+    CPU-time windows (``windows.time_sides``: acdrive, GEM's ``physical_system.simulate``, GEM's
+    ``env.step``), the ratios and their spread; both simulators' integration errors against
+    references of their own equations (if ``reference``). ``timing``: ``solo_window_cpu_s`` and
+    ``min_calibration_cpu_s``."""
     say = log or (lambda _m: None)
+    clock = clock or Clock()
+    timing = {"solo_window_cpu_s": 1.0, "min_calibration_cpu_s": 0.1, **(timing or {})}
     n = round(duration / T_S)
     act = actions(n)
     v_s, v_r = acdrive_voltages(act)
@@ -280,48 +286,90 @@ def run_case(
     compiled = system.compile()
     compiled.run(min(0.01, duration), T_S, substeps=SUBSTEPS, log=ports)
     first = time.perf_counter() - start
-    say("acdrive gem_dfim: timing")
+    last: dict = {}
 
-    def run():
-        return compiled.run(duration, T_S, substeps=SUBSTEPS, log=ports)
+    def run_once():
+        last["raw"] = compiled.run(duration, T_S, substeps=SUBSTEPS, log=ports)
+        return last["raw"].steps
 
-    run()
-    wall, raw = best_of(run, repeats)
-    out: dict = {
-        "case": case(duration),
-        "acdrive": {
-            "integrator": INTEGRATOR,
-            "substeps_per_segment": SUBSTEPS,
-            "first_run_s": first,
-            "control_steps": raw.steps,
-            "wall_s": wall,
-            "steps_per_s": raw.steps / wall,
-            "real_time_factor": duration / wall,
-            "final_speed_rad_s": float(raw.signal(p["shaft"].out.w)[-1]),
-        },
-    }
+    run_once()  # warm-up
     tmp = tempfile.mkdtemp(prefix="acdrive_bench_gem_")
-    record = os.path.join(tmp, "gem_run.npz") if reference else None
-    if peer.get("available"):
-        case_path = os.path.join(tmp, "case.json")
-        act_path = os.path.join(tmp, "actions.npy")
-        with open(case_path, "w", encoding="utf-8") as f:
-            json.dump(case(duration), f)
-        np.save(act_path, act)
-        args = ["--case", case_path, "--actions", act_path, "--repeats", str(peer_repeats)]
-        if record:
-            args += ["--out", record]
-        say(f"gym-electric-motor: timing{' and recording' if record else ''}")
-        gem = run_peer_script(peer["python"], "gem_dfim.py", args, cwd=tmp)
-        if gem.get("available"):
-            gem["steps_per_s"] = gem["physical_system_steps_per_s"]
-            gem["steps_per_s_is"] = "physical_system.simulate (the faster of GEM's two loops)"
-    else:
-        gem = {"available": False, "reason": peer.get("reason", "not run")}
-    out["gym-electric-motor"] = gem
-    if gem.get("available"):
-        out["ratio"] = out["acdrive"]["steps_per_s"] / gem["steps_per_s"]
-        out["ratio_env_step"] = out["acdrive"]["steps_per_s"] / gem["env_step_steps_per_s"]
+    record = os.path.join(tmp, "gem_run.npz")
+    gem: dict = {"available": False, "reason": peer.get("reason", "not run")}
+    proc = None
+    pairs = {
+        "acdrive_vs_physical_system": ("acdrive", "gem_physical_system"),
+        "acdrive_vs_env_step": ("acdrive", "gem_env_step"),
+    }
+    try:
+        if peer.get("available"):
+            case_path = os.path.join(tmp, "case.json")
+            act_path = os.path.join(tmp, "actions.npy")
+            with open(case_path, "w", encoding="utf-8") as f:
+                json.dump(case(duration), f)
+            np.save(act_path, act)
+            try:
+                proc = PeerProcess(peer["python"], "gem_dfim.py", cwd=tmp)
+                gem = {"available": True, **proc.ask("about")}
+                proc.ask("load", case=case_path, actions=act_path)
+            except PeerFailed as exc:
+                gem = {"available": False, "reason": str(exc)}
+        peers = {}
+        if gem["available"]:
+            peers = {
+                "gem_physical_system": lambda runs: proc.ask("window", kind="physical", runs=runs),
+                "gem_env_step": lambda runs: proc.ask("window", kind="env", runs=runs),
+            }
+        say("gem_dfim: interleaved CPU-time windows")
+        local = {"acdrive": local_side(run_once, clock)}
+        try:
+            t = time_sides(local, peers, pairs, rounds, clock, log=say, **timing)
+            if peers:
+                say("gym-electric-motor: recording a run")
+                gem.update(proc.ask("record", out=record))
+        except PeerFailed as exc:
+            gem = {"available": False, "reason": str(exc)}
+            t = time_sides(local, {}, {}, rounds, clock, log=say, **timing)
+        raw = last["raw"]
+        out: dict = {
+            "case": case(duration),
+            "timing": t,
+            "acdrive": {
+                "integrator": INTEGRATOR,
+                "substeps_per_segment": SUBSTEPS,
+                "first_run_s": first,
+                "control_steps": raw.steps,
+                "steps_per_cpu_s": t["sides"]["acdrive"]["steps_per_cpu_s"]["median"],
+                "per_run_cpu_s": t["sides"]["acdrive"]["per_run_cpu_s"],
+                "final_speed_rad_s": float(raw.signal(p["shaft"].out.w)[-1]),
+            },
+        }
+        if gem["available"]:
+            sides = t["sides"]
+            gem["steps_per_cpu_s"] = sides["gem_physical_system"]["steps_per_cpu_s"]["median"]
+            gem["steps_per_cpu_s_is"] = "physical_system.simulate (the faster of GEM's two loops)"
+            gem["env_step_steps_per_cpu_s"] = sides["gem_env_step"]["steps_per_cpu_s"]["median"]
+            gem["per_run_cpu_s"] = sides["gem_physical_system"]["per_run_cpu_s"]
+            gem["env_step_per_run_cpu_s"] = sides["gem_env_step"]["per_run_cpu_s"]
+            main_ratio = t["ratios"]["acdrive_vs_physical_system"]
+            out["ratio"] = main_ratio["ratio"]
+            out["ratio_spread"] = ratio_spread(main_ratio)
+            env_ratio = t["ratios"]["acdrive_vs_env_step"]
+            out["ratio_env_step"] = env_ratio["ratio"]
+            out["ratio_env_step_spread"] = ratio_spread(env_ratio)
+        out["gym-electric-motor"] = gem
+        _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say)
+    finally:
+        if proc is not None:
+            proc.close()
+        for name in os.listdir(tmp):
+            os.remove(os.path.join(tmp, name))
+        os.rmdir(tmp)
+    return out
+
+
+def _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say):
+    """Both simulators' errors against references of their own equations (``run_case``)."""
     if reference:
         a_states = acdrive_states(raw, system, p)
         seg = {
@@ -365,7 +413,3 @@ def run_case(
             g_phys = accuracy(g_states, seg, n, DFIMEquations("rotor"), extended_substeps=0)
             gem["error_vs_rotor_frame_reference"] = short_errors(g_phys)
             out["error_verdicts"] = error_verdicts(a_err, g_err)
-    for name in os.listdir(tmp):
-        os.remove(os.path.join(tmp, name))
-    os.rmdir(tmp)
-    return out

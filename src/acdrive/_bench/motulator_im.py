@@ -34,9 +34,9 @@ import time
 
 import numpy as np
 
-from acdrive._bench.common import best_of, public
 from acdrive._bench.reference import accuracy, error_verdicts, short_errors
-from acdrive._bench.venvs import run_peer_script
+from acdrive._bench.venvs import PeerFailed, PeerProcess
+from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
 
 #: integration of the matched cases: one step of the sixth-order method per held segment
 INTEGRATOR = "rk6"
@@ -137,27 +137,39 @@ MATCHED = {
         "differences": [
             (
                 "indirect FOC (rotor-flux model from the current reference) instead of "
-                "motulator's observer on the measured current and voltage"
+                "motulator's reduced-order observer on the measured speed, current and the "
+                "realized voltage"
             ),
             (
-                "current controller on the error only (1DOF) with a fixed-frequency integrator; "
-                "motulator's integrator turns at the estimated synchronous frequency and its "
-                "reference path has the gain k_t"
+                "current controller on the error only (1DOF: k_p on i_ref - i) with a "
+                "fixed-frequency integrator discretised by Tustin; motulator's is 2DOF (k_t on "
+                "i_ref, k_p on i), in synchronous coordinates, its integrator turning at the "
+                "estimated synchronous frequency and updated by forward Euler with anti-windup "
+                "from the realized voltage"
             ),
             (
                 "no computational delay in acdrive (the command applies from the sample "
                 "instant); motulator delays the duty ratios by one sample and advances the "
-                "voltage angle"
+                "voltage angle by 1.5 T_s w_c"
             ),
             (
                 "acdrive's speed PI clamps its integral at a torque limit; motulator's "
-                "integrates the torque the current limit realised"
+                "integrates the torque the current limit realised, and its current limit also "
+                "caps i_sq at psi_R / L_sgm + i_sd (breakdown)"
+            ),
+            (
+                "motulator's field-weakening integrator on i_sd is absent in acdrive; it acts "
+                "only while the unlimited |u_s_ref| exceeds k_u u_dc / sqrt(3) = 296 V (the "
+                "back-emf w_s psi_s_nom at 0.5 p.u. is about 155 V)"
             ),
             (
                 "pwm only: single update of the duty ratios per carrier period (N = 2) instead "
                 "of double update"
             ),
         ],
+        "measured_as": "the speed-trajectory difference between the two simulators on this "
+        "case (cases.*.trajectories.speed_difference: RMS and largest, over the whole run and "
+        "per phase), read from motulator's recorded run and acdrive's timed one",
     },
 }
 
@@ -281,17 +293,15 @@ def log_ports(p) -> list:
     ]
 
 
-def bench_acdrive(
+def prepare_acdrive(
     converter: str,
-    repeats: int,
     duration: float,
     integrator: str = INTEGRATOR,
     substeps: int = SUBSTEPS,
-    log=None,
 ) -> dict:
-    """Best-of-``repeats`` control steps per second of acdrive's side. pwm: carrier N = 2
-    (primary) and N = 1; averaged: one variant. ``log``: progress lines."""
-    say = log or (lambda _m: None)
+    """acdrive's side compiled and warmed up, ready to be timed: per variant (pwm: carrier
+    N = 2, the primary, and N = 1; averaged: one) a ``run_once()`` returning the control steps
+    of one run of ``duration`` and keeping that run's result (``last``) for the accuracy."""
     system, p = matched_acdrive_system(converter, integrator)
     ports = log_ports(p)
     start = time.perf_counter()
@@ -302,6 +312,9 @@ def bench_acdrive(
         "substeps": substeps,
         "variants": {},
         "first_run_s": time.perf_counter() - start,
+        "primary": "N2" if converter == "pwm" else "averaged",
+        "_ports": p,
+        "_system": system,
     }
     carriers = (2, 1) if converter == "pwm" else (None,)
     for n_carrier in carriers:
@@ -310,32 +323,32 @@ def bench_acdrive(
             if n_carrier is None
             else p["inverter"].with_params(f_pwm=1.0 / (n_carrier * T_S))
         )
+        variant: dict = {"carrier_samples": n_carrier, "_modulator": modulator}
 
-        def run(modulator=modulator):
-            return compiled.run(duration, T_S, substeps=substeps, log=ports, parts=[modulator])
+        def run_once(modulator=modulator, variant=variant):
+            raw = compiled.run(duration, T_S, substeps=substeps, log=ports, parts=[modulator])
+            variant["_raw"] = raw
+            return raw.steps
 
-        say(f"acdrive {converter} {'' if n_carrier is None else f'N = {n_carrier} '}timing")
-        run()  # warm-up
-        wall, raw = best_of(run, repeats)
-        i_s = raw.signal(p["im"].out.i_s)
-        name = "averaged" if n_carrier is None else f"N{n_carrier}"
-        out["variants"][name] = {
-            "carrier_samples": n_carrier,
-            "pwm_frequency_hz": None if n_carrier is None else 1.0 / (n_carrier * T_S),
-            "control_steps": raw.steps,
-            "wall_s": wall,
-            "steps_per_s": raw.steps / wall,
-            "real_time_factor": duration / wall,
-            "final_speed_rad_s": float(raw.signal(p["shaft"].out.w)[-1]),
-            "peak_current_a_peak_scaling": float(np.max(np.abs(i_s)) / K),
-            "events": raw.events,
-            "_raw": raw,
-            "_modulator": modulator,
-        }
-    out["primary"] = "N2" if converter == "pwm" else "averaged"
-    out["_ports"] = p
-    out["_system"] = system
+        run_once()  # warm-up
+        variant["_run_once"] = run_once
+        out["variants"]["averaged" if n_carrier is None else f"N{n_carrier}"] = variant
     return out
+
+
+def describe_variant(variant: dict, ports: dict, duration: float) -> dict:
+    """What a variant's last run did (for the JSON): carrier, steps, final speed, peak current."""
+    raw = variant["_raw"]
+    n = variant["carrier_samples"]
+    return {
+        "carrier_samples": n,
+        "pwm_frequency_hz": None if n is None else 1.0 / (n * T_S),
+        "control_steps": raw.steps,
+        "model_time_s": duration,
+        "final_speed_rad_s": float(raw.signal(ports["shaft"].out.w)[-1]),
+        "peak_current_a_peak_scaling": float(np.max(np.abs(raw.signal(ports["im"].out.i_s))) / K),
+        "events": raw.events,
+    }
 
 
 def acdrive_segments(raw, ports, modulator) -> dict:
@@ -463,17 +476,6 @@ class IMEquations:
 
 
 # --- motulator's side ---------------------------------------------------------------------------
-def run_motulator(
-    python: str, converter: str, seconds: float, record_path: str | None, repeats: int = 1
-) -> dict:
-    """motulator's run of the case in its venv (``peers/motulator_im.py``), best of
-    ``repeats`` timed runs."""
-    args = ["--converter", converter, "--seconds", repr(seconds), "--repeats", str(repeats)]
-    if record_path:
-        args += ["--out", record_path]
-    return run_peer_script(python, "motulator_im.py", args, cwd=tempfile.gettempdir())
-
-
 def motulator_states(rec) -> tuple[np.ndarray, dict]:
     """motulator's recorded states at its sampling instants (plus the final state) as
     power-invariant (i_s, psi_R, w_M) rows, and its segment sequence as voltages."""
@@ -490,14 +492,47 @@ def motulator_states(rec) -> tuple[np.ndarray, dict]:
     return states, seg
 
 
+def speed_difference(a_w: np.ndarray, m_w: np.ndarray, t: np.ndarray) -> dict:
+    """RMS and largest |acdrive's speed - motulator's| [rad/s and rpm] at the common sampling
+    instants ``t``, over the whole run and over each phase of the case that it reaches:
+    standstill (before the speed step), the step response (step to load) and under load."""
+    d = a_w - m_w
+    rpm = 60.0 / (2.0 * np.pi)
+    phases = {
+        "whole_run": np.ones(t.size, dtype=bool),
+        "before_speed_step": t < T_STEP,
+        "speed_step_to_load": (t >= T_STEP) & (t < T_LOAD),
+        "under_load": t >= T_LOAD,
+    }
+    out = {}
+    for name, m in phases.items():
+        if not m.any():
+            continue
+        rms = float(np.sqrt(np.mean(d[m] ** 2)))
+        top = float(np.max(np.abs(d[m])))
+        out[name] = {
+            "from_s": float(t[m][0]),
+            "to_s": float(t[m][-1]),
+            "samples": int(m.sum()),
+            "rms_rad_s": rms,
+            "max_abs_rad_s": top,
+            "rms_rpm": rms * rpm,
+            "max_abs_rpm": top * rpm,
+        }
+    return out
+
+
 def compare_trajectories(a_states: np.ndarray, m_states: np.ndarray) -> dict:
-    """Do the two simulators run the same case? Speed and current magnitude of both (peak-value
-    scaling) at a few instants, the speed dip under the load, their largest speed difference."""
+    """How far apart the two simulators' runs of the case are, the remaining differences of their
+    controllers (``MATCHED["control"]["differences"]``) included: the speed difference
+    (``speed_difference``) and, for each, the speed and current magnitude (peak-value scaling)
+    at a few instants and the speed dip under the load."""
     n = min(a_states.shape[0], m_states.shape[0]) - 1
-    after = np.arange(n) * T_S >= T_LOAD
+    t = np.arange(n) * T_S
+    after = t >= T_LOAD
     out = {
         "compared_samples": n,
-        "max_speed_difference_rad_s": float(np.max(np.abs(a_states[:n, 4] - m_states[:n, 4]))),
+        "speed_difference": speed_difference(a_states[:n, 4], m_states[:n, 4], t),
     }
     for name, s in (("acdrive", a_states), ("motulator", m_states)):
         w = s[:n, 4]
@@ -521,63 +556,109 @@ def compare_trajectories(a_states: np.ndarray, m_states: np.ndarray) -> dict:
 def run_case(
     converter: str,
     peer: dict,
-    repeats: int,
+    rounds: int,
     duration: float,
     reference: bool,
     extended_substeps: int = 4,
-    peer_repeats: int = 1,
     log=None,
+    timing: dict | None = None,
+    clock: Clock | None = None,
 ) -> dict:
-    """The matched case with ``converter``: acdrive timed, motulator timed (if ``peer`` is
-    available), both simulators' errors (if ``reference``), their ratio. ``peer`` is
-    ``venvs.ensure_venv``'s answer for motulator."""
+    """The matched case with ``converter``: acdrive and motulator (if ``peer`` is available:
+    ``venvs.ensure_venv``'s answer) timed in ``rounds`` rounds of interleaved CPU-time windows
+    (``windows.time_sides``), the ratio and its spread, motulator's recorded run and the
+    speed-trajectory difference between the two, and both simulators' errors (if
+    ``reference``). ``timing``: ``solo_window_cpu_s`` and ``min_calibration_cpu_s``."""
     say = log or (lambda _m: None)
+    clock = clock or Clock()
+    timing = {"solo_window_cpu_s": 1.0, "min_calibration_cpu_s": 0.1, **(timing or {})}
     out: dict = {"converter": converter, "duration_s": duration, "sample_time_s": T_S}
-    acd = bench_acdrive(converter, repeats, duration, log=say)
-    primary = acd["variants"][acd["primary"]]
-    out["acdrive"] = {
-        "integrator": acd["integrator"],
-        "substeps_per_segment": acd["substeps"],
-        "first_run_s": acd["first_run_s"],
-        "primary": acd["primary"],
-        "variants": {k: public(v) for k, v in acd["variants"].items()},
-        "steps_per_s": primary["steps_per_s"],
-    }
+    acd = prepare_acdrive(converter, duration)
+    ports = acd["_ports"]
+    names = {"averaged": "acdrive", "N2": "acdrive", "N1": "acdrive_N1"}
+    local = {names[k]: local_side(v["_run_once"], clock) for k, v in acd["variants"].items()}
+    pairs = {"acdrive_vs_motulator": ("acdrive", "motulator")}
+    if converter == "pwm":
+        pairs["acdrive_N1_vs_motulator"] = ("acdrive_N1", "motulator")
     tmp = tempfile.mkdtemp(prefix="acdrive_bench_")
-    record = os.path.join(tmp, "motulator_run.npz") if reference else None
-    if peer.get("available"):
-        say(f"motulator {converter}: timing{' and recording' if record else ''}")
-        mot = run_motulator(peer["python"], converter, duration, record, peer_repeats)
-    else:
-        mot = {"available": False, "reason": peer.get("reason", "not run")}
-    out["motulator"] = mot
-    if mot.get("available"):
-        out["ratio"] = primary["steps_per_s"] / mot["steps_per_s"]
-        if converter == "pwm":
-            out["ratio_N1"] = acd["variants"]["N1"]["steps_per_s"] / mot["steps_per_s"]
-    if reference:
-        model = IMEquations()
+    record = os.path.join(tmp, "motulator_run.npz")
+    mot: dict = {"available": False, "reason": peer.get("reason", "not run")}
+    proc = None
+    try:
+        if peer.get("available"):
+            try:
+                proc = PeerProcess(peer["python"], "motulator_im.py", cwd=tmp)
+                mot = {"available": True, **proc.ask("about"), "converter": converter}
+            except PeerFailed as exc:
+                mot = {"available": False, "reason": str(exc)}
+
+        def motulator_window(runs):
+            return proc.ask("window", converter=converter, seconds=duration, runs=runs)
+
+        peers = {"motulator": motulator_window} if mot["available"] else {}
+        say(f"{converter}: interleaved CPU-time windows (acdrive{', motulator' * bool(peers)})")
+        try:
+            t = time_sides(local, peers, pairs, rounds, clock, log=say, **timing)
+            if peers:
+                say(f"motulator {converter}: recording a run")
+                mot.update(proc.ask("record", converter=converter, seconds=duration, out=record))
+        except PeerFailed as exc:
+            mot = {"available": False, "reason": str(exc)}
+            t = time_sides(local, {}, {}, rounds, clock, log=say, **timing)
+        out["timing"] = t
+        out["acdrive"] = {
+            "integrator": acd["integrator"],
+            "substeps_per_segment": acd["substeps"],
+            "first_run_s": acd["first_run_s"],
+            "primary": acd["primary"],
+            "variants": {
+                k: {
+                    **describe_variant(v, ports, duration),
+                    "steps_per_cpu_s": t["sides"][names[k]]["steps_per_cpu_s"],
+                    "per_run_cpu_s": t["sides"][names[k]]["per_run_cpu_s"],
+                }
+                for k, v in acd["variants"].items()
+            },
+            "steps_per_cpu_s": t["sides"]["acdrive"]["steps_per_cpu_s"]["median"],
+        }
+        if mot["available"]:
+            mot["steps_per_cpu_s"] = t["sides"]["motulator"]["steps_per_cpu_s"]["median"]
+            mot["per_run_cpu_s"] = t["sides"]["motulator"]["per_run_cpu_s"]
+            out["ratio"] = t["ratios"]["acdrive_vs_motulator"]["ratio"]
+            out["ratio_spread"] = ratio_spread(t["ratios"]["acdrive_vs_motulator"])
+            if converter == "pwm":
+                out["ratio_N1"] = t["ratios"]["acdrive_N1_vs_motulator"]["ratio"]
+                out["ratio_N1_spread"] = ratio_spread(t["ratios"]["acdrive_N1_vs_motulator"])
+        out["motulator"] = mot
+        primary = acd["variants"][acd["primary"]]
         system = acd["_system"]
-        say(f"acdrive {converter}: accuracy against the references")
-        a_states = acdrive_states(primary, acd["_ports"], system)
-        a_seg = acdrive_segments(primary["_raw"], acd["_ports"], primary["_modulator"])
-        n = a_seg["t"].size
-        a_err = accuracy(a_states, a_seg, n, model, extended_substeps=extended_substeps)
-        out["acdrive"]["error"] = a_err
-        out["acdrive"]["error_summary"] = short_errors(a_err)
-        if mot.get("available"):
-            say(f"motulator {converter}: accuracy against the references")
-            rec = dict(np.load(record))
-            m_states, m_seg = motulator_states(rec)
-            m_err = accuracy(
-                m_states, m_seg, m_seg["t"].size, model, extended_substeps=extended_substeps
-            )
-            mot["error"] = m_err
-            mot["error_summary"] = short_errors(m_err)
-            out["error_verdicts"] = error_verdicts(a_err, m_err)
+        a_states = acdrive_states(primary, ports, system)
+        m_states = m_seg = None
+        if mot["available"]:
+            m_states, m_seg = motulator_states(dict(np.load(record)))
             out["trajectories"] = compare_trajectories(a_states, m_states)
-    for name in os.listdir(tmp):
-        os.remove(os.path.join(tmp, name))
-    os.rmdir(tmp)
+        if reference:
+            model = IMEquations()
+            say(f"acdrive {converter}: accuracy against the references")
+            a_seg = acdrive_segments(primary["_raw"], ports, primary["_modulator"])
+            a_err = accuracy(
+                a_states, a_seg, a_seg["t"].size, model, extended_substeps=extended_substeps
+            )
+            out["acdrive"]["error"] = a_err
+            out["acdrive"]["error_summary"] = short_errors(a_err)
+            if m_states is not None:
+                say(f"motulator {converter}: accuracy against the references")
+                m_err = accuracy(
+                    m_states, m_seg, m_seg["t"].size, model, extended_substeps=extended_substeps
+                )
+                mot["error"] = m_err
+                mot["error_summary"] = short_errors(m_err)
+                out["error_verdicts"] = error_verdicts(a_err, m_err)
+    finally:
+        if proc is not None:
+            proc.close()
+        for name in os.listdir(tmp):
+            os.remove(os.path.join(tmp, name))
+        os.rmdir(tmp)
     out["matched_case"] = MATCHED
     return out

@@ -9,8 +9,10 @@ Cases (``CASES``; ``--only`` picks some):
   ``ratio_vs_gem``;
 * ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``.
 
-Each ratio is acdrive's control steps per second over the peer's, both measured in this run on
-this machine, the peer in its own virtualenv (``_bench.venvs``); each simulator's error is taken
+Each ratio is acdrive's control steps per CPU second over the peer's, both measured in this run
+on this machine, the peer in its own virtualenv (``_bench.venvs``), in interleaved windows of
+similar length (``_bench.windows``: the median over the rounds, with its spread and the load of
+every window, ``warnings`` where it was high); each simulator's error is taken
 against references of the same equations (``_bench.reference``), so that speed is never bought
 with error. The verdicts (``target_checks``) are computed from those numbers: ``None`` where a
 number is missing (a peer that could not be installed, ``--no-reference``), and ``targets_met``
@@ -27,6 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from acdrive._bench.common import load_average, package_version
+from acdrive._bench.windows import LOAD_RULE
 
 CASES = ("motulator_averaged", "motulator_pwm", "gem_dfim", "icad")
 
@@ -41,22 +44,24 @@ TARGETS = {
     "present, else Radau rtol 1e-10 within its own resolution)",
 }
 
-#: model times and repeats: the full run and ``--quick`` (short model times, for a smoke test)
+#: model times and timing: the full run and ``--quick`` (short model times, for a smoke test).
+#: ``rounds``: interleaved windows per side (``_bench.windows``); ``solo_window_cpu_s``: the
+#: window length without a peer; ``min_calibration_cpu_s``: the shortest calibration window.
 FULL = {
     "im_s": 1.5,
     "gem_s": 1.0,
-    "repeats": 5,
-    "motulator_repeats": 2,
-    "gem_repeats": 3,
+    "rounds": 5,
+    "solo_window_cpu_s": 1.0,
+    "min_calibration_cpu_s": 0.1,
     "icad_repeat": 7,
     "extended_substeps": 4,
 }
 QUICK = {
-    "im_s": 0.05,
+    "im_s": 0.3,
     "gem_s": 0.05,
-    "repeats": 2,
-    "motulator_repeats": 1,
-    "gem_repeats": 1,
+    "rounds": 3,
+    "solo_window_cpu_s": 0.2,
+    "min_calibration_cpu_s": 0.05,
     "icad_repeat": 3,
     "extended_substeps": 4,
 }
@@ -136,24 +141,24 @@ def run_suite(options: Options) -> dict:
             report["cases"][name] = run_case(
                 name.split("_", 1)[1],
                 report["peers"]["motulator"],
-                settings["repeats"],
+                settings["rounds"],
                 settings["im_s"],
                 ref,
                 settings["extended_substeps"],
-                settings["motulator_repeats"],
                 say,
+                timing=_timing(settings),
             )
         elif name == "gem_dfim":
             from acdrive._bench.gem_dfim import run_case
 
             report["cases"][name] = run_case(
                 report["peers"]["gym-electric-motor"],
-                settings["repeats"],
+                settings["rounds"],
                 settings["gem_s"],
                 ref,
                 settings["extended_substeps"],
-                settings["gem_repeats"],
                 say,
+                timing=_timing(settings),
             )
         elif name == "icad":
             from acdrive._bench.icad import run_icad
@@ -165,29 +170,47 @@ def run_suite(options: Options) -> dict:
     return report
 
 
+def _timing(settings: dict) -> dict:
+    return {k: settings[k] for k in ("solo_window_cpu_s", "min_calibration_cpu_s")}
+
+
 def _peer_of(case: str) -> str:
     return "gym-electric-motor" if case == "gem_dfim" else "motulator"
 
 
+RATIO_KEYS = {
+    "motulator_averaged": "ratio_vs_motulator",
+    "motulator_pwm": "ratio_vs_motulator_pwm",
+    "gem_dfim": "ratio_vs_gem",
+}
+
+
 def summarise(report: dict) -> None:
-    """The headline keys and the verdicts, computed from the cases' numbers."""
+    """The headline keys and the verdicts, computed from the cases' numbers: per case the
+    ratio (median over the interleaved rounds) and its spread, both sides' steps per CPU second,
+    their errors, the speed-trajectory difference against motulator, and the load warnings."""
     cases = report["cases"]
-    ratio_keys = {
-        "motulator_averaged": "ratio_vs_motulator",
-        "motulator_pwm": "ratio_vs_motulator_pwm",
-        "gem_dfim": "ratio_vs_gem",
-    }
-    report["acdrive_steps_per_s"] = {}
-    report["peer_steps_per_s"] = {}
+    report["acdrive_steps_per_cpu_s"] = {}
+    report["peer_steps_per_cpu_s"] = {}
+    report["ratio_spreads"] = {}
     report["errors"] = {}
-    for case, key in ratio_keys.items():
+    report["speed_trajectory_difference"] = {}
+    report["load_warnings"] = {}
+    for case, key in RATIO_KEYS.items():
         c = cases.get(case)
         report[key] = c.get("ratio") if c else None
         if not c:
             continue
-        report["acdrive_steps_per_s"][case] = c["acdrive"]["steps_per_s"]
+        report["acdrive_steps_per_cpu_s"][case] = c["acdrive"]["steps_per_cpu_s"]
         peer = c.get(_peer_of(case), {})
-        report["peer_steps_per_s"][case] = peer.get("steps_per_s")
+        report["peer_steps_per_cpu_s"][case] = peer.get("steps_per_cpu_s")
+        report["ratio_spreads"][case] = c.get("ratio_spread")
+        timing = c.get("timing", {})
+        if timing.get("warning"):
+            report["load_warnings"][case] = timing["warning"]
+        diff = c.get("trajectories", {}).get("speed_difference")
+        if diff:
+            report["speed_trajectory_difference"][case] = diff["whole_run"]
         if "error_summary" in c["acdrive"]:
             report["errors"][case] = {
                 "acdrive": c["acdrive"]["error_summary"],
@@ -197,6 +220,8 @@ def summarise(report: dict) -> None:
     if "gem_dfim" in cases:
         report["ratio_vs_gem_env_step"] = cases["gem_dfim"].get("ratio_env_step")
     report["icad_ms"] = cases["icad"]["icad_ms"] if "icad" in cases else None
+    report["load_rule"] = LOAD_RULE
+    report["warnings"] = [f"{k}: {v}" for k, v in report["load_warnings"].items()]
     report["targets"] = TARGETS
     report["target_checks"] = target_checks(report)
     checks = report["target_checks"]
@@ -232,37 +257,56 @@ def target_checks(report: dict) -> dict:
     return out
 
 
+def _fmt(x, spec: str) -> str:
+    return "-" if x is None else format(x, spec)
+
+
 def table(report: dict) -> str:
     """A short human-readable summary of the report."""
     host = report["host"]
     kind = "quick" if report["quick"] else "full"
     load = f"{host['load_average_at_start']} -> {host['load_average_at_end']}"
-    lines = [f"acdrive bench ({kind}), load average {load}"]
+    lines = [f"acdrive bench ({kind}), load average {load}, {host['cpus']} cores"]
     lines.append(
-        f"{'case':<20}{'acdrive steps/s':>17}{'peer steps/s':>14}{'ratio':>9}"
-        f"{'acdrive err':>13}{'peer err':>11}"
+        f"{'case':<20}{'acdrive steps/CPU s':>21}{'peer steps/CPU s':>18}"
+        f"{'ratio (min-max)':>24}{'acdrive err':>13}{'peer err':>11}"
     )
-    for case in ("motulator_averaged", "motulator_pwm", "gem_dfim"):
+    for case in RATIO_KEYS:
         c = report["cases"].get(case)
         if not c:
             continue
         peer = c.get(_peer_of(case), {})
         a_err = _decisive_current(c["acdrive"].get("error_summary"))
         p_err = _decisive_current(peer.get("error_summary"))
-        ratio = c.get("ratio")
+        r = c.get("ratio_spread") or {}
+        span = f"{_fmt(r.get('median'), '.0f')} ({_fmt(r.get('min'), '.0f')}-"
+        span += f"{_fmt(r.get('max'), '.0f')})"
         lines.append(
-            f"{case:<20}{c['acdrive']['steps_per_s']:>17,.0f}"
-            f"{peer['steps_per_s'] if peer.get('steps_per_s') else float('nan'):>14,.0f}"
-            f"{ratio if ratio else float('nan'):>9.0f}{a_err:>13}{p_err:>11}"
+            f"{case:<20}{_fmt(c['acdrive']['steps_per_cpu_s'], ',.0f'):>21}"
+            f"{_fmt(peer.get('steps_per_cpu_s'), ',.0f'):>18}"
+            f"{span if r else '-':>24}{a_err:>13}{p_err:>11}"
         )
         if not peer.get("available"):
             lines.append(f"  {_peer_of(case)} not measured: {peer.get('reason')}")
+        diff = report["speed_trajectory_difference"].get(case)
+        if diff:
+            lines.append(
+                f"  speed difference to motulator: RMS {diff['rms_rpm']:.3g} rpm, largest "
+                f"{diff['max_abs_rpm']:.3g} rpm over {diff['from_s']:g}-{diff['to_s']:g} s"
+            )
     if report.get("icad_ms") is not None:
         lines.append(f"icad: {report['icad_ms']:.1f} ms (full ICAD, 100 x 2,000)")
-    lines.append("current errors relative to the peak, against the tightest reference")
+    lines.append(
+        "ratios: median over interleaved CPU-time rounds (min-max); current errors "
+        "relative to the peak, against the tightest reference"
+    )
     for k, v in report["target_checks"].items():
         lines.append(f"  {k}: {'-' if v is None else ('yes' if v else 'NO')}")
     lines.append(f"targets met: {'yes' if report['targets_met'] else 'no'}")
+    for w in report["warnings"]:
+        lines.append(f"WARNING {w}")
+    if report["warnings"]:
+        lines.append(f"  rule: {report['load_rule']}")
     return "\n".join(lines)
 
 

@@ -13,10 +13,12 @@ JSON says why the peer is missing (``available: false``).
 from __future__ import annotations
 
 import glob
+import json
 import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -178,30 +180,74 @@ def _run_step(cmd: list[str], timeout: float = 600.0) -> str | None:
     return None
 
 
-def run_peer_script(
-    python: str, script: str, args: list[str], cwd: str | None = None, timeout: float = 3600.0
-) -> dict:
-    """Run ``peers/<script>`` with the peer's python; its last stdout line is JSON. Returns that
-    dict with ``available: True``, or ``{"available": False, "reason": ...}``."""
-    cmd = [python, str(PEER_SCRIPTS / script), *args]
-    try:
-        r = subprocess.run(
-            cmd,
-            check=False,
-            capture_output=True,
-            text=True,
-            env=clean_env(),
-            cwd=cwd,
-            timeout=timeout,
-        )
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        return {"available": False, "reason": f"{script} failed: {exc}"}
-    if r.returncode != 0:
-        tail = r.stderr.strip().splitlines()[-5:]
-        return {"available": False, "reason": f"{script} failed: " + " | ".join(tail)}
-    try:
-        result = dict(__import__("json").loads(r.stdout.strip().splitlines()[-1]))
-    except (ValueError, IndexError):
-        return {"available": False, "reason": f"{script} printed no JSON line"}
-    result["available"] = True
-    return result
+class PeerFailed(RuntimeError):
+    """The peer's process ended, answered with an error or could not be started."""
+
+
+class PeerProcess:
+    """A peer script running with ``--serve`` in the peer's virtualenv (``peers/_serve.py``):
+    ``ask(cmd, **args)`` sends one command and returns its JSON answer; ``close()`` ends it.
+    Its stderr goes to a temporary file (a pipe nobody reads could fill and block it) whose end
+    is quoted when it fails."""
+
+    REPLY_PREFIX = "ACDRIVE-BENCH "
+
+    def __init__(self, python: str, script: str, cwd: str | None = None):
+        self.script = script
+        self._stderr = tempfile.TemporaryFile(mode="w+", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        try:
+            self._proc = subprocess.Popen(
+                [python, str(PEER_SCRIPTS / script), "--serve"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=self._stderr,
+                text=True,
+                bufsize=1,
+                env=clean_env(),
+                cwd=cwd,
+            )
+        except OSError as exc:
+            self._stderr.close()
+            raise PeerFailed(f"{script} could not start: {exc}") from exc
+
+    def _tail(self) -> str:
+        self._stderr.seek(0)
+        lines = self._stderr.read().strip().splitlines()[-5:]
+        return " | ".join(lines) or "no message"
+
+    def ask(self, cmd: str, **args) -> dict:
+        try:
+            self._proc.stdin.write(json.dumps({"cmd": cmd, "args": args}) + "\n")
+            self._proc.stdin.flush()
+        except OSError as exc:
+            raise PeerFailed(f"{self.script} ended: {self._tail()}") from exc
+        for line in self._proc.stdout:
+            if line.startswith(self.REPLY_PREFIX):
+                answer = json.loads(line[len(self.REPLY_PREFIX) :])
+                if "error" in answer:
+                    raise PeerFailed(f"{self.script} {cmd}: {answer['error']}")
+                return answer
+        self._proc.wait()
+        raise PeerFailed(f"{self.script} ended (exit {self._proc.returncode}): {self._tail()}")
+
+    def close(self) -> None:
+        try:
+            if self._proc.poll() is None:
+                self._proc.stdin.write(json.dumps({"cmd": "quit"}) + "\n")
+                self._proc.stdin.flush()
+            self._proc.wait(timeout=30)
+        except (OSError, subprocess.TimeoutExpired):
+            self._proc.kill()
+            self._proc.wait()
+        finally:
+            for stream in (self._proc.stdin, self._proc.stdout):
+                if stream is not None:
+                    stream.close()
+            self._stderr.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False

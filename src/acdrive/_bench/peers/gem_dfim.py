@@ -2,7 +2,8 @@
 
 Runs in GEM's own virtualenv (made by ``acdrive._bench.venvs``), never with acdrive on the path:
 
-    python gem_dfim.py --case case.json --actions actions.npy [--out run.npz] [--repeats 3]
+    python gem_dfim.py --case case.json --actions actions.npy [--out run.npz] [--repeats 1]
+    python gem_dfim.py --serve
 
 ``case.json`` (written by ``acdrive._bench.gem_dfim``) holds the machine, load, supply and control
 period; ``actions.npy`` the action of every control step, shape (n, 6): GEM's normalised duty
@@ -14,15 +15,18 @@ GEM's default solver (scipy ``ode`` dopri5 with its default tolerances) and a vi
 Three kinds of run, each from a fresh environment:
 
 * ``env.step`` over all actions (how GEM's users run it: physical system, reference generator,
-  reward and constraint monitor), best of ``--repeats``;
+  reward and constraint monitor);
 * ``physical_system.simulate`` alone over the same actions (the simulator without the
-  reinforcement-learning wrapper), best of ``--repeats``;
+  reinforcement-learning wrapper);
 * with ``--out``: one more ``env.step`` run recording, at every step, GEM's ODE state at the
   step's start (load then motor states: omega, i_salpha, i_sbeta, psi_ralpha, psi_rbeta,
   epsilon, peak-value scaling) and the stator and rotor voltages GEM handed to its solver for
   that step (stationary frame), plus the final state.
 
-One JSON line is printed.
+The timed kinds (``window``) time only the loop over the actions, in this process's CPU time
+(``_serve.cpu_window``), ``--repeats`` runs each. Alone, the script prints one JSON line; with
+``--serve`` it answers the suite's commands (``about``, ``load``, ``window``, ``record``; see
+``_serve.py``), so that the suite interleaves these windows with acdrive's.
 """
 
 from __future__ import annotations
@@ -30,11 +34,11 @@ from __future__ import annotations
 import argparse
 import json
 import platform
-import time
 from importlib.metadata import version
 
 import gym_electric_motor as gem
 import numpy as np
+from _serve import cpu_window, serve
 from gym_electric_motor.physical_systems import PolynomialStaticLoad
 
 ENV_ID = "Cont-SC-DFIM-v0"
@@ -72,30 +76,74 @@ def make_env(case: dict):
     )
 
 
-def run_env(case: dict, actions: np.ndarray) -> tuple[float, int, np.ndarray]:
-    """(wall time of the env.step loop, episodes ended early, final normalised state)."""
+def prepared(case: dict):
+    """A fresh environment of ``case``, reset (untimed: building the model)."""
     env = make_env(case)
     env.reset(seed=0)
-    ended = 0
-    state = None
-    start = time.perf_counter()
+    return env
+
+
+def env_steps(env, actions: np.ndarray, ended: list) -> int:
+    """``env.step`` over all actions (reset where an episode ends, counted in ``ended``)."""
     for action in actions:
-        (state, _), _, terminated, truncated, _ = env.step(action)
+        _, _, terminated, truncated, _ = env.step(action)
         if terminated or truncated:
-            ended += 1
+            ended.append(1)
             env.reset()
-    return time.perf_counter() - start, ended, state
+    return len(actions)
 
 
-def run_physical(case: dict, actions: np.ndarray) -> float:
-    """Wall time of ``physical_system.simulate`` over the actions, after a reset."""
-    env = make_env(case)
-    env.reset(seed=0)
+def physical_steps(env, actions: np.ndarray) -> int:
+    """``physical_system.simulate`` alone over all actions."""
     simulate = env.unwrapped.physical_system.simulate
-    start = time.perf_counter()
     for action in actions:
         simulate(action)
-    return time.perf_counter() - start
+    return len(actions)
+
+
+LOADED: dict = {}
+
+
+def load(case: str, actions: str) -> dict:
+    """Read the case (JSON) and the actions (.npy) that the next commands use."""
+    with open(case, encoding="utf-8") as f:
+        LOADED["case"] = json.load(f)
+    LOADED["actions"] = np.load(actions)
+    return {"control_steps": len(LOADED["actions"])}
+
+
+def window(kind: str, runs: int = 1) -> dict:
+    """``runs`` timed runs over the loaded actions (``_serve.cpu_window``, this process's CPU
+    time): ``kind`` "physical" (``physical_system.simulate``) or "env" (``env.step``)."""
+    case, actions = LOADED["case"], LOADED["actions"]
+    ended: list = []
+    if kind == "physical":
+        out = cpu_window(lambda: prepared(case), lambda env: physical_steps(env, actions), runs)
+    elif kind == "env":
+        out = cpu_window(lambda: prepared(case), lambda env: env_steps(env, actions, ended), runs)
+        out["episodes_ended_early"] = len(ended)
+    else:
+        raise ValueError(f"kind must be physical or env, got {kind!r}")
+    return out
+
+
+def save_record(out: str) -> dict:
+    """One recorded ``env.step`` run over the loaded actions (``record``), saved to ``out``."""
+    rec = record(LOADED["case"], LOADED["actions"])
+    np.savez(out, **{k: v for k, v in rec.items() if k != "ended"})
+    return {"recorded_episodes_ended_early": rec["ended"]}
+
+
+def about() -> dict:
+    return {
+        "peer": "gym-electric-motor",
+        "version": version("gym-electric-motor"),
+        "env": ENV_ID,
+        "python": platform.python_version(),
+        "numpy": version("numpy"),
+        "scipy": version("scipy"),
+        "gymnasium": version("gymnasium"),
+    }
 
 
 def record(case: dict, actions: np.ndarray) -> dict:
@@ -134,41 +182,23 @@ def record(case: dict, actions: np.ndarray) -> dict:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--case", required=True, help="case description (JSON)")
-    parser.add_argument("--actions", required=True, help="actions, shape (n, 6) (.npy)")
+    parser.add_argument("--serve", action="store_true", help="answer the suite's commands")
+    parser.add_argument("--case", help="case description (JSON)")
+    parser.add_argument("--actions", help="actions, shape (n, 6) (.npy)")
     parser.add_argument("--out", help="save the recorded run (.npz)")
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--repeats", type=int, default=1, help="timed runs per kind")
     args = parser.parse_args()
-    with open(args.case, encoding="utf-8") as f:
-        case = json.load(f)
-    actions = np.load(args.actions)
-    n = len(actions)
-
-    env_walls, ended = [], 0
-    for _ in range(max(args.repeats, 1)):
-        wall, k, _ = run_env(case, actions)
-        env_walls.append(wall)
-        ended = max(ended, k)
-    phys_walls = [run_physical(case, actions) for _ in range(max(args.repeats, 1))]
-    out = {
-        "peer": "gym-electric-motor",
-        "version": version("gym-electric-motor"),
-        "env": ENV_ID,
-        "python": platform.python_version(),
-        "numpy": version("numpy"),
-        "scipy": version("scipy"),
-        "gymnasium": version("gymnasium"),
-        "control_steps": n,
-        "env_step_wall_s": min(env_walls),
-        "env_step_steps_per_s": n / min(env_walls),
-        "physical_system_wall_s": min(phys_walls),
-        "physical_system_steps_per_s": n / min(phys_walls),
-        "episodes_ended_early": ended,
-    }
+    if args.serve:
+        serve({"about": about, "load": load, "window": window, "record": save_record})
+        return
+    if not (args.case and args.actions):
+        parser.error("--case and --actions are needed without --serve")
+    out = {**about(), **load(args.case, args.actions)}
+    for kind in ("env", "physical"):
+        w = window(kind, args.repeats)
+        out[kind] = {**w, "steps_per_cpu_s": w["steps_per_run"] * w["runs"] / w["cpu_s"]}
     if args.out:
-        rec = record(case, actions)
-        np.savez(args.out, **{k: v for k, v in rec.items() if k != "ended"})
-        out["recorded_episodes_ended_early"] = rec["ended"]
+        out.update(save_record(args.out))
     print(json.dumps(out))
 
 

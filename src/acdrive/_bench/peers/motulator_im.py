@@ -4,6 +4,7 @@ Runs in motulator's own virtualenv (motulator 0.18 needs Python >= 3.12; ``acdri
 it, see ``acdrive._bench.venvs``), never with acdrive on the path:
 
     python motulator_im.py --converter {averaged,pwm} [--seconds 1.5] [--out run.npz]
+    python motulator_im.py --serve
 
 The case is motulator's example ``examples/drive/current_vector/plot_2kw_im_sat_cvc.py``
 (2.2 kW, 400 V, 50 Hz, 2 pole pairs, J = 0.015 kg m^2, 540 V DC link, default sampling period
@@ -28,24 +29,26 @@ Everything else is the example's: current-vector control with psi_s_nom = 0.95 p
 i_s_max = 1.5 i_base, the 2DOF complex PI current controller (alpha_c = 2 pi 200 rad/s), the
 speed PI k_p = 1, k_i = 10, motulator's default solver (RK45, rtol 1e-3, atol 1e-6).
 
-Two kinds of run of the same case: the timed ones (``--repeats``, the best kept; only
-``Simulation.simulate`` is timed, no progress bar, nothing recorded); then one that records, at
-every sampling instant, the model state and the switching sequence that ``Drive.modulate`` hands to the simulation loop (interval lengths and
+Two kinds of run of the same case: timed windows (``window``: ``--repeats`` runs, only
+``Simulation.simulate`` timed, in this process's CPU time, no progress bar, nothing recorded);
+and one that records (``save_record``), at every sampling instant, the model state and the
+switching sequence that ``Drive.modulate`` hands to the simulation loop (interval lengths and
 switching states, or duty ratios with the averaged converter), which ``--out`` saves for the
-suite's accuracy reference (``acdrive._bench.motulator_im``). One JSON line is printed.
+suite's accuracy reference (``acdrive._bench.motulator_im``). Alone, the script prints one JSON
+line; with ``--serve`` it answers the suite's commands (``about``, ``window``, ``record``; see
+``_serve.py``), so that the suite interleaves its windows with acdrive's.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import platform
-import time
 from importlib.metadata import version
 
 import motulator.drive.control.im as control
 import numpy as np
+from _serve import cpu_window, serve
 from motulator.drive import model, utils
 
 T_S = 125e-6  # s, motulator's default sampling period of current-vector control
@@ -109,70 +112,91 @@ def record(sim: model.Simulation) -> dict:
     return rec
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", help="save the recorded run (.npz) for the accuracy reference")
-    parser.add_argument("--converter", choices=("averaged", "pwm"), default="pwm")
-    parser.add_argument("--seconds", type=float, default=DURATION, help="model time [s]")
-    parser.add_argument("--repeats", type=int, default=1, help="timed runs (the best is kept)")
-    args = parser.parse_args()
+def simulate(sim: model.Simulation, seconds: float) -> int:
+    """Run ``sim`` for ``seconds`` of model time; the control-system calls it made (the loop runs
+    to the first sample after ``seconds``)."""
+    res = sim.simulate(t_stop=seconds)
+    if not res.success:
+        raise RuntimeError("motulator's solver reported failure")
+    sim.last_result = res
+    return len(res.ctrl.t)
 
-    pwm = args.converter == "pwm"
-    walls = []
-    for _ in range(max(args.repeats, 1)):
-        sim = build(pwm)
-        start = time.perf_counter()
-        res = sim.simulate(t_stop=args.seconds)
-        walls.append(time.perf_counter() - start)
-    wall = min(walls)
-    steps = len(res.ctrl.t)  # control-system calls (the loop runs to the first sample after t_stop)
-    w_M = np.real(res.mdl.mechanics.w_M)
-    i_s = np.asarray(res.mdl.machine.i_s_ab)
-    out = {
+
+def window(converter: str, seconds: float, runs: int = 1) -> dict:
+    """``runs`` timed runs of the case (``_serve.cpu_window``: only ``Simulation.simulate`` is
+    timed, in this process's CPU time) and the last run's final speed and peak current."""
+    pwm = converter == "pwm"
+    sims = []
+
+    def prepare():
+        sims.append(build(pwm))
+        return sims[-1]
+
+    out = cpu_window(prepare, lambda sim: simulate(sim, seconds), runs)
+    res = sims[-1].last_result
+    out["final_speed_rad_s"] = float(np.real(res.mdl.mechanics.w_M)[-1])
+    out["peak_current_a"] = float(np.max(np.abs(np.asarray(res.mdl.machine.i_s_ab))))
+    out["model_time_s"] = float(res.ctrl.t[-1] + T_S)
+    return out
+
+
+def save_record(converter: str, seconds: float, out: str) -> dict:
+    """One more run recording the state and the segments at every sampling instant (``record``),
+    saved to ``out`` (.npz) for the suite's accuracy reference and trajectory comparison."""
+    sim = build(converter == "pwm")
+    rec = record(sim)
+    res = sim.simulate(t_stop=seconds)
+    mdl = sim.mdl
+    np.savez(
+        out,
+        t=np.array(rec["t"]),
+        psi_s=np.array(rec["psi_s"]),
+        psi_r=np.array(rec["psi_r"]),
+        w_M=np.array(rec["w_M"]),
+        n=np.array(rec["n"], dtype=np.int64),
+        dt=np.array(rec["dt"]),
+        q=np.array(rec["q"]),
+        final_t=mdl.t0,
+        final_psi_s=complex(mdl.machine.state.psi_s_ab),
+        final_psi_r=complex(mdl.machine.state.psi_r_ab),
+        final_w_M=float(np.real(mdl.mechanics.state.w_M)),
+        u_dc=U_DC,
+        T_s=T_S,
+    )
+    return {
+        "recorded_control_steps": len(res.ctrl.t),
+        "recorded_final_speed_rad_s": float(np.real(res.mdl.mechanics.w_M)[-1]),
+    }
+
+
+def about() -> dict:
+    return {
         "peer": "motulator",
         "version": version("motulator"),
-        "converter": args.converter,
         "python": platform.python_version(),
         "numpy": version("numpy"),
         "scipy": version("scipy"),
-        "success": bool(res.success),
-        "model_time_s": float(res.ctrl.t[-1] + T_S),
-        "control_steps": steps,
-        "wall_s": wall,
-        "wall_s_all_runs": walls,
-        "steps_per_s": steps / wall,
-        "real_time_factor": steps * T_S / wall,
-        "final_speed_rad_s": float(w_M[-1]),
-        "peak_current_a": float(np.max(np.abs(i_s))),
         "base": {"w_M": float(base.w_M), "psi": float(base.psi), "i": float(base.i)},
     }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--serve", action="store_true", help="answer the suite's commands")
+    parser.add_argument("--out", help="save the recorded run (.npz) for the accuracy reference")
+    parser.add_argument("--converter", choices=("averaged", "pwm"), default="pwm")
+    parser.add_argument("--seconds", type=float, default=DURATION, help="model time [s]")
+    parser.add_argument("--repeats", type=int, default=1, help="timed runs (one window)")
+    args = parser.parse_args()
+    if args.serve:
+        serve({"about": about, "window": window, "record": save_record})
+        return
+    out = {**about(), "converter": args.converter}
+    w = window(args.converter, args.seconds, args.repeats)
+    out.update(w)
+    out["steps_per_cpu_s"] = w["steps_per_run"] * w["runs"] / w["cpu_s"]
     if args.out:
-        sim2 = build(pwm)
-        rec = record(sim2)
-        res2 = sim2.simulate(t_stop=args.seconds)
-        mdl = sim2.mdl
-        np.savez(
-            args.out,
-            t=np.array(rec["t"]),
-            psi_s=np.array(rec["psi_s"]),
-            psi_r=np.array(rec["psi_r"]),
-            w_M=np.array(rec["w_M"]),
-            n=np.array(rec["n"], dtype=np.int64),
-            dt=np.array(rec["dt"]),
-            q=np.array(rec["q"]),
-            final_t=mdl.t0,
-            final_psi_s=complex(mdl.machine.state.psi_s_ab),
-            final_psi_r=complex(mdl.machine.state.psi_r_ab),
-            final_w_M=float(np.real(mdl.mechanics.state.w_M)),
-            u_dc=U_DC,
-            T_s=T_S,
-        )
-        out["recorded_run_matches_timed_run"] = bool(
-            len(res2.ctrl.t) == steps
-            and math.isclose(
-                float(np.real(res2.mdl.mechanics.w_M)[-1]), float(w_M[-1]), rel_tol=0.0, abs_tol=0.0
-            )
-        )
+        out.update(save_record(args.converter, args.seconds, args.out))
     print(json.dumps(out))
 
 
