@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive.control._speed import SpeedPIGains
+from acdrive.control._speed import SpeedPIGains, require_feedforward_fraction
 from acdrive.errors import (
     InputError,
     Notice,
@@ -91,6 +91,14 @@ __all__ = [  # the reading functions of scenarios._files are offered here too
 ]
 
 RAD_S_PER_RPM = math.pi / 30.0
+#: largest supply frequency [Hz]: the machine model (constant lumped inductances and
+#: resistances, no skin effect, iron loss or winding capacitance) is one of power-frequency
+#: machines; grids are 50/60 Hz, aircraft grids 360-800 Hz, so 1 kHz bounds what it describes
+MAX_SUPPLY_HZ = 1000.0
+#: most motors on one supply: each adds its parts to the one compiled loop, whose compile time
+#: grows with them (about 13 s per motor on a loaded 2-core machine, 51 s for 4); Bodson's
+#: experiments use one or two, the built-ins up to three. Eight keeps a first run to minutes.
+MAX_MOTORS = 8
 #: sample time [s] and substeps per sample when the scenario does not say
 DEFAULT_SAMPLE_TIME = 200e-6
 DEFAULT_SUBSTEPS = 4
@@ -147,7 +155,7 @@ def _reactive_power_gains(section: _Section) -> tuple[float, float]:
 def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     mode = section.text("mode", "voltage", choices=("voltage", "current"))
     bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
-    K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
+    K_F = section.number("K_F", 2.0 / 3.0, require_feedforward_fraction)
     design_inertia = section.number("design_inertia", machine.J, require_positive)
     q_kp, q_ki = _reactive_power_gains(section)
     gains = dataclasses.replace(SpeedPIGains.design(design_inertia, bandwidth), K_F=K_F)
@@ -225,6 +233,17 @@ def _converter(
             "the DC link cannot supply it",
         )
     return losses
+
+
+def _supply_frequency(field: str, value) -> float:
+    """A supply frequency [Hz]: > 0 and at most :data:`MAX_SUPPLY_HZ`."""
+    value = require_positive(field, value)
+    if value > MAX_SUPPLY_HZ:
+        raise InputError(
+            field, f"must be at most {MAX_SUPPLY_HZ:g} Hz (the lumped machine model describes "
+            f"power-frequency supplies), got {value:g} Hz"
+        )  # fmt: skip
+    return value
 
 
 def _phase_scales(section: _Section):
@@ -450,6 +469,11 @@ def build_setup(data: dict) -> DriveSetup:
     compare = top.get("compare_modes", [])
     if not isinstance(compare, list) or any(m not in ("voltage", "current") for m in compare):
         raise InputError("compare_modes", 'must be a list of "voltage" / "current"')
+    if len(set(compare)) < len(compare):
+        raise InputError(
+            "compare_modes", f"must name each mode once (a mode run twice gives the same run), "
+            f"got {compare}"
+        )  # fmt: skip
     sim = _Section(top.get("simulation", {}), "simulation")
     duration = sim.number("duration", 1.0, require_positive)
     sample_time = sim.number("sample_time", DEFAULT_SAMPLE_TIME, require_positive)
@@ -470,7 +494,7 @@ def build_setup(data: dict) -> DriveSetup:
     sup = _Section(top.get("supply", {}), "supply")
     supply = Supply(
         voltage_pk=sup.constant_or_profile("voltage_pk", 11.1, rule=require_nonnegative),
-        frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=require_positive),
+        frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=_supply_frequency),
         resistance=sup.number("resistance", 0.0, require_nonnegative),
         inductance=sup.number("inductance", 0.0, require_nonnegative),
         phase_scales=_phase_scales(sup),
@@ -482,6 +506,11 @@ def build_setup(data: dict) -> DriveSetup:
     motors_data = top.get("motor")
     if not isinstance(motors_data, list) or not motors_data:
         raise InputError("motor", "at least one [[motor]] table is required")
+    if len(motors_data) > MAX_MOTORS:
+        raise InputError(
+            "motor", f"at most {MAX_MOTORS} [[motor]] tables on one supply (each one lengthens "
+            f"the compilation of the simulation loop), got {len(motors_data)}"
+        )  # fmt: skip
     motors = []
     for k, raw in enumerate(motors_data):
         sec = _Section(raw, f"motor[{k}]")

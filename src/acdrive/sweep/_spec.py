@@ -63,7 +63,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -217,12 +216,10 @@ def read_sweep_text(source: str) -> tuple[str, Path | None]:
 
 def load_sweep(source: str) -> SweepSpec:
     """Read and validate a sweep file (or built-in sweep name)."""
+    from acdrive.scenarios._files import parse_toml
+
     text, folder = read_sweep_text(str(source))
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError("sweep", f"{source} is not valid TOML ({exc})") from None
-    return build_spec(data, folder)
+    return build_spec(parse_toml(text, str(source), "sweep"), folder)
 
 
 def _base(top: _Table, folder: Path | None) -> tuple[str, dict]:
