@@ -60,8 +60,7 @@ def parse_toml(text: str, origin: str, field: str) -> dict:
     A leading UTF-8 byte-order mark is dropped (TOML requires UTF-8, and a BOM carries nothing
     else). A document nested so deeply that the parser runs out of stack (thousands of ``[``) is
     refused as invalid TOML for acdrive, not left to crash the command."""
-    if text.startswith(BOM):
-        text = text[len(BOM) :]
+    text = text.removeprefix(BOM)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
