@@ -169,18 +169,52 @@ def run(args) -> int:
 
 
 def _map(args) -> int:
+    from acdrive._output import FILE, OutputEntries
+    from acdrive._progress import Progress
+
+    n_speed, n_load = args.grid
+    if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
+        raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
+    models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
+    # --out checked (a folder, or creatable and writable) before any analysis, as `run` does
+    with OutputEntries(args.out, {_figure_name(args): FILE}, field="--out") as output:
+        report, maps = _map_report(args, models, Progress(7, "stability map"))
+        _draw(maps, output.staging, args)
+        (path,) = output.publish()
+    out = {
+        "bandwidth_rad_s": args.bandwidth,
+        "model": args.model,
+        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
+        "modes": report,
+        "figure": str(path),
+    }
+    if args.json:
+        print(strict_json(out, indent=2))
+    else:
+        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
+        for mode, r in report.items():
+            print(
+                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
+                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
+                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
+                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
+                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
+            )
+    return 0
+
+
+def _figure_name(args) -> str:
+    return f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+
+
+def _map_report(args, models, bar) -> tuple[dict, dict]:
+    """(report per mode, StabilityMap per mode) of ``acdrive stability --map``."""
     import numpy as np
 
     from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
 
     n_speed, n_load = args.grid
-    if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
-        raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
-    from acdrive._progress import Progress
-
     maps, report = {}, {}
-    models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
-    bar = Progress(7, "stability map")
     for mode, model in models.items():
         speeds, loads = default_grid(model, n_speed, n_load)
         bar.phase(f"{mode} command: {n_speed} x {n_load} operating points")
@@ -212,28 +246,8 @@ def _map(args) -> int:
             "max_stable_bandwidth_zero_load_rad_s": unloaded,
         }
     bar.phase("drawing")
-    path = _draw(maps, Path(args.out), args)
     bar.close()
-    out = {
-        "bandwidth_rad_s": args.bandwidth,
-        "model": args.model,
-        "speeds_rpm": [float(s) for s in maps["voltage"].speeds_rpm],
-        "modes": report,
-        "figure": str(path),
-    }
-    if args.json:
-        print(strict_json(out, indent=2))
-    else:
-        print(f"a_D,VEL = {args.bandwidth:g} rad/s, {args.model} model; figure {path}")
-        for mode, r in report.items():
-            print(
-                f"{mode:8s} unstable at {r['unstable_points']}/{r['points']} points "
-                f"(worst Re s = {r['worst_max_real_part']:+.1f} 1/s at {r['worst_speed_rpm']:.0f} rpm, "
-                f"{r['worst_load_nm']:+.3f} N m); tolerates a_D,VEL up to "
-                f"{r['max_stable_bandwidth_rad_s']:.0f} rad/s "
-                f"({r['max_stable_bandwidth_zero_load_rad_s']:.0f} rad/s without load)"
-            )
-    return 0
+    return report, maps
 
 
 def _bench(args) -> int:
@@ -321,7 +335,7 @@ def _draw(maps, out: Path, args) -> Path:
         ax.legend(loc="upper right", fontsize=8)
     axes[0].set_ylabel("speed [rpm]")
     fig.colorbar(pc, ax=axes, label="max Re(s) [1/s]")
-    path = out / f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+    path = out / _figure_name(args)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
