@@ -39,7 +39,10 @@ Physical pre-checks, made before any simulation (each an ``InputError`` naming t
 - integration step: see :func:`choose_substeps`. An omitted ``simulation.substeps`` is raised
   from its default of 4 to what the plant's fastest mode needs, with a one-line
   ``acdrive.errors.Notice``; a step no allowed number of substeps can make stable is refused;
-- ``simulation.log_every`` must not exceed the number of control steps of the run.
+- ``simulation.log_every`` must not exceed the number of control steps of the run;
+- the control period against the supply period, the speed and current loops
+  (``sim._period.check_control_period``: an aliasing frequency estimator or an unstable sampled
+  loop is refused; a long but workable period is a warning in summary.json).
 """
 
 from __future__ import annotations
@@ -66,6 +69,7 @@ from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
 from acdrive.scenarios._files import Section as _Section
 from acdrive.scenarios._files import builtin_names, builtin_text, machine_from, read_scenario
+from acdrive.sim._period import check_control_period
 from acdrive.sim._result import N_LOG
 from acdrive.sim._setup import (
     RK4_STEP_LIMIT,
@@ -384,7 +388,8 @@ def choose_substeps(setup: DriveSetup, given: bool) -> int:
     - simulation.substeps omitted and need > the default 4: the run goes ahead with ``need``
       substeps and a one-line ``Notice`` says which value was chosen and why. That is what a drive
       engineer who lengthened the sample time expects: the plant is integrated correctly and only
-      the wall time grows;
+      the wall time grows (whether the *controller* works at that sample time is another
+      question, checked before this by ``sim._period.check_control_period``);
     - simulation.substeps given: kept as written, even below ``need``. An explicit value is a
       deliberate choice (reproducing a run, studying the integrator), and the estimate is an upper
       one (the converter-loss slope, for one, only applies near zero rotor current), so overriding
@@ -564,6 +569,7 @@ def build_setup(data: dict) -> DriveSetup:
         note=note,
     )
     check_setup(setup)
+    check_control_period(setup)
     chosen = choose_substeps(setup, substeps_given)
     if chosen != substeps:
         _check_size(duration, sample_time, chosen, log_every, len(motors), max(len(compare), 1))
