@@ -45,8 +45,10 @@ SUPPLY_SAMPLES_WARN = 20
 SPEED_BANDWIDTH_T_S_WARN = 0.5
 #: a_D,CUR T_s above which the sampled rotor current loop is warned about
 CURRENT_BANDWIDTH_T_S_WARN = 1.0
-#: the sample time of the built-in scenarios [s]: a refused loop with a longer T_s names it
+#: the sample time of the built-in DFIM scenarios [s]: a refused loop with a longer T_s names it
 USUAL_SAMPLE_TIME = 200e-6
+#: the same for the cage IM drive (the paper's 50 kHz)
+USUAL_IM_SAMPLE_TIME = 20e-6
 
 
 def speed_loop_radius(K_P: float, K_I: float, J: float, T_s: float, filter_tau: float) -> float:
@@ -55,7 +57,8 @@ def speed_loop_radius(K_P: float, K_I: float, J: float, T_s: float, filter_tau: 
     State [w_k, w_{k-1}, e_k, w_f,k-1]: with the torque u_k held over the sample the encoder's
     backward difference at t_k is (w_{k-1} + w_k) / 2; the filter w_f,k = w_f,k-1 + c (that -
     w_f,k-1), c = T_s / (tau + T_s); u_k = -K_P w_f,k + K_I e_k; e_k+1 = e_k - T_s w_f,k (the
-    reference is zero: stability does not depend on it); w_k+1 = w_k + T_s u_k / J."""
+    reference is zero: stability does not depend on it); w_k+1 = w_k + T_s u_k / J. With
+    K_I = 0 (a proportional speed loop) the integral state is left out."""
     c = T_s / (filter_tau + T_s)
 
     def step(x):
@@ -65,6 +68,8 @@ def speed_loop_radius(K_P: float, K_I: float, J: float, T_s: float, filter_tau: 
         return np.array([w + T_s * u / J, w, e - T_s * wf, wf])
 
     A = np.column_stack([step(col) for col in np.eye(4)])
+    if K_I == 0.0:  # a P loop: the integral state acts on nothing and is left out
+        A = np.delete(np.delete(A, 2, axis=0), 2, axis=1)
     return float(np.max(np.abs(np.linalg.eigvals(A))))
 
 
@@ -188,3 +193,64 @@ def control_period_warnings(setup: DriveSetup) -> list[str]:
                 "switching less than once per sample cannot"
             )
     return out
+
+
+# --- the cage induction motor drive (``sim._im_drive``) ------------------------------------------
+# Its sampled current loop, with the inverter's carrier latch, is checked exactly by
+# ``scenarios._im_loader`` (``sim._im_drive.current_loop_radius``), and the sample time must
+# divide the PWM period; the speed loop is checked here like the DFIM's.
+
+
+def _im_speed_gains(setup) -> tuple[float, float, str] | None:
+    """(K_P, K_I, field) of the IM drive's speed loop, None without one (current mode)."""
+    if setup.mode == "speed-p":
+        return setup.speed_p.k_p, 0.0, "speed_controller.k_p"
+    if setup.mode in ("speed-pi", "position"):
+        return setup.speed_pi.K_P, setup.speed_pi.K_I, "speed_controller.K_P"
+    return None
+
+
+def _im_speed_bandwidth(K_P: float, K_I: float, J: float) -> float:
+    """The speed loop's design root: a = 2 K_I / K_P of J s^2 + K_P s + K_I with both roots at
+    -a (``SpeedPISetup.design``), or K_P / J for a proportional loop."""
+    return 2.0 * K_I / K_P if K_I > 0.0 and K_P > 0.0 else K_P / J
+
+
+def check_im_control_period(setup) -> None:
+    """Refuse an IM drive whose sampled speed loop (as :func:`speed_loop_radius`, the torque
+    taken as commanded through the fast current loop) is unstable."""
+    gains = _im_speed_gains(setup)
+    if gains is None:
+        return
+    K_P, K_I, key = gains
+    T_s, J = setup.sample_time, setup.mechanics.J
+    rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
+    if rho >= 1.0:
+        a = _im_speed_bandwidth(K_P, K_I, J)
+        raise InputError(
+            key if setup.sample_time <= USUAL_IM_SAMPLE_TIME else "simulation.sample_time",
+            f"the sampled speed loop (K_P = {K_P:.4g}, K_I = {K_I:.4g}, J = {J:.4g} kg m^2: "
+            f"a = {a:.4g} rad/s, a T_s = {a * T_s:.3g} at T_s = {T_s:g} s) is unstable "
+            f"(spectral radius {rho:.4g} >= 1): shorten simulation.sample_time or lower the "
+            "speed controller's gains",
+        )
+
+
+def im_control_period_warnings(setup) -> list[str]:
+    """The IM drive's control-period warning: a speed loop with a T_s above
+    :data:`SPEED_BANDWIDTH_T_S_WARN`."""
+    gains = _im_speed_gains(setup)
+    if gains is None:
+        return []
+    K_P, K_I, _ = gains
+    T_s, J = setup.sample_time, setup.mechanics.J
+    a = _im_speed_bandwidth(K_P, K_I, J)
+    if a * T_s <= SPEED_BANDWIDTH_T_S_WARN:
+        return []
+    rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
+    line = (
+        f"control period: the speed loop has a T_s = {a * T_s:.3g} (a = {a:.4g} rad/s, T_s = "
+        f"{T_s:g} s), above {SPEED_BANDWIDTH_T_S_WARN:g}: the sampled loop departs from its "
+        f"design (spectral radius {rho:.3g})"
+    )
+    return [line]
