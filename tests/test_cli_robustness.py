@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+import tomllib
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -438,12 +439,30 @@ def _table(data, path):
     return node
 
 
+def _field_name(path: tuple, key: str) -> str:
+    """The scenario field of ``key`` in the table at ``path``, as an error names it."""
+    # the TOML writer writes keys bare: "J " is read as J
+    return ".".join(["motor[0]" if part == "motor" else part for part in path] + [key.strip()])
+
+
+def _named(err: str) -> str:
+    """The field an ``acdrive: error: <field>: <rule>`` line names."""
+    return _one_line(err).removeprefix("acdrive: error: ").split(": ", 1)[0]
+
+
+def _names_one_of(named: str, fields) -> bool:
+    """Whether ``named`` is one of ``fields`` or the table holding one (an error may name
+    ``motor[0].params`` for a parameter that makes the machine's mode too fast)."""
+    return any(f == named or f.startswith(named + ".") for f in fields)
+
+
 @st.composite
 def broken_scenarios(draw):
-    """(scenario dict, must_fail): one to three mutations of a valid short scenario."""
+    """(scenario dict, must_fail, mutated fields): one to three mutations of a valid short
+    scenario; the fields are those an error may name."""
     data = _base()
     must_fail = False  # an unknown key
-    kinds = {}  # (table, key) -> the kind of its last mutation
+    kinds = {}  # field -> the kind of its last mutation
     for _ in range(draw(st.integers(1, 3))):
         kind = draw(st.sampled_from(["wrong type", "non-finite", "extreme", "unknown", "no motor"]))
         if kind == "unknown":
@@ -451,18 +470,19 @@ def broken_scenarios(draw):
             key = draw(st.sampled_from(["colour", "Duration", "motor_", "J ", "x"]))
             _table(data, path)[key] = draw(st.sampled_from([1, "a", 1.5]))
             must_fail = True
+            kinds[_field_name(path, key)] = kind
         elif kind == "no motor":
             data["motor"] = draw(st.sampled_from([[], "bodson", Inline(machine="bodson-dfim")]))
             if not data["motor"]:
                 del data["motor"]
-            return data, True
+            return data, True, {**kinds, "motor": kind}
         else:
             path = draw(st.sampled_from(sorted(NUMERIC)))
             key = draw(st.sampled_from(NUMERIC[path]))
             strategy = {"wrong type": WRONG_TYPES, "non-finite": NON_FINITE, "extreme": EXTREME}
             _table(data, path)[key] = draw(strategy[kind])
-            kinds[path, key] = kind
-    return data, must_fail or any(kind != "extreme" for kind in kinds.values())
+            kinds[_field_name(path, key)] = kind
+    return data, must_fail or any(kind != "extreme" for kind in kinds.values()), kinds
 
 
 @settings(
@@ -470,7 +490,11 @@ def broken_scenarios(draw):
 )
 @given(case=broken_scenarios())
 def test_fuzzed_scenarios_fail_with_one_line_and_no_output(tmp_path_factory, capsys, case):
-    data, must_fail = case
+    """A refused scenario names a field it was broken in, never one left valid: one of the
+    mutated fields or its table (``motor[0].params`` for a parameter that makes the machine's
+    mode too fast); exactly a mutated field when no value is merely extreme (a wrong type, a
+    non-finite number, an unknown key: named by the field's own rule)."""
+    data, must_fail, kinds = case
     folder = tmp_path_factory.mktemp("fuzz")
     path = folder / "scenario.toml"
     path.write_text(to_toml(data))
@@ -486,6 +510,16 @@ def test_fuzzed_scenarios_fail_with_one_line_and_no_output(tmp_path_factory, cap
     else:
         assert err == "" and (out / "fuzz" / "summary.json").is_file()
         _strict((out / "fuzz" / "summary.json").read_text())
+    if code == 2:
+        named = _named(err)
+        try:
+            tomllib.loads(to_toml(data))
+        except tomllib.TOMLDecodeError:  # e.g. "J " written beside J: a key given twice
+            assert named == "scenario", (to_toml(data), err)
+            return
+        assert _names_one_of(named, kinds), (to_toml(data), err)
+        if "extreme" not in kinds.values():
+            assert named in kinds, (to_toml(data), err)
 
 
 def test_the_toml_writer_round_trips():

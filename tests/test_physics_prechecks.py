@@ -452,7 +452,7 @@ def test_a_megavolt_supply_names_the_supply_voltage(capsys, tmp_path):
     path.write_text(text)
     line = _refused(capsys, tmp_path, path, "supply.voltage_pk")
     magnetising = 1e6 / (2 * math.pi * 60.0 * 9.7e-3)  # v / (w_e M), Bodson (33)
-    assert f"= {magnetising:.4g} A peak" in line and "rotor current limit 6 A" in line
+    assert f"= {magnetising:.4g} A peak" in line and "(rotor 6 A, stator 6 A)" in line
 
 
 def test_a_meganewton_metre_load_names_the_load(capsys, tmp_path):

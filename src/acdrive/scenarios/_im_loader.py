@@ -402,6 +402,12 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     duration = sim.number("duration", 0.2, require_positive)
     sample_time = sim.number("sample_time", PAPER_SAMPLE_TIME, require_positive)
     if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                "simulation.duration",
+                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
+                "(the default), got {duration:g} s",
+            )
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
     substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
     integrator = sim.text("integrator", "rk4", choices=tuple(INTEGRATORS))

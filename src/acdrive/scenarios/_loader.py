@@ -130,12 +130,20 @@ def _machine(section: _Section, index: int) -> DFIMParams:
     return dataclasses.replace(machine, B=B, tau_c=tau_c)
 
 
+def _phase_tolerance(field: str, value) -> float:
+    """A phase tolerance [degrees]: > 0 and at most 180 (a phase error is at most 180 degrees)."""
+    value = require_positive(field, value)
+    if value > 180.0:
+        raise InputError(field, f"must be at most 180 degrees, got {value:g}")
+    return value
+
+
 def _sync(section: _Section) -> Synchroniser:
     sync = Synchroniser(
         enabled=section.boolean("enabled", False),
         gain=section.number("gain", 40.0, require_positive),
         tolerance_magnitude=section.number("tolerance_magnitude", 0.02, require_positive),
-        tolerance_phase=section.number("tolerance_phase_deg", 2.0, require_positive)
+        tolerance_phase=section.number("tolerance_phase_deg", 2.0, _phase_tolerance)
         * math.pi
         / 180,
         hold_time=section.number("hold_time", 0.02, require_nonnegative),
@@ -182,7 +190,38 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         lossless_law=section.boolean("lossless_law", False),
     )
     section.done()
+    _check_gains(section, controller, machine, bandwidth, design_inertia)
     return controller
+
+
+def _check_gains(
+    section: _Section, controller: DFIMController, machine: DFIMParams, bandwidth: float,
+    design_inertia: float,
+) -> None:  # fmt: skip
+    """The gains the design equations give must be numbers: K_P = 2 a J and K_I = a^2 J (27),
+    K_P,C = sigma L_r a_C and K_I,C = R_T a_C (49) overflow for extreme bandwidths or R_T; the
+    field named is the input that made the gain overflow."""
+    K_PC, K_IC = controller.current_gains(machine)
+    motor = section.path.rsplit(".", 1)[0]
+    inertia = (
+        section.field("design_inertia") if section.has("design_inertia") else f"{motor}.params.J"
+    )
+
+    def larger(*fields):  # the factor of a product farther from 1: it made the product overflow
+        return max(fields, key=lambda f: abs(math.log10(f[1])) if f[1] > 0.0 else 0.0)[0]
+
+    speed = larger((section.field("speed_bandwidth"), bandwidth), (inertia, design_inertia))
+    current = section.field("current_bandwidth")
+    gains = [
+        ("K_P (27)", controller.gains.K_P, speed),
+        ("K_I (27)", controller.gains.K_I, speed),
+        ("K_P,C (49)", K_PC, current),
+        ("K_I,C (49)", K_IC, larger((current, controller.current_bandwidth),
+                                    (section.field("R_T"), controller.R_T))),
+    ]  # fmt: skip
+    for name, value, field in gains:
+        if not math.isfinite(value):
+            raise InputError(field, f"gives the gain {name} = {value}: the design overflows")
 
 
 def _converter(
@@ -483,6 +522,12 @@ def build_setup(data: dict) -> DriveSetup:
     duration = sim.number("duration", 1.0, require_positive)
     sample_time = sim.number("sample_time", DEFAULT_SAMPLE_TIME, require_positive)
     if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                "simulation.duration",
+                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
+                "(the default), got {duration:g} s",
+            )
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
     substeps_given = sim.has("substeps")
     substeps = sim.integer("substeps", DEFAULT_SUBSTEPS, maximum=MAX_SUBSTEPS)

@@ -36,7 +36,7 @@ import math
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.sim._setup import DriveSetup, MotorSetup
+from acdrive.sim._setup import IMPLAUSIBLE_FACTOR, DriveSetup, MotorSetup
 
 #: fewer samples than this per supply period are warned (the grid voltage then turns by more
 #: than 18 degrees within one held command)
@@ -93,10 +93,17 @@ def _modes(setup: DriveSetup) -> set[str]:
 
 
 def _at_fault(setup: DriveSetup, k: int, key: str) -> str:
-    """The field a refused loop names: the sample time if it is longer than the built-ins', else
-    the controller's bandwidth."""
+    """The field a refused loop names: the sample time if it is longer than the built-ins'; for
+    the speed loop a design inertia J_d = K_P^2 / (4 K_I) (27) more than IMPLAUSIBLE_FACTOR from
+    the machine's J (the loop gain is a J_d / J); else the controller's bandwidth."""
     if setup.sample_time > USUAL_SAMPLE_TIME:
         return "simulation.sample_time"
+    motor = setup.motors[k]
+    g = motor.controller.gains
+    if key == "speed_bandwidth" and g.K_I > 0.0:
+        ratio = g.K_P**2 / (4.0 * g.K_I) / motor.machine.J
+        if not 1.0 / IMPLAUSIBLE_FACTOR <= ratio <= IMPLAUSIBLE_FACTOR:
+            return f"motor[{k}].controller.design_inertia"
     return f"motor[{k}].controller.{key}"
 
 

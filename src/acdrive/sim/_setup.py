@@ -258,7 +258,8 @@ def peak_torque_window(motor: MotorSetup, supply: Supply) -> tuple[float, float]
 
 def _check_magnetising(k: int, motor: MotorSetup, supply: Supply) -> None:
     """The rotor must carry the magnetising current v_s / (w_e M) the supply needs at zero torque
-    (Bodson (33)); far beyond the rotor limit the supply voltage is the input at fault."""
+    (Bodson (33)); far beyond both the rotor and the stator current limit the supply voltage is
+    the input at fault, else the rotor current limit."""
     v_pk = float(np.max(supply.voltage_pk[1]))
     f_min = float(np.min(supply.frequency_hz[1]))
     magnetising_pk = v_pk / (2.0 * np.pi * f_min * motor.machine.M)
@@ -269,12 +270,13 @@ def _check_magnetising(k: int, motor: MotorSetup, supply: Supply) -> None:
         f"the magnetising current the stator supply needs, supply.voltage_pk / (2 pi "
         f"supply.frequency_hz M) = {magnetising_pk:.4g} A peak (at {v_pk:g} V, {f_min:g} Hz)"
     )
-    if magnetising_pk > IMPLAUSIBLE_FACTOR * limit:
+    largest = max(limit, motor.controller.stator_current_limit_pk)
+    if magnetising_pk > IMPLAUSIBLE_FACTOR * largest:  # both current limits far below it
         raise InputError(
             "supply.voltage_pk",
-            f"{need} is more than {IMPLAUSIBLE_FACTOR:g} times motor[{k}]'s rotor current limit "
-            f"{limit:g} A: the supply voltage is far above what this machine can be magnetised "
-            "from (Bodson (33))",
+            f"{need} is more than {IMPLAUSIBLE_FACTOR:g} times motor[{k}]'s current limits "
+            f"(rotor {limit:g} A, stator {motor.controller.stator_current_limit_pk:g} A): the "
+            "supply voltage is far above what this machine can be magnetised from (Bodson (33))",
         )
     raise InputError(
         f"motor[{k}].controller.rotor_current_limit_pk", f"must exceed {need}",
@@ -297,6 +299,25 @@ def _check_load(k: int, motor: MotorSetup, supply: Supply) -> None:
         )
 
 
+def _check_dc_link(k: int, motor: MotorSetup, supply: Supply) -> None:
+    """A speed reference out of the converter's range (:func:`speed_range`) because the DC link
+    is far too low: the DC link the reference needs, sqrt(2) |s| (L_r / M) v_s at its largest
+    slip s, is more than IMPLAUSIBLE_FACTOR times the one given; then the DC link is named."""
+    m = motor.machine
+    v_s = SQRT_3_2 * float(supply.voltage_pk[1][0])
+    w_e = 2.0 * np.pi * float(supply.frequency_hz[1][0])
+    slip = float(np.max(np.abs(w_e - m.n_p * motor.speed_reference[1]))) / w_e
+    needed = float(np.sqrt(2.0)) * slip * m.L_r / m.M * v_s
+    if needed > IMPLAUSIBLE_FACTOR * motor.dc_link_voltage:
+        raise InputError(
+            f"motor[{k}].dc_link_voltage",
+            f"{motor.dc_link_voltage:g} V: the speed reference reaches a slip of {slip:.3g}, for "
+            f"which the rotor converter needs a DC link of about sqrt(2) |s| (L_r / M) v_s = "
+            f"{needed:.4g} V (Bodson (20) at zero torque), more than {IMPLAUSIBLE_FACTOR:g} "
+            "times the one given",
+        )
+
+
 def check_setup(setup: DriveSetup) -> None:
     """Cross-field rules that single fields cannot express (raises InputError)."""
     for k, motor in enumerate(setup.motors):
@@ -311,6 +332,7 @@ def check_setup(setup: DriveSetup) -> None:
         )
         ref = motor.speed_reference[1]
         if np.min(ref) < low or np.max(ref) > high:
+            _check_dc_link(k, motor, setup.supply)
             raise InputError(f"motor[{k}].speed_reference_rpm", rule)
         # a motor connected at t = 0 starts in steady state at its initial speed; a synchronising
         # one starts with its stator open, and the summary reports a relay that cannot close
