@@ -549,3 +549,130 @@ def test_an_interrupt_inside_a_parallel_compiled_call_stays_an_interrupt():
     with pytest.raises(SystemError):
         call_interruptible(hidden(ValueError("a real error")))
     assert interrupt_behind(ValueError()) is None
+
+
+# ---------------------------------------------------------------------------------------------
+# 6. inputs refused before any work, named by their cause (issue 19)
+# ---------------------------------------------------------------------------------------------
+
+
+def _write_scenario(tmp_path, data: dict, name="scenario.toml"):
+    path = tmp_path / name
+    path.write_text(to_toml(data))
+    return path
+
+
+def _refused_run(tmp_path, capsys, path, field) -> str:
+    out = tmp_path / "out"
+    code, _, err = _main(capsys, "run", path, "--out", out, "--no-figures")
+    assert code == 2, err
+    assert not out.exists()
+    return _one_line(err, field)
+
+
+def test_a_utf8_byte_order_mark_is_accepted_in_scenarios_and_sweeps(tmp_path):
+    """Windows editors write a UTF-8 BOM; the file means the same with or without it."""
+    from acdrive.scenarios._loader import load_scenario
+    from acdrive.sweep._spec import load_sweep
+
+    text = to_toml(_base())
+    plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
+    plain.write_text(text, encoding="utf-8")
+    marked.write_text(text, encoding="utf-8-sig")
+    assert marked.read_bytes().startswith(b"\xef\xbb\xbf")
+    from acdrive.scenarios._files import read_scenario
+
+    assert read_scenario(marked) == read_scenario(plain) == tomllib.loads(text)
+    assert load_scenario(marked).name == "fuzz"
+    sweep = 'base = "marked.toml"\n[[vary]]\nfield = "motor[0].load_torque"\nvalues = [0.0, 0.01]\n'
+    (tmp_path / "sweep.toml").write_text(sweep, encoding="utf-8-sig")
+    spec = load_sweep(str(tmp_path / "sweep.toml"))
+    assert spec.base_data == tomllib.loads(text)
+
+
+def test_a_toml_file_nested_too_deeply_is_one_line_naming_the_file(tmp_path, capsys):
+    deep = "x = " + "[" * 5000 + "]" * 5000 + "\n"
+    path = tmp_path / "deep.toml"
+    path.write_text('name = "deep"\n' + deep)
+    line = _refused_run(tmp_path, capsys, path, "scenario")
+    assert "nests arrays or tables too deeply" in line
+    code, _, err = _main(capsys, "sweep", path, "--out", tmp_path / "s")
+    assert code == 2 and _one_line(err, "sweep") and not (tmp_path / "s").exists()
+
+
+def test_a_mode_compared_with_itself_is_refused(tmp_path, capsys):
+    data = {"compare_modes": ["voltage", "voltage"], **_base()}
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), "compare_modes")
+    assert "must name each mode once" in line
+
+
+@pytest.mark.parametrize("K_F", [2.0, -0.1, 1.0000001])
+def test_a_feedforward_fraction_outside_0_to_1_is_refused(tmp_path, capsys, K_F):
+    from acdrive.control._speed import SpeedPIGains
+    from acdrive.errors import InputError
+
+    data = _base()
+    data["motor"][0]["controller"]["K_F"] = K_F
+    line = _refused_run(
+        tmp_path, capsys, _write_scenario(tmp_path, data), "motor[0].controller.K_F"
+    )
+    assert "Bodson (25) must be between 0 (I-P control) and 1 (a plain PI)" in line
+    with pytest.raises(InputError, match="^K_F: "):
+        SpeedPIGains.design(3.5e-4, 314.0, K_F)
+
+
+@pytest.mark.parametrize("K_F", [0.0, 2.0 / 3.0, 1.0])
+def test_the_feedforward_fractions_of_the_range_are_accepted(K_F):
+    from acdrive.scenarios._loader import build_setup
+
+    data = _base()
+    data["motor"][0]["controller"]["K_F"] = K_F
+    assert build_setup(data).motors[0].controller.gains.K_F == K_F
+
+
+@pytest.mark.parametrize(
+    ("supply", "field"),
+    [
+        ({"frequency_hz": 1e6}, "supply.frequency_hz"),
+        ({"frequency_hz_profile": [[0.0, 60.0], [0.005, 1001.0]]}, "supply.frequency_hz_profile[1][1]"),
+    ],
+)  # fmt: skip
+def test_a_supply_above_a_kilohertz_is_refused(tmp_path, capsys, supply, field):
+    data = _base()
+    data["supply"].update(supply)
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), field)
+    assert "must be at most 1000 Hz" in line
+
+
+def test_more_motors_than_the_bound_are_refused_before_compiling(tmp_path, capsys):
+    from acdrive.scenarios._loader import MAX_MOTORS, build_setup
+
+    data = _base()
+    data["motor"] = [dict(data["motor"][0]) for _ in range(MAX_MOTORS)]
+    assert len(build_setup(data).motors) == MAX_MOTORS
+    data["motor"] = [dict(data["motor"][0]) for _ in range(100)]
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), "motor")
+    assert f"at most {MAX_MOTORS} [[motor]] tables" in line and "got 100" in line
+
+
+def test_icad_speeds_without_sweep_is_refused(capsys):
+    code, out, err = _main(
+        capsys, "icad", "bodson-dfim", "--speed", "10", "--speeds", "0", "1", "3"
+    )
+    assert code == 2 and out == ""
+    assert "needs --sweep" in _one_line(err, "--speeds")
+
+
+def test_stability_map_names_an_unwritable_out_before_the_analysis(tmp_path, capsys):
+    """As `run` does: --out is checked (a folder, or creatable) before any work, one line naming
+    it, exit 2 (was an input/output failure, exit 74, after the whole map)."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("mine")
+    code, out, err = _main(
+        capsys, "stability", "--map", "--out", blocker / "maps", "--grid", "2", "2"
+    )
+    assert code == 2 and out == ""
+    assert "Not a directory" in _one_line(err, "--out")
+    assert blocker.read_text() == "mine"
+    code, _, err = _main(capsys, "run", _scenario(tmp_path), "--out", blocker / "runs")
+    assert code == 2 and _one_line(err, "--out")
