@@ -522,6 +522,99 @@ def test_fuzzed_scenarios_fail_with_one_line_and_no_output(tmp_path_factory, cap
             assert named in kinds, (to_toml(data), err)
 
 
+# --- sweep files --------------------------------------------------------------------------------
+
+#: numeric scenario fields a sweep may vary on the one-motor fuzz base
+SWEEP_FIELDS = ["motor[0].load_torque", "motor[0].controller.speed_bandwidth",
+                "simulation.duration", "supply.voltage_pk", "motor[0].controller.K_F"]  # fmt: skip
+
+
+def _sweep_base() -> dict:
+    return {"name": "fuzzsweep", "base": "base.toml",
+            "vary": [{"field": "motor[0].load_torque", "values": [0.0, 0.01]}]}  # fmt: skip
+
+
+@st.composite
+def broken_sweeps(draw):
+    """(sweep dict, the field its error must name): one mutation of a valid two-variant sweep
+    of a one-motor base, each of which the sweep file's loader must refuse before anything is
+    written."""
+    data = _sweep_base()
+    vary = data["vary"][0]
+    vary["field"] = draw(st.sampled_from(SWEEP_FIELDS))
+    kind = draw(st.sampled_from([
+        "index", "wrong type", "mixed types", "huge grid", "huge sample", "bounds",
+        "non-finite bound", "unknown key", "fixed wrong type", "fixed index", "twice",
+    ]))  # fmt: skip
+    if kind == "index":  # a motor the base does not have
+        k = draw(st.integers(1, 9))
+        vary["field"] = f"motor[{k}].load_torque"
+        return data, "vary[0].field"
+    if kind == "wrong type":
+        vary["values"] = [draw(st.sampled_from(["heavy", True, [1.0], Inline(a=1), ""]))]
+        return data, "vary[0].values[0]"
+    if kind == "mixed types":
+        vary["values"] = [0.01, draw(st.sampled_from(["0.02", "x"]))]
+        return data, "vary[0].values[1]"
+    if kind == "huge grid":
+        del vary["values"]
+        vary.update(low=0.0, high=0.1, points=draw(st.integers(10**6 + 1, 10**12)))
+        return data, "vary[0].points"
+    if kind == "huge sample":
+        data["sampling"] = {"method": "random", "samples": draw(st.integers(10**6 + 1, 10**12))}
+        return data, "sampling.samples"
+    if kind == "bounds":
+        del vary["values"]
+        vary.update(low=0.1, high=draw(st.sampled_from([0.1, 0.0, -1e308])), points=2)
+        return data, "vary[0].high"
+    if kind == "non-finite bound":
+        del vary["values"]
+        vary.update(low=draw(NON_FINITE), high=0.1, points=2)
+        return data, "vary[0].low"
+    if kind == "unknown key":
+        key = draw(st.sampled_from(["colour", "Values", "point"]))
+        vary[key] = 1
+        return data, f"vary[0].{key}"
+    if kind == "fixed wrong type":
+        field = draw(st.sampled_from(SWEEP_FIELDS))
+        data["fixed"] = {field: draw(st.sampled_from(["fast", [1.0]]))}
+        return data, f"fixed.{field}"
+    if kind == "fixed index":
+        data["fixed"] = {f"motor[{draw(st.integers(1, 9))}].load_torque": 0.01}
+        return data, f"fixed.{next(iter(data['fixed']))}"
+    data["vary"].append(dict(vary))  # "twice"
+    return data, "vary"
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(case=broken_sweeps())
+def test_fuzzed_sweeps_name_the_field_and_write_nothing(tmp_path_factory, capsys, case):
+    """Each broken sweep file is refused at load with one line naming the field broken (exit 2),
+    before anything is written (a refused sweep leaves no folder that would block the corrected
+    one), and without materialising a grid (a huge one is refused at once)."""
+    import time
+
+    data, field = case
+    folder = tmp_path_factory.mktemp("sweepfuzz")
+    (folder / "base.toml").write_text(to_toml(_base()))
+    path = folder / "sweep.toml"
+    text = to_toml({k: v for k, v in data.items() if k != "fixed"})
+    if "fixed" in data:  # dotted field names are quoted keys of [fixed]
+        text += "[fixed]\n" + "".join(
+            f"{json.dumps(k)} = {_toml_value(v)}\n" for k, v in data["fixed"].items()
+        )
+    path.write_text(text)
+    out = folder / "out"
+    start = time.monotonic()
+    code, _, err = _main(capsys, "sweep", path, "--out", out, "--quiet", "--no-report")
+    assert code == 2, (text, err)
+    assert _named(err) == field, (text, err)
+    assert not out.exists(), text
+    assert time.monotonic() - start < 30, text
+
+
 def test_the_toml_writer_round_trips():
     import tomllib
 
