@@ -99,10 +99,11 @@ RAD_S_PER_RPM = math.pi / 30.0
 #: resistances, no skin effect, iron loss or winding capacitance) is one of power-frequency
 #: machines; grids are 50/60 Hz, aircraft grids 360-800 Hz, so 1 kHz bounds what it describes
 MAX_SUPPLY_HZ = 1000.0
-#: most motors on one supply: each adds its parts to the one compiled loop, whose compile time
-#: grows with them (about 13 s per motor on a loaded 2-core machine, 51 s for 4); Bodson's
-#: experiments use one or two, the built-ins up to three. Eight keeps a first run to minutes.
-MAX_MOTORS = 8
+#: most motors on one supply: each adds its parts to the one compiled loop, whose first compile
+#: grows faster than the number of motors (measured on a loaded 2-core machine: 51 s for 4
+#: motors, 489 s for 8); Bodson's experiments use one or two, the built-ins up to three. Four
+#: keeps a first run near a minute.
+MAX_MOTORS = 4
 #: sample time [s] and substeps per sample when the scenario does not say
 DEFAULT_SAMPLE_TIME = 200e-6
 DEFAULT_SUBSTEPS = 4
