@@ -464,3 +464,31 @@ def test_a_meganewton_metre_load_names_the_load(capsys, tmp_path):
     lo, hi = peak_torque_window(setup.motors[0], setup.supply)
     assert 0.0 < hi < 0.5 < 10 * hi
     assert f"largest torque the drive can produce, {max(hi, -lo):.4g} N m" in line
+
+
+def test_the_im_current_loop_bandwidth_is_that_of_its_closed_loop_and_warned_when_coarse():
+    """The cage-IM drive: the current loop's -3 dB bandwidth as designed (paper-20 on the nominal
+    machine at standstill) is where |L / (1 + L)| crosses 1/sqrt(2), checked against the loop
+    evaluated there independently; 250 us samples (4 per 4 kHz carrier period, a stable
+    latched loop) give a_C T_s > 1 and a warning, the paper's 20 us none."""
+    from acdrive.machines._induction import stator_current_ss
+    from acdrive.scenarios._im_loader import build_im_setup
+    from acdrive.sim._period import im_current_bandwidth
+
+    data = tomllib.loads(builtin_text("im-locked-rotor"))
+    paper = build_im_setup(data)
+    a = im_current_bandwidth(paper)
+    A, B, C, D = stator_current_ss(paper.machine, 0.0)
+
+    def closed(w):
+        g = (C @ np.linalg.solve(1j * w * np.eye(4) - A, B) + D)[0, 0]
+        loop = g * paper.current_control.lti.freqresp(np.array([w]))[0]
+        return abs(loop / (1 + loop))
+
+    step = 10 ** (7 / 1400)  # the grid's ratio (1401 points over 1 to 1e7 rad/s)
+    assert closed(a / step) >= 1 / math.sqrt(2) > closed(a)
+    assert im_control_period_warnings(paper) == []
+    data["simulation"]["sample_time"] = 2.5e-4
+    data["inverter"]["pwm_frequency_hz"] = 4000.0
+    (line,) = im_control_period_warnings(build_im_setup(data))
+    assert f"a_C T_s = {a * 2.5e-4:.3g}" in line and a * 2.5e-4 > 1.0

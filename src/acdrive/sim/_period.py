@@ -204,8 +204,9 @@ def control_period_warnings(setup: DriveSetup) -> list[str]:
 
 # --- the cage induction motor drive (``sim._im_drive``) ------------------------------------------
 # Its sampled current loop, with the inverter's carrier latch, is checked exactly by
-# ``scenarios._im_loader`` (``sim._im_drive.current_loop_radius``), and the sample time must
-# divide the PWM period; the speed loop is checked here like the DFIM's.
+# ``scenarios._im_loader`` (``sim._im_drive.current_loop_radius``: refused when unstable), and
+# the sample time must divide the PWM period; the speed loop is checked here like the DFIM's,
+# and both loops' a T_s are warned above the DFIM's limits.
 
 
 def _im_speed_gains(setup) -> tuple[float, float, str] | None:
@@ -243,21 +244,50 @@ def check_im_control_period(setup) -> None:
         )
 
 
+def im_current_bandwidth(setup) -> float:
+    """The -3 dB bandwidth [rad/s] of the IM drive's current loop as designed: the continuous
+    controller on the nominal machine's stator-current plant (Amezquita-Brooks (1)-(4)) at
+    standstill, channel alpha, |T(j w)| = |L / (1 + L)| first below 1/sqrt(2) on a logarithmic
+    grid of 1 to 1e7 rad/s (inf if never)."""
+    from acdrive.machines._induction import stator_current_ss
+
+    A, B, C, D = stator_current_ss(setup.machine, 0.0)
+    w = np.geomspace(1.0, 1e7, 1401)
+    k = setup.current_control.lti.freqresp(w)
+    eye = np.eye(A.shape[0])
+    g = np.array([(C @ np.linalg.solve(1j * x * eye - A, B) + D)[0, 0] for x in w])
+    loop = g * k
+    below = np.abs(loop / (1.0 + loop)) < 1.0 / math.sqrt(2.0)
+    return float(w[np.argmax(below)]) if below.any() else math.inf
+
+
 def im_control_period_warnings(setup) -> list[str]:
-    """The IM drive's control-period warning: a speed loop with a T_s above
-    :data:`SPEED_BANDWIDTH_T_S_WARN`."""
+    """The IM drive's control-period warnings: a speed loop with a T_s above
+    :data:`SPEED_BANDWIDTH_T_S_WARN`, a current loop with a_C T_s above
+    :data:`CURRENT_BANDWIDTH_T_S_WARN` (a_C: :func:`im_current_bandwidth`). The PWM period needs
+    none: the sample time must divide it, and the current loop with the inverter's latch is
+    checked exactly before the run (``scenarios._im_loader``)."""
+    out = []
+    T_s = setup.sample_time
+    a_cur = im_current_bandwidth(setup)
+    if a_cur * T_s > CURRENT_BANDWIDTH_T_S_WARN:
+        out.append(
+            f"control period: the current loop ({setup.current_control.controller}) has "
+            f"a_C T_s = {a_cur * T_s:.3g} (-3 dB bandwidth a_C = {a_cur:.4g} rad/s as designed, "
+            f"T_s = {T_s:g} s), above {CURRENT_BANDWIDTH_T_S_WARN:g}: the sampled loop no "
+            "longer behaves as designed"
+        )
     gains = _im_speed_gains(setup)
     if gains is None:
-        return []
+        return out
     K_P, K_I, _ = gains
-    T_s, J = setup.sample_time, setup.mechanics.J
+    J = setup.mechanics.J
     a = _im_speed_bandwidth(K_P, K_I, J)
-    if a * T_s <= SPEED_BANDWIDTH_T_S_WARN:
-        return []
-    rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
-    line = (
-        f"control period: the speed loop has a T_s = {a * T_s:.3g} (a = {a:.4g} rad/s, T_s = "
-        f"{T_s:g} s), above {SPEED_BANDWIDTH_T_S_WARN:g}: the sampled loop departs from its "
-        f"design (spectral radius {rho:.3g})"
-    )
-    return [line]
+    if a * T_s > SPEED_BANDWIDTH_T_S_WARN:
+        rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
+        out.append(
+            f"control period: the speed loop has a T_s = {a * T_s:.3g} (a = {a:.4g} rad/s, "
+            f"T_s = {T_s:g} s), above {SPEED_BANDWIDTH_T_S_WARN:g}: the sampled loop departs "
+            f"from its design (spectral radius {rho:.3g})"
+        )
+    return out
