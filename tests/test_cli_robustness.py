@@ -11,6 +11,7 @@ import json
 import math
 import subprocess
 import sys
+import tomllib
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -61,8 +62,20 @@ def _strict(text: str):
 # 1. a diverging simulation: exit 3, the time, what to change
 # ---------------------------------------------------------------------------------------------
 
-#: RK4 step 10 ms, far beyond the stability limit of the fastest electrical pole
-LONG_STEP = "duration = 0.2\nsample_time = 1e-2\nsubsteps = 1"
+#: RK4 step 2 ms, far beyond the stability limit of the fastest electrical pole of a machine
+#: with an 8-ohm rotor (R_r / (sigma L_r) + 2 pi f = 3,433 1/s: 6.9 per step); the controller
+#: works at that period (a_D,VEL T_s = 0.63 < 0.83, 8 samples per supply period: sim._period)
+LONG_STEP = "duration = 0.2\nsample_time = 2e-3\nsubsteps = 1"
+RESISTIVE_ROTOR = """
+[motor.params]
+R_s = 0.66
+R_r = 8.0
+L_s = 13.1e-3
+L_r = 9.8e-3
+M = 9.7e-3
+n_p = 2
+J = 3.5e-4
+"""
 TINY_J = """
 [motor.params]
 R_s = 0.66
@@ -76,18 +89,18 @@ J = 1e-10
 
 
 def test_long_integration_step_diverges_with_exit_3_and_a_hint(tmp_path, capsys):
-    path = _scenario(tmp_path, LONG_STEP)
+    path = _scenario(tmp_path, LONG_STEP, extra=RESISTIVE_ROTOR)
     out = tmp_path / "out"
     code, _, err = _main(capsys, "run", path, "--out", out, "--no-figures")
     assert code == 3
     line = _one_line(err, "simulation")
-    assert "diverged" in line and "t = 0.04 s" in line
+    assert "diverged" in line and "t = 0.01 s" in line
     assert "simulation.substeps" in line and "at least 3" in line
     assert not out.exists()
 
 
 def test_the_hinted_substeps_make_it_run(tmp_path, capsys):
-    path = _scenario(tmp_path, LONG_STEP.replace("substeps = 1", "substeps = 3"))
+    path = _scenario(tmp_path, LONG_STEP.replace("substeps = 1", "substeps = 3"), RESISTIVE_ROTOR)
     code, _, err = _main(capsys, "run", path, "--out", tmp_path / "out", "--no-figures")
     assert code == 0, err
 
@@ -102,15 +115,15 @@ def test_tiny_inertia_diverges_and_the_hint_names_j(tmp_path, capsys):
 
 
 def test_debug_shows_the_divergence_as_an_exception(tmp_path):
-    path = _scenario(tmp_path, LONG_STEP)
+    path = _scenario(tmp_path, LONG_STEP, extra=RESISTIVE_ROTOR)
     with pytest.raises(SimulationDiverged) as info:
         main(["--debug", "run", str(path), "--out", str(tmp_path / "out"), "--no-figures"])
-    assert info.value.time == pytest.approx(0.04) and "substeps" in info.value.hint
+    assert info.value.time == pytest.approx(0.01) and "substeps" in info.value.hint
     assert isinstance(info.value, RuntimeError)
 
 
 def test_divergence_through_the_real_command_has_no_traceback(tmp_path):
-    path = _scenario(tmp_path, LONG_STEP)
+    path = _scenario(tmp_path, LONG_STEP, extra=RESISTIVE_ROTOR)
     result = subprocess.run(
         [sys.executable, "-m", "acdrive.cli", "run", str(path), "--out", str(tmp_path / "o")],
         capture_output=True,
@@ -438,12 +451,30 @@ def _table(data, path):
     return node
 
 
+def _field_name(path: tuple, key: str) -> str:
+    """The scenario field of ``key`` in the table at ``path``, as an error names it."""
+    # the TOML writer writes keys bare: "J " is read as J
+    return ".".join(["motor[0]" if part == "motor" else part for part in path] + [key.strip()])
+
+
+def _named(err: str) -> str:
+    """The field an ``acdrive: error: <field>: <rule>`` line names."""
+    return _one_line(err).removeprefix("acdrive: error: ").split(": ", 1)[0]
+
+
+def _names_one_of(named: str, fields) -> bool:
+    """Whether ``named`` is one of ``fields`` or the table holding one (an error may name
+    ``motor[0].params`` for a parameter that makes the machine's mode too fast)."""
+    return any(f == named or f.startswith(named + ".") for f in fields)
+
+
 @st.composite
 def broken_scenarios(draw):
-    """(scenario dict, must_fail): one to three mutations of a valid short scenario."""
+    """(scenario dict, must_fail, mutated fields): one to three mutations of a valid short
+    scenario; the fields are those an error may name."""
     data = _base()
     must_fail = False  # an unknown key
-    kinds = {}  # (table, key) -> the kind of its last mutation
+    kinds = {}  # field -> the kind of its last mutation
     for _ in range(draw(st.integers(1, 3))):
         kind = draw(st.sampled_from(["wrong type", "non-finite", "extreme", "unknown", "no motor"]))
         if kind == "unknown":
@@ -451,18 +482,19 @@ def broken_scenarios(draw):
             key = draw(st.sampled_from(["colour", "Duration", "motor_", "J ", "x"]))
             _table(data, path)[key] = draw(st.sampled_from([1, "a", 1.5]))
             must_fail = True
+            kinds[_field_name(path, key)] = kind
         elif kind == "no motor":
             data["motor"] = draw(st.sampled_from([[], "bodson", Inline(machine="bodson-dfim")]))
             if not data["motor"]:
                 del data["motor"]
-            return data, True
+            return data, True, {**kinds, "motor": kind}
         else:
             path = draw(st.sampled_from(sorted(NUMERIC)))
             key = draw(st.sampled_from(NUMERIC[path]))
             strategy = {"wrong type": WRONG_TYPES, "non-finite": NON_FINITE, "extreme": EXTREME}
             _table(data, path)[key] = draw(strategy[kind])
-            kinds[path, key] = kind
-    return data, must_fail or any(kind != "extreme" for kind in kinds.values())
+            kinds[_field_name(path, key)] = kind
+    return data, must_fail or any(kind != "extreme" for kind in kinds.values()), kinds
 
 
 @settings(
@@ -470,7 +502,11 @@ def broken_scenarios(draw):
 )
 @given(case=broken_scenarios())
 def test_fuzzed_scenarios_fail_with_one_line_and_no_output(tmp_path_factory, capsys, case):
-    data, must_fail = case
+    """A refused scenario names a field it was broken in, never one left valid: one of the
+    mutated fields or its table (``motor[0].params`` for a parameter that makes the machine's
+    mode too fast); exactly a mutated field when no value is merely extreme (a wrong type, a
+    non-finite number, an unknown key: named by the field's own rule)."""
+    data, must_fail, kinds = case
     folder = tmp_path_factory.mktemp("fuzz")
     path = folder / "scenario.toml"
     path.write_text(to_toml(data))
@@ -486,6 +522,109 @@ def test_fuzzed_scenarios_fail_with_one_line_and_no_output(tmp_path_factory, cap
     else:
         assert err == "" and (out / "fuzz" / "summary.json").is_file()
         _strict((out / "fuzz" / "summary.json").read_text())
+    if code == 2:
+        named = _named(err)
+        try:
+            tomllib.loads(to_toml(data))
+        except tomllib.TOMLDecodeError:  # e.g. "J " written beside J: a key given twice
+            assert named == "scenario", (to_toml(data), err)
+            return
+        assert _names_one_of(named, kinds), (to_toml(data), err)
+        if "extreme" not in kinds.values():
+            assert named in kinds, (to_toml(data), err)
+
+
+# --- sweep files --------------------------------------------------------------------------------
+
+#: numeric scenario fields a sweep may vary on the one-motor fuzz base
+SWEEP_FIELDS = ["motor[0].load_torque", "motor[0].controller.speed_bandwidth",
+                "simulation.duration", "supply.voltage_pk", "motor[0].controller.K_F"]  # fmt: skip
+
+
+def _sweep_base() -> dict:
+    return {"name": "fuzzsweep", "base": "base.toml",
+            "vary": [{"field": "motor[0].load_torque", "values": [0.0, 0.01]}]}  # fmt: skip
+
+
+@st.composite
+def broken_sweeps(draw):
+    """(sweep dict, the field its error must name): one mutation of a valid two-variant sweep
+    of a one-motor base, each of which the sweep file's loader must refuse before anything is
+    written."""
+    data = _sweep_base()
+    vary = data["vary"][0]
+    vary["field"] = draw(st.sampled_from(SWEEP_FIELDS))
+    kind = draw(st.sampled_from([
+        "index", "wrong type", "mixed types", "huge grid", "huge sample", "bounds",
+        "non-finite bound", "unknown key", "fixed wrong type", "fixed index", "twice",
+    ]))  # fmt: skip
+    if kind == "index":  # a motor the base does not have
+        k = draw(st.integers(1, 9))
+        vary["field"] = f"motor[{k}].load_torque"
+        return data, "vary[0].field"
+    if kind == "wrong type":
+        vary["values"] = [draw(st.sampled_from(["heavy", True, [1.0], Inline(a=1), ""]))]
+        return data, "vary[0].values[0]"
+    if kind == "mixed types":
+        vary["values"] = [0.01, draw(st.sampled_from(["0.02", "x"]))]
+        return data, "vary[0].values[1]"
+    if kind == "huge grid":
+        del vary["values"]
+        vary.update(low=0.0, high=0.1, points=draw(st.integers(10**6 + 1, 10**12)))
+        return data, "vary[0].points"
+    if kind == "huge sample":
+        data["sampling"] = {"method": "random", "samples": draw(st.integers(10**6 + 1, 10**12))}
+        return data, "sampling.samples"
+    if kind == "bounds":
+        del vary["values"]
+        vary.update(low=0.1, high=draw(st.sampled_from([0.1, 0.0, -1e308])), points=2)
+        return data, "vary[0].high"
+    if kind == "non-finite bound":
+        del vary["values"]
+        vary.update(low=draw(NON_FINITE), high=0.1, points=2)
+        return data, "vary[0].low"
+    if kind == "unknown key":
+        key = draw(st.sampled_from(["colour", "Values", "point"]))
+        vary[key] = 1
+        return data, f"vary[0].{key}"
+    if kind == "fixed wrong type":
+        field = draw(st.sampled_from(SWEEP_FIELDS))
+        data["fixed"] = {field: draw(st.sampled_from(["fast", [1.0]]))}
+        return data, f"fixed.{field}"
+    if kind == "fixed index":
+        data["fixed"] = {f"motor[{draw(st.integers(1, 9))}].load_torque": 0.01}
+        return data, f"fixed.{next(iter(data['fixed']))}"
+    data["vary"].append(dict(vary))  # "twice"
+    return data, "vary"
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(case=broken_sweeps())
+def test_fuzzed_sweeps_name_the_field_and_write_nothing(tmp_path_factory, capsys, case):
+    """Each broken sweep file is refused at load with one line naming the field broken (exit 2),
+    before anything is written (a refused sweep leaves no folder that would block the corrected
+    one), and without materialising a grid (a huge one is refused at once)."""
+    import time
+
+    data, field = case
+    folder = tmp_path_factory.mktemp("sweepfuzz")
+    (folder / "base.toml").write_text(to_toml(_base()))
+    path = folder / "sweep.toml"
+    text = to_toml({k: v for k, v in data.items() if k != "fixed"})
+    if "fixed" in data:  # dotted field names are quoted keys of [fixed]
+        text += "[fixed]\n" + "".join(
+            f"{json.dumps(k)} = {_toml_value(v)}\n" for k, v in data["fixed"].items()
+        )
+    path.write_text(text)
+    out = folder / "out"
+    start = time.monotonic()
+    code, _, err = _main(capsys, "sweep", path, "--out", out, "--quiet", "--no-report")
+    assert code == 2, (text, err)
+    assert _named(err) == field, (text, err)
+    assert not out.exists(), text
+    assert time.monotonic() - start < 30, text
 
 
 def test_the_toml_writer_round_trips():
@@ -515,3 +654,130 @@ def test_an_interrupt_inside_a_parallel_compiled_call_stays_an_interrupt():
     with pytest.raises(SystemError):
         call_interruptible(hidden(ValueError("a real error")))
     assert interrupt_behind(ValueError()) is None
+
+
+# ---------------------------------------------------------------------------------------------
+# 6. inputs refused before any work, named by their cause (issue 19)
+# ---------------------------------------------------------------------------------------------
+
+
+def _write_scenario(tmp_path, data: dict, name="scenario.toml"):
+    path = tmp_path / name
+    path.write_text(to_toml(data))
+    return path
+
+
+def _refused_run(tmp_path, capsys, path, field) -> str:
+    out = tmp_path / "out"
+    code, _, err = _main(capsys, "run", path, "--out", out, "--no-figures")
+    assert code == 2, err
+    assert not out.exists()
+    return _one_line(err, field)
+
+
+def test_a_utf8_byte_order_mark_is_accepted_in_scenarios_and_sweeps(tmp_path):
+    """Windows editors write a UTF-8 BOM; the file means the same with or without it."""
+    from acdrive.scenarios._loader import load_scenario
+    from acdrive.sweep._spec import load_sweep
+
+    text = to_toml(_base())
+    plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
+    plain.write_text(text, encoding="utf-8")
+    marked.write_text(text, encoding="utf-8-sig")
+    assert marked.read_bytes().startswith(b"\xef\xbb\xbf")
+    from acdrive.scenarios._files import read_scenario
+
+    assert read_scenario(marked) == read_scenario(plain) == tomllib.loads(text)
+    assert load_scenario(marked).name == "fuzz"
+    sweep = 'base = "marked.toml"\n[[vary]]\nfield = "motor[0].load_torque"\nvalues = [0.0, 0.01]\n'
+    (tmp_path / "sweep.toml").write_text(sweep, encoding="utf-8-sig")
+    spec = load_sweep(str(tmp_path / "sweep.toml"))
+    assert spec.base_data == tomllib.loads(text)
+
+
+def test_a_toml_file_nested_too_deeply_is_one_line_naming_the_file(tmp_path, capsys):
+    deep = "x = " + "[" * 5000 + "]" * 5000 + "\n"
+    path = tmp_path / "deep.toml"
+    path.write_text('name = "deep"\n' + deep)
+    line = _refused_run(tmp_path, capsys, path, "scenario")
+    assert "nests arrays or tables too deeply" in line
+    code, _, err = _main(capsys, "sweep", path, "--out", tmp_path / "s")
+    assert code == 2 and _one_line(err, "sweep") and not (tmp_path / "s").exists()
+
+
+def test_a_mode_compared_with_itself_is_refused(tmp_path, capsys):
+    data = {"compare_modes": ["voltage", "voltage"], **_base()}
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), "compare_modes")
+    assert "must name each mode once" in line
+
+
+@pytest.mark.parametrize("K_F", [2.0, -0.1, 1.0000001])
+def test_a_feedforward_fraction_outside_0_to_1_is_refused(tmp_path, capsys, K_F):
+    from acdrive.control._speed import SpeedPIGains
+    from acdrive.errors import InputError
+
+    data = _base()
+    data["motor"][0]["controller"]["K_F"] = K_F
+    line = _refused_run(
+        tmp_path, capsys, _write_scenario(tmp_path, data), "motor[0].controller.K_F"
+    )
+    assert "Bodson (25) must be between 0 (I-P control) and 1 (a plain PI)" in line
+    with pytest.raises(InputError, match="^K_F: "):
+        SpeedPIGains.design(3.5e-4, 314.0, K_F)
+
+
+@pytest.mark.parametrize("K_F", [0.0, 2.0 / 3.0, 1.0])
+def test_the_feedforward_fractions_of_the_range_are_accepted(K_F):
+    from acdrive.scenarios._loader import build_setup
+
+    data = _base()
+    data["motor"][0]["controller"]["K_F"] = K_F
+    assert build_setup(data).motors[0].controller.gains.K_F == K_F
+
+
+@pytest.mark.parametrize(
+    ("supply", "field"),
+    [
+        ({"frequency_hz": 1e6}, "supply.frequency_hz"),
+        ({"frequency_hz_profile": [[0.0, 60.0], [0.005, 1001.0]]}, "supply.frequency_hz_profile[1][1]"),
+    ],
+)  # fmt: skip
+def test_a_supply_above_a_kilohertz_is_refused(tmp_path, capsys, supply, field):
+    data = _base()
+    data["supply"].update(supply)
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), field)
+    assert "must be at most 1000 Hz" in line
+
+
+def test_more_motors_than_the_bound_are_refused_before_compiling(tmp_path, capsys):
+    from acdrive.scenarios._loader import MAX_MOTORS, build_setup
+
+    data = _base()
+    data["motor"] = [dict(data["motor"][0]) for _ in range(MAX_MOTORS)]
+    assert len(build_setup(data).motors) == MAX_MOTORS
+    data["motor"] = [dict(data["motor"][0]) for _ in range(100)]
+    line = _refused_run(tmp_path, capsys, _write_scenario(tmp_path, data), "motor")
+    assert f"at most {MAX_MOTORS} [[motor]] tables" in line and "got 100" in line
+
+
+def test_icad_speeds_without_sweep_is_refused(capsys):
+    code, out, err = _main(
+        capsys, "icad", "bodson-dfim", "--speed", "10", "--speeds", "0", "1", "3"
+    )
+    assert code == 2 and out == ""
+    assert "needs --sweep" in _one_line(err, "--speeds")
+
+
+def test_stability_map_names_an_unwritable_out_before_the_analysis(tmp_path, capsys):
+    """As `run` does: --out is checked (a folder, or creatable) before any work, one line naming
+    it, exit 2 (was an input/output failure, exit 74, after the whole map)."""
+    blocker = tmp_path / "a-file"
+    blocker.write_text("mine")
+    code, out, err = _main(
+        capsys, "stability", "--map", "--out", blocker / "maps", "--grid", "2", "2"
+    )
+    assert code == 2 and out == ""
+    assert "Not a directory" in _one_line(err, "--out")
+    assert blocker.read_text() == "mine"
+    code, _, err = _main(capsys, "run", _scenario(tmp_path), "--out", blocker / "runs")
+    assert code == 2 and _one_line(err, "--out")

@@ -15,6 +15,7 @@ import re
 import tomllib
 import warnings
 
+import numpy as np
 import pytest
 
 from acdrive.cli import main
@@ -26,6 +27,12 @@ from acdrive.scenarios._loader import (
     builtin_text,
     fastest_mode,
     load_scenario,
+)
+from acdrive.sim._period import (
+    control_period_warnings,
+    current_loop_radius,
+    im_control_period_warnings,
+    speed_loop_radius,
 )
 from acdrive.sim._setup import RK4_STEP_LIMIT, ConverterLosses, fastest_electrical_rate
 from acdrive.sim._system import MAX_SUBSTEPS
@@ -165,42 +172,95 @@ def test_a_dead_time_within_both_bounds_runs(capsys, tmp_path):
 # (c) the integration step against the fastest mode
 # ---------------------------------------------------------------------------------------------
 
-#: 25 ms samples: 4 substeps (6.25 ms) exceed RK4's limit for the 513 1/s flux mode of the
-#: Bodson machine; the estimate (736 1/s) asks for 8
-COARSE = "duration = 0.5\nsample_time = 0.025"
+#: 5 ms samples of a machine with an 8-ohm rotor: the rotor flux mode R_r / (sigma L_r) is about
+#: 3,100 1/s, and 4 substeps (1.25 ms) exceed RK4's limit; the estimate (3,433 1/s) asks for 7.
+#: The speed loop is slowed to a_D,VEL = 50 rad/s so the controller works at that period
+#: (a_D,VEL T_s = 0.25, 3.3 samples per supply period: sim._period) and only the plant's
+#: integration is at stake here.
+COARSE = "duration = 0.5\nsample_time = 0.005"
+
+
+def _coarse(tmp_path, simulation=COARSE, R_r=8.0):
+    data = tomllib.loads(_scenario(tmp_path, simulation=simulation).read_text())
+    motor = data["motor"][0]
+    del motor["machine"]
+    motor["params"] = {"R_s": 0.66, "R_r": R_r, "L_s": 13.1e-3, "L_r": 9.8e-3, "M": 9.7e-3,
+                       "n_p": 2, "J": 3.5e-4}  # fmt: skip
+    motor["controller"]["speed_bandwidth"] = 50.0
+    path = tmp_path / "coarse.toml"
+    path.write_text(_toml(data))
+    assert tomllib.loads(path.read_text()) == data
+    return path
+
+
+def _toml(data: dict) -> str:
+    """The few tables of a DFIM scenario as TOML (scalars, lists, nested tables)."""
+    lines, tables = [], []
+    for key, value in data.items():
+        if isinstance(value, dict):
+            tables.append((key, value))
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            for item in value:
+                lines.append(f"[[{key}]]")
+                lines.append(_toml_body(item, key))
+        else:
+            lines.insert(0, f"{key} = {json.dumps(value)}")
+    for key, value in tables:
+        lines.append(f"[{key}]")
+        lines.append(_toml_body(value, key))
+    return "\n".join(lines) + "\n"
+
+
+def _toml_body(table: dict, prefix: str) -> str:
+    lines, nested = [], []
+    for key, value in table.items():
+        if isinstance(value, dict):
+            nested.append((key, value))
+        else:
+            lines.append(f"{key} = {json.dumps(value)}")
+    for key, value in nested:
+        lines.append(f"[{prefix}.{key}]")
+        lines.append(_toml_body(value, f"{prefix}.{key}"))
+    return "\n".join(lines)
 
 
 def test_too_few_default_substeps_are_raised_and_the_run_ends(capsys, tmp_path):
-    err = _accepted(capsys, tmp_path, _scenario(tmp_path, simulation=COARSE))
+    err = _accepted(capsys, tmp_path, _coarse(tmp_path))
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith(
-        "acdrive: note: simulation.substeps = 8 chosen (default 4 too few)"
+        "acdrive: note: simulation.substeps = 7 chosen (default 4 too few)"
     ), err
     import pandas as pd
 
     data = pd.read_parquet(tmp_path / "out" / "bodson-ramp-ideal" / "data.parquet")
-    assert len(data) == 20  # every sample of the 0.5 s logged
+    assert len(data) == 100  # every sample of the 0.5 s logged
 
 
 def test_the_default_would_have_diverged(capsys, tmp_path):
     """The same scenario with substeps = 4 written out: kept as given, it diverges (exit 3)."""
-    path = _scenario(tmp_path, simulation=COARSE + "\nsubsteps = 4")
+    path = _coarse(tmp_path, simulation=COARSE + "\nsubsteps = 4")
     code, err = _run(capsys, tmp_path, path)
     assert code == 3, err
-    assert "diverged" in err and "at least 8" in err and "note" not in err
+    assert "diverged" in err and "at least 7" in err and "note" not in err
+
+
+#: a 5 ms sample (the controller works at it, as in COARSE) of rotors so resistive that their
+#: flux mode needs about 1,530 (2,000 ohm) and 956 (1,250 ohm) substeps: past and just under
+#: MAX_SUBSTEPS; the usual 200 us sample would need only 61 and 38, so the sample time is named
+LONG = "duration = 10.0\nsample_time = 0.005"
 
 
 def test_a_step_that_no_allowed_substeps_can_integrate_is_refused(capsys, tmp_path):
-    path = _scenario(tmp_path, simulation="duration = 10.0\nsample_time = 4.0")
+    path = _coarse(tmp_path, simulation=LONG, R_r=2000.0)
     line = _refused(capsys, tmp_path, path, "simulation.sample_time")
     assert f"(limit {MAX_SUBSTEPS})" in line and "shorten simulation.sample_time" in line
 
 
 def test_a_step_needing_just_under_max_substeps_is_accepted(tmp_path):
     with pytest.warns(Notice, match=r"simulation.substeps = \d+ chosen"):
-        setup = load_scenario(_scenario(tmp_path, simulation="duration = 10.0\nsample_time = 3.3"))
+        setup = load_scenario(_coarse(tmp_path, simulation=LONG, R_r=1250.0))
     rate = fastest_mode(setup)[0]
-    assert setup.substeps == math.ceil(3.3 * rate / RK4_STEP_LIMIT) <= MAX_SUBSTEPS
+    assert setup.substeps == math.ceil(0.005 * rate / RK4_STEP_LIMIT) <= MAX_SUBSTEPS
     assert setup.substeps > MAX_SUBSTEPS - 100
 
 
@@ -260,3 +320,175 @@ def test_refusals_are_input_errors_for_library_callers(tmp_path):
     with pytest.raises(InputError) as info:
         load_scenario(_scenario(tmp_path, motor="converter_dead_time = 1e-6"))
     assert info.value.field == "motor[0].converter_switching_frequency"
+
+
+# ---------------------------------------------------------------------------------------------
+# (e) the control period (sim._period): supply aliasing, sampled speed and current loops, PWM
+# ---------------------------------------------------------------------------------------------
+
+
+def _speed_loop_polynomial(aT: float) -> np.ndarray:
+    """Characteristic polynomial of the sampled speed loop with the design (27) (K_P = 2 a J,
+    K_I = a^2 J), no filter, derived by hand in z: the backward difference (1 + z^-1)/2 W, the
+    forward-Euler integral -T (1 + z^-1)/(2 (z - 1)) W and the shaft (z - 1) W = (T/J) U give
+    2 z (z - 1)^2 + aT (z + 1) (2 (z - 1) + aT) = 0."""
+    shaft = 2.0 * np.polymul([1.0, 0.0], np.polymul([1.0, -1.0], [1.0, -1.0]))
+    return np.polyadd(shaft, aT * np.polymul([1.0, 1.0], [2.0, -2.0 + aT]))
+
+
+@pytest.mark.parametrize("aT", [0.01, 0.1, 0.5, 0.8, 0.9, 2.0])
+def test_the_sampled_speed_loop_radius_is_that_of_its_characteristic_polynomial(aT):
+    J, T = 3.5e-4, 2e-4
+    a = aT / T
+    rho = speed_loop_radius(2 * a * J, a * a * J, J, T, 0.0)
+    assert rho == pytest.approx(max(abs(np.roots(_speed_loop_polynomial(aT)))), rel=1e-9)
+
+
+def test_the_sampled_speed_loop_tends_to_its_continuous_design():
+    """Both continuous poles at s = -a map to z = exp(-a T): the sampled loop's slowest pole
+    approaches it as aT -> 0 (within (aT)^1.5: a perturbation of order (aT)^3 of a double root
+    moves it by the square root of that), and it is unstable at aT = 1 (the 10 ms DFIM case
+    has aT = 3.1)."""
+    J = 3.5e-4
+    for aT in (1e-3, 1e-2):
+        T = 2e-4
+        a = aT / T
+        assert abs(speed_loop_radius(2 * a * J, a * a * J, J, T, 0.0) - math.exp(-aT)) < aT**1.5
+    assert speed_loop_radius(2 * 5000 * J, 5000**2 * J, J, 2e-4, 0.0) > 1.0
+
+
+def test_the_sampled_current_loop_without_integral_is_one_minus_a_t():
+    """R_T = 0 in (49): K_I,C = 0 and the loop sigma L_r di/dt = -K_P,C i has the single sampled
+    pole 1 - a T (forward step of the held voltage): stable up to aT = 2."""
+    sigma_L = 2.6e-3
+    for aT in (0.3, 1.5, 2.5):
+        T = 2e-4
+        a = aT / T
+        assert current_loop_radius(sigma_L, 0.0, sigma_L * a, 0.0, T) == pytest.approx(abs(1 - aT))
+
+
+def test_a_control_period_that_aliases_the_supply_is_refused(capsys, tmp_path):
+    """The issue's case: at 10 ms the DFIM drive never left standstill and the run ended with
+    exit 0 and a reassuring note. 60 Hz x 10 ms = 0.6 >= 1/2: the frequency estimator aliases."""
+    path = _scenario(tmp_path, simulation="duration = 0.5\nsample_time = 0.01")
+    line = _refused(capsys, tmp_path, path, "simulation.sample_time")
+    assert "f T_s >= 0.5 (here 0.6)" in line and "1 / (2 f) = 0.00833 s" in line
+
+
+def test_a_control_period_that_makes_the_speed_loop_unstable_is_refused(capsys, tmp_path):
+    # 5 ms: 60 Hz is sampled 3.3 times a period (no aliasing), but a_D,VEL T_s = 1.57
+    path = _scenario(tmp_path, simulation="duration = 0.5\nsample_time = 0.005")
+    line = _refused(capsys, tmp_path, path, "simulation.sample_time")
+    assert "sampled speed loop of motor[0]" in line and "a_D,VEL T_s = 1.57" in line
+    J = 3.5e-4
+    rho = speed_loop_radius(2 * 314 * J, 314**2 * J, J, 0.005, 0.0)
+    assert f"spectral radius {rho:.4g} >= 1" in line
+
+
+def test_a_bandwidth_too_high_for_the_usual_period_names_the_bandwidth(tmp_path):
+    text = _scenario(tmp_path).read_text()
+    assert "speed_bandwidth = 314.0" in text
+    data = tomllib.loads(text.replace("speed_bandwidth = 314.0", "speed_bandwidth = 5000.0"))
+    with pytest.raises(InputError) as info:  # a_D,VEL T_s = 1.0 at the usual 200 us
+        build_setup(data)
+    assert info.value.field == "motor[0].controller.speed_bandwidth"
+
+
+def test_an_unstable_current_loop_is_refused_in_current_mode(tmp_path):
+    # a_D,CUR T_s = 12000 x 200 us = 2.4 with R_T = 0: the sampled pole 1 - 2.4 is outside
+    data = tomllib.loads(_scenario(tmp_path).read_text())
+    controller = data["motor"][0]["controller"]
+    controller.update(mode="current", current_bandwidth=12e3, R_T=0.0)
+    with pytest.raises(InputError) as info:
+        build_setup(data)
+    assert info.value.field == "motor[0].controller.current_bandwidth"
+    assert "rotor current loop" in info.value.rule and "a_D,CUR T_s = 2.4" in info.value.rule
+    controller["mode"] = "voltage"  # no current loop: accepted
+    build_setup(data)
+
+
+def test_a_coarse_but_stable_control_period_runs_with_the_warnings_in_the_summary(capsys, tmp_path):
+    """2 ms: 8.3 samples per supply period (< 20) and a_D,VEL T_s = 0.628 (> 0.5), a stable
+    sampled speed loop: the run goes ahead and summary.json says both, with their numbers."""
+    path = _scenario(tmp_path, simulation="duration = 0.1\nsample_time = 0.002")
+    code, err = _run(capsys, tmp_path, path)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "out" / "bodson-ramp-ideal" / "summary.json").read_text())
+    period = [w for w in summary["warnings"] if w.startswith("control period:")]
+    J = 3.5e-4
+    rho = speed_loop_radius(2 * 314 * J, 314**2 * J, J, 0.002, 0.0)
+    assert len(period) == 2, summary["warnings"]
+    assert "8.33 samples per period of the 60 Hz supply (fewer than 20" in period[0]
+    assert "a_D,VEL T_s = 0.628" in period[1] and f"spectral radius {rho:.3g}" in period[1]
+    assert 0.0 < rho < 1.0
+
+
+def test_the_usual_control_period_warns_of_nothing():
+    for name in builtin_names():
+        setup = load_scenario(name)
+        warnings = (
+            control_period_warnings(setup)
+            if hasattr(setup, "motors")
+            else im_control_period_warnings(setup)
+        )
+        assert warnings == [], name
+
+
+def test_a_pwm_period_longer_than_the_control_period_is_warned(tmp_path):
+    motor = "converter_dead_time = 1e-6\nconverter_switching_frequency = 2e3"
+    setup = load_scenario(_scenario(tmp_path, motor=motor))  # T_s = 200 us, f_sw T_s = 0.4
+    (line,) = control_period_warnings(setup)
+    assert "switches at 2000 Hz" in line and "0.0005 s longer than T_s = 0.0002 s" in line
+
+
+# ---------------------------------------------------------------------------------------------
+# (f) inputs far beyond what the machine allows name themselves, not a consequence
+# ---------------------------------------------------------------------------------------------
+
+
+def test_a_megavolt_supply_names_the_supply_voltage(capsys, tmp_path):
+    text = _scenario(tmp_path).read_text().replace("voltage_pk = 11.1", "voltage_pk = 1e6")
+    path = tmp_path / "scenario.toml"
+    path.write_text(text)
+    line = _refused(capsys, tmp_path, path, "supply.voltage_pk")
+    magnetising = 1e6 / (2 * math.pi * 60.0 * 9.7e-3)  # v / (w_e M), Bodson (33)
+    assert f"= {magnetising:.4g} A peak" in line and "(rotor 6 A, stator 6 A)" in line
+
+
+def test_a_meganewton_metre_load_names_the_load(capsys, tmp_path):
+    from acdrive.sim._setup import peak_torque_window
+
+    path = _scenario(tmp_path, motor="load_torque = 1e6")
+    line = _refused(capsys, tmp_path, path, "motor[0].load_torque")
+    setup = load_scenario(_scenario(tmp_path, motor="load_torque = 0.5"))  # above the window: runs
+    lo, hi = peak_torque_window(setup.motors[0], setup.supply)
+    assert 0.0 < hi < 0.5 < 10 * hi
+    assert f"largest torque the drive can produce, {max(hi, -lo):.4g} N m" in line
+
+
+def test_the_im_current_loop_bandwidth_is_that_of_its_closed_loop_and_warned_when_coarse():
+    """The cage-IM drive: the current loop's -3 dB bandwidth as designed (paper-20 on the nominal
+    machine at standstill) is where |L / (1 + L)| crosses 1/sqrt(2), checked against the loop
+    evaluated there independently; 250 us samples (4 per 4 kHz carrier period, a stable
+    latched loop) give a_C T_s > 1 and a warning, the paper's 20 us none."""
+    from acdrive.machines._induction import stator_current_ss
+    from acdrive.scenarios._im_loader import build_im_setup
+    from acdrive.sim._period import im_current_bandwidth
+
+    data = tomllib.loads(builtin_text("im-locked-rotor"))
+    paper = build_im_setup(data)
+    a = im_current_bandwidth(paper)
+    A, B, C, D = stator_current_ss(paper.machine, 0.0)
+
+    def closed(w):
+        g = (C @ np.linalg.solve(1j * w * np.eye(4) - A, B) + D)[0, 0]
+        loop = g * paper.current_control.lti.freqresp(np.array([w]))[0]
+        return abs(loop / (1 + loop))
+
+    step = 10 ** (7 / 1400)  # the grid's ratio (1401 points over 1 to 1e7 rad/s)
+    assert closed(a / step) >= 1 / math.sqrt(2) > closed(a)
+    assert im_control_period_warnings(paper) == []
+    data["simulation"]["sample_time"] = 2.5e-4
+    data["inverter"]["pwm_frequency_hz"] = 4000.0
+    (line,) = im_control_period_warnings(build_im_setup(data))
+    assert f"a_C T_s = {a * 2.5e-4:.3g}" in line and a * 2.5e-4 > 1.0

@@ -210,6 +210,15 @@ def test_unreachable_scheduler_is_one_line_after_a_bounded_time(tmp_path):
         ("[[vary]]\nfield = 'motor[0].load_torque'\nvalues = [0.0]\n[metrics]\ndefault = 3\n",
          "metrics.default"),
         ("base = 'no-such-scenario'\n", "base"),
+        # issue 19: a motor the one-motor base does not have (every row was invalid, exit 0)
+        ("[[vary]]\nfield = 'motor[3].load_torque'\nvalues = [0.0, 0.1]\n", "vary[0].field"),
+        # a value of the wrong type (exit 70 and a half-written folder)
+        ("[[vary]]\nfield = 'motor[0].load_torque'\nvalues = ['heavy', 0.1]\n",
+         "vary[0].values[0]"),
+        ("[fixed]\n'motor[0].load_torque' = 'heavy'\n[[vary]]\nfield = 'simulation.duration'\n"
+         + "values = [0.01]\n", "fixed.motor[0].load_torque"),
+        ("[[vary]]\nfield = 'motor[0].controller.mode'\nvalues = ['current', 1.0]\n",
+         "vary[0].values[1]"),
     ],
 )  # fmt: skip
 def test_malformed_sweep_file_is_one_line_naming_the_field(tmp_path, capsys, text, field):
@@ -217,6 +226,30 @@ def test_malformed_sweep_file_is_one_line_naming_the_field(tmp_path, capsys, tex
     assert main(["sweep", str(path), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"acdrive: error: {field}:"), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_billion_point_grid_is_refused_at_once(tmp_path, capsys):
+    """The variants are counted as the product of the axes' lengths, never materialised: a grid
+    of 1e9 points (which hung) is refused by the 1e6 limit in well under a second's work."""
+    text = """
+    base = "bodson-ramp"
+    [[vary]]
+    field = "motor[0].load_torque"
+    low = 0.0
+    high = 0.1
+    points = 1000000000
+    [[vary]]
+    field = "motor[0].controller.speed_bandwidth"
+    values = [100.0, 200.0]
+    """
+    path = _write(tmp_path, text)
+    start = time.process_time()
+    assert main(["sweep", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert time.process_time() - start < 5.0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("acdrive: error: vary[0].points:"), err
+    assert "2e+09 variants" in err[0] and "1000000000 x 2" in err[0]
     assert not (tmp_path / "o").exists()
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from acdrive.control._open_loop import ComplexProgram, VoltageProgram
-from acdrive.core._signals import Layout, real
+from acdrive.core._signals import Layout, Var, real
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._dfim import BODSON_DFIM, machine_vector, steady_state_currents
@@ -70,6 +70,28 @@ def test_parameters_are_validated_with_the_part_name():
         CageInductionMachine("im", R_s=1.0, R_r=1.0, L_s=1.0, L_r=1.0, L_m=1.0)
     with pytest.raises(InputError, match=r"shaft.J: must be finite"):
         Shaft("shaft", J=float("nan"))
+
+
+def test_table_parameters_obey_their_declared_rule_at_construction():
+    """A rule declared with a table parameter holds for every value of its profile, checked when
+    the part is built (issue 19: ThreePhaseSource(V_pk=-11.1) raised nothing)."""
+    from acdrive.plant._sources import DCSource, UnbalancedSource
+
+    with pytest.raises(InputError, match=r"^grid.V_pk: must be >= 0, got -11.1$"):
+        ThreePhaseSource("grid", V_pk=-11.1)
+    with pytest.raises(InputError, match=r"^grid.V_pk: must be >= 0, got -1$"):
+        ThreePhaseSource("grid", V_pk=[[0.0, 11.1], [0.5, -1.0]])  # a later point
+    with pytest.raises(InputError, match=r"^grid.f: must be > 0, got 0$"):
+        ThreePhaseSource("grid", V_pk=11.1, f=0.0)
+    with pytest.raises(InputError, match=r"^grid.k_b: must be between 0 and 1, got 1.5$"):
+        UnbalancedSource("grid", V_pk=11.1, k_b=1.5)
+    with pytest.raises(InputError, match=r"^link.V: must be >= 0"):
+        DCSource("link", V=-30.0)
+    grid = ThreePhaseSource("grid", V_pk=[[0.0, 11.1], [0.5, 0.0]], f=60.0)  # a collapse to 0
+    with pytest.raises(InputError, match=r"^grid.V_pk: must be >= 0"):
+        grid.with_params(V_pk=-1.0)
+    with pytest.raises(ValueError, match="rule"):
+        Layout(Var("z", "V", "a complex value", "complex", "positive"))
     with pytest.raises(InputError, match=r"shaft.load: times must be >= 0 and non-decreasing"):
         Shaft("shaft", J=1.0, load=[[1.0, 0.0], [0.5, 1.0]])
     with pytest.raises(InputError, match=r"inverter.V_dc: must be given"):
@@ -147,6 +169,11 @@ def test_batch_equals_single_runs():
         for J, V in [(7e-4, 200.0), (2e-3, 250.0), (5e-4, 150.0)]
     ]
     batch = compiled.run_batch(variants, 0.05, 1e-4, log=[im.out.i_s, shaft.out.w])
+    # a dict where the list of variants belongs is named, not an AttributeError
+    with pytest.raises(InputError, match=r"^variants: must be a list of dicts"):
+        compiled.run_batch(variants[0], 0.05, 1e-4)
+    with pytest.raises(InputError, match=r"^variants\[1\]: must be a dict"):
+        compiled.run_batch([variants[0], ["shaft", 1.0]], 0.05, 1e-4)
     for changes, result in zip(variants, batch):
         parts = [system.part(name).with_params(**values) for name, values in changes.items()]
         alone = compiled.run(0.05, 1e-4, log=[im.out.i_s, shaft.out.w], parts=parts)
@@ -188,7 +215,7 @@ def test_a_diverging_system_stops_with_the_time_and_the_state():
 _USER_PART = """
 from numba import njit
 from acdrive.core._parts import ContinuousPart
-from acdrive.core._signals import Layout, real
+from acdrive.core._signals import Layout, Var, real
 
 @njit
 def level_outputs(t, x, p, y):

@@ -133,6 +133,11 @@ def run(args) -> int:
     from acdrive.analysis._icad import analyse, controller_for, default_controller_name
     from acdrive.analysis._plants import machine_params, plant_for
 
+    if args.speeds is not None and not args.sweep:
+        raise InputError(
+            "--speeds", "sets the speeds of a sweep and needs --sweep (one analysis at one speed "
+            "takes --speed)"
+        )  # fmt: skip
     params = machine_params(args.machine)
     name = args.controller or default_controller_name(params)
     bandwidth = require_between("--bandwidth", args.bandwidth, *BANDWIDTH_RANGE)

@@ -170,16 +170,18 @@ def run(args) -> int:
 
 def _map(args) -> int:
     from acdrive._output import OutputFile
+    from acdrive._progress import Progress
 
     n_speed, n_load = args.grid
     if not (1 <= n_speed <= MAX_GRID and 1 <= n_load <= MAX_GRID):
         raise InputError("--grid", f"N_SPEED and N_LOAD must be from 1 to {MAX_GRID}")
-
-    maps, report = {}, {}
     models = {mode: _model(args, mode) for mode in ("voltage", "current")}  # checked first
-    name = f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
-    with OutputFile(args.out, name, field="--out") as output:  # --out checked before the map
-        path = _map_and_figure(args, models, maps, report, output, n_speed, n_load)
+    # --out checked (a folder, or creatable and writable; a file of the figure's name must be
+    # acdrive's own) before any analysis, as `run` does
+    with OutputFile(args.out, _figure_name(args), field="--out") as output:
+        report, maps = _map_report(args, models, Progress(7, "stability map"))
+        _draw(maps, output.path, args)
+        path = output.publish()
     out = {
         "bandwidth_rad_s": args.bandwidth,
         "model": args.model,
@@ -202,15 +204,18 @@ def _map(args) -> int:
     return 0
 
 
-def _map_and_figure(args, models, maps, report, output, n_speed, n_load) -> Path:
-    """Compute both modes' maps and tolerated bandwidths into ``maps`` and ``report``, draw the
-    figure into ``output`` and publish it; returns the figure's path."""
+def _figure_name(args) -> str:
+    return f"stability-map-{args.model}-a{math.floor(args.bandwidth)}.png"
+
+
+def _map_report(args, models, bar) -> tuple[dict, dict]:
+    """(report per mode, StabilityMap per mode) of ``acdrive stability --map``."""
     import numpy as np
 
-    from acdrive._progress import Progress
     from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
 
-    bar = Progress(7, "stability map")
+    n_speed, n_load = args.grid
+    maps, report = {}, {}
     for mode, model in models.items():
         speeds, loads = default_grid(model, n_speed, n_load)
         bar.phase(f"{mode} command: {n_speed} x {n_load} operating points")
@@ -242,9 +247,8 @@ def _map_and_figure(args, models, maps, report, output, n_speed, n_load) -> Path
             "max_stable_bandwidth_zero_load_rad_s": unloaded,
         }
     bar.phase("drawing")
-    _draw(maps, output.path, args)
     bar.close()
-    return output.publish()
+    return report, maps
 
 
 def _bench(args) -> int:

@@ -320,7 +320,7 @@ class SaturatedSpeedP(SampledPart):
 SPEED_PI_PARAMS = Layout(
     real("K_P", "N m s/rad", "proportional gain", "nonnegative"),
     real("K_I", "N m/rad", "integral gain", "nonnegative"),
-    real("K_F", "", "reference weight of the proportional term (1: PI on the error)"),
+    real("K_F", "", "reference weight of the proportional term (1: PI on the error)", "fraction"),
     real("tau_max", "N m", "torque limit", "positive"),
 )
 SPEED_PI_STATES = Layout(real("e_int", "rad", "integral of the speed error"))

@@ -9,16 +9,37 @@ from acdrive._jit import jit
 from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, real, table
 from acdrive.core._tables import table_at
-from acdrive.errors import require_positive
+from acdrive.errors import InputError, require_finite, require_positive
+
+
+def require_feedforward_fraction(field: str, value) -> float:
+    """``value`` as float if it is a valid K_F of the speed PI (Bodson (25)), else InputError.
+
+    K_F is the fraction of the proportional action applied to the reference: from 0 (I-P
+    control, no closed-loop zero) to 1 (a plain PI, zero at -a_D,VEL / 2 with the design (27),
+    the most overshoot); in between it moves the zero -K_I / (K_F K_P) = -a_D,VEL / (2 K_F),
+    which is what the paper uses it for. Above 1 the reference would be amplified beyond the
+    proportional gain itself, more overshoot than a plain PI; below 0 it would push against it.
+    """
+    value = require_finite(field, value)
+    if not 0.0 <= value <= 1.0:
+        raise InputError(
+            field, f"the feedforward fraction of Bodson (25) must be between 0 (I-P control) and "
+            f"1 (a plain PI), got {value:g}"
+        )  # fmt: skip
+    return value
 
 
 @dataclass(frozen=True)
 class SpeedPIGains:
-    """K_P, K_I, K_F of Bodson (25)."""
+    """K_P, K_I, K_F of Bodson (25); K_F checked by :func:`require_feedforward_fraction`."""
 
     K_P: float
     K_I: float
     K_F: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "K_F", require_feedforward_fraction("K_F", self.K_F))
 
     @classmethod
     def design(cls, J: float, bandwidth: float, K_F: float = 2.0 / 3.0) -> SpeedPIGains:

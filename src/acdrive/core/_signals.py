@@ -25,20 +25,22 @@ import numpy as np
 from acdrive.errors import InputError
 
 KINDS = ("real", "complex", "table")
-#: value rules a real quantity may declare, checked whenever values are packed
+#: value rules a real quantity or a table's values may declare, checked whenever values are
+#: packed (a part checks its parameters at construction)
 RULES = {
     "": "",
     "positive": "must be > 0",
     "nonnegative": "must be >= 0",
     "count": "must be a positive integer",
+    "fraction": "must be between 0 and 1",
 }
 
 
 @dataclass(frozen=True)
 class Var:
     """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
-    ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity, a value
-    ``rule`` (one of ``RULES``) that packing enforces."""
+    ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity or a table
+    (each of its values), a value ``rule`` (one of ``RULES``) that packing enforces."""
 
     name: str
     unit: str
@@ -53,8 +55,10 @@ class Var:
             raise ValueError(f"Var {self.name}: kind must be one of {', '.join(KINDS)}")
         if not self.doc:
             raise ValueError(f"Var {self.name}: a one-line doc is required")
-        if self.rule not in RULES or (self.rule and self.kind != "real"):
-            raise ValueError(f"Var {self.name}: rule must be one of {list(RULES)} on a real")
+        if self.rule not in RULES or (self.rule and self.kind == "complex"):
+            raise ValueError(
+                f"Var {self.name}: rule must be one of {list(RULES)} on a real or a table"
+            )
 
     def check(self, field: str, value: float) -> float:
         """``value`` if it obeys the declared rule, else an InputError naming ``field``."""
@@ -63,10 +67,20 @@ class Var:
             "positive": value > 0.0,
             "nonnegative": value >= 0.0,
             "count": value >= 1.0 and value == int(value),
+            "fraction": 0.0 <= value <= 1.0,
         }[self.rule]
         if not ok:
             raise InputError(field, f"{RULES[self.rule]}, got {value:g}")
         return value
+
+    def check_table(self, field: str, packed: np.ndarray) -> np.ndarray:
+        """A packed table (:func:`pack_table`) if each of its values obeys the declared rule,
+        else an InputError naming ``field`` and the first value that breaks it."""
+        if self.rule:
+            n = int(packed[0])
+            for value in packed[1 + n :]:
+                self.check(field, float(value))
+        return packed
 
     @property
     def width(self) -> int:
@@ -82,8 +96,8 @@ def cplx(name: str, unit: str, doc: str) -> Var:
     return Var(name, unit, doc, "complex")
 
 
-def table(name: str, unit: str, doc: str) -> Var:
-    return Var(name, unit, doc, "table")
+def table(name: str, unit: str, doc: str, rule: str = "") -> Var:
+    return Var(name, unit, doc, "table", rule)
 
 
 class Layout:
@@ -185,7 +199,7 @@ class Layout:
                 raise InputError(field, "must be given")
             value = merged[v.name]
             if v.kind == "table":
-                tables.append(pack_table(field, value))
+                tables.append(v.check_table(field, pack_table(field, value)))
                 continue
             s = self._slots[v.name]
             if v.kind == "complex":

@@ -32,8 +32,8 @@ from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.core._tables import table_at, table_offset
 
 PARAMS = Layout(
-    table("V_pk", "V", "peak line-to-neutral voltage profile"),
-    table("f", "Hz", "frequency profile"),
+    table("V_pk", "V", "peak line-to-neutral voltage profile", "nonnegative"),
+    table("f", "Hz", "frequency profile", "positive"),
 )
 STATES = Layout(
     real("theta_g", "rad", "source angle"),
@@ -78,9 +78,9 @@ class ThreePhaseSource(ContinuousPart):
 
 UNBALANCED_PARAMS = Layout(
     *PARAMS,  # V_pk and f first: the balanced source's kernels find them at the same offsets
-    table("k_a", "", "phase a EMF magnitude as a fraction of V_pk (profile)"),
-    table("k_b", "", "phase b EMF magnitude as a fraction of V_pk (profile)"),
-    table("k_c", "", "phase c EMF magnitude as a fraction of V_pk (profile)"),
+    table("k_a", "", "phase a EMF magnitude as a fraction of V_pk (profile)", "fraction"),
+    table("k_b", "", "phase b EMF magnitude as a fraction of V_pk (profile)", "fraction"),
+    table("k_c", "", "phase c EMF magnitude as a fraction of V_pk (profile)", "fraction"),
 )
 
 
@@ -111,7 +111,7 @@ class UnbalancedSource(ThreePhaseSource):
 
 # --- DC source --------------------------------------------------------------------------------
 
-DC_PARAMS = Layout(table("V", "V", "DC voltage profile"))
+DC_PARAMS = Layout(table("V", "V", "DC voltage profile", "nonnegative"))
 DC_OUTPUTS = Layout(real("v_dc", "V", "DC voltage"))
 _DC_TABLE = DC_PARAMS.table_start
 _Y_V_DC = DC_OUTPUTS.slot("v_dc")

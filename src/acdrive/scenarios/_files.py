@@ -47,10 +47,29 @@ def read_scenario(source: str | Path) -> dict:
             raise InputError("scenario", f"{path} is not a UTF-8 text file") from None
         except OSError as exc:
             raise InputError("scenario", f"cannot read {path} ({exc.strerror})") from None
+    return parse_toml(text, origin, "scenario")
+
+
+#: a UTF-8 byte-order mark, as Windows editors write at the start of a file
+BOM = "\ufeff"
+
+
+def parse_toml(text: str, origin: str, field: str) -> dict:
+    """The TOML document ``text`` (read from ``origin``), or an ``InputError`` on ``field``.
+
+    A leading UTF-8 byte-order mark is dropped (TOML requires UTF-8, and a BOM carries nothing
+    else). A document nested so deeply that the parser runs out of stack (thousands of ``[``) is
+    refused as invalid TOML for acdrive, not left to crash the command."""
+    text = text.removeprefix(BOM)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError("scenario", f"{origin} is not valid TOML ({exc})") from None
+        raise InputError(field, f"{origin} is not valid TOML ({exc})") from None
+    except RecursionError:
+        raise InputError(
+            field, f"{origin} nests arrays or tables too deeply to be read (a scenario or sweep "
+            "needs a few levels)"
+        ) from None  # fmt: skip
 
 
 class Section:

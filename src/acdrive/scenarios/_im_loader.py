@@ -54,6 +54,7 @@ Rules checked before the run, each naming its field:
   machine held over each sample, the discretised controller, the command latched for the carrier
   period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
   is unstable without the latch) or ``inverter.pwm_frequency_hz`` (the latch's delay) is refused;
+- the sampled speed loop (``sim._period.check_im_control_period``), as for the DFIM drive;
 - the size of the run (log memory, integration steps), as for the DFIM drive.
 
 A DC link too low for the flux reference at the requested speed is *not* refused: the drive then
@@ -72,6 +73,7 @@ from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
+from acdrive.control._speed import require_feedforward_fraction
 from acdrive.errors import (
     InputError,
     require_nonnegative,
@@ -100,6 +102,7 @@ from acdrive.sim._im_drive import (
     SpeedPSetup,
     current_loop_radius,
 )
+from acdrive.sim._period import check_im_control_period
 from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 DRIVE = "cage-im"
@@ -263,7 +266,7 @@ def _speed_p(sec: _Section) -> SpeedPSetup:
 def _speed_pi(sec: _Section, J: float) -> SpeedPISetup:
     d = SpeedPI.DEFAULTS
     tau_max = sec.number("tau_max", d["tau_max"], require_positive)
-    K_F = sec.number("K_F", d["K_F"])
+    K_F = sec.number("K_F", d["K_F"], require_feedforward_fraction)
     if sec.has("bandwidth_rad_s"):
         for key in ("K_P", "K_I"):
             if sec.has(key):
@@ -399,6 +402,12 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     duration = sim.number("duration", 0.2, require_positive)
     sample_time = sim.number("sample_time", PAPER_SAMPLE_TIME, require_positive)
     if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                "simulation.duration",
+                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
+                "(the default), got {duration:g} s",
+            )
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
     substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
     integrator = sim.text("integrator", "rk4", choices=tuple(INTEGRATORS))
@@ -504,4 +513,5 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     )
     _check_size(setup)
     _check_controller(setup)
+    check_im_control_period(setup)
     return setup

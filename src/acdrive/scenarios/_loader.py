@@ -39,7 +39,10 @@ Physical pre-checks, made before any simulation (each an ``InputError`` naming t
 - integration step: see :func:`choose_substeps`. An omitted ``simulation.substeps`` is raised
   from its default of 4 to what the plant's fastest mode needs, with a one-line
   ``acdrive.errors.Notice``; a step no allowed number of substeps can make stable is refused;
-- ``simulation.log_every`` must not exceed the number of control steps of the run.
+- ``simulation.log_every`` must not exceed the number of control steps of the run;
+- the control period against the supply period, the speed and current loops
+  (``sim._period.check_control_period``: an aliasing frequency estimator or an unstable sampled
+  loop is refused; a long but workable period is a warning in summary.json).
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive.control._speed import SpeedPIGains
+from acdrive.control._speed import SpeedPIGains, require_feedforward_fraction
 from acdrive.errors import (
     InputError,
     Notice,
@@ -66,6 +69,7 @@ from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
 from acdrive.scenarios._files import Section as _Section
 from acdrive.scenarios._files import builtin_names, builtin_text, machine_from, read_scenario
+from acdrive.sim._period import check_control_period
 from acdrive.sim._result import N_LOG
 from acdrive.sim._setup import (
     RK4_STEP_LIMIT,
@@ -91,6 +95,15 @@ __all__ = [  # the reading functions of scenarios._files are offered here too
 ]
 
 RAD_S_PER_RPM = math.pi / 30.0
+#: largest supply frequency [Hz]: the machine model (constant lumped inductances and
+#: resistances, no skin effect, iron loss or winding capacitance) is one of power-frequency
+#: machines; grids are 50/60 Hz, aircraft grids 360-800 Hz, so 1 kHz bounds what it describes
+MAX_SUPPLY_HZ = 1000.0
+#: most motors on one supply: each adds its parts to the one compiled loop, whose first compile
+#: grows faster than the number of motors (measured on a loaded 2-core machine: 51 s for 4
+#: motors, 489 s for 8); Bodson's experiments use one or two, the built-ins up to three. Four
+#: keeps a first run near a minute.
+MAX_MOTORS = 4
 #: sample time [s] and substeps per sample when the scenario does not say
 DEFAULT_SAMPLE_TIME = 200e-6
 DEFAULT_SUBSTEPS = 4
@@ -118,12 +131,20 @@ def _machine(section: _Section, index: int) -> DFIMParams:
     return dataclasses.replace(machine, B=B, tau_c=tau_c)
 
 
+def _phase_tolerance(field: str, value) -> float:
+    """A phase tolerance [degrees]: > 0 and at most 180 (a phase error is at most 180 degrees)."""
+    value = require_positive(field, value)
+    if value > 180.0:
+        raise InputError(field, f"must be at most 180 degrees, got {value:g}")
+    return value
+
+
 def _sync(section: _Section) -> Synchroniser:
     sync = Synchroniser(
         enabled=section.boolean("enabled", False),
         gain=section.number("gain", 40.0, require_positive),
         tolerance_magnitude=section.number("tolerance_magnitude", 0.02, require_positive),
-        tolerance_phase=section.number("tolerance_phase_deg", 2.0, require_positive)
+        tolerance_phase=section.number("tolerance_phase_deg", 2.0, _phase_tolerance)
         * math.pi
         / 180,
         hold_time=section.number("hold_time", 0.02, require_nonnegative),
@@ -147,7 +168,7 @@ def _reactive_power_gains(section: _Section) -> tuple[float, float]:
 def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
     mode = section.text("mode", "voltage", choices=("voltage", "current"))
     bandwidth = section.number("speed_bandwidth", 314.0, require_positive)
-    K_F = section.number("K_F", 2.0 / 3.0, require_nonnegative)
+    K_F = section.number("K_F", 2.0 / 3.0, require_feedforward_fraction)
     design_inertia = section.number("design_inertia", machine.J, require_positive)
     q_kp, q_ki = _reactive_power_gains(section)
     gains = dataclasses.replace(SpeedPIGains.design(design_inertia, bandwidth), K_F=K_F)
@@ -170,7 +191,38 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         lossless_law=section.boolean("lossless_law", False),
     )
     section.done()
+    _check_gains(section, controller, machine, bandwidth, design_inertia)
     return controller
+
+
+def _check_gains(
+    section: _Section, controller: DFIMController, machine: DFIMParams, bandwidth: float,
+    design_inertia: float,
+) -> None:  # fmt: skip
+    """The gains the design equations give must be numbers: K_P = 2 a J and K_I = a^2 J (27),
+    K_P,C = sigma L_r a_C and K_I,C = R_T a_C (49) overflow for extreme bandwidths or R_T; the
+    field named is the input that made the gain overflow."""
+    K_PC, K_IC = controller.current_gains(machine)
+    motor = section.path.rsplit(".", 1)[0]
+    inertia = (
+        section.field("design_inertia") if section.has("design_inertia") else f"{motor}.params.J"
+    )
+
+    def larger(*fields):  # the factor of a product farther from 1: it made the product overflow
+        return max(fields, key=lambda f: abs(math.log10(f[1])) if f[1] > 0.0 else 0.0)[0]
+
+    speed = larger((section.field("speed_bandwidth"), bandwidth), (inertia, design_inertia))
+    current = section.field("current_bandwidth")
+    gains = [
+        ("K_P (27)", controller.gains.K_P, speed),
+        ("K_I (27)", controller.gains.K_I, speed),
+        ("K_P,C (49)", K_PC, current),
+        ("K_I,C (49)", K_IC, larger((current, controller.current_bandwidth),
+                                    (section.field("R_T"), controller.R_T))),
+    ]  # fmt: skip
+    for name, value, field in gains:
+        if not math.isfinite(value):
+            raise InputError(field, f"gives the gain {name} = {value}: the design overflows")
 
 
 def _converter(
@@ -225,6 +277,17 @@ def _converter(
             "the DC link cannot supply it",
         )
     return losses
+
+
+def _supply_frequency(field: str, value) -> float:
+    """A supply frequency [Hz]: > 0 and at most :data:`MAX_SUPPLY_HZ`."""
+    value = require_positive(field, value)
+    if value > MAX_SUPPLY_HZ:
+        raise InputError(
+            field, f"must be at most {MAX_SUPPLY_HZ:g} Hz (the lumped machine model describes "
+            f"power-frequency supplies), got {value:g} Hz"
+        )  # fmt: skip
+    return value
 
 
 def _phase_scales(section: _Section):
@@ -365,7 +428,8 @@ def choose_substeps(setup: DriveSetup, given: bool) -> int:
     - simulation.substeps omitted and need > the default 4: the run goes ahead with ``need``
       substeps and a one-line ``Notice`` says which value was chosen and why. That is what a drive
       engineer who lengthened the sample time expects: the plant is integrated correctly and only
-      the wall time grows;
+      the wall time grows (whether the *controller* works at that sample time is another
+      question, checked before this by ``sim._period.check_control_period``);
     - simulation.substeps given: kept as written, even below ``need``. An explicit value is a
       deliberate choice (reproducing a run, studying the integrator), and the estimate is an upper
       one (the converter-loss slope, for one, only applies near zero rotor current), so overriding
@@ -450,10 +514,21 @@ def build_setup(data: dict) -> DriveSetup:
     compare = top.get("compare_modes", [])
     if not isinstance(compare, list) or any(m not in ("voltage", "current") for m in compare):
         raise InputError("compare_modes", 'must be a list of "voltage" / "current"')
+    if len(set(compare)) < len(compare):
+        raise InputError(
+            "compare_modes", f"must name each mode once (a mode run twice gives the same run), "
+            f"got {compare}"
+        )  # fmt: skip
     sim = _Section(top.get("simulation", {}), "simulation")
     duration = sim.number("duration", 1.0, require_positive)
     sample_time = sim.number("sample_time", DEFAULT_SAMPLE_TIME, require_positive)
     if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                "simulation.duration",
+                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
+                "(the default), got {duration:g} s",
+            )
         raise InputError("simulation.sample_time", "must not exceed simulation.duration")
     substeps_given = sim.has("substeps")
     substeps = sim.integer("substeps", DEFAULT_SUBSTEPS, maximum=MAX_SUBSTEPS)
@@ -470,7 +545,7 @@ def build_setup(data: dict) -> DriveSetup:
     sup = _Section(top.get("supply", {}), "supply")
     supply = Supply(
         voltage_pk=sup.constant_or_profile("voltage_pk", 11.1, rule=require_nonnegative),
-        frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=require_positive),
+        frequency_hz=sup.constant_or_profile("frequency_hz", 60.0, rule=_supply_frequency),
         resistance=sup.number("resistance", 0.0, require_nonnegative),
         inductance=sup.number("inductance", 0.0, require_nonnegative),
         phase_scales=_phase_scales(sup),
@@ -482,6 +557,11 @@ def build_setup(data: dict) -> DriveSetup:
     motors_data = top.get("motor")
     if not isinstance(motors_data, list) or not motors_data:
         raise InputError("motor", "at least one [[motor]] table is required")
+    if len(motors_data) > MAX_MOTORS:
+        raise InputError(
+            "motor", f"at most {MAX_MOTORS} [[motor]] tables on one supply (each one lengthens "
+            f"the compilation of the simulation loop), got {len(motors_data)}"
+        )  # fmt: skip
     motors = []
     for k, raw in enumerate(motors_data):
         sec = _Section(raw, f"motor[{k}]")
@@ -535,6 +615,7 @@ def build_setup(data: dict) -> DriveSetup:
         note=note,
     )
     check_setup(setup)
+    check_control_period(setup)
     chosen = choose_substeps(setup, substeps_given)
     if chosen != substeps:
         _check_size(duration, sample_time, chosen, log_every, len(motors), max(len(compare), 1))

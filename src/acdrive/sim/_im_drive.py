@@ -1156,7 +1156,7 @@ def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
                 summary[f"speed_ramp_error_{label}"] = s["ramp"]["speed_ramp_error_rad_s"]
                 summary[f"ramp_slope_{label}_rad_s2"] = s["ramp"]["ramp_slope_rad_s2"]
     summary["runs"] = summaries
-    summary["warnings"] = warnings_of(setup, results, summaries)
+    summary["warnings"] = warnings_of(setup, results, summaries) + im_control_period_warnings(setup)
     if not summary["warnings"]:
         del summary["warnings"]
     if setup.note:
@@ -1170,6 +1170,13 @@ def _span(result: IMDriveResult, flag: str) -> str:
     if hits.size == 0:
         return "between logged samples"
     return f"logged between {result.t[hits[0]]:.4g} s and {result.t[hits[-1]]:.4g} s"
+
+
+def im_control_period_warnings(setup: IMDriveSetup) -> list[str]:
+    """``sim._period.im_control_period_warnings`` (imported when called)."""
+    from acdrive.sim._period import im_control_period_warnings as warnings
+
+    return warnings(setup)
 
 
 def warnings_of(setup: IMDriveSetup, results: dict, summaries: dict) -> list[str]:

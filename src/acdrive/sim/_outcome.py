@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.sim._period import control_period_warnings
 from acdrive.sim._result import OSCILLATION_BAND_HZ, RPM_PER_RAD_S, DriveResult
 from acdrive.sim._setup import DriveSetup, simulate
 
@@ -329,6 +330,7 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
     for k in range(len(setup.motors)):
         if _closed_by_force(first, setup, k):
             warnings.append(_forced_close_warning(first, setup, k))
+    warnings.extend(control_period_warnings(setup))
     if warnings:
         summary["warnings"] = warnings
     fallback = first.first_event_time("sensor_fallback")

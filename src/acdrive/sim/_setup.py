@@ -234,29 +234,110 @@ def simulate(setup: DriveSetup) -> DriveResult:
     return dfim_drive.simulate(setup, divergence_hint)
 
 
+#: a supply voltage or load torque this many times beyond what the machine and its limits allow
+#: is not a study of an overload (which runs, and the summary reports what happened) but a wrong
+#: number or unit, refused naming that input
+IMPLAUSIBLE_FACTOR = 10.0
+
+
+def peak_torque_window(motor: MotorSetup, supply: Supply) -> tuple[float, float]:
+    """(tau_lo, tau_hi) [N m]: the torque window of Bodson case 1 ((30), (32), (37)) at the
+    nominal supply (voltage and frequency at t = 0) and the controller's current limits, the
+    torques the drive can hold (tau_lo < 0 generating)."""
+    from acdrive.machines._dfim import machine_vector, torque_window
+
+    c = motor.controller
+    v_s = SQRT_3_2 * float(supply.voltage_pk[1][0])
+    w_e = 2.0 * np.pi * float(supply.frequency_hz[1][0])
+    lo, hi, _ = torque_window(
+        machine_vector(motor.machine), w_e, v_s,
+        SQRT_3_2 * c.stator_current_limit_pk, SQRT_3_2 * c.rotor_current_limit_pk,
+    )  # fmt: skip
+    return float(lo), float(hi)
+
+
+def _check_magnetising(k: int, motor: MotorSetup, supply: Supply) -> None:
+    """The rotor must carry the magnetising current v_s / (w_e M) the supply needs at zero torque
+    (Bodson (33)); far beyond both the rotor and the stator current limit the supply voltage is
+    the input at fault, else the rotor current limit."""
+    v_pk = float(np.max(supply.voltage_pk[1]))
+    f_min = float(np.min(supply.frequency_hz[1]))
+    magnetising_pk = v_pk / (2.0 * np.pi * f_min * motor.machine.M)
+    limit = motor.controller.rotor_current_limit_pk
+    if limit > magnetising_pk:
+        return
+    need = (
+        f"the magnetising current the stator supply needs, supply.voltage_pk / (2 pi "
+        f"supply.frequency_hz M) = {magnetising_pk:.4g} A peak (at {v_pk:g} V, {f_min:g} Hz)"
+    )
+    largest = max(limit, motor.controller.stator_current_limit_pk)
+    if magnetising_pk > IMPLAUSIBLE_FACTOR * largest:  # both current limits far below it
+        raise InputError(
+            "supply.voltage_pk",
+            f"{need} is more than {IMPLAUSIBLE_FACTOR:g} times motor[{k}]'s current limits "
+            f"(rotor {limit:g} A, stator {motor.controller.stator_current_limit_pk:g} A): the "
+            "supply voltage is far above what this machine can be magnetised from (Bodson (33))",
+        )
+    raise InputError(
+        f"motor[{k}].controller.rotor_current_limit_pk", f"must exceed {need}",
+    )  # fmt: skip
+
+
+def _check_load(k: int, motor: MotorSetup, supply: Supply) -> None:
+    """A load torque more than IMPLAUSIBLE_FACTOR times the largest torque of the drive's torque
+    window (:func:`peak_torque_window`) is refused naming the load."""
+    lo, hi = peak_torque_window(motor, supply)
+    largest = max(hi, -lo)
+    load = float(np.max(np.abs(motor.load_torque[1])))
+    if largest > 0.0 and load > IMPLAUSIBLE_FACTOR * largest:
+        raise InputError(
+            f"motor[{k}].load_torque",
+            f"|load torque| up to {load:g} N m is more than {IMPLAUSIBLE_FACTOR:g} times the "
+            f"largest torque the drive can produce, {largest:.4g} N m (the torque window of "
+            "Bodson (30), (32), (37) at the nominal supply and the controller's current "
+            "limits): check its value and unit (N m)",
+        )
+
+
+def _check_dc_link(k: int, motor: MotorSetup, supply: Supply) -> None:
+    """A speed reference out of the converter's range (:func:`speed_range`) because the DC link
+    is far too low: the DC link the reference needs, sqrt(2) |s| (L_r / M) v_s at its largest
+    slip s, is more than IMPLAUSIBLE_FACTOR times the one given; then the DC link is named."""
+    m = motor.machine
+    v_s = SQRT_3_2 * float(supply.voltage_pk[1][0])
+    w_e = 2.0 * np.pi * float(supply.frequency_hz[1][0])
+    slip = float(np.max(np.abs(w_e - m.n_p * motor.speed_reference[1]))) / w_e
+    needed = float(np.sqrt(2.0)) * slip * m.L_r / m.M * v_s
+    if needed > IMPLAUSIBLE_FACTOR * motor.dc_link_voltage:
+        raise InputError(
+            f"motor[{k}].dc_link_voltage",
+            f"{motor.dc_link_voltage:g} V: the speed reference reaches a slip of {slip:.3g}, for "
+            f"which the rotor converter needs a DC link of about sqrt(2) |s| (L_r / M) v_s = "
+            f"{needed:.4g} V (Bodson (20) at zero torque), more than {IMPLAUSIBLE_FACTOR:g} "
+            "times the one given",
+        )
+
+
 def check_setup(setup: DriveSetup) -> None:
     """Cross-field rules that single fields cannot express (raises InputError)."""
     for k, motor in enumerate(setup.motors):
+        # the rotor must be able to carry the magnetising current v_s / (w_e M) at zero torque (33)
+        _check_magnetising(k, motor, setup.supply)
         low, high = speed_range(motor, setup.supply)
+        v_pk = float(setup.supply.voltage_pk[1][0])
         rule = (
             f"must stay within {low * 30 / np.pi:.0f} to {high * 30 / np.pi:.0f} rpm (the "
-            "converter's rotor-voltage limit at the nominal supply and DC link)"
+            "converter's rotor-voltage limit at the nominal supply and DC link: "
+            f"dc_link_voltage {motor.dc_link_voltage:g} V against supply.voltage_pk {v_pk:g} V)"
         )
         ref = motor.speed_reference[1]
         if np.min(ref) < low or np.max(ref) > high:
+            _check_dc_link(k, motor, setup.supply)
             raise InputError(f"motor[{k}].speed_reference_rpm", rule)
         # a motor connected at t = 0 starts in steady state at its initial speed; a synchronising
         # one starts with its stator open, and the summary reports a relay that cannot close
         if not motor.controller.sync.enabled and not low <= motor.initial_speed <= high:
             raise InputError(f"motor[{k}].initial_speed_rpm", rule)
-        # the rotor must be able to carry the magnetising current v_s / (w_e M) at zero torque (33)
-        v_pk = float(np.max(setup.supply.voltage_pk[1]))
-        f_min = float(np.min(setup.supply.frequency_hz[1]))
-        magnetising_pk = v_pk / (2.0 * np.pi * f_min * motor.machine.M)
-        if motor.controller.rotor_current_limit_pk <= magnetising_pk:
-            raise InputError(
-                f"motor[{k}].controller.rotor_current_limit_pk",
-                f"must exceed the magnetising current the stator supply needs ({magnetising_pk:.2f} A peak)",
-            )
+        _check_load(k, motor, setup.supply)
     if setup.substeps < 1:
         raise InputError("simulation.substeps", "must be an integer >= 1")

@@ -858,6 +858,16 @@ class CompiledSystem:
         """Run many variants at once on all cores. ``variants`` is a list of dicts
         ``{part name: {parameter: value}}``; each variant's result equals running it alone."""
         sys_ = self.system
+        if not isinstance(variants, (list, tuple)):
+            raise InputError(
+                "variants", "must be a list of dicts {part name: {parameter: value}}, one per "
+                f"variant, got {type(variants).__name__}"
+            )  # fmt: skip
+        for b, changes in enumerate(variants):
+            if not isinstance(changes, dict) or not all(
+                isinstance(params, dict) for params in changes.values()
+            ):
+                raise InputError(f"variants[{b}]", "must be a dict {part name: {parameter: value}}")
         n_steps = self._steps(duration, sample_time, substeps)
         columns, rows = self._log_setup(log, n_steps, log_every)
         B = len(variants)

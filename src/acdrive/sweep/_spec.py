@@ -63,7 +63,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -142,6 +141,12 @@ class Vary:
     points: int | None = None
     log: bool = False
 
+    @property
+    def length(self) -> int | None:
+        """Values of this field on a grid (counted, never materialised); None for a random draw
+        between bounds."""
+        return len(self.values) if self.values is not None else self.points
+
 
 @dataclass(frozen=True)
 class SweepSpec:
@@ -217,12 +222,10 @@ def read_sweep_text(source: str) -> tuple[str, Path | None]:
 
 def load_sweep(source: str) -> SweepSpec:
     """Read and validate a sweep file (or built-in sweep name)."""
+    from acdrive.scenarios._files import parse_toml
+
     text, folder = read_sweep_text(str(source))
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError("sweep", f"{source} is not valid TOML ({exc})") from None
-    return build_spec(data, folder)
+    return build_spec(parse_toml(text, str(source), "sweep"), folder)
 
 
 def _base(top: _Table, folder: Path | None) -> tuple[str, dict]:
@@ -336,6 +339,108 @@ def _reducers(metrics: _Table) -> tuple:
     return tuple(out)
 
 
+def _check_count(method: str, samples: int, vary: tuple[Vary, ...], limit: int) -> None:
+    """Refuse more than ``limit`` variants, counted as the product of the grid's axis lengths
+    (nothing is materialised: ``points = 1000000000`` is refused at once)."""
+    if method == "random":
+        if samples > limit:
+            raise InputError(
+                "sampling.samples", f"{samples:.4g} variants exceed limits.max_variants = {limit}"
+            )
+        return
+    n = math.prod(v.length for v in vary)
+    if n <= limit:
+        return
+    i = max(range(len(vary)), key=lambda j: vary[j].length)
+    longest = vary[i]
+    where = f"vary[{i}]." + ("values" if longest.values is not None else "points")
+    field = where if longest.length > limit else "vary"
+    raise InputError(
+        field, f"the grid has {n:.4g} variants (the product of the axes' lengths, "
+        f"{' x '.join(str(v.length) for v in vary)}), more than limits.max_variants = {limit}"
+    )  # fmt: skip
+
+
+#: the loaders' rules that say a value has the wrong type (not a wrong size): such a value is a
+#: mistake in the sweep file, refused at load; a value of the right type that breaks a rule of
+#: its field or of a combination is an invalid variant, kept as a row with its reason
+_TYPE_RULES = (
+    "must be a number",
+    "must be a real number",
+    "must be a string",
+    "must be true or false",
+    "must be a table",
+    "must be a non-empty list",
+    "must be a list",
+    "must be a [time_s, value] pair",
+    "must be one of",
+)
+
+
+def _kind(value) -> str:
+    if isinstance(value, bool):
+        return "true or false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "a string"
+    return type(value).__name__
+
+
+def _check_value(field: str, where: str, value, base_data: dict, fixed: dict) -> None:
+    """Refuse ``value`` for ``field`` (named ``where``) if the base scenario's loader refuses it
+    for its type: the variant with that value alone is built, and an error naming ``field`` with
+    a type rule is raised on ``where``."""
+    from acdrive.batch import apply_overrides, build_variant_setup
+
+    if field.startswith(("part:", "initial:")):
+        if _kind(value) != "a number":
+            raise InputError(where, f"{field} is a part's parameter or state: must be a number")
+        return
+    try:
+        build_variant_setup(apply_overrides(base_data, {**fixed, field: value}))
+    except InputError as exc:
+        if exc.field == field and exc.rule.startswith(_TYPE_RULES):
+            raise InputError(where, f"{value!r} for {field}: {exc.rule}") from None
+
+
+def _check_values(vary: tuple[Vary, ...], fixed: dict, base_data: dict) -> None:
+    """Every varied and fixed field exists in the base scenario (an index such as motor[3] on a
+    one-motor base is refused), each ``values`` list holds one kind of value (one table column
+    has one type), and a value of the wrong type for its field is refused before anything runs
+    (one variant per kind of value is built; see :func:`_check_value`)."""
+    from acdrive.batch import get_field
+
+    scenario_fixed = {k: v for k, v in fixed.items() if not k.startswith(("part:", "initial:"))}
+    for key, value in fixed.items():
+        if not key.startswith(("part:", "initial:")):
+            try:
+                get_field(base_data, key)
+            except InputError as exc:
+                raise InputError(f"fixed.{key}", exc.rule) from None
+        _check_value(key, f"fixed.{key}", value, base_data, {})
+    for i, v in enumerate(vary):
+        if not v.field.startswith(("part:", "initial:")):
+            try:
+                get_field(base_data, v.field)
+            except InputError as exc:
+                raise InputError(f"vary[{i}].field", exc.rule) from None
+        if v.values is None:
+            _check_value(v.field, f"vary[{i}].low", v.low, base_data, scenario_fixed)
+            continue
+        kinds: dict[str, int] = {}
+        for j, value in enumerate(v.values):
+            kinds.setdefault(_kind(value), j)
+        for j in kinds.values():
+            _check_value(v.field, f"vary[{i}].values[{j}]", v.values[j], base_data, scenario_fixed)
+        if len(kinds) > 1:
+            j = sorted(kinds.values())[1]
+            raise InputError(
+                f"vary[{i}].values[{j}]", f"must be {_kind(v.values[0])} like values[0] (one "
+                f"field's values share one type), got {v.values[j]!r}"
+            )  # fmt: skip
+
+
 def build_spec(data: dict, folder: Path | None = None) -> SweepSpec:
     """Validate a parsed sweep file (``folder``: where relative paths start)."""
     top = _Table(data, "")
@@ -411,6 +516,8 @@ def build_spec(data: dict, folder: Path | None = None) -> SweepSpec:
                                          positive=True),
     }  # fmt: skip
     limits_t.done()
+    _check_count(method, samples, vary, limits["max_variants"])
+    _check_values(vary, dict(fixed), base_data)
 
     crosscheck = None
     if top.has("crosscheck"):

@@ -35,7 +35,7 @@ def count(spec: SweepSpec) -> int:
     """Number of variants (a Python int: a grid's product may be huge)."""
     if spec.method == "random":
         return spec.samples
-    return math.prod(len(grid_values(v)) for v in spec.vary)
+    return math.prod(v.length for v in spec.vary)
 
 
 def _draw(v: Vary, rng: np.random.Generator):
