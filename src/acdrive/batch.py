@@ -22,10 +22,13 @@ the single run's loop, one variant per row (``tests/test_batch.py`` checks ``np.
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
 appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
 reference, window and exceed limit (peak |x| and its time, mean, RMS, the count of samples
-beyond a limit and the first such time, the final value), and one part per oscillation metric
-(``oscillation_step``: the band-limited RMS in two late windows). Each reads one output port
-(minus a reference port, if given) at every control sample and accumulates in its discrete
-state, read back after the run. Nothing is logged per sample unless asked for, so the memory of
+beyond a limit and the first such time, the final value), one part per oscillation metric
+(``oscillation_step``: the band-limited RMS in two late windows) and one per speed error
+(``speed_error_step``: the kernel of ``sim._metrics`` that a single run's summary runs on its
+logged samples, so a batch row and summary.json give the same figures under the same names).
+Each reads one output port (minus a reference port, if given) at the control samples a single
+run logs (every ``log_every``-th) and accumulates in its discrete state, read back after the
+run. Nothing is logged per sample unless asked for, so the memory of
 a batch is a few hundred floats per variant whatever the duration. The reducer parts only read,
 so the plant's slots and generated code are those of the single run; the plant states agree
 with the reducer-free loop bit for bit under ``ACDRIVE_STRICT_MATH=1`` and to the last bit
@@ -37,7 +40,7 @@ the speed error's RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-
 sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run
 exceeds ``OSCILLATION_FINDING_RPM`` (1 rpm): the threshold of the single run's limit-cycle
 finding (``sim._outcome``). The ratio of that RMS to the one over the 0.25 s before
-(``speed_oscillation_growth``) tells a growing oscillation from a settled limit cycle.
+(``speed_oscillation_late_rpm_growth``) tells a growing oscillation from a settled limit cycle.
 """
 
 from __future__ import annotations
@@ -54,8 +57,17 @@ from acdrive._jit import jit
 from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
-from acdrive.sim._outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
-from acdrive.sim._result import OSCILLATION_BAND_HZ
+from acdrive.sim._metrics import (
+    LATE_WINDOW_S,
+    NO_CLOSING,
+    OSCILLATION_BAND_HZ,
+    OSCILLATION_FINDING_RPM,
+    RPM_PER_RAD_S,
+    SPEED_ERROR_STATES,
+    TrackingRule,
+    speed_error_figures,
+    speed_error_update,
+)
 from acdrive.sim._system import STATUS_OK, System
 
 __all__ = [
@@ -68,10 +80,9 @@ __all__ = [
     "simulate_batch",
 ]
 
-RPM_PER_RAD_S = 30.0 / math.pi
 #: sqrt(3/2): space-vector magnitude of a balanced three-phase set per peak phase value
 SQRT_3_2 = math.sqrt(1.5)
-REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation")
+REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error")
 #: prefix of the parts appended to a system for its reducers
 REDUCER_PREFIX = "reducer_"
 
@@ -86,7 +97,9 @@ REDUCER_PARAMS = Layout(
     real("b_lp", "", "oscillation: T_s/(tau + T_s) of the low-pass section (backward Euler)"),
     real("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
     real("has_ref", "", "1 if a reference is subtracted from the signal"),
+    real("every", "", "the metric reads every every-th control sample (the logged ones)"),
 )
+_EVERY = REDUCER_PARAMS.slot("every")
 _START, _STOP, _SPLIT = (REDUCER_PARAMS.slot(n) for n in ("start", "stop", "split"))
 _LIMIT, _A, _B = (REDUCER_PARAMS.slot(n) for n in ("limit", "a_hp", "b_lp"))
 _CPLX, _REF = REDUCER_PARAMS.slot("is_complex"), REDUCER_PARAMS.slot("has_ref")
@@ -142,10 +155,25 @@ STATS_PARAMS = (
 _NS, _NP = len(STATS_CHANNEL), len(STATS_PARAMS)
 
 
+@_inline
+def _logged_time(t, T_s, every):
+    """(True and the time the single run logs, if control sample t is one it logs (every
+    ``every``-th, ``SystemResult.t``'s arithmetic); else False and t). The metrics of a batch
+    are taken on the samples a single run of the variant logs, so both give the same figures."""
+    k = int(t / T_s + 0.5)
+    n = int(every)
+    if k % n != 0:
+        return False, t
+    return True, (k // n) * T_s * n
+
+
 @jit
 def stats_step(t, T_s, u, p, s, y):
+    logged, t = _logged_time(t, T_s, p[1])
+    if not logged:
+        return 0
     for c in range(int(p[0])):
-        q = 1 + _NP * c
+        q = 2 + _NP * c
         if p[q] <= t <= p[q + 1]:
             v = _difference(u, int(p[q + 4]), int(p[q + 5]), p[q + 3] > 0.5)
             a = abs(v)
@@ -171,7 +199,11 @@ def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
     """The stats part for ``channels`` = ((unit, is complex, has reference), ...): inputs
     ``x<c>`` (and ``ref<c>``) declared in each signal's unit (the wiring checks units)."""
     if channels not in _STATS_CLASSES:
-        inputs, params, states = [], [real("channels", "", "number of channels")], []
+        inputs, states = [], []
+        params = [
+            real("channels", "", "number of channels"),
+            real("every", "", "the metrics read every every-th control sample (the logged ones)"),
+        ]
         for c, (unit, is_complex, has_ref) in enumerate(channels):
             make = cplx if is_complex else real
             inputs.append(make(f"x{c}", unit, f"signal of channel {c}"))
@@ -210,6 +242,9 @@ OSC_STATES = Layout(
 
 @jit
 def oscillation_step(t, T_s, u, p, s, y):
+    logged, t = _logged_time(t, T_s, p[_EVERY])
+    if not logged:
+        return 0
     x = _reduced_value(u, p)
     if s[0] == 0.0:
         s[0] = 1.0
@@ -259,12 +294,70 @@ def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> typ
                 "STATES": states,
                 "INPUTS": Layout(*inputs),
                 "OUTPUTS": Layout(),
-                "DEFAULTS": {"split": 0.0, "limit": NO_LIMIT, "a_hp": 0.0, "b_lp": 0.0},
+                "DEFAULTS": {
+                    "split": 0.0,
+                    "limit": NO_LIMIT,
+                    "a_hp": 0.0,
+                    "b_lp": 0.0,
+                    "every": 1.0,
+                },
                 "INITIAL": {},
                 "step": step,
             },
         )
     return _CLASSES[key]
+
+
+#: the speed-error part's parameters before its reference-change windows
+SPEED_ERROR_PARAMS = (
+    ("every", "", "the metric reads every every-th control sample (the logged ones)"),
+    ("slew", "s s/rad", "SLEW_MARGIN J / tau: window per rad/s of error at a relay closing"),
+    ("settle", "s", "SETTLE_TIME_CONSTANTS / a_D,VEL: settling after a change"),
+    ("has_gate", "", "1 if the relay state is an input (else always closed)"),
+)
+_SE_NP = len(SPEED_ERROR_PARAMS)
+
+
+@jit
+def speed_error_step(t, T_s, u, p, s, y):
+    """The whole-run and tracking speed error (``sim._metrics.speed_error_update``, the kernel a
+    single run's summary runs on its logged samples) on line: inputs w, w_ref (and the relay
+    state)."""
+    logged, t = _logged_time(t, T_s, p[0])
+    if not logged:
+        return 0
+    closed = u[2] if p[3] > 0.5 else 1.0
+    speed_error_update(t, u[1] - u[0], closed, p[1], p[2], p[_SE_NP:], s)
+    return 0
+
+
+_SPEED_ERROR_CLASSES: dict[tuple, type] = {}
+
+
+def _speed_error_class(unit: str, gated: bool, n_windows: int) -> type:
+    key = (unit, gated, n_windows)
+    if key not in _SPEED_ERROR_CLASSES:
+        inputs = [real("x", unit, "speed"), real("ref", unit, "speed reference")]
+        if gated:
+            inputs.append(real("gate", "", "relay state: 1 closed, 0 open"))
+        params = [real(n, u, d) for n, u, d in SPEED_ERROR_PARAMS]
+        for j in range(n_windows):
+            params += [real(f"start{j}", "s", f"start of excluded window {j}"),
+                       real(f"end{j}", "s", f"end of excluded window {j}")]  # fmt: skip
+        _SPEED_ERROR_CLASSES[key] = type(
+            "Reducer_speed_error",
+            (SampledPart,),
+            {
+                "__doc__": "On-line whole-run and tracking speed error (acdrive.batch).",
+                "PARAMS": Layout(*params),
+                "STATES": Layout(*(real(n, u, d) for n, u, d in SPEED_ERROR_STATES)),
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "INITIAL": {"until": NO_CLOSING},
+                "step": speed_error_step,
+            },
+        )
+    return _SPEED_ERROR_CLASSES[key]
 
 
 @dataclass(frozen=True)
@@ -274,7 +367,10 @@ class Reducer:
     ``kind``: ``peak`` (max |x|; also ``<name>_time``), ``mean``, ``rms``, ``exceed`` (samples
     with |x| > ``limit``; also ``<name>_first_time``, NaN if none), ``final`` (x at the last
     sample of the window), ``oscillation`` (RMS of x in ``band_hz`` over the last ``window`` s of
-    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before). ``x`` is
+    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before),
+    ``speed_error`` (``signal`` a speed, ``reference`` its reference, ``gate`` the relay state or
+    None: the columns of ``sim._metrics.speed_error_figures`` in ``unit``, ``suffix`` appended,
+    the tracking window by ``rule``; ``name`` is not used). ``x`` is
     ``signal`` ("part.output") minus ``reference`` if given; a space vector's magnitude. The
     window is [``start``, ``stop``] (``stop`` None: the end of the run). The value is multiplied
     by ``scale`` (e.g. rad/s -> rpm); ``limit`` is in the signal's unit.
@@ -290,8 +386,15 @@ class Reducer:
     scale: float = 1.0
     band_hz: tuple[float, float] = OSCILLATION_BAND_HZ
     window: float = LATE_WINDOW_S
+    gate: str | None = None
+    rule: TrackingRule | None = None
+    unit: str = "rpm"
+    suffix: str = ""
 
     def columns(self) -> list[str]:
+        if self.kind == "speed_error":
+            state = np.ones(len(SPEED_ERROR_STATES))
+            return [k + self.suffix for k in speed_error_figures(state, 1.0, self.unit)]
         extra = {"peak": ["_time"], "exceed": ["_first_time"], "oscillation": ["_growth"]}
         return [self.name] + [self.name + s for s in extra.get(self.kind, [])]
 
@@ -330,17 +433,31 @@ def check_reducer(r: Reducer, where: str) -> Reducer:
 
 def dfim_reducers(setup) -> list[Reducer]:
     """The default metrics of a DFIM drive, per motor k (suffix ``_m<k>`` beyond the first):
-    speed error RMS and peak [rpm], band-limited speed oscillation and its growth, peak phase
-    currents [A] and samples above the controller's current limits, peak torque, final speed."""
+    the speed error over the whole run and where tracking is expected (the columns of
+    ``sim._metrics.speed_error_figures``, the window of ``sim._metrics.tracking_rule``: the
+    single run's figures of the same names), the band-limited speed oscillation over the last
+    ``LATE_WINDOW_S`` and its growth (``speed_oscillation_late_rpm``), peak phase currents [A]
+    and samples above the controller's current limits, peak torque, final speed."""
+    from acdrive.sim._metrics import tracking_rule
+
     out = []
     for k, motor in enumerate(setup.motors):
         sfx = "" if k == 0 else f"_m{k}"
         c = motor.controller
         w, ref = f"shaft{k}.w", f"reference{k}.w_ref"
         out += [
-            Reducer(f"speed_error_rms_rpm{sfx}", "rms", w, ref, scale=RPM_PER_RAD_S),
-            Reducer(f"speed_error_peak_rpm{sfx}", "peak", w, ref, scale=RPM_PER_RAD_S),
-            Reducer(f"speed_oscillation_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
+            Reducer(
+                "speed",
+                "speed_error",
+                w,
+                ref,
+                gate=f"relay{k}.closed",
+                rule=tracking_rule(setup, k),
+                scale=RPM_PER_RAD_S,
+                unit="rpm",
+                suffix=sfx,
+            ),
+            Reducer(f"speed_oscillation_late_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
             Reducer(f"peak_stator_current_a{sfx}", "peak", f"dfim{k}.i_s", scale=1 / SQRT_3_2),
             Reducer(f"peak_rotor_current_a{sfx}", "peak", f"dfim{k}.i_r_rotor", scale=1 / SQRT_3_2),
             Reducer(
@@ -368,8 +485,11 @@ def default_reducers(setup) -> list[Reducer]:
 
 def im_reducers(setup) -> list[Reducer]:
     """The default metrics of a cage-IM drive: current tracking RMS error and peak current [A,
-    space vector], peak torque, final speed, and the speed error's RMS if a speed reference
-    exists."""
+    space vector], peak torque, final speed, and with a speed loop its speed error over the
+    whole run and where tracking is expected [rad/s] (``sim._metrics.im_tracking_rule``; the
+    single run's figures of the same names)."""
+    from acdrive.sim._metrics import im_tracking_rule
+
     reference = "reference.i" if setup.mode == "current" else "ifoc.i_s_ref"  # IMDrive's
     out = [
         Reducer("current_error_rms_a", "rms", "machine.i_s", reference),
@@ -378,7 +498,8 @@ def im_reducers(setup) -> list[Reducer]:
         Reducer("final_speed_rad_s", "final", "shaft.w"),
     ]
     if setup.mode in ("speed-p", "speed-pi"):
-        out.append(Reducer("speed_error_rms_rad_s", "rms", "shaft.w", "speed_reference.w_ref"))
+        out.append(Reducer("speed", "speed_error", "shaft.w", "speed_reference.w_ref",
+                           rule=im_tracking_rule(setup), unit="rad_s"))  # fmt: skip
     return out
 
 
@@ -555,12 +676,13 @@ class _Prepared:
 
 
 def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
-                   replaced=None) -> tuple[System, list[tuple[str, int]]]:  # fmt: skip
+                   replaced=None, every: int = 1) -> tuple[System, list[tuple[str, int]]]:  # fmt: skip
     """The drive's system with the reducer parts appended after every other part (the same
     wires; the plant's slots and generated code unchanged), and (part name, first state slot
     within the part) of each reducer. Peak, mean, RMS, exceed and final metrics of the same
     signal, reference and window share one channel of the one "stats" part (at most one exceed
-    limit per channel); each oscillation has its own part.
+    limit per channel); each oscillation and speed error has its own part. Every metric reads
+    the ``every``-th control samples (those a single run logs).
     ``replaced[name]`` is a re-parametrised copy of part ``name`` used in its place."""
     from acdrive.core._parts import Port
 
@@ -589,6 +711,21 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             raise InputError(f"{where}.signal", "must be a real or complex output")
         if r.kind == "oscillation" and x.var.kind == "complex":
             raise InputError(f"{where}.signal", "an oscillation is measured on a real signal")
+        if r.kind == "speed_error":
+            gate = None if r.gate is None else remap(_port(base, r.gate, f"{where}.gate"))
+            rule = r.rule or TrackingRule()
+            cls = _speed_error_class(x.var.unit, gate is not None, len(rule.windows))
+            values = {"every": float(every), "slew": rule.slew_s_per_rad_s,
+                      "settle": rule.settle_s, "has_gate": float(gate is not None)}  # fmt: skip
+            for j, (a, b) in enumerate(rule.windows):
+                values.update({f"start{j}": a, f"end{j}": b})
+            part = cls(f"{REDUCER_PREFIX}speed_error{len(served)}", **values)
+            parts.append(part)
+            wires += [(x, part.inp.x), (ref, part.inp.ref)]
+            if gate is not None:
+                wires.append((gate, part.inp.gate))
+            served.append((part.name, 0))
+            continue
         stop = duration if r.stop is None else min(r.stop, duration)
         start, split, a_hp, b_lp = r.start, 0.0, 0.0, 0.0
         kind = "oscillation" if r.kind == "oscillation" else "stats"
@@ -596,7 +733,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
         if kind == "oscillation":  # two windows at the end of the run
             split = max(stop - r.window, 0.0)
             start = max(split - r.window, r.start)
-            a_hp, b_lp = band_coefficients(r.band_hz, sample_time)
+            a_hp, b_lp = band_coefficients(r.band_hz, sample_time * every)
         key = (kind, r.signal, r.reference, start, stop, split, a_hp, b_lp)
         group = groups.get(key)
         if group is None or (limit is not None and group["limit"] not in (None, limit)):
@@ -614,7 +751,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             (g["x"].var.unit, g["x"].var.kind == "complex", g["ref"] is not None) for g in stats
         )
         cls = _stats_class(channels)
-        values = {"channels": float(len(stats))}
+        values = {"channels": float(len(stats)), "every": float(every)}
         for c, g in enumerate(stats):
             ref_slot = -1 if g["ref"] is None else cls.INPUTS.slot(f"ref{c}")
             values.update({
@@ -638,7 +775,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
         part = cls(
             f"{REDUCER_PREFIX}oscillation{j}", start=g["start"], stop=g["stop"],
             split=g["split"], a_hp=g["a"], b_lp=g["b"], is_complex=0.0,
-            has_ref=float(ref is not None),
+            has_ref=float(ref is not None), every=float(every),
         )  # fmt: skip
         parts.append(part)
         wires.append((x, part.inp.x))
@@ -654,6 +791,9 @@ def _reduce(r: Reducer, s: np.ndarray, n_ok: bool) -> dict:
     nan = math.nan
     if not n_ok:
         return dict.fromkeys(r.columns(), nan)
+    if r.kind == "speed_error":
+        figures = speed_error_figures(s, abs(r.scale), r.unit)
+        return {k + r.suffix: nan if v is None else v for k, v in figures.items()}
     if r.kind == "oscillation":
         late = math.sqrt(s[7] / s[8]) * abs(r.scale) if s[8] else nan
         early = math.sqrt(s[5] / s[6]) * abs(r.scale) if s[6] else nan
@@ -729,7 +869,7 @@ def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None
     elif callable(reducers):
         reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers(setup))]
     system, served = _with_reducers(
-        drive, list(reducers), setup.duration, setup.sample_time, replaced
+        drive, list(reducers), setup.duration, setup.sample_time, replaced, setup.log_every
     )
     return setup, drive, system, initial, held, list(zip(reducers, served, strict=True))
 
@@ -806,7 +946,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             }
             for r, (part, offset) in m.reducers:
                 a = m.system.slots[part].s[0] + offset
-                values = _reduce(r, S[b, a : a + max(_NS, len(OSC_STATES))], ok)
+                width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES))
+                values = _reduce(r, S[b, a : a + width], ok)
                 row.update({k: float(x) for k, x in values.items()})
             for e, (part, events) in enumerate(names):
                 if part.startswith(REDUCER_PREFIX):
@@ -838,7 +979,9 @@ def _verdict(setup, row: dict, finite: bool):
     ``OSCILLATION_FINDING_RPM``; True otherwise; None without the oscillation metric."""
     if not finite:
         return False
-    keys = [k for k in row if k.startswith("speed_oscillation_rpm") and not k.endswith("_growth")]
+    keys = [
+        k for k in row if k.startswith("speed_oscillation_late_rpm") and not k.endswith("_growth")
+    ]
     if not keys or not hasattr(setup, "motors"):
         return None
     values = [row[k] for k in keys]
