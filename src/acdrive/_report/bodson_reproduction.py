@@ -560,7 +560,7 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
         "",
         f"With the paper's velocity gains (a_D,VEL = {A_VEL:g} rad/s) and an **ideal** rotor "
         f"converter (`bodson-ramp-ideal`), the voltage-command drive {oscillation_verdict(osc_ideal[0])}"
-        + (f", at about {osc_ideal[1]:.0f} Hz" if osc_ideal[0] > OSCILLATION_FINDING_RPM else "")
+        + (f", at about {osc_ideal[1]:.0f} Hz" if osc_ideal[1] is not None else "")
         + f"; its speed error on the ramp reaches {ramp_error:.0f} rpm. Current command at the same "
         f"gains with an ideal converter (`bodson-step`, `bodson-mixed-steps`) "
         f"{oscillation_verdict(max(cc_ideal))} (worse of the two). The linearised closed loop "

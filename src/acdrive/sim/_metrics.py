@@ -16,9 +16,11 @@ Windows, named in the keys:
   is written beside the figures (``speed_tracking.rule``);
 * ``_late_``: the last ``LATE_WINDOW_S`` of the run.
 
-The limit-cycle band RMS (``speed_oscillation``) is taken on the longest stretch of tracked
-samples; its frequency is reported only where that RMS exceeds ``OSCILLATION_FINDING_RPM``
-(below it the dominant bin of noise is no frequency of anything).
+The limit-cycle band RMS (``limit_cycle``) is taken on the longest stretch of tracked samples;
+its frequency is reported only where a limit cycle is shown: that RMS above
+``OSCILLATION_FINDING_RPM`` over the stretch and over its end, and a persistent period
+(``period_correlation``). Below it the
+dominant bin of noise, or of a drift's share of the band, is no frequency of anything.
 """
 
 from __future__ import annotations
@@ -302,7 +304,7 @@ def band_spectrum(t, err, band_hz=OSCILLATION_BAND_HZ):
     transient) or has fewer than 16 samples."""
     n = t.size
     dt = t[1] - t[0] if n > 1 else 0.0
-    if n < 16 or n * dt < 5.0 / band_hz[0]:
+    if n < 16 or n * dt < (5.0 / band_hz[0]) * (1.0 - 1e-9):  # (rounding of n dt)
         return None
     err = err - np.polyval(np.polyfit(t - t[0], err, 1), t - t[0])
     window = np.hanning(n)
@@ -316,14 +318,79 @@ def band_spectrum(t, err, band_hz=OSCILLATION_BAND_HZ):
     return rms, freq[inside], power
 
 
-def speed_oscillation(t, err_rpm, mask, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float | None]:
-    """(band RMS [rpm], dominant frequency [Hz] or None) of the speed error ``err_rpm`` over the
-    longest stretch of consecutive ``mask`` samples (nothing zero-filled; ``band_spectrum``).
-    The frequency is given only where the RMS exceeds ``OSCILLATION_FINDING_RPM``; (0, None)
-    from a stretch too short to judge."""
-    start, stop = longest_run(mask)
-    found = band_spectrum(np.asarray(t)[start:stop], np.asarray(err_rpm)[start:stop], band_hz)
-    if found is None:
+#: a limit cycle repeats its period: the band-limited error's normalised autocorrelation at its
+#: first peak (one period) is at least this. A sinusoid of constant amplitude gives above 0.85
+#: even at 20 Hz over the shortest stretch judged (0.25 s, five periods; Hann-windowed), band-
+#: limited noise about 0.3, the band's share of a drifting or diverging speed well below 0.75.
+PERIOD_CORRELATION_MIN = 0.75
+
+
+def period_correlation(t, err, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float | None]:
+    """(r, 1 / lag [Hz] or None): the normalised autocorrelation r of ``err`` restricted to
+    ``band_hz`` (trend removed, Hann-windowed, out-of-band bins zeroed, zero-padded so the
+    correlation is linear) at its highest peak after its first zero crossing within lags of one
+    period of the band (1 / high to 1 / low); (0, None) if there is no such interior peak."""
+    n = t.size
+    if n < 16:
         return 0.0, None
+    dt = t[1] - t[0]
+    err = err - np.polyval(np.polyfit(t - t[0], err, 1), t - t[0])
+    spectrum = np.fft.rfft(err * np.hanning(n), 2 * n)
+    freq = np.fft.rfftfreq(2 * n, dt)
+    spectrum[(freq < band_hz[0]) | (freq > band_hz[1])] = 0.0
+    ac = np.fft.irfft(np.abs(spectrum) ** 2, 2 * n)[:n]
+    if ac[0] <= 0.0:
+        return 0.0, None
+    ac = ac / ac[0]
+    longest = min(int(1.0 / (band_hz[0] * dt)) + 1, n - 1)
+    negative = np.flatnonzero(ac[: longest + 1] < 0.0)
+    if negative.size == 0:
+        return 0.0, None
+    first = int(negative[0])
+    k = first + int(np.argmax(ac[first : longest + 1]))
+    if k in (first, longest):  # no interior peak: no period within the band
+        return float(max(ac[k], 0.0)), None
+    return float(ac[k]), 1.0 / (k * dt)
+
+
+def limit_cycle(t, err_rpm, mask, band_hz=OSCILLATION_BAND_HZ) -> dict:
+    """The limit-cycle figures of the speed error ``err_rpm`` over the longest stretch of
+    consecutive ``mask`` samples: ``speed_oscillation_rms_rpm`` over the stretch
+    (``band_spectrum``; 0 from a stretch too short to judge), ``speed_oscillation_end_rms_rpm``
+    over its last LATE_WINDOW_S, ``speed_oscillation_period_correlation``: the smaller
+    ``period_correlation`` r of the two. ``speed_limit_cycle``: shown where both RMS exceed
+    OSCILLATION_FINDING_RPM and r is at least PERIOD_CORRELATION_MIN: an oscillation whose period
+    repeats and that lasts to the end of the stretch, not a transient's, a drift's or a passing
+    disturbance's share of the band. Then ``speed_oscillation_hz`` is the stretch's dominant
+    frequency (else None)."""
+    start, stop = longest_run(mask)
+    t, err = np.asarray(t)[start:stop], np.asarray(err_rpm)[start:stop]
+    found = band_spectrum(t, err, band_hz)
+    tail = t >= t[-1] - LATE_WINDOW_S * (1 - 1e-9) if t.size else np.zeros(0, dtype=bool)
+    end = band_spectrum(t[tail], err[tail], band_hz) if found is not None else None
+    if found is None or end is None:
+        rms = found[0] if found is not None else 0.0
+        return {"speed_oscillation_rms_rpm": rms, "speed_oscillation_end_rms_rpm": None,
+                "speed_oscillation_hz": None, "speed_oscillation_period_correlation": None,
+                "speed_limit_cycle": False}  # fmt: skip
     rms, freq, power = found
-    return rms, (float(freq[np.argmax(power)]) if rms > OSCILLATION_FINDING_RPM else None)
+    r = min(period_correlation(t, err, band_hz)[0], period_correlation(t[tail], err[tail])[0])
+    shown = bool(
+        rms > OSCILLATION_FINDING_RPM
+        and end[0] > OSCILLATION_FINDING_RPM
+        and r >= PERIOD_CORRELATION_MIN
+    )
+    return {
+        "speed_oscillation_rms_rpm": rms,
+        "speed_oscillation_end_rms_rpm": end[0],
+        "speed_oscillation_hz": float(freq[np.argmax(power)]) if shown else None,
+        "speed_oscillation_period_correlation": r,
+        "speed_limit_cycle": shown,
+    }
+
+
+def speed_oscillation(t, err_rpm, mask, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float | None]:
+    """(band RMS [rpm], dominant frequency [Hz] or None) of ``limit_cycle``: the frequency only
+    where a limit cycle is shown."""
+    c = limit_cycle(t, err_rpm, mask, band_hz)
+    return c["speed_oscillation_rms_rpm"], c["speed_oscillation_hz"]

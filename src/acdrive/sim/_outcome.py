@@ -16,9 +16,13 @@ from acdrive.sim._metrics import (
     LATE_WINDOW_S,
     OSCILLATION_BAND_HZ,
     OSCILLATION_FINDING_RPM,
+    PERIOD_CORRELATION_MIN,
+    RPM_PER_RAD_S,
+    limit_cycle,
     speed_tracking,
     tracking_rule,
 )
+from acdrive.sim._recovery import speed_outcome
 from acdrive.sim._result import DriveResult
 from acdrive.sim._setup import DriveSetup, simulate
 
@@ -74,17 +78,32 @@ def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int =
 
 
 def _late_oscillation(results: dict) -> tuple | None:
-    """(mode, motor, RMS [rpm], frequency [Hz], whole-run RMS) of the first speed oscillation
-    above the finding threshold over the last ``LATE_WINDOW_S`` of a run, or None."""
+    """(mode, motor, limit-cycle figures, whole-run RMS) of the first limit cycle shown
+    (``sim._metrics.limit_cycle``) over the last ``LATE_WINDOW_S`` of a run, or None."""
     for mode, result in results.items():
         tail = result.t >= result.t[-1] - LATE_WINDOW_S * (1 - 1e-9)
         end = DriveResult(result.name, result.t[tail], result.signals[tail], result.sample_time,
                           result.final_state, tracking=result.tracking)  # fmt: skip
         for k in range(result.n_motors):
-            rms, hz = end.speed_oscillation(k)
-            if rms > OSCILLATION_FINDING_RPM:
-                return mode, k, rms, hz, result.speed_oscillation(k)[0]
+            err = (end.signal("w_ref", k) - end.signal("w", k)) * RPM_PER_RAD_S
+            cycle = limit_cycle(end.t, err, end.tracking_mask(k))
+            if cycle["speed_limit_cycle"]:
+                return mode, k, cycle, result.speed_oscillation(k)[0]
     return None
+
+
+def _cycle_words(cycle: dict) -> str:
+    """How a limit cycle was shown: band RMS over the threshold and its period repeating."""
+    low, high = OSCILLATION_BAND_HZ
+    return (
+        f"{cycle['speed_oscillation_rms_rpm']:.1f} rpm RMS at about "
+        f"{cycle['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
+        f"{OSCILLATION_FINDING_RPM:g} rpm threshold to the end of the tracked stretch "
+        f"({cycle['speed_oscillation_end_rms_rpm']:.1f} rpm over its last {LATE_WINDOW_S:g} s), "
+        "its period repeating: autocorrelation "
+        f"{cycle['speed_oscillation_period_correlation']:.2f} at one period, at least "
+        f"{PERIOD_CORRELATION_MIN:g}"
+    )
 
 
 def _open_relay_reasons(result: DriveResult, motor: int = 0) -> str:
@@ -196,31 +215,29 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
             summary[f"speed_rms_error_tracking_{suffix}_rpm"] = s["speed_rms_error_tracking_rpm"]
             summary[f"speed_tracking_{suffix}"] = s["speed_tracking"]
             summary[f"limit_events_{suffix}"] = s["limit_events"]
+    a_vel = motor.controller.gains.K_P / (2 * motor.machine.J)
+    eigen = (
+        "the linearised whole drive's eigenvalues at an operating point: `acdrive stability` "
+        "(docs/stability.md)"
+    )
     for mode, s in summaries.items():
-        worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
-        if worst["speed_oscillation_rms_rpm"] > OSCILLATION_FINDING_RPM:
-            low, high = OSCILLATION_BAND_HZ
+        cycles = [m for m in s["motors"] if m["speed_limit_cycle"]]
+        if cycles:
+            worst = max(cycles, key=lambda m: m["speed_oscillation_rms_rpm"])
             summary["finding"] = (
-                f"{mode} command: the speed oscillates ({worst['speed_oscillation_rms_rpm']:.1f} rpm "
-                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
-                f"{OSCILLATION_FINDING_RPM:g} rpm threshold) at a_D,VEL = "
-                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
-                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+                f"{mode} command: the speed oscillates in a limit cycle ({_cycle_words(worst)}) "
+                f"at a_D,VEL = {a_vel:.0f} rad/s; {eigen}"
             )
             break
     if "finding" not in summary:
         late = _late_oscillation(results)
         if late is not None:
-            mode, k, rms, hz, whole = late
-            low, high = OSCILLATION_BAND_HZ
+            mode, k, cycle, whole = late
             summary["finding"] = (
-                f"{mode} command: the speed oscillates at the end of the run (motor {k + 1}: "
-                f"{rms:.1f} rpm RMS at about {hz:.0f} Hz over its last {LATE_WINDOW_S:g} s in "
-                f"the {low:g}-{high:g} Hz band, above the {OSCILLATION_FINDING_RPM:g} rpm "
-                f"threshold; {whole:.1f} rpm over the whole run): an oscillation that starts late "
-                f"or is still growing, at a_D,VEL = "
-                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
-                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+                f"{mode} command: the speed oscillates in a limit cycle at the end of the run "
+                f"(motor {k + 1}: {_cycle_words(cycle)}, over its last {LATE_WINDOW_S:g} s; "
+                f"{whole:.1f} rpm over the whole run): an oscillation that starts late or is "
+                f"still growing, at a_D,VEL = {a_vel:.0f} rad/s; {eigen}"
             )
     # the bench converter's first-harmonic voltage loss per motor (dead time and device drops,
     # plant._converter / machines._dfim_part), which the scenario notes refer to
@@ -249,6 +266,13 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
                         f"{e['peak_a']:.2f} A, first at {e['first_time_s']:.3f} s"
                     )
         summary["limit_excursions"][mode] = per_motor
+    for mode, result in results.items():  # what happened at each disturbance and at the end
+        masks = [result.tracking_mask(k) for k in range(result.n_motors)]
+        who = f"{mode} command, " if len(results) > 1 else ""
+        speed = speed_outcome(result, masks, setup, who)
+        warnings += speed.pop("warnings")
+        key = "speed_outcome" if len(results) == 1 else f"speed_outcome_{MODE_SUFFIX[mode]}"
+        summary[key] = speed
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync

@@ -14,6 +14,7 @@ from acdrive.sim._metrics import (
     OSCILLATION_BAND_HZ,
     RPM_PER_RAD_S,
     TrackingRule,
+    limit_cycle,
     speed_oscillation,
     speed_tracking,
 )
@@ -131,7 +132,7 @@ class DriveResult:
     def speed_oscillation(self, motor: int = 0, band_hz=OSCILLATION_BAND_HZ):
         """(band RMS [rpm], dominant frequency [Hz] or None) of the speed error over the longest
         stretch of tracked samples (``sim._metrics.speed_oscillation``; the frequency only where
-        the RMS exceeds ``OSCILLATION_FINDING_RPM``)."""
+        a limit cycle is shown)."""
         err = (self.signal("w_ref", motor) - self.signal("w", motor)) * RPM_PER_RAD_S
         return speed_oscillation(self.t, err, self.tracking_mask(motor), band_hz)
 
@@ -154,13 +155,13 @@ class DriveResult:
         """Headline metrics (motor 0 at top level, every motor under ``motors``), each computed
         once in ``acdrive.sim._metrics`` with its window in its name: ``_whole_run_`` (every
         logged sample) or ``_tracking_`` (``speed_tracking``: the rule, the excluded windows and
-        the same figures); ``speed_oscillation_rms_rpm`` in OSCILLATION_BAND_HZ over the longest
-        tracked stretch, ``speed_oscillation_hz`` only above OSCILLATION_FINDING_RPM (else None)."""
+        the same figures); ``sim._metrics.limit_cycle`` over the longest tracked stretch:
+        ``speed_oscillation_rms_rpm`` in OSCILLATION_BAND_HZ, the period correlation,
+        ``speed_limit_cycle`` and ``speed_oscillation_hz`` (None unless a limit cycle is shown)."""
         per_motor = []
         for k in range(self.n_motors):
             figures, tracking, mask = self.speed_tracking(k)
             err = (self.signal("w_ref", k) - self.signal("w", k)) * RPM_PER_RAD_S
-            rms, hz = speed_oscillation(self.t, err, mask)
             per_motor.append(
                 {
                     **figures,
@@ -169,8 +170,7 @@ class DriveResult:
                     "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
                     "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
                     "limit_events": self.events(k),
-                    "speed_oscillation_rms_rpm": rms,
-                    "speed_oscillation_hz": hz,
+                    **limit_cycle(self.t, err, mask),
                 }
             )
         return {
