@@ -1,8 +1,8 @@
 """What happened to the speed at each disturbance of a DFIM run and at its end.
 
-The disturbances are known from the scenario before the run (``disturbances``): a supply
-voltage, frequency or phase EMF that departs from its starting value (a sag, a frequency step, a
-collapsed phase) until it returns, a DC link that drops, a load torque that steps, a relay
+The disturbances are known from the scenario before the run (``disturbances``, after t = 0): a
+supply voltage, frequency or phase EMF that departs from its starting value (a sag, a frequency
+step, a collapsed phase) until it returns, a DC link that drops, a load torque that steps, a relay
 closed by force, current sensors that fail. Each is judged from its start to the next
 disturbance's start or the end of the run, on the samples where tracking is expected
 (``sim._metrics.TrackingRule``: the intended reference steps' settling and an open relay are not
@@ -107,7 +107,8 @@ def disturbances(setup) -> list[dict]:
                            (m.current_sensor_fault_time, "current sensors fail")):  # fmt: skip
             if math.isfinite(time):
                 found.append({"what": what, "start_s": float(time), "cleared_s": None, "motor": k})
-    found = [d for d in found if d["start_s"] < setup.duration]
+    # a step at t = 0 is the starting condition: there is no state before it to recover to
+    found = [d for d in found if 0.0 < d["start_s"] < setup.duration]
     return sorted(found, key=lambda d: d["start_s"])
 
 
