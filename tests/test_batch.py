@@ -6,13 +6,12 @@ import math
 import numpy as np
 import pytest
 
+from acdrive._reducer_parts import band_coefficients, oscillation_step
 from acdrive.batch import (
     Reducer,
     apply_overrides,
-    band_coefficients,
     build_variant_setup,
     get_field,
-    oscillation_step,
     prepare_variant,
     simulate_batch,
 )
