@@ -32,13 +32,13 @@ print(f"{len(table)} variants, {batch.steps} control steps in {batch.wall_time:.
 fig, ax = plt.subplots(figsize=(7, 3.5))
 for k, tl in enumerate(loads):
     rows = table.iloc[k * len(bandwidths) : (k + 1) * len(bandwidths)]
-    ax.semilogx(bandwidths, rows["speed_oscillation_rpm"], "o-", label=f"load {tl:g} N m")
+    ax.semilogx(bandwidths, rows["speed_oscillation_late_rpm"], "o-", label=f"load {tl:g} N m")
 ax.set_xlabel("speed-loop bandwidth a_D,VEL [rad/s]")
 ax.set_ylabel("late speed oscillation [rpm RMS]")
 ax.legend()
 fig.tight_layout()
 print(
-    table[["stable", "speed_oscillation_rpm"]].assign(
+    table[["stable", "speed_oscillation_late_rpm"]].assign(
         bandwidth=[v["motor[0].controller.speed_bandwidth"] for v in variants]
     )
 )

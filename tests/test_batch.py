@@ -6,13 +6,12 @@ import math
 import numpy as np
 import pytest
 
+from acdrive._reducer_parts import band_coefficients, oscillation_step
 from acdrive.batch import (
     Reducer,
     apply_overrides,
-    band_coefficients,
     build_variant_setup,
     get_field,
-    oscillation_step,
     prepare_variant,
     simulate_batch,
 )
@@ -109,7 +108,7 @@ def test_oscillation_reducer_measures_a_sinusoid_through_its_band_filter():
     of the start transient, the window's partial periods); constant amplitude -> growth 1."""
     T = 200e-6
     a, b = band_coefficients((20.0, 200.0), T)
-    p = np.array([0.5, 1.0, 0.75, 0.0, a, b, 0.0, 0.0])
+    p = np.array([0.5, 1.0, 0.75, 0.0, a, b, 0.0, 0.0, 1.0])  # every control sample
     s = np.zeros(9)
     A, f = 3.0, 50.0
     for k in range(int(1.0 / T) + 1):
@@ -138,9 +137,9 @@ def test_invalid_variants_are_reported_with_their_reason_and_the_batch_goes_on()
     assert rows[1]["reason"].startswith("motor[0].params.R_s:")
     assert rows[2]["reason"].startswith("motor[0].no_such_field:")
     assert rows[3]["reason"].startswith("shaft0.J:")
-    assert math.isnan(rows[0]["speed_error_rms_rpm"]) and rows[0]["status"] == "invalid"
+    assert math.isnan(rows[0]["speed_rms_error_tracking_rpm"]) and rows[0]["status"] == "invalid"
     assert rows[4]["status"] == "ok" and rows[4]["stable"] is True
-    assert np.isfinite(rows[4]["speed_error_rms_rpm"])
+    assert np.isfinite(rows[4]["speed_rms_error_tracking_rpm"])
 
 
 def test_machine_parameter_override_expands_the_built_in_machine():
@@ -166,3 +165,26 @@ def test_cage_im_variants_equal_single_runs():
                                 initial=initial, held=held, log=[drive.parts["shaft"].out.w])  # fmt: skip
     assert np.array_equal(batch.traces[0].final_state, alone.final_state)
     assert np.array_equal(batch.traces[0].data, alone.data)
+
+
+def test_cage_im_speed_figures_are_the_single_runs():
+    """A cage-IM speed loop: the batch row's speed error columns are the single run's summary
+    figures of the same names (one kernel, ``sim._metrics``; the samples the run logs, here every
+    fifth): equal to the last bits of the compiled loop (rel 1e-9)."""
+    from acdrive.sim._im_drive import run_im_scenario
+
+    variant = {"simulation.duration": 0.1}
+    row = simulate_batch("im-foc-speed", [variant]).rows[0]
+    setup = build_variant_setup(apply_overrides(read_scenario("im-foc-speed"), variant))
+    assert setup.log_every == 5
+    summary = run_im_scenario(setup).summary
+    keys = [k for k in summary if k.startswith("speed_") and ("_error_" in k)]
+    assert {"speed_rms_error_tracking_rad_s", "speed_rms_error_whole_run_rad_s"} <= set(keys)
+    for key in keys:
+        if key == "speed_steady_error_rad_s":  # the mean over the steady end, single run only
+            continue
+        expected = summary[key]
+        if expected is None:
+            assert math.isnan(row[key]), key
+        else:
+            assert row[key] == pytest.approx(expected, rel=1e-9, abs=1e-12), key

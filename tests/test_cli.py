@@ -46,7 +46,8 @@ speed_bandwidth = 100.0
     folder = tmp_path / "out" / "short"
     summary = json.loads((folder / "summary.json").read_text())
     for key in (
-        "speed_rms_error_rpm",
+        "speed_rms_error_tracking_rpm",
+        "speed_max_abs_error_whole_run_rpm",
         "peak_rotor_current_a",
         "peak_stator_current_a",
         "limit_events",

@@ -189,7 +189,8 @@ def _result(setup, t, w, relay=None):
 def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth():
     from acdrive._frames import K_PEAK
     from acdrive.machines._dfim import machine_vector, torque_limits_case1
-    from acdrive.sim._outcome import SETTLE_TIME_CONSTANTS, SLEW_MARGIN, tracking_windows
+    from acdrive.sim._metrics import SETTLE_TIME_CONSTANTS, SLEW_MARGIN
+    from acdrive.sim._outcome import tracking_windows
 
     setup = _ramp_and_stop()
     m = setup.motors[0]

@@ -600,7 +600,7 @@ def test_forced_closing_closes_the_relay_at_its_time_unsynchronised():
     tol = motor.controller.sync
     assert sync["voltage_mismatch_at_closing"] > tol.tolerance_magnitude + tol.tolerance_phase
     assert abs(sync["theta_adj_error_rad"]) > tol.tolerance_phase  # offset not identified
-    (warning,) = [w for w in out.summary["warnings"] if "closed by force" in w]
+    (warning,) = [w for w in out.summary["warnings"] if "closed by force at relay_forced" in w]
     assert f"{sync['theta_adj_error_rad']:+.3f} rad" in warning
     assert_finite_and_complete(out)
 

@@ -20,12 +20,15 @@ time, duration and substeps) and each group runs in one call of the compiled ``r
 the single run's loop, one variant per row (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
-appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
+(``acdrive._reducer_parts``) appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
 reference, window and exceed limit (peak |x| and its time, mean, RMS, the count of samples
-beyond a limit and the first such time, the final value), and one part per oscillation metric
-(``oscillation_step``: the band-limited RMS in two late windows). Each reads one output port
-(minus a reference port, if given) at every control sample and accumulates in its discrete
-state, read back after the run. Nothing is logged per sample unless asked for, so the memory of
+beyond a limit and the first such time, the final value), one part per oscillation metric
+(``oscillation_step``: the band-limited RMS in two late windows) and one per speed error
+(``speed_error_step``: the kernel of ``sim._metrics`` that a single run's summary runs on its
+logged samples, so a batch row and summary.json give the same figures under the same names).
+Each reads one output port (minus a reference port, if given) at the control samples a single
+run logs (every ``log_every``-th) and accumulates in its discrete state, read back after the
+run. Nothing is logged per sample unless asked for, so the memory of
 a batch is a few hundred floats per variant whatever the duration. The reducer parts only read,
 so the plant's slots and generated code are those of the single run; the plant states agree
 with the reducer-free loop bit for bit under ``ACDRIVE_STRICT_MATH=1`` and to the last bit
@@ -37,7 +40,7 @@ the speed error's RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-
 sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run
 exceeds ``OSCILLATION_FINDING_RPM`` (1 rpm): the threshold of the single run's limit-cycle
 finding (``sim._outcome``). The ratio of that RMS to the one over the 0.25 s before
-(``speed_oscillation_growth``) tells a growing oscillation from a settled limit cycle.
+(``speed_oscillation_late_rpm_growth``) tells a growing oscillation from a settled limit cycle.
 """
 
 from __future__ import annotations
@@ -48,14 +51,26 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
-from acdrive._jit import jit
-from acdrive.core._parts import SampledPart
-from acdrive.core._signals import Layout, cplx, real
+from acdrive._reducer_parts import (
+    _NS,
+    NO_LIMIT,
+    OSC_STATES,
+    _reducer_class,
+    _speed_error_class,
+    _stats_class,
+    band_coefficients,
+)
 from acdrive.errors import InputError
-from acdrive.sim._outcome import LATE_WINDOW_S, OSCILLATION_FINDING_RPM
-from acdrive.sim._result import OSCILLATION_BAND_HZ
+from acdrive.sim._metrics import (
+    LATE_WINDOW_S,
+    OSCILLATION_BAND_HZ,
+    OSCILLATION_FINDING_RPM,
+    RPM_PER_RAD_S,
+    SPEED_ERROR_STATES,
+    TrackingRule,
+    speed_error_figures,
+)
 from acdrive.sim._system import STATUS_OK, System
 
 __all__ = [
@@ -68,203 +83,11 @@ __all__ = [
     "simulate_batch",
 ]
 
-RPM_PER_RAD_S = 30.0 / math.pi
 #: sqrt(3/2): space-vector magnitude of a balanced three-phase set per peak phase value
 SQRT_3_2 = math.sqrt(1.5)
-REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation")
+REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error")
 #: prefix of the parts appended to a system for its reducers
 REDUCER_PREFIX = "reducer_"
-
-# --- reducer parts -------------------------------------------------------------------------
-
-REDUCER_PARAMS = Layout(
-    real("start", "s", "start of the window the metric is taken over"),
-    real("stop", "s", "end of the window (inclusive)"),
-    real("split", "s", "oscillation: start of the late window (the early one ends there)"),
-    real("limit", "", "stats: threshold on |x| in the signal's unit (exceed count)"),
-    real("a_hp", "", "oscillation: tau/(tau + T_s) of the high-pass sections (backward Euler)"),
-    real("b_lp", "", "oscillation: T_s/(tau + T_s) of the low-pass section (backward Euler)"),
-    real("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
-    real("has_ref", "", "1 if a reference is subtracted from the signal"),
-)
-_START, _STOP, _SPLIT = (REDUCER_PARAMS.slot(n) for n in ("start", "stop", "split"))
-_LIMIT, _A, _B = (REDUCER_PARAMS.slot(n) for n in ("limit", "a_hp", "b_lp"))
-_CPLX, _REF = REDUCER_PARAMS.slot("is_complex"), REDUCER_PARAMS.slot("has_ref")
-
-_inline = njit(cache=True, error_model="numpy", inline="always")
-
-
-@_inline
-def _difference(u, at, ref_at, is_space_vector):
-    """The quantity every reducer reads: the signal at input slot ``at`` minus the reference at
-    ``ref_at`` (none if negative); for a space vector (two slots each) the magnitude of that
-    difference. Signed for a real signal."""
-    if is_space_vector:
-        re, im = u[at], u[at + 1]
-        if ref_at >= 0:
-            re -= u[ref_at]
-            im -= u[ref_at + 1]
-        return math.sqrt(re * re + im * im)
-    if ref_at >= 0:
-        return u[at] - u[ref_at]
-    return u[at]
-
-
-@_inline
-def _reduced_value(u, p):
-    """The signal a one-signal reducer part reads: its input ``x`` minus its input ``ref``."""
-    is_space_vector = p[_CPLX] > 0.5
-    ref_at = (2 if is_space_vector else 1) if p[_REF] > 0.5 else -1
-    return _difference(u, 0, ref_at, is_space_vector)
-
-
-#: every peak / mean / rms / exceed / final metric of a system is served by one "stats" part
-#: with one channel per (signal, reference, window, exceed limit) (``_with_reducers``): the cost
-#: of a reducer part is mostly per part per sample (about 35 ns), not in its arithmetic.
-STATS_CHANNEL = (
-    ("n", "", "samples in the window"),
-    ("peak", "", "largest |x| in the window"),
-    ("t_peak", "s", "time of the peak"),
-    ("sum", "", "sum of x over the window"),
-    ("sum_sq", "", "sum of x^2 over the window"),
-    ("count", "", "samples with |x| > limit in the window"),
-    ("t_first", "s", "time of the first such sample (-1: none)"),
-    ("last", "", "x at the last sample of the window"),
-)
-STATS_PARAMS = (
-    ("start", "s", "start of the window"),
-    ("stop", "s", "end of the window (inclusive)"),
-    ("limit", "", "threshold on |x| for the exceed count"),
-    ("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
-    ("x_slot", "", "first input slot of the signal"),
-    ("ref_slot", "", "first input slot of the reference (-1: none)"),
-)
-_NS, _NP = len(STATS_CHANNEL), len(STATS_PARAMS)
-
-
-@jit
-def stats_step(t, T_s, u, p, s, y):
-    for c in range(int(p[0])):
-        q = 1 + _NP * c
-        if p[q] <= t <= p[q + 1]:
-            v = _difference(u, int(p[q + 4]), int(p[q + 5]), p[q + 3] > 0.5)
-            a = abs(v)
-            k = _NS * c
-            s[k] += 1.0
-            if s[k] == 1.0 or a > s[k + 1]:
-                s[k + 1] = a
-                s[k + 2] = t
-            s[k + 3] += v
-            s[k + 4] += v * v
-            if a > p[q + 2]:
-                if s[k + 5] == 0.0:
-                    s[k + 6] = t
-                s[k + 5] += 1.0
-            s[k + 7] = v
-    return 0
-
-
-_STATS_CLASSES: dict[tuple, type] = {}
-
-
-def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
-    """The stats part for ``channels`` = ((unit, is complex, has reference), ...): inputs
-    ``x<c>`` (and ``ref<c>``) declared in each signal's unit (the wiring checks units)."""
-    if channels not in _STATS_CLASSES:
-        inputs, params, states = [], [real("channels", "", "number of channels")], []
-        for c, (unit, is_complex, has_ref) in enumerate(channels):
-            make = cplx if is_complex else real
-            inputs.append(make(f"x{c}", unit, f"signal of channel {c}"))
-            if has_ref:
-                inputs.append(make(f"ref{c}", unit, f"reference of channel {c}"))
-            params += [real(f"{n}{c}", u, d) for n, u, d in STATS_PARAMS]
-            states += [real(f"{n}{c}", u, d) for n, u, d in STATS_CHANNEL]
-        _STATS_CLASSES[channels] = type(
-            "Reducer_stats",
-            (SampledPart,),
-            {
-                "__doc__": "On-line peak, mean, RMS, exceed count and final value (acdrive.batch).",
-                "PARAMS": Layout(*params),
-                "STATES": Layout(*states),
-                "INPUTS": Layout(*inputs),
-                "OUTPUTS": Layout(),
-                "INITIAL": {f"t_first{c}": -1.0 for c in range(len(channels))},
-                "step": stats_step,
-            },
-        )
-    return _STATS_CLASSES[channels]
-
-
-OSC_STATES = Layout(
-    real("started", "", "1 once the filters hold the first sample"),
-    real("x_prev", "", "previous input of the first high-pass section"),
-    real("h1", "", "output of the first high-pass section"),
-    real("h2", "", "output of the second high-pass section"),
-    real("band", "", "band-limited signal (low-pass output)"),
-    real("early_sq", "", "sum of band^2 over [start, split)"),
-    real("early_n", "", "samples in the early window"),
-    real("late_sq", "", "sum of band^2 over [split, stop]"),
-    real("late_n", "", "samples in the late window"),
-)
-
-
-@jit
-def oscillation_step(t, T_s, u, p, s, y):
-    x = _reduced_value(u, p)
-    if s[0] == 0.0:
-        s[0] = 1.0
-        s[1] = x
-    a, b = p[_A], p[_B]
-    h1 = a * (s[2] + x - s[1])
-    h2 = a * (s[3] + h1 - s[2])
-    s[4] += b * (h2 - s[4])
-    s[1], s[2], s[3] = x, h1, h2
-    band = s[4]
-    if p[_START] <= t < p[_SPLIT]:
-        s[5] += band * band
-        s[6] += 1.0
-    elif p[_SPLIT] <= t <= p[_STOP]:
-        s[7] += band * band
-        s[8] += 1.0
-    return 0
-
-
-def band_coefficients(band_hz, sample_time: float) -> tuple[float, float]:
-    """(a, b) of the backward-Euler high-pass (lower edge) and low-pass (upper edge) sections."""
-    tau_h, tau_l = 1.0 / (2.0 * math.pi * band_hz[0]), 1.0 / (2.0 * math.pi * band_hz[1])
-    return tau_h / (tau_h + sample_time), sample_time / (tau_l + sample_time)
-
-
-#: no exceed metric on a stats part: a limit no finite |x| passes
-NO_LIMIT = 1e300
-_KERNELS = {"oscillation": (oscillation_step, OSC_STATES)}
-_CLASSES: dict[tuple, type] = {}
-
-
-def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> type:
-    """The sampled part of one reducer kind ("oscillation") reading a signal of ``unit`` (the wiring checks units, so the input is declared in the signal's own unit)."""
-    key = (kind, unit, is_complex, has_ref)
-    if key not in _CLASSES:
-        make = cplx if is_complex else real
-        inputs = [make("x", unit, "the reduced signal")]
-        if has_ref:
-            inputs.append(make("ref", unit, "reference subtracted from the signal"))
-        step, states = _KERNELS[kind]
-        _CLASSES[key] = type(
-            f"Reducer_{kind}",
-            (SampledPart,),
-            {
-                "__doc__": f"On-line {kind} of a signal (acdrive.batch).",
-                "PARAMS": REDUCER_PARAMS,
-                "STATES": states,
-                "INPUTS": Layout(*inputs),
-                "OUTPUTS": Layout(),
-                "DEFAULTS": {"split": 0.0, "limit": NO_LIMIT, "a_hp": 0.0, "b_lp": 0.0},
-                "INITIAL": {},
-                "step": step,
-            },
-        )
-    return _CLASSES[key]
 
 
 @dataclass(frozen=True)
@@ -274,7 +97,10 @@ class Reducer:
     ``kind``: ``peak`` (max |x|; also ``<name>_time``), ``mean``, ``rms``, ``exceed`` (samples
     with |x| > ``limit``; also ``<name>_first_time``, NaN if none), ``final`` (x at the last
     sample of the window), ``oscillation`` (RMS of x in ``band_hz`` over the last ``window`` s of
-    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before). ``x`` is
+    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before),
+    ``speed_error`` (``signal`` a speed, ``reference`` its reference, ``gate`` the relay state or
+    None: the columns of ``sim._metrics.speed_error_figures`` in ``unit``, ``suffix`` appended,
+    the tracking window by ``rule``; ``name`` is not used). ``x`` is
     ``signal`` ("part.output") minus ``reference`` if given; a space vector's magnitude. The
     window is [``start``, ``stop``] (``stop`` None: the end of the run). The value is multiplied
     by ``scale`` (e.g. rad/s -> rpm); ``limit`` is in the signal's unit.
@@ -290,8 +116,15 @@ class Reducer:
     scale: float = 1.0
     band_hz: tuple[float, float] = OSCILLATION_BAND_HZ
     window: float = LATE_WINDOW_S
+    gate: str | None = None
+    rule: TrackingRule | None = None
+    unit: str = "rpm"
+    suffix: str = ""
 
     def columns(self) -> list[str]:
+        if self.kind == "speed_error":
+            state = np.ones(len(SPEED_ERROR_STATES))
+            return [k + self.suffix for k in speed_error_figures(state, 1.0, self.unit)]
         extra = {"peak": ["_time"], "exceed": ["_first_time"], "oscillation": ["_growth"]}
         return [self.name] + [self.name + s for s in extra.get(self.kind, [])]
 
@@ -330,17 +163,31 @@ def check_reducer(r: Reducer, where: str) -> Reducer:
 
 def dfim_reducers(setup) -> list[Reducer]:
     """The default metrics of a DFIM drive, per motor k (suffix ``_m<k>`` beyond the first):
-    speed error RMS and peak [rpm], band-limited speed oscillation and its growth, peak phase
-    currents [A] and samples above the controller's current limits, peak torque, final speed."""
+    the speed error over the whole run and where tracking is expected (the columns of
+    ``sim._metrics.speed_error_figures``, the window of ``sim._metrics.tracking_rule``: the
+    single run's figures of the same names), the band-limited speed oscillation over the last
+    ``LATE_WINDOW_S`` and its growth (``speed_oscillation_late_rpm``), peak phase currents [A]
+    and samples above the controller's current limits, peak torque, final speed."""
+    from acdrive.sim._metrics import tracking_rule
+
     out = []
     for k, motor in enumerate(setup.motors):
         sfx = "" if k == 0 else f"_m{k}"
         c = motor.controller
         w, ref = f"shaft{k}.w", f"reference{k}.w_ref"
         out += [
-            Reducer(f"speed_error_rms_rpm{sfx}", "rms", w, ref, scale=RPM_PER_RAD_S),
-            Reducer(f"speed_error_peak_rpm{sfx}", "peak", w, ref, scale=RPM_PER_RAD_S),
-            Reducer(f"speed_oscillation_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
+            Reducer(
+                "speed",
+                "speed_error",
+                w,
+                ref,
+                gate=f"relay{k}.closed",
+                rule=tracking_rule(setup, k),
+                scale=RPM_PER_RAD_S,
+                unit="rpm",
+                suffix=sfx,
+            ),
+            Reducer(f"speed_oscillation_late_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
             Reducer(f"peak_stator_current_a{sfx}", "peak", f"dfim{k}.i_s", scale=1 / SQRT_3_2),
             Reducer(f"peak_rotor_current_a{sfx}", "peak", f"dfim{k}.i_r_rotor", scale=1 / SQRT_3_2),
             Reducer(
@@ -368,8 +215,11 @@ def default_reducers(setup) -> list[Reducer]:
 
 def im_reducers(setup) -> list[Reducer]:
     """The default metrics of a cage-IM drive: current tracking RMS error and peak current [A,
-    space vector], peak torque, final speed, and the speed error's RMS if a speed reference
-    exists."""
+    space vector], peak torque, final speed, and with a speed loop its speed error over the
+    whole run and where tracking is expected [rad/s] (``sim._metrics.im_tracking_rule``; the
+    single run's figures of the same names)."""
+    from acdrive.sim._metrics import im_tracking_rule
+
     reference = "reference.i" if setup.mode == "current" else "ifoc.i_s_ref"  # IMDrive's
     out = [
         Reducer("current_error_rms_a", "rms", "machine.i_s", reference),
@@ -378,7 +228,8 @@ def im_reducers(setup) -> list[Reducer]:
         Reducer("final_speed_rad_s", "final", "shaft.w"),
     ]
     if setup.mode in ("speed-p", "speed-pi"):
-        out.append(Reducer("speed_error_rms_rad_s", "rms", "shaft.w", "speed_reference.w_ref"))
+        out.append(Reducer("speed", "speed_error", "shaft.w", "speed_reference.w_ref",
+                           rule=im_tracking_rule(setup), unit="rad_s"))  # fmt: skip
     return out
 
 
@@ -555,12 +406,13 @@ class _Prepared:
 
 
 def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
-                   replaced=None) -> tuple[System, list[tuple[str, int]]]:  # fmt: skip
+                   replaced=None, every: int = 1) -> tuple[System, list[tuple[str, int]]]:  # fmt: skip
     """The drive's system with the reducer parts appended after every other part (the same
     wires; the plant's slots and generated code unchanged), and (part name, first state slot
     within the part) of each reducer. Peak, mean, RMS, exceed and final metrics of the same
     signal, reference and window share one channel of the one "stats" part (at most one exceed
-    limit per channel); each oscillation has its own part.
+    limit per channel); each oscillation and speed error has its own part. Every metric reads
+    the ``every``-th control samples (those a single run logs).
     ``replaced[name]`` is a re-parametrised copy of part ``name`` used in its place."""
     from acdrive.core._parts import Port
 
@@ -589,6 +441,21 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             raise InputError(f"{where}.signal", "must be a real or complex output")
         if r.kind == "oscillation" and x.var.kind == "complex":
             raise InputError(f"{where}.signal", "an oscillation is measured on a real signal")
+        if r.kind == "speed_error":
+            gate = None if r.gate is None else remap(_port(base, r.gate, f"{where}.gate"))
+            rule = r.rule or TrackingRule()
+            cls = _speed_error_class(x.var.unit, gate is not None, len(rule.windows))
+            values = {"every": float(every), "slew": rule.slew_s_per_rad_s,
+                      "settle": rule.settle_s, "has_gate": float(gate is not None)}  # fmt: skip
+            for j, (a, b) in enumerate(rule.windows):
+                values.update({f"start{j}": a, f"end{j}": b})
+            part = cls(f"{REDUCER_PREFIX}speed_error{len(served)}", **values)
+            parts.append(part)
+            wires += [(x, part.inp.x), (ref, part.inp.ref)]
+            if gate is not None:
+                wires.append((gate, part.inp.gate))
+            served.append((part.name, 0))
+            continue
         stop = duration if r.stop is None else min(r.stop, duration)
         start, split, a_hp, b_lp = r.start, 0.0, 0.0, 0.0
         kind = "oscillation" if r.kind == "oscillation" else "stats"
@@ -596,7 +463,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
         if kind == "oscillation":  # two windows at the end of the run
             split = max(stop - r.window, 0.0)
             start = max(split - r.window, r.start)
-            a_hp, b_lp = band_coefficients(r.band_hz, sample_time)
+            a_hp, b_lp = band_coefficients(r.band_hz, sample_time * every)
         key = (kind, r.signal, r.reference, start, stop, split, a_hp, b_lp)
         group = groups.get(key)
         if group is None or (limit is not None and group["limit"] not in (None, limit)):
@@ -614,7 +481,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             (g["x"].var.unit, g["x"].var.kind == "complex", g["ref"] is not None) for g in stats
         )
         cls = _stats_class(channels)
-        values = {"channels": float(len(stats))}
+        values = {"channels": float(len(stats)), "every": float(every)}
         for c, g in enumerate(stats):
             ref_slot = -1 if g["ref"] is None else cls.INPUTS.slot(f"ref{c}")
             values.update({
@@ -638,7 +505,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
         part = cls(
             f"{REDUCER_PREFIX}oscillation{j}", start=g["start"], stop=g["stop"],
             split=g["split"], a_hp=g["a"], b_lp=g["b"], is_complex=0.0,
-            has_ref=float(ref is not None),
+            has_ref=float(ref is not None), every=float(every),
         )  # fmt: skip
         parts.append(part)
         wires.append((x, part.inp.x))
@@ -654,6 +521,9 @@ def _reduce(r: Reducer, s: np.ndarray, n_ok: bool) -> dict:
     nan = math.nan
     if not n_ok:
         return dict.fromkeys(r.columns(), nan)
+    if r.kind == "speed_error":
+        figures = speed_error_figures(s, abs(r.scale), r.unit)
+        return {k + r.suffix: nan if v is None else v for k, v in figures.items()}
     if r.kind == "oscillation":
         late = math.sqrt(s[7] / s[8]) * abs(r.scale) if s[8] else nan
         early = math.sqrt(s[5] / s[6]) * abs(r.scale) if s[6] else nan
@@ -729,7 +599,7 @@ def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None
     elif callable(reducers):
         reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers(setup))]
     system, served = _with_reducers(
-        drive, list(reducers), setup.duration, setup.sample_time, replaced
+        drive, list(reducers), setup.duration, setup.sample_time, replaced, setup.log_every
     )
     return setup, drive, system, initial, held, list(zip(reducers, served, strict=True))
 
@@ -806,7 +676,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             }
             for r, (part, offset) in m.reducers:
                 a = m.system.slots[part].s[0] + offset
-                values = _reduce(r, S[b, a : a + max(_NS, len(OSC_STATES))], ok)
+                width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES))
+                values = _reduce(r, S[b, a : a + width], ok)
                 row.update({k: float(x) for k, x in values.items()})
             for e, (part, events) in enumerate(names):
                 if part.startswith(REDUCER_PREFIX):
@@ -838,7 +709,9 @@ def _verdict(setup, row: dict, finite: bool):
     ``OSCILLATION_FINDING_RPM``; True otherwise; None without the oscillation metric."""
     if not finite:
         return False
-    keys = [k for k in row if k.startswith("speed_oscillation_rpm") and not k.endswith("_growth")]
+    keys = [
+        k for k in row if k.startswith("speed_oscillation_late_rpm") and not k.endswith("_growth")
+    ]
     if not keys or not hasattr(setup, "motors"):
         return None
     values = [row[k] for k in keys]

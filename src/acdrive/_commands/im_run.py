@@ -37,6 +37,20 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
                     ),
                 )
             )
+        tracking = run.get("speed_tracking")
+        if tracking is not None and tracking["rms_error_rad_s"] is not None:
+            rows.append(
+                (
+                    f"speed tracking, {who}",
+                    (
+                        f"{tracking['rms_error_rad_s']:.3g} rad/s RMS, largest "
+                        f"{tracking['max_abs_error_rad_s']:.3g} rad/s at "
+                        f"{tracking['max_abs_error_at_s']:.3f} s, over "
+                        f"{tracking['tracked_fraction']:.0%} of the run (speed step settling "
+                        "excluded: speed_tracking.rule)"
+                    ),
+                )
+            )
         if "speed_final_rad_s" in run:
             text = (
                 f"{run['speed_final_rad_s']:.2f} rad/s for "

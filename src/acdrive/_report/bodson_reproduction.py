@@ -560,7 +560,7 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
         "",
         f"With the paper's velocity gains (a_D,VEL = {A_VEL:g} rad/s) and an **ideal** rotor "
         f"converter (`bodson-ramp-ideal`), the voltage-command drive {oscillation_verdict(osc_ideal[0])}"
-        + (f", at about {osc_ideal[1]:.0f} Hz" if osc_ideal[0] > OSCILLATION_FINDING_RPM else "")
+        + (f", at about {osc_ideal[1]:.0f} Hz" if osc_ideal[1] is not None else "")
         + f"; its speed error on the ramp reaches {ramp_error:.0f} rpm. Current command at the same "
         f"gains with an ideal converter (`bodson-step`, `bodson-mixed-steps`) "
         f"{oscillation_verdict(max(cc_ideal))} (worse of the two). The linearised closed loop "
@@ -742,20 +742,20 @@ def write_report(out_dir: str | Path) -> Path:
             *_checks(name, outcome, ideal),
         ]
         keys = [
-            "speed_rms_error_rpm",
-            "speed_max_abs_error_rpm",
+            "speed_rms_error_tracking_rpm",
+            "speed_max_abs_error_whole_run_rpm",
             "peak_rotor_current_a",
             "peak_stator_current_a",
             "peak_rotor_current_vc_a",
             "peak_rotor_current_cc_a",
-            "speed_rms_error_vc_rpm",
-            "speed_rms_error_cc_rpm",
+            "speed_rms_error_tracking_vc_rpm",
+            "speed_rms_error_tracking_cc_rpm",
         ]
         lines += [f"- `{k}`: {summary[k]:.3f}" for k in keys if k in summary]
         if len(summary.get("motors", [])) > 1:
             for k, motor in enumerate(summary["motors"]):
                 lines.append(
-                    f"- motor {k + 1}: speed RMS error {motor['speed_rms_error_rpm']:.2f} rpm, "
+                    f"- motor {k + 1}: speed RMS error (tracking) {motor['speed_rms_error_tracking_rpm']:.2f} rpm, "
                     f"peak rotor current {motor['peak_rotor_current_a']:.2f} A"
                 )
         if "finding" in summary:

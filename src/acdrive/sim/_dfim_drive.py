@@ -31,6 +31,7 @@ from acdrive.plant._mechanics import Shaft
 from acdrive.plant._network import ForcedRelay, StatorRelay, SupplyBus
 from acdrive.plant._sensors import CurrentSensors, Encoder
 from acdrive.plant._sources import DCSource, ThreePhaseSource, UnbalancedSource
+from acdrive.sim._metrics import tracking_rule
 from acdrive.sim._result import LOG_NAMES, DriveResult
 from acdrive.sim._system import CompiledSystem, System
 
@@ -288,6 +289,7 @@ class DFIMDrive:
             sample_time=self.setup.sample_time,
             final_state=result.final_state,
             wall_time=result.wall_time,
+            tracking=tuple(tracking_rule(self.setup, k) for k in range(n)),
         )
 
 

@@ -54,8 +54,9 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
 * current tracking: e = i_ref - i_s (space vectors, power-invariant, Bodson (8)); the RMS phase
   error sqrt(mean |e|^2 / 3) [A] (the three zero-sum phase errors have sum of squares |e|^2) over
   t >= ``metrics_from``, and the same of the reference (its RMS phase current);
-* speed: the error against the reference, the mean error over the last ``STEADY_FRACTION`` of the
-  run, the largest deviation after each load change, the steady torque balance
+* speed: the error against the reference (RMS and largest over the whole run and where tracking
+  is expected, ``sim._metrics``, as the batch's rows), the mean error over the last
+  ``STEADY_FRACTION`` of the run, the largest deviation after each load change, the steady torque balance
   tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB));
 * the saturated ramp of (21) (a speed step with ``speed-p``): the ideal response with perfect
   current control and no friction is the constant-torque ramp w_0 + (tau_max / J)(t - t_step)
@@ -872,13 +873,23 @@ class IMDriveResult:
         return [t for t in times if t < self.t[-1]]
 
     def speed_metrics(self) -> dict:
+        """The speed figures of the module docstring; the speed error over the whole run and
+        where tracking is expected (``sim._metrics.speed_tracking`` under
+        ``im_tracking_rule``: the batch's figures of the same names) with ``speed_tracking``."""
+        from acdrive.sim._metrics import im_tracking_rule, speed_tracking
+
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
         steady = _steady_mask(t)
         err = w_ref - w
+        figures, tracking, _ = speed_tracking(
+            t, w, w_ref, None, im_tracking_rule(self.setup), scale=1.0, unit="rad_s"
+        )
         out = {
             "speed_final_rad_s": float(np.mean(w[steady])),
             "speed_reference_final_rad_s": float(np.mean(w_ref[steady])),
             "speed_steady_error_rad_s": float(np.mean(err[steady])),
+            **figures,
+            "speed_tracking": tracking,
         }
         final_ref = float(w_ref[-1])
         if final_ref != 0.0:

@@ -12,17 +12,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.sim._metrics import (
+    LATE_WINDOW_S,
+    OSCILLATION_BAND_HZ,
+    OSCILLATION_FINDING_RPM,
+    PERIOD_CORRELATION_MIN,
+    RPM_PER_RAD_S,
+    limit_cycle,
+    speed_tracking,
+    tracking_rule,
+)
 from acdrive.sim._period import control_period_warnings
-from acdrive.sim._result import OSCILLATION_BAND_HZ, RPM_PER_RAD_S, DriveResult
+from acdrive.sim._recovery import speed_outcome
+from acdrive.sim._result import DriveResult
 from acdrive.sim._setup import DriveSetup, simulate
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
-#: speed-error RMS in the 20-200 Hz band above which the summary states a limit-cycle finding
-OSCILLATION_FINDING_RPM = 1.0
-#: the end of the run in which an oscillation is also looked for [s]: the shortest stretch the
-#: estimate accepts (five periods of the band's lowest frequency), so a late or growing
-#: oscillation is not averaged away over a quiet start
-LATE_WINDOW_S = 5.0 / OSCILLATION_BAND_HZ[0]
 
 
 def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict | None:
@@ -74,17 +79,32 @@ def synchronisation_summary(result: DriveResult, setup: DriveSetup, motor: int =
 
 
 def _late_oscillation(results: dict) -> tuple | None:
-    """(mode, motor, RMS [rpm], frequency [Hz], whole-run RMS) of the first speed oscillation
-    above the finding threshold over the last ``LATE_WINDOW_S`` of a run, or None."""
+    """(mode, motor, limit-cycle figures, whole-run RMS) of the first limit cycle shown
+    (``sim._metrics.limit_cycle``) over the last ``LATE_WINDOW_S`` of a run, or None."""
     for mode, result in results.items():
         tail = result.t >= result.t[-1] - LATE_WINDOW_S * (1 - 1e-9)
         end = DriveResult(result.name, result.t[tail], result.signals[tail], result.sample_time,
-                          result.final_state)  # fmt: skip
+                          result.final_state, tracking=result.tracking)  # fmt: skip
         for k in range(result.n_motors):
-            rms, hz = end.speed_oscillation(k)
-            if rms > OSCILLATION_FINDING_RPM:
-                return mode, k, rms, hz, result.speed_oscillation(k)[0]
+            err = (end.signal("w_ref", k) - end.signal("w", k)) * RPM_PER_RAD_S
+            cycle = limit_cycle(end.t, err, end.tracking_mask(k))
+            if cycle["speed_limit_cycle"]:
+                return mode, k, cycle, result.speed_oscillation(k)[0]
     return None
+
+
+def _cycle_words(cycle: dict) -> str:
+    """How a limit cycle was shown: band RMS over the threshold and its period repeating."""
+    low, high = OSCILLATION_BAND_HZ
+    return (
+        f"{cycle['speed_oscillation_rms_rpm']:.1f} rpm RMS at about "
+        f"{cycle['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
+        f"{OSCILLATION_FINDING_RPM:g} rpm threshold to the end of the tracked stretch "
+        f"({cycle['speed_oscillation_end_rms_rpm']:.1f} rpm over its last {LATE_WINDOW_S:g} s), "
+        "its period repeating: autocorrelation "
+        f"{cycle['speed_oscillation_period_correlation']:.2f} at one period, at least "
+        f"{PERIOD_CORRELATION_MIN:g}"
+    )
 
 
 def _open_relay_reasons(result: DriveResult, motor: int = 0) -> str:
@@ -135,82 +155,16 @@ def _forced_close_warning(result: DriveResult, setup: DriveSetup, k: int) -> str
     )
 
 
-#: the drive may deliver less than its current-limit torque while slewing (converter voltage,
-#: losses): a step's slewing window is this many times the time at the limit torque
-SLEW_MARGIN = 2.0
-#: time constants 1 / a_D,VEL of the speed loop after slewing: both roots of (27) sit at
-#: -a_D,VEL, whose step error (1 + a t) e^{-a t} is below 2 % after 6 / a_D,VEL
-SETTLE_TIME_CONSTANTS = 6.0
-
-
-def _slew_torque(setup: DriveSetup, motor: int) -> float:
-    """The smaller of the motoring and generating torque limits [N m] of motor ``motor`` at the
-    nominal supply (Bodson (30)-(37), as ``acdrive limits``): the torque a reference step is
-    slewed with at most."""
-    from acdrive._frames import K_PEAK
-    from acdrive.machines._dfim import machine_vector, torque_limits_case1
-
-    m = setup.motors[motor]
-    c = m.controller
-    v_pk = float(setup.supply.voltage_pk[1][0])
-    w_e = 2.0 * math.pi * float(setup.supply.frequency_hz[1][0])
-    t1, t2, t3, m2, m3, _ = torque_limits_case1(
-        machine_vector(m.machine), w_e, K_PEAK * v_pk, K_PEAK * c.stator_current_limit_pk,
-        K_PEAK * c.rotor_current_limit_pk,
-    )  # fmt: skip
-    return min(abs(min(t1, t2, t3)), abs(max(m2, m3)))
-
-
 def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> dict:
-    """Where the speed of motor ``motor`` is expected to track its reference, and how well it did.
-
-    Not expected: while the stator relay is open (the speed is not controlled), and after each
-    change of the reference faster than the drive can follow (a step, or a segment steeper than
-    tau/J) and each relay closing, for SLEW_MARGIN x J |dw| / tau to slew at the torque limit
-    tau (``_slew_torque``) plus SETTLE_TIME_CONSTANTS / a_D,VEL for the speed loop to settle
-    (a_D,VEL = K_P / (2 J), (27)); dw is the step, or the speed error at closing. Returns the
-    ``rule`` (a sentence with the numbers), the excluded ``windows_s``, the ``tracked_fraction``
-    of the samples and the RMS and largest |error| [rpm] over the tracked samples, with when the
-    largest occurred (``None`` for all three if no sample is tracked)."""
-    m = setup.motors[motor]
-    J = m.machine.J
-    a = m.controller.gains.K_P / (2.0 * J)
-    tau = _slew_torque(setup, motor)
-    settle = SETTLE_TIME_CONSTANTS / a
-    times, values = (np.asarray(x, dtype=float) for x in m.speed_reference)
-    changes = []  # (time, |dw| [rad/s])
-    for i in range(1, times.size):
-        dt, dw = times[i] - times[i - 1], abs(values[i] - values[i - 1])
-        if dw > 0.0 and (dt <= 0.0 or dw / dt > tau / J):
-            changes.append((float(times[i - 1]), float(dw)))
-    t = result.t
-    err = result.reference_rpm(motor) - result.speed_rpm(motor)
-    closed = result.signal("relay_closed", motor) > 0
-    closings = np.flatnonzero(closed[1:] & ~closed[:-1]) + 1
-    for i in closings:
-        changes.append((float(t[i]), abs(float(err[i])) / RPM_PER_RAD_S))
-    mask = closed.copy()
-    windows = []
-    for start, dw in sorted(changes):
-        end = start + SLEW_MARGIN * J * dw / tau + settle
-        mask[(t >= start) & (t < end)] = False
-        windows.append([start, min(end, float(t[-1]))])
-    open_s = float(np.count_nonzero(~closed)) * (t[1] - t[0] if t.size > 1 else 0.0)
-    relay = f"relay closed ({open_s:.3g} s open excluded) and " if open_s > 0.0 else ""
-    rule = (
-        f"speed error where tracking is expected: {relay}not within {SLEW_MARGIN:g} x J |dw| / tau + {SETTLE_TIME_CONSTANTS:g} / a_D,VEL of "
-        f"a reference step or relay closing (J = {J:.3g} kg m^2, tau = {tau:.3g} N m at the "
-        f"nominal supply, a_D,VEL = {a:.0f} rad/s: {settle * 1e3:.1f} ms to settle)"
-    )
-    out = {"rule": rule, "windows_s": windows, "tracked_fraction": float(np.mean(mask))}
-    if mask.any():
-        k = int(np.argmax(np.where(mask, np.abs(err), -1.0)))
-        out["rms_error_rpm"] = float(np.sqrt(np.mean(err[mask] ** 2)))
-        out["max_abs_error_rpm"] = float(abs(err[k]))
-        out["max_abs_error_at_s"] = float(t[k])
-    else:
-        out["rms_error_rpm"] = out["max_abs_error_rpm"] = out["max_abs_error_at_s"] = None
-    return out
+    """Where the speed of motor ``motor`` is expected to track its reference, and how well it
+    did: ``speed_tracking`` of ``sim._metrics`` under the scenario's ``tracking_rule`` (the
+    ``rule`` with its numbers, the excluded ``windows_s``, the ``tracked_fraction`` and the RMS
+    and largest |error| [rpm] over the tracked samples with when the largest occurred; None for
+    the three if no sample is tracked)."""
+    rule = tracking_rule(setup, motor)
+    closed = result.signal("relay_closed", motor)
+    return speed_tracking(result.t, result.signal("w", motor), result.signal("w_ref", motor),
+                          closed, rule)[1]  # fmt: skip
 
 
 @dataclass
@@ -242,10 +196,6 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
             on_run(mode)
         results[mode] = simulate(run_setup)
     summaries = {mode: result.summary() for mode, result in results.items()}  # once each
-    for mode, result in results.items():  # tracking where it is expected (the headline)
-        for k, motor_summary in enumerate(summaries[mode]["motors"]):
-            motor_summary["speed_tracking"] = tracking_windows(result, setup, k)
-        summaries[mode]["speed_tracking"] = summaries[mode]["motors"][0]["speed_tracking"]
     first_mode, first = next(iter(results.items()))
     summary = dict(summaries[first_mode])
     motor = setup.motors[0]
@@ -263,34 +213,32 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
         for mode, s in summaries.items():
             suffix = MODE_SUFFIX[mode]
             summary[f"peak_rotor_current_{suffix}_a"] = s["peak_rotor_current_a"]
-            summary[f"speed_rms_error_{suffix}_rpm"] = s["speed_rms_error_rpm"]
+            summary[f"speed_rms_error_tracking_{suffix}_rpm"] = s["speed_rms_error_tracking_rpm"]
             summary[f"speed_tracking_{suffix}"] = s["speed_tracking"]
             summary[f"limit_events_{suffix}"] = s["limit_events"]
+    a_vel = motor.controller.gains.K_P / (2 * motor.machine.J)
+    eigen = (
+        "the linearised whole drive's eigenvalues at an operating point: `acdrive stability` "
+        "(docs/stability.md)"
+    )
     for mode, s in summaries.items():
-        worst = max(s["motors"], key=lambda m: m["speed_oscillation_rms_rpm"])
-        if worst["speed_oscillation_rms_rpm"] > OSCILLATION_FINDING_RPM:
-            low, high = OSCILLATION_BAND_HZ
+        cycles = [m for m in s["motors"] if m["speed_limit_cycle"]]
+        if cycles:
+            worst = max(cycles, key=lambda m: m["speed_oscillation_rms_rpm"])
             summary["finding"] = (
-                f"{mode} command: the speed oscillates ({worst['speed_oscillation_rms_rpm']:.1f} rpm "
-                f"RMS at about {worst['speed_oscillation_hz']:.0f} Hz in the {low:g}-{high:g} Hz band, above the "
-                f"{OSCILLATION_FINDING_RPM:g} rpm threshold) at a_D,VEL = "
-                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
-                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+                f"{mode} command: the speed oscillates in a limit cycle ({_cycle_words(worst)}) "
+                f"at a_D,VEL = {a_vel:.0f} rad/s; {eigen}"
             )
             break
     if "finding" not in summary:
         late = _late_oscillation(results)
         if late is not None:
-            mode, k, rms, hz, whole = late
-            low, high = OSCILLATION_BAND_HZ
+            mode, k, cycle, whole = late
             summary["finding"] = (
-                f"{mode} command: the speed oscillates at the end of the run (motor {k + 1}: "
-                f"{rms:.1f} rpm RMS at about {hz:.0f} Hz over its last {LATE_WINDOW_S:g} s in "
-                f"the {low:g}-{high:g} Hz band, above the {OSCILLATION_FINDING_RPM:g} rpm "
-                f"threshold; {whole:.1f} rpm over the whole run): an oscillation that starts late "
-                f"or is still growing, at a_D,VEL = "
-                f"{motor.controller.gains.K_P / (2 * motor.machine.J):.0f} rad/s; the linearised "
-                "whole drive's eigenvalues at an operating point: `acdrive stability` (docs/stability.md)"
+                f"{mode} command: the speed oscillates in a limit cycle at the end of the run "
+                f"(motor {k + 1}: {_cycle_words(cycle)}, over its last {LATE_WINDOW_S:g} s; "
+                f"{whole:.1f} rpm over the whole run): an oscillation that starts late or is "
+                f"still growing, at a_D,VEL = {a_vel:.0f} rad/s; {eigen}"
             )
     # the bench converter's first-harmonic voltage loss per motor (dead time and device drops,
     # plant._converter / machines._dfim_part), which the scenario notes refer to
@@ -319,6 +267,13 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
                         f"{e['peak_a']:.2f} A, first at {e['first_time_s']:.3f} s"
                     )
         summary["limit_excursions"][mode] = per_motor
+    for mode, result in results.items():  # what happened at each disturbance and at the end
+        masks = [result.tracking_mask(k) for k in range(result.n_motors)]
+        who = f"{mode} command, " if len(results) > 1 else ""
+        speed = speed_outcome(result, masks, setup, who)
+        warnings += speed.pop("warnings")
+        key = "speed_outcome" if len(results) == 1 else f"speed_outcome_{MODE_SUFFIX[mode]}"
+        summary[key] = speed
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync

@@ -10,6 +10,14 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8)
 from acdrive.columns import DEFAULT_FORMAT, Column, write_table
 from acdrive.control._dfim import EVENT_NAMES
+from acdrive.sim._metrics import (
+    OSCILLATION_BAND_HZ,
+    RPM_PER_RAD_S,
+    TrackingRule,
+    limit_cycle,
+    speed_oscillation,
+    speed_tracking,
+)
 
 #: the signals of a DFIM drive run, per motor and logged sample (``DriveResult.signals``)
 LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
@@ -54,10 +62,6 @@ FILE_COLUMNS = (
     ("i_r_q_sv", "i_r_q", 1.0, "A", f"measured rotor current, q: {_SV}"),
 )  # fmt: skip
 
-RPM_PER_RAD_S = 30.0 / np.pi
-#: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag
-OSCILLATION_BAND_HZ = (20.0, 200.0)
-
 
 @dataclass
 class DriveResult:
@@ -75,6 +79,9 @@ class DriveResult:
     sample_time: float
     final_state: np.ndarray
     wall_time: float = 0.0
+    #: per motor, where the speed is expected to track (``sim._metrics.tracking_rule`` of the
+    #: scenario); None (a result built by hand): every sample
+    tracking: tuple[TrackingRule, ...] | None = None
 
     @property
     def n_motors(self) -> int:
@@ -105,43 +112,29 @@ class DriveResult:
         hits = np.flatnonzero(flags & (1 << EVENT_NAMES.index(name)))
         return float(self.t[hits[0]]) if hits.size else None
 
-    def tracking_mask(
-        self, motor: int = 0, settle_s: float = 0.5, jump_rpm: float = 10.0
-    ) -> np.ndarray:
-        """Samples where the speed is expected to track: not within ``settle_s`` after a reference
-        jump (a change larger than ``jump_rpm`` in one sample, such as the abrupt stop of Fig. 4)."""
-        ref = self.reference_rpm(motor)
-        jumps = np.flatnonzero(np.abs(np.diff(ref)) > jump_rpm) + 1
-        mask = np.ones(ref.size, dtype=bool)
-        for j in jumps:
-            mask[(self.t >= self.t[j]) & (self.t < self.t[j] + settle_s)] = False
-        return mask
+    def tracking_rule(self, motor: int = 0) -> TrackingRule:
+        """Where motor ``motor``'s speed is expected to track (``sim._metrics.TrackingRule``):
+        the scenario's rule when the result comes from a simulation, else every sample."""
+        return self.tracking[motor] if self.tracking is not None else TrackingRule()
 
-    def speed_oscillation(self, motor: int = 0, band_hz=OSCILLATION_BAND_HZ) -> tuple[float, float]:
-        """(RMS [rpm], dominant frequency [Hz]) of the speed error in ``band_hz``.
+    def speed_tracking(self, motor: int = 0) -> tuple[dict, dict, np.ndarray]:
+        """(speed-error figures, ``speed_tracking``, tracked mask) of motor ``motor``
+        (``sim._metrics.speed_tracking``: the kernel the batch runs on line)."""
+        rule = self.tracking_rule(motor)
+        closed = self.signal("relay_closed", motor) if rule.relay else None
+        return speed_tracking(self.t, self.signal("w", motor), self.signal("w_ref", motor),
+                              closed, rule)  # fmt: skip
 
-        Method: the longest stretch of consecutive tracking samples (``tracking_mask``; nothing is
-        zero-filled), its linear trend removed, a Hann window w applied against leakage from slow
-        transients, then Parseval on its FFT: mean square in the band = 2 sum |X_k|^2 / (N sum w^2)
-        over the band's bins. A stretch shorter than five periods of the band's
-        lowest frequency gives (0, 0): too short to tell a limit cycle from a transient."""
-        start, stop = _longest_run(self.tracking_mask(motor))
-        dt = self.t[1] - self.t[0] if self.t.size > 1 else self.sample_time
-        n = stop - start
-        if n < 16 or n * dt < 5.0 / band_hz[0]:
-            return 0.0, 0.0
-        t = self.t[start:stop]
-        err = (self.reference_rpm(motor) - self.speed_rpm(motor))[start:stop]
-        err = err - np.polyval(np.polyfit(t - t[0], err, 1), t - t[0])
-        window = np.hanning(n)
-        spectrum = np.fft.rfft(err * window)
-        freq = np.fft.rfftfreq(n, dt)
-        inside = (freq >= band_hz[0]) & (freq <= band_hz[1]) & (freq > 0) & (freq < 0.5 / dt)
-        power = np.abs(spectrum[inside]) ** 2
-        if power.size == 0:
-            return 0.0, 0.0
-        rms = float(np.sqrt(2.0 * power.sum() / (n * np.sum(window**2))))
-        return rms, float(freq[inside][np.argmax(power)])
+    def tracking_mask(self, motor: int = 0) -> np.ndarray:
+        """Samples where the speed is expected to track (``tracking_rule``)."""
+        return self.speed_tracking(motor)[2]
+
+    def speed_oscillation(self, motor: int = 0, band_hz=OSCILLATION_BAND_HZ):
+        """(band RMS [rpm], dominant frequency [Hz] or None) of the speed error over the longest
+        stretch of tracked samples (``sim._metrics.speed_oscillation``; the frequency only where
+        a limit cycle is shown)."""
+        err = (self.signal("w_ref", motor) - self.signal("w", motor)) * RPM_PER_RAD_S
+        return speed_oscillation(self.t, err, self.tracking_mask(motor), band_hz)
 
     def limit_excursions(self, motor: int, limits_pk: dict[str, float]) -> dict[str, dict]:
         """For each current signal (``i_r_mag``, ``i_s_mag``) and its peak-phase limit [A]: the
@@ -159,29 +152,25 @@ class DriveResult:
         return out
 
     def summary(self) -> dict:
-        """Headline metrics (motor 0 at top level, every motor under ``motors``).
-
-        speed_rms_error_rpm is taken over ``tracking_mask`` samples (reference steps excluded for
-        0.5 s); speed_max_abs_error_whole_run_rpm over the whole run, including the intended
-        reference steps (``speed_max_abs_error_rpm``: the same number under its former name).
-        Tracking where it is expected, from the scenario's reference profile and the speed
-        loop's bandwidth: ``acdrive.sim._outcome.tracking_windows`` (``speed_tracking``)."""
+        """Headline metrics (motor 0 at top level, every motor under ``motors``), each computed
+        once in ``acdrive.sim._metrics`` with its window in its name: ``_whole_run_`` (every
+        logged sample) or ``_tracking_`` (``speed_tracking``: the rule, the excluded windows and
+        the same figures); ``sim._metrics.limit_cycle`` over the longest tracked stretch:
+        ``speed_oscillation_rms_rpm`` in OSCILLATION_BAND_HZ, the period correlation,
+        ``speed_limit_cycle`` and ``speed_oscillation_hz`` (None unless a limit cycle is shown)."""
         per_motor = []
-        oscillation = [self.speed_oscillation(k) for k in range(self.n_motors)]
         for k in range(self.n_motors):
-            err = self.reference_rpm(k) - self.speed_rpm(k)
-            tracking = self.tracking_mask(k)
+            figures, tracking, mask = self.speed_tracking(k)
+            err = (self.signal("w_ref", k) - self.signal("w", k)) * RPM_PER_RAD_S
             per_motor.append(
                 {
-                    "speed_rms_error_rpm": float(np.sqrt(np.mean(err[tracking] ** 2))),
-                    "speed_max_abs_error_whole_run_rpm": float(np.max(np.abs(err))),
-                    "speed_max_abs_error_rpm": float(np.max(np.abs(err))),
+                    **figures,
+                    "speed_tracking": tracking,
                     "peak_rotor_current_a": float(np.max(self.peak("i_r_mag", k))),
                     "peak_stator_current_a": float(np.max(self.peak("i_s_mag", k))),
                     "peak_rotor_voltage_v": float(np.max(self.peak("v_r_mag", k))),
                     "limit_events": self.events(k),
-                    "speed_oscillation_rms_rpm": oscillation[k][0],
-                    "speed_oscillation_hz": oscillation[k][1],
+                    **limit_cycle(self.t, err, mask),
                 }
             )
         return {
@@ -265,14 +254,3 @@ class DriveResult:
         ax_w.set_title(title)
         fig.tight_layout()
         return fig
-
-
-def _longest_run(mask: np.ndarray) -> tuple[int, int]:
-    """(start, stop) of the longest stretch of True in ``mask`` ((0, 0) if there is none)."""
-    padded = np.concatenate([[False], mask.astype(bool), [False]])
-    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
-    starts, stops = edges[0::2], edges[1::2]
-    if starts.size == 0:
-        return 0, 0
-    k = int(np.argmax(stops - starts))
-    return int(starts[k]), int(stops[k])

@@ -188,7 +188,9 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
         lines += _md_table(["metric", "n", "min", "p5", "median", "p95", "max"], rows) + [""]
         files = _figures(table, metrics, folder)
         lines += [f"![{f}](figures/{f})" for f in files] + [""]
-    worst = spec.worst or next((m for m in metrics if m.startswith("speed_error_rms")), None)
+    worst = spec.worst or next(
+        (m for m in metrics if m.startswith("speed_rms_error_tracking")), None
+    )
     worst = worst or (metrics[0] if metrics else None)
     if worst is not None and worst in table:
         lines += [f"## Worst cases (largest {worst})", ""]
@@ -218,7 +220,7 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
             f"{int(unstable.sum())} of {n} (diverged, or late speed oscillation above 1 rpm RMS "
             "in 20-200 Hz)" + (":" if unstable.any() else ".")
         )
-        osc = [c for c in table.columns if c.startswith("speed_oscillation_rpm")]
+        osc = [c for c in table.columns if c.startswith("speed_oscillation_late_rpm")]
         for _, r in table[unstable].head(MAX_LISTED).iterrows():
             values = ", ".join(f"{c} = {_fmt(r[c])}" for c in osc)
             lines.append(f"- `{r['variant_id']}`: {r['status']}" + (f"; {values}" if osc else ""))

@@ -28,7 +28,7 @@ Schema (units as in the scenario files; every table optional except ``[[vary]]``
 
     [metrics]
     default = true                  # the drive's own on-line metrics (acdrive.batch.dfim_reducers)
-    summary = ["speed_rms_error_rpm"]   # summary.json keys (a full single run per variant)
+    summary = ["speed_oscillation_rms_rpm"]   # summary.json keys (a full single run per variant)
     [[metrics.reducer]]             # more on-line metrics (acdrive.batch.Reducer)
     name = "peak_speed_rpm"
     kind = "peak"                   # peak | mean | rms | exceed | final | oscillation
@@ -43,7 +43,7 @@ Schema (units as in the scenario files; every table optional except ``[[vary]]``
     every = 50                      # samples between rows
 
     [report]
-    worst = "speed_error_rms_rpm"   # metric whose largest values are the worst cases
+    worst = "speed_rms_error_tracking_rpm"   # metric whose largest values are the worst cases
     count = 5
 
     [limits]                        # checked before the sweep starts

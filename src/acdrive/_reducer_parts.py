@@ -1,0 +1,290 @@
+"""The reducer parts of ``acdrive.batch``: sampled parts appended to a drive's system that read
+its outputs at the samples a single run logs and accumulate metrics in their discrete state.
+
+One "stats" part (``stats_step``: peak, mean, RMS, exceed count, final value, one channel per
+signal, reference, window and limit), one part per oscillation metric (``oscillation_step``: the
+band-limited RMS in two late windows) and one per speed error (``speed_error_step``: the kernel
+of ``sim._metrics`` that a single run's summary runs on its logged samples).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from acdrive._jit import jit
+from acdrive.core._parts import SampledPart
+from acdrive.core._signals import Layout, cplx, real
+from acdrive.sim._metrics import NO_CLOSING, SPEED_ERROR_STATES, speed_error_update
+
+REDUCER_PARAMS = Layout(
+    real("start", "s", "start of the window the metric is taken over"),
+    real("stop", "s", "end of the window (inclusive)"),
+    real("split", "s", "oscillation: start of the late window (the early one ends there)"),
+    real("limit", "", "stats: threshold on |x| in the signal's unit (exceed count)"),
+    real("a_hp", "", "oscillation: tau/(tau + T_s) of the high-pass sections (backward Euler)"),
+    real("b_lp", "", "oscillation: T_s/(tau + T_s) of the low-pass section (backward Euler)"),
+    real("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
+    real("has_ref", "", "1 if a reference is subtracted from the signal"),
+    real("every", "", "the metric reads every every-th control sample (the logged ones)"),
+)
+_EVERY = REDUCER_PARAMS.slot("every")
+_START, _STOP, _SPLIT = (REDUCER_PARAMS.slot(n) for n in ("start", "stop", "split"))
+_LIMIT, _A, _B = (REDUCER_PARAMS.slot(n) for n in ("limit", "a_hp", "b_lp"))
+_CPLX, _REF = REDUCER_PARAMS.slot("is_complex"), REDUCER_PARAMS.slot("has_ref")
+
+_inline = njit(cache=True, error_model="numpy", inline="always")
+
+
+@_inline
+def _difference(u, at, ref_at, is_space_vector):
+    """The quantity every reducer reads: the signal at input slot ``at`` minus the reference at
+    ``ref_at`` (none if negative); for a space vector (two slots each) the magnitude of that
+    difference. Signed for a real signal."""
+    if is_space_vector:
+        re, im = u[at], u[at + 1]
+        if ref_at >= 0:
+            re -= u[ref_at]
+            im -= u[ref_at + 1]
+        return math.sqrt(re * re + im * im)
+    if ref_at >= 0:
+        return u[at] - u[ref_at]
+    return u[at]
+
+
+@_inline
+def _reduced_value(u, p):
+    """The signal a one-signal reducer part reads: its input ``x`` minus its input ``ref``."""
+    is_space_vector = p[_CPLX] > 0.5
+    ref_at = (2 if is_space_vector else 1) if p[_REF] > 0.5 else -1
+    return _difference(u, 0, ref_at, is_space_vector)
+
+
+#: every peak / mean / rms / exceed / final metric of a system is served by one "stats" part
+#: with one channel per (signal, reference, window, exceed limit) (``_with_reducers``): the cost
+#: of a reducer part is mostly per part per sample (about 35 ns), not in its arithmetic.
+STATS_CHANNEL = (
+    ("n", "", "samples in the window"),
+    ("peak", "", "largest |x| in the window"),
+    ("t_peak", "s", "time of the peak"),
+    ("sum", "", "sum of x over the window"),
+    ("sum_sq", "", "sum of x^2 over the window"),
+    ("count", "", "samples with |x| > limit in the window"),
+    ("t_first", "s", "time of the first such sample (-1: none)"),
+    ("last", "", "x at the last sample of the window"),
+)
+STATS_PARAMS = (
+    ("start", "s", "start of the window"),
+    ("stop", "s", "end of the window (inclusive)"),
+    ("limit", "", "threshold on |x| for the exceed count"),
+    ("is_complex", "", "1 if the signal is a space vector (its magnitude is reduced)"),
+    ("x_slot", "", "first input slot of the signal"),
+    ("ref_slot", "", "first input slot of the reference (-1: none)"),
+)
+_NS, _NP = len(STATS_CHANNEL), len(STATS_PARAMS)
+
+
+@_inline
+def _logged_time(t, T_s, every):
+    """(True and the time the single run logs, if control sample t is one it logs (every
+    ``every``-th, ``SystemResult.t``'s arithmetic); else False and t). The metrics of a batch
+    are taken on the samples a single run of the variant logs, so both give the same figures."""
+    k = int(t / T_s + 0.5)
+    n = int(every)
+    if k % n != 0:
+        return False, t
+    return True, (k // n) * T_s * n
+
+
+@jit
+def stats_step(t, T_s, u, p, s, y):
+    logged, t = _logged_time(t, T_s, p[1])
+    if not logged:
+        return 0
+    for c in range(int(p[0])):
+        q = 2 + _NP * c
+        if p[q] <= t <= p[q + 1]:
+            v = _difference(u, int(p[q + 4]), int(p[q + 5]), p[q + 3] > 0.5)
+            a = abs(v)
+            k = _NS * c
+            s[k] += 1.0
+            if s[k] == 1.0 or a > s[k + 1]:
+                s[k + 1] = a
+                s[k + 2] = t
+            s[k + 3] += v
+            s[k + 4] += v * v
+            if a > p[q + 2]:
+                if s[k + 5] == 0.0:
+                    s[k + 6] = t
+                s[k + 5] += 1.0
+            s[k + 7] = v
+    return 0
+
+
+_STATS_CLASSES: dict[tuple, type] = {}
+
+
+def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
+    """The stats part for ``channels`` = ((unit, is complex, has reference), ...): inputs
+    ``x<c>`` (and ``ref<c>``) declared in each signal's unit (the wiring checks units)."""
+    if channels not in _STATS_CLASSES:
+        inputs, states = [], []
+        params = [
+            real("channels", "", "number of channels"),
+            real("every", "", "the metrics read every every-th control sample (the logged ones)"),
+        ]
+        for c, (unit, is_complex, has_ref) in enumerate(channels):
+            make = cplx if is_complex else real
+            inputs.append(make(f"x{c}", unit, f"signal of channel {c}"))
+            if has_ref:
+                inputs.append(make(f"ref{c}", unit, f"reference of channel {c}"))
+            params += [real(f"{n}{c}", u, d) for n, u, d in STATS_PARAMS]
+            states += [real(f"{n}{c}", u, d) for n, u, d in STATS_CHANNEL]
+        _STATS_CLASSES[channels] = type(
+            "Reducer_stats",
+            (SampledPart,),
+            {
+                "__doc__": "On-line peak, mean, RMS, exceed count and final value (acdrive.batch).",
+                "PARAMS": Layout(*params),
+                "STATES": Layout(*states),
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "INITIAL": {f"t_first{c}": -1.0 for c in range(len(channels))},
+                "step": stats_step,
+            },
+        )
+    return _STATS_CLASSES[channels]
+
+
+OSC_STATES = Layout(
+    real("started", "", "1 once the filters hold the first sample"),
+    real("x_prev", "", "previous input of the first high-pass section"),
+    real("h1", "", "output of the first high-pass section"),
+    real("h2", "", "output of the second high-pass section"),
+    real("band", "", "band-limited signal (low-pass output)"),
+    real("early_sq", "", "sum of band^2 over [start, split)"),
+    real("early_n", "", "samples in the early window"),
+    real("late_sq", "", "sum of band^2 over [split, stop]"),
+    real("late_n", "", "samples in the late window"),
+)
+
+
+@jit
+def oscillation_step(t, T_s, u, p, s, y):
+    logged, t = _logged_time(t, T_s, p[_EVERY])
+    if not logged:
+        return 0
+    x = _reduced_value(u, p)
+    if s[0] == 0.0:
+        s[0] = 1.0
+        s[1] = x
+    a, b = p[_A], p[_B]
+    h1 = a * (s[2] + x - s[1])
+    h2 = a * (s[3] + h1 - s[2])
+    s[4] += b * (h2 - s[4])
+    s[1], s[2], s[3] = x, h1, h2
+    band = s[4]
+    if p[_START] <= t < p[_SPLIT]:
+        s[5] += band * band
+        s[6] += 1.0
+    elif p[_SPLIT] <= t <= p[_STOP]:
+        s[7] += band * band
+        s[8] += 1.0
+    return 0
+
+
+def band_coefficients(band_hz, sample_time: float) -> tuple[float, float]:
+    """(a, b) of the backward-Euler high-pass (lower edge) and low-pass (upper edge) sections."""
+    tau_h, tau_l = 1.0 / (2.0 * math.pi * band_hz[0]), 1.0 / (2.0 * math.pi * band_hz[1])
+    return tau_h / (tau_h + sample_time), sample_time / (tau_l + sample_time)
+
+
+#: no exceed metric on a stats part: a limit no finite |x| passes
+NO_LIMIT = 1e300
+_KERNELS = {"oscillation": (oscillation_step, OSC_STATES)}
+_CLASSES: dict[tuple, type] = {}
+
+
+def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> type:
+    """The sampled part of one reducer kind ("oscillation") reading a signal of ``unit`` (the wiring checks units, so the input is declared in the signal's own unit)."""
+    key = (kind, unit, is_complex, has_ref)
+    if key not in _CLASSES:
+        make = cplx if is_complex else real
+        inputs = [make("x", unit, "the reduced signal")]
+        if has_ref:
+            inputs.append(make("ref", unit, "reference subtracted from the signal"))
+        step, states = _KERNELS[kind]
+        _CLASSES[key] = type(
+            f"Reducer_{kind}",
+            (SampledPart,),
+            {
+                "__doc__": f"On-line {kind} of a signal (acdrive.batch).",
+                "PARAMS": REDUCER_PARAMS,
+                "STATES": states,
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "DEFAULTS": {
+                    "split": 0.0,
+                    "limit": NO_LIMIT,
+                    "a_hp": 0.0,
+                    "b_lp": 0.0,
+                    "every": 1.0,
+                },
+                "INITIAL": {},
+                "step": step,
+            },
+        )
+    return _CLASSES[key]
+
+
+#: the speed-error part's parameters before its reference-change windows
+SPEED_ERROR_PARAMS = (
+    ("every", "", "the metric reads every every-th control sample (the logged ones)"),
+    ("slew", "s s/rad", "SLEW_MARGIN J / tau: window per rad/s of error at a relay closing"),
+    ("settle", "s", "SETTLE_TIME_CONSTANTS / a_D,VEL: settling after a change"),
+    ("has_gate", "", "1 if the relay state is an input (else always closed)"),
+)
+_SE_NP = len(SPEED_ERROR_PARAMS)
+
+
+@jit
+def speed_error_step(t, T_s, u, p, s, y):
+    """The whole-run and tracking speed error (``sim._metrics.speed_error_update``, the kernel a
+    single run's summary runs on its logged samples) on line: inputs w, w_ref (and the relay
+    state)."""
+    logged, t = _logged_time(t, T_s, p[0])
+    if not logged:
+        return 0
+    closed = u[2] if p[3] > 0.5 else 1.0
+    speed_error_update(t, u[1] - u[0], closed, p[1], p[2], p[_SE_NP:], s)
+    return 0
+
+
+_SPEED_ERROR_CLASSES: dict[tuple, type] = {}
+
+
+def _speed_error_class(unit: str, gated: bool, n_windows: int) -> type:
+    key = (unit, gated, n_windows)
+    if key not in _SPEED_ERROR_CLASSES:
+        inputs = [real("x", unit, "speed"), real("ref", unit, "speed reference")]
+        if gated:
+            inputs.append(real("gate", "", "relay state: 1 closed, 0 open"))
+        params = [real(n, u, d) for n, u, d in SPEED_ERROR_PARAMS]
+        for j in range(n_windows):
+            params += [real(f"start{j}", "s", f"start of excluded window {j}"),
+                       real(f"end{j}", "s", f"end of excluded window {j}")]  # fmt: skip
+        _SPEED_ERROR_CLASSES[key] = type(
+            "Reducer_speed_error",
+            (SampledPart,),
+            {
+                "__doc__": "On-line whole-run and tracking speed error (acdrive.batch).",
+                "PARAMS": Layout(*params),
+                "STATES": Layout(*(real(n, u, d) for n, u, d in SPEED_ERROR_STATES)),
+                "INPUTS": Layout(*inputs),
+                "OUTPUTS": Layout(),
+                "INITIAL": {"until": NO_CLOSING},
+                "step": speed_error_step,
+            },
+        )
+    return _SPEED_ERROR_CLASSES[key]
