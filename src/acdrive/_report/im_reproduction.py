@@ -37,6 +37,7 @@ import numpy as np
 
 from acdrive._report import icad_targets as targets
 from acdrive._report.im_outputs import (
+    delayed_linear_step_response,
     step_comparison,
     write_comparison_figures,
     write_run_figures,
@@ -61,6 +62,7 @@ from acdrive.analysis._coupling import (
     VOLTAGE_LIMIT,
     CouplingResult,
     CouplingSetup,
+    hold_delay,
     icad_coupling,
     measure_coupling,
     pmsg_pi,
@@ -134,6 +136,9 @@ TOLERANCES = {
     "better_ratio": 2.0,
     # a simulated step overshoot equals the linear ICAD model's within (fraction of the step)
     "overshoot_abs": 0.05,
+    # one controller "overshoots more" than another (Figs. 18, 20) when its overshoot is larger
+    # by at least (fraction of the step)
+    "overshoot_order_abs": 0.01,
     # ringing of the inner PI against (20) (Fig. 20): ratio of late RMS deviations at least
     "ringing_ratio": 1.5,
     # a scenario's setting equals the printed number within (relative)
@@ -164,6 +169,8 @@ PMSG_FREQUENCIES = (20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 2000.0)
 PMSG_BANDWIDTH = 1000.0
 PMSG_SPEED = 2.0 * math.pi * 50.0  # rated 50 Hz electrical (w_gen = 157 rad/s)
 PMSG_AMPLITUDE = 100.0  # A, phase peak
+#: the window before the Fig. 14 load change over which the position step must have settled [s]
+PRELOAD_WINDOW = 0.2
 #: the step window after which ringing is measured [s]
 RINGING_FROM = 0.005
 
@@ -298,6 +305,13 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
     _, n["fig14_position_drift_rad"], n["fig14_steady_window_s"] = _steady_drift(
         outcomes["fig14"].main, "theta"
     )
+    main14 = outcomes["fig14"].main
+    before = main14.t < n["fig14_load_time_s"]
+    (
+        n["fig14_preload_position_rad"],
+        n["fig14_preload_drift_rad"],
+        n["fig14_preload_window_s"],
+    ) = window_drift(main14.t[before], main14.signal("theta")[before], PRELOAD_WINDOW)
     # Fig. 16
     sm = outcomes["fig16"].summary
     n["fig16_speed_reference_rad_s"] = sm["speed_reference_final_rad_s"]
@@ -319,10 +333,19 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
     # Figs. 18, 20
     o = outcomes["fig18_20"]
     n["steps_speed_rad_s"] = float(o.setup.mechanics.prescribed_speed[1][0])
+    n["steps_hold_delay_s"] = hold_delay(o.setup.carrier_samples, o.setup.sample_time)
     for label, result in o.results.items():
         c = step_comparison(result)
         n[f"step_overshoot_{label}"] = c["overshoot_simulated"]
         n[f"step_overshoot_linear_{label}"] = c["overshoot_linear"]
+        delayed = delayed_linear_step_response(
+            result.setup.plant,
+            n["steps_speed_rad_s"],
+            result.setup.current_control.lti,
+            c["t"],
+            n["steps_hold_delay_s"],
+        )
+        n[f"step_overshoot_linear_delayed_{label}"] = float(np.max(delayed[:, 0]) - 1.0)
         n[f"step_coupling_peak_{label}"] = c["coupling_peak_simulated"]
         n[f"step_coupling_peak_linear_{label}"] = c["coupling_peak_linear"]
         n[f"step_ringing_{label}"], n[f"step_ringing_linear_{label}"] = _ringing(result)
@@ -433,6 +456,24 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
         },
         " rad",
     )
+    v["fig14_settled_before_load"] = when_settled(
+        within_abs(
+            n["fig14_preload_position_rad"],
+            P["fig14_position"].value,
+            t["position_abs"],
+            " rad",
+            yes="settled at the reference",
+            no="away from the reference",
+        ),
+        {
+            "the position": judge_settling(
+                n["fig14_preload_drift_rad"],
+                n["fig14_preload_window_s"],
+                t["settled_position_abs"],
+            )
+        },
+        " rad",
+    )
     v["fig14_dip"] = at_most(
         abs(n["fig14_load_dip_rad"]) / P["fig14_position"].value,
         t["position_dip_rel"],
@@ -483,25 +524,19 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
     v["fig16_pi_steady"] = fig16_steady_verdict(n, t)
     # Figs. 18, 20
     v["steps_speed"] = setting("w_r_steps", n["steps_speed_rad_s"])
-    v["fig18_overshoot"] = Verdict(
-        n["step_overshoot_high_ki_pi"] > n["step_overshoot_icad"],
-        (
-            "agrees: the high-K_I PI overshoots more"
-            if n["step_overshoot_high_ki_pi"] > n["step_overshoot_icad"]
-            else "differs: the high-K_I PI does not overshoot more"
-        )
-        + f" ({fmt(100 * n['step_overshoot_high_ki_pi'], 3)} % vs "
-        f"{fmt(100 * n['step_overshoot_icad'], 3)} %)",
+    v["fig18_overshoot"] = overshoot_order(
+        n["step_overshoot_high_ki_pi"],
+        n["step_overshoot_icad"],
+        t["overshoot_order_abs"],
+        "the high-K_I PI overshoots more than (20)",
+        "the high-K_I PI does not overshoot clearly more than (20)",
     )
-    v["fig20_overshoot"] = Verdict(
-        n["step_overshoot_icad"] > n["step_overshoot_inner_pi"],
-        (
-            "agrees: (20) overshoots more than its inner PI"
-            if n["step_overshoot_icad"] > n["step_overshoot_inner_pi"]
-            else "differs: (20) does not overshoot more than its inner PI"
-        )
-        + f" ({fmt(100 * n['step_overshoot_icad'], 3)} % vs "
-        f"{fmt(100 * n['step_overshoot_inner_pi'], 3)} %)",
+    v["fig20_overshoot"] = overshoot_order(
+        n["step_overshoot_icad"],
+        n["step_overshoot_inner_pi"],
+        t["overshoot_order_abs"],
+        "(20) overshoots more than its inner PI",
+        "(20) does not overshoot clearly more than its inner PI",
     )
     v["fig20_ringing"] = ratio_at_least(
         n["step_ringing_inner_pi"],
@@ -513,6 +548,11 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
     for label in ("icad", "inner_pi", "high_ki_pi"):
         v[f"step_linear_{label}"] = within_abs(
             n[f"step_overshoot_{label}"], n[f"step_overshoot_linear_{label}"], t["overshoot_abs"]
+        )
+        v[f"step_linear_delayed_{label}"] = within_abs(
+            n[f"step_overshoot_{label}"],
+            n[f"step_overshoot_linear_delayed_{label}"],
+            t["overshoot_abs"],
         )
     # Fig. 23
     for k, f in targets.PERTURBATION_FACTORS.items():
@@ -575,6 +615,78 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
             ),
         )
     return v
+
+
+def overshoot_order(larger: float, smaller: float, tol: float, yes: str, no: str) -> Verdict:
+    """Figs. 18, 20: one simulated step overshoot exceeds another by at least ``tol`` (fractions
+    of the step), both printed in % of the step."""
+    ok = larger - smaller >= tol
+    return Verdict(
+        ok,
+        f"{'agrees' if ok else 'differs'}: {yes if ok else no} ({_pct(larger)} vs "
+        f"{_pct(smaller)}: difference {fmt(100 * (larger - smaller), 3)} % of the step, "
+        f"tolerance: at least {_pct(tol)})",
+    )
+
+
+def hold_explanation(n: dict, t: dict, names: dict[str, str]) -> str:
+    """The sentence under Figs. 18/20 on the gap between the simulated and the continuous linear
+    overshoot: printed as explained by the modelled hold only for a controller where the linear
+    loop with the hold's delay agrees with the simulation while the continuous one does not;
+    otherwise the cause is stated as open."""
+    tol = t["overshoot_abs"]
+    gaps = [
+        label
+        for label in names
+        if abs(n[f"step_overshoot_{label}"] - n[f"step_overshoot_linear_{label}"]) > tol
+    ]
+    if not gaps:
+        return (
+            "Every simulated overshoot agrees with the continuous linear one (tolerance "
+            f"{_pct(tol)} of the step): no gap to explain."
+        )
+    delay_us = fmt(1e6 * n["steps_hold_delay_s"])
+    closed = [
+        g
+        for g in gaps
+        if abs(n[f"step_overshoot_{g}"] - n[f"step_overshoot_linear_delayed_{g}"]) <= tol
+    ]
+    spoiled = [
+        label
+        for label in names
+        if label not in gaps
+        and abs(n[f"step_overshoot_{label}"] - n[f"step_overshoot_linear_delayed_{label}"]) > tol
+    ]
+    head = (
+        "The simulated overshoot differs from the continuous linear one beyond "
+        f"{_pct(tol)} of the step for {_names(names, gaps)}. A single loop delay of {delay_us} us "
+        "(the average delay N T_s / 2 of the 5 kHz carrier hold) in the linear loop gives the "
+        "'linear with the hold's delay' overshoots above. "
+    )
+    open_ = [g for g in gaps if g not in closed]
+    if not open_ and not spoiled:
+        return head + (
+            "It closes the gap for each of them and keeps the others within the tolerance: the "
+            "hold's delay accounts for the difference."
+        )
+    findings = []
+    if closed:
+        findings.append(f"it closes the gap for {_names(names, closed)}")
+    if open_:
+        findings.append(f"it does not close the gap for {_names(names, open_)}")
+    if spoiled:
+        findings.append(
+            f"it moves {_names(names, spoiled)} beyond the tolerance, which the continuous loop met"
+        )
+    return head + (
+        f"Computed: {'; '.join(findings)}. This single-delay model does not reproduce the "
+        "simulated overshoots, so the cause of the gap is open (the sampling, the carrier latch "
+        "and the SVPWM are not in the linear model)."
+    )
+
+
+def _names(names: dict[str, str], labels: list[str]) -> str:
+    return ", ".join(names[label] for label in labels)
 
 
 def fig16_steady_verdict(n: dict, t: dict) -> Verdict:
@@ -872,9 +984,17 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         "The paper shows the 6.28 rad step, a load applied at t = 2.5 s rejected 'with a slight "
         "transient deviation', and the currents with their references at low speed. acdrive runs "
         f"`im-foc-position` for {fmt(n['fig14_duration_s'])} s with the load "
-        f"({fmt(0.415)} N m, assumed) at {fmt(n['fig14_load_time_s'])} s: the step has settled "
-        "by then, so the rejection is the same and the run shorter. K_theta = 10 1/s and the "
-        "speed PI are assumed (the paper designs them in [25])."
+        f"({fmt(0.415)} N m, assumed) at {fmt(n['fig14_load_time_s'])} s instead of 2.5 s to "
+        "shorten the run; over the "
+        f"{fmt(n['fig14_preload_window_s'], 2)} s before the load the position is "
+        f"{fmt(n['fig14_preload_position_rad'], 6)} rad (drift "
+        f"{fmt(n['fig14_preload_drift_rad'], 2)} rad): {v['fig14_settled_before_load']}"
+        + (
+            ", so the load meets a settled position as in the paper. "
+            if v["fig14_settled_before_load"].holds
+            else ", so the load meets the step still moving, unlike in the paper. "
+        )
+        + "K_theta = 10 1/s and the speed PI are assumed (the paper designs them in [25])."
     )
     s.rows += [
         Row(
@@ -899,7 +1019,8 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             P["fig14_load_time"].where,
             "2.5 s",
             f"{fmt(n['fig14_load_time_s'])} s",
-            f"{v['fig14_load_time']}: moved to shorten the run (the step settles well before)",
+            f"{v['fig14_load_time']}: moved to shorten the run (position before the load: "
+            f"{v['fig14_settled_before_load']})",
         ),
         Row(
             "deviation at the load",
@@ -1023,8 +1144,9 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
                 f"{fmt(n[f'step_ringing_linear_{label}'])}); peak i_beta "
                 f"{fmt(n[f'step_coupling_peak_{label}'])} (linear "
                 f"{fmt(n[f'step_coupling_peak_linear_{label}'])})",
-                f"simulated vs linear overshoot: {v[f'step_linear_{label}']} (tolerance in "
-                "fractions of the step)",
+                f"simulated vs linear overshoot: {v[f'step_linear_{label}']}; linear with the "
+                f"hold's delay {_pct(n[f'step_overshoot_linear_delayed_{label}'])}: "
+                f"{v[f'step_linear_delayed_{label}']} (tolerances in fractions of the step)",
             )
         )
     s.rows += [
@@ -1032,12 +1154,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         Row("(20) vs inner PI", "Fig. 20", "(20) overshoot higher", "", str(v["fig20_overshoot"])),
         Row("ringing of the inner PI", "Fig. 20", "rings; (20) does not", "", str(v["fig20_ringing"])),
     ]  # fmt: skip
-    s.after = (
-        "Where the simulated overshoot exceeds the linear one, the reason is the PWM hold: a "
-        "command is held for a 200 us carrier period, a delay the continuous model does not have "
-        "and which erodes the phase margin most for the high-K_I PI (its margin is the smallest; "
-        "sec. IX names this limitation)."
-    )
+    s.after = hold_explanation(n, t, names)
     s.figures += figures.get("fig18_20", [])
     out.append(s)
 
