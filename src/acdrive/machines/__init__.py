@@ -26,6 +26,7 @@ __all__, __getattr__, __dir__ = namespace(
         "names": "._registry",
         "stator_current_ss": "._induction",
         "params_from_stationary_matrix": "._induction",
+        "machine_vector": "._dfim",
         "impedances": "._dfim",
         "steady_state_currents": "._dfim",
         "rotor_voltage_for": "._dfim",
