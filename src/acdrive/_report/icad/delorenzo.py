@@ -9,6 +9,7 @@ crossings of gamma over w_r against G_M,min; figure: Fig. 3.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from pathlib import Path
@@ -50,12 +51,19 @@ ARG_LIMIT_TOL_DEG = 0.01
 
 
 def gm_min_note(gm: float, label: str) -> str:
-    """G_M,min of (19) against the printed 0.75 (-2.47 dB), with the reason where it differs."""
+    """G_M,min of (19) against the printed 0.75 (-2.47 dB); for the Appendix set, where it
+    differs, whether L_s of (13) in place of the Appendix's alone gives the printed value."""
     linear = printed_digits(targets.GM_MIN_PRINTED.as_printed, gm)
     in_db = printed_digits(targets.GM_MIN_DB_PRINTED.as_printed, db(gm))
     note = f"{linear}; in dB {in_db}"
     if not (linear.holds and in_db.holds) and label == "App.":
-        note += "; the Appendix L_s gives a different sigma (see above)"
+        swapped = gm_min(dataclasses.replace(DELORENZO_IM, L_s=DELORENZO_IM_13.L_s))
+        with_ls = printed_digits(targets.GM_MIN_PRINTED.as_printed, swapped)
+        note += (
+            f"; with L_s of (13) ({fmt(DELORENZO_IM_13.L_s, 5)} H) and the other Appendix "
+            f"values, G_M,min = {fmt(swapped)}: {with_ls}"
+            + (" (the Appendix L_s, through sigma, makes the difference)" if with_ls.holds else "")
+        )
     return note
 
 

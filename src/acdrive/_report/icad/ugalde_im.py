@@ -120,6 +120,16 @@ def _printed_closed_forms(p: IMParams, w_r: float) -> dict[str, float]:
     return out
 
 
+def _gamma_60_as_printed(p: IMParams, w_r: float, w: np.ndarray) -> np.ndarray:
+    """gamma(j w) of Ugalde-Loo (60) with d_gamma_w as printed there: its term
+    -j w sigma L_s L_s^3 w_r^2 where (61) has -j w sigma L_s L_r^3 w_r^2 (the rest of d_gamma_w
+    as (61), ``im_dgamma_re_im``)."""
+    re, im = im_dgamma_re_im(p, w_r, w)
+    extra = -w * p.sigma * p.L_s * (p.L_s**3 - p.L_r**3) * w_r**2
+    num = p.L_r**2 * p.L_m**4 * p.R_r**2 * w_r**2 * w**2
+    return num / (re + 1j * (im + extra)) ** 2
+
+
 def c_of_80_row(p: IMParams) -> Row:
     """C of (80) as printed (``targets.UGALDE_IM_C_80_ROWS``) against C of (41) built by
     ``stator_current_ss``: the shape of each printed row and which row of (41)'s C it matches."""
@@ -253,6 +263,8 @@ def section_ugalde_im(fig_dir: Path) -> Section:
     G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * wv)
     gam = G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
     err = float(np.max(np.abs(im_msf_closed_form(p, w_r, wv) - gam) / np.abs(gam)))
+    err60 = float(np.max(np.abs(_gamma_60_as_printed(p, w_r, wv) - gam) / np.abs(gam)))
+    as_printed_60 = error_within(err60, FREQRESP_REL_TOL)
     s.rows.append(
         Row(
             "gamma(j w) of (60)-(61) vs state space",
@@ -260,8 +272,13 @@ def section_ugalde_im(fig_dir: Path) -> Section:
             "closed form",
             f"max rel. diff {fmt_rel(err)}",
             f"{error_within(err, FREQRESP_REL_TOL)} with the closed form written from (61); (60) "
-            "prints sigma L_s L_s^3 w_r^2 in d_gamma_w where (61) and the algebra give "
-            "sigma L_s L_r^3 w_r^2",
+            "as printed, with the term -j w sigma L_s L_s^3 w_r^2 in d_gamma_w where (61) has "
+            f"sigma L_s L_r^3 w_r^2: {as_printed_60}"
+            + (
+                " (a misprint of L_r^3 in (60))"
+                if not as_printed_60.holds and error_within(err, FREQRESP_REL_TOL).holds
+                else ""
+            ),
         )
     )
     f2 = brentq(lambda x: im_dgamma_re_im(p, w_r, x)[0], 1e-6, 1e6)
