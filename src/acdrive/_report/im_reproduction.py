@@ -291,6 +291,8 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
     n["fig13_torque_residual_n_m"] = sm["torque_balance"]["residual_n_m"]
     n["fig13_rms_error_rel"] = sm["current_rms_error_relative"]
     n["fig13_peak_modulation"] = _peak_modulation(outcomes["fig13"])
+    n["fig13_inertia_kg_m2"] = float(outcomes["fig13"].setup.mechanics.J)
+    n["fig13_flux_wb"] = float(np.max(outcomes["fig13"].setup.foc.psi_ref[1]))
     n["fig13_overmodulation_samples"] = sm["events"]["overmodulation"]
     n["fig13_saturated_samples"] = sm["events"]["current_controller_saturation"]
     n["fig13_duration_s"] = sm["duration_s"]
@@ -311,6 +313,7 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
     _, n["fig14_position_drift_rad"], n["fig14_steady_window_s"] = _steady_drift(
         outcomes["fig14"].main, "theta"
     )
+    n["fig14_load_n_m"] = float(np.max(np.abs(outcomes["fig14"].setup.mechanics.load[1])))
     main14 = outcomes["fig14"].main
     before = main14.t < n["fig14_load_time_s"]
     (
@@ -335,11 +338,13 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
             outcomes["fig16"].results[label], "w"
         )
     n["fig16_duration_s"] = sm["duration_s"]
+    n["fig16_k_p"] = float(outcomes["fig16"].setup.speed_p.k_p)
+    n["fig16_tau_max_n_m"] = float(outcomes["fig16"].setup.speed_p.tau_max)
     check16 = outcomes["fig16"].summary["voltage_check"]
     n["fig16_flux_wb"] = check16["flux_wb"]
     n["fig16_link_limit_v"] = check16["limit_v"]
     # the rated flux of Fig. 13's run, at Fig. 16's top speed with no torque (phase peak volts)
-    n["fig16_rated_flux_wb"] = float(np.max(outcomes["fig13"].setup.foc.psi_ref[1]))
+    n["fig16_rated_flux_wb"] = n["fig13_flux_wb"]
     n["fig16_rated_flux_needed_v"] = abs(
         foc_voltage(
             outcomes["fig16"].setup.plant, n["fig16_rated_flux_wb"], 0.0, check16["speed_rad_s"]
@@ -978,7 +983,8 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         f"{fmt(n['fig13_duration_s'])} s (the paper's record is longer; step, settling and load "
         f"rejection are inside this one), the brake from {fmt(n['fig13_load_time_s'])} s "
         f"({fmt(n['fig13_load_n_m'], 3)} N m at 150 rad/s, assumed: half the rated torque), "
-        "J = 0.000711 kg m^2, viscous and Coulomb friction, rated flux 0.964 Wb and a speed PI "
+        f"J = {fmt(n['fig13_inertia_kg_m2'], 3)} kg m^2, viscous and Coulomb friction, rated "
+        f"flux {fmt(n['fig13_flux_wb'], 3)} Wb and a speed PI "
         "with both roots at -50 rad/s (all assumed: the paper gives none; [25] designs the outer "
         "loop)."
     )
@@ -1042,15 +1048,15 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         "The paper shows the 6.28 rad step, a load applied at t = 2.5 s rejected 'with a slight "
         "transient deviation', and the currents with their references at low speed. acdrive runs "
         f"`im-foc-position` for {fmt(n['fig14_duration_s'])} s with the load "
-        f"({fmt(0.415)} N m, assumed) at {fmt(n['fig14_load_time_s'])} s instead of 2.5 s to "
+        f"({fmt(n['fig14_load_n_m'], 3)} N m, assumed) at {fmt(n['fig14_load_time_s'])} s instead of 2.5 s to "
         "shorten the run; over the "
         f"{fmt(n['fig14_preload_window_s'], 2)} s before the load the position is "
         f"{fmt(n['fig14_preload_position_rad'], 6)} rad (drift "
         f"{fmt(n['fig14_preload_drift_rad'], 2)} rad): {v['fig14_settled_before_load']}"
         + (
-            ", so the load meets a settled position as in the paper. "
+            ", so the load meets a settled position. "
             if v["fig14_settled_before_load"].holds
-            else ", so the load meets the step still moving, unlike in the paper. "
+            else ", so the load meets a position still moving by more than the settling tolerance. "
         )
         + "K_theta = 10 1/s and the speed PI are assumed (the paper designs them in [25])."
     )
@@ -1109,7 +1115,8 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         f"`im-icad-vs-pi` for {fmt(n['fig16_duration_s'])} s, long enough for both speeds to "
         "settle (the steady-state errors are judged over the last "
         f"{fmt(n['fig16_steady_window_s'], 2)} s, where each speed must drift by at most "
-        f"{fmt(t['settled_speed_abs'])} rad/s): k_p = 0.0711 N m s/rad and tau_max = 0.5 N m (assumed), and a rotor "
+        f"{fmt(t['settled_speed_abs'])} rad/s): k_p = {fmt(n['fig16_k_p'], 3)} N m s/rad and "
+        f"tau_max = {fmt(n['fig16_tau_max_n_m'], 3)} N m (assumed), and a rotor "
         f"flux of {fmt(n['fig16_flux_wb'])} Wb instead of the rated "
         f"{fmt(n['fig16_rated_flux_wb'])} Wb: "
         + (
