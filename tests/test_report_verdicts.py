@@ -126,11 +126,14 @@ def test_pi_family_trend_flips_on_a_step_against_it():
     assert not pi_family_trend([17.0, 17.0, 17.0], [95.0, 95.0, 95.0]).holds  # no change
 
 
-def test_gm_min_note_gives_the_reason_only_where_the_appendix_set_differs():
+def test_gm_min_note_tests_the_l_s_explanation_only_where_the_appendix_set_differs():
     assert gm_min_note(0.7524, "(13)").startswith("agrees")
     app = gm_min_note(0.7662, "App.")
-    assert app.startswith("differs") and "different sigma" in app
-    assert "different sigma" not in gm_min_note(0.7524, "App.")
+    # the computation: L_s of (13) with the other Appendix values gives G_M,min = 0.743, which
+    # does not round to 0.75, so no explanation by L_s alone is printed
+    assert app.startswith("differs") and "with L_s of (13)" in app and "0.743" in app
+    assert "makes the difference" not in app
+    assert "with L_s of (13)" not in gm_min_note(0.7524, "App.")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -20,13 +20,14 @@ This module assembles the report; each section is computed and drawn by its own 
 - ``design_helpers``: acdrive's design helpers on the paper's problem (not in the papers);
 - ``figure_index``: which file shows each figure of the papers;
 
-then what is not reproduced. ``acdrive._report.markdown`` renders the sections.
+then what is not reproduced here (the time-domain half is ``acdrive reproduce im``). ``acdrive._report.markdown`` renders the sections.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from acdrive._report import im_reproduction
 from acdrive._report.icad.controller_20 import section_controller_20
 from acdrive._report.icad.delorenzo import section_delorenzo_model
 from acdrive._report.icad.design_helpers import section_design_helpers
@@ -40,14 +41,24 @@ from acdrive._report.icad.ugalde_im import section_ugalde_im
 from acdrive._report.markdown import Section, render_section
 from acdrive.analysis._freqresp import LTI
 
-NOT_REPRODUCED = """## Not reproduced
 
-- Experiments (seed 002 Figs. 11, 13, 14, 16) and the nonlinear VSI simulation (Fig. 23): they
-  need the IM drive simulator with indirect field orientation, which acdrive does not have yet.
-- Table I of seed 002 is an image absent from the text; only the values quoted in the text are
-  compared.
-- The ranges of w_gen / w_r of seed 001 Figs. 4, 6-8 are not printed; 0 ... rated speed is used.
-"""
+def not_reproduced() -> str:
+    """What this report leaves out, and where the time-domain half of seed 002 is instead: the
+    experiments run by ``acdrive reproduce im`` (``_report.im_reproduction.EXPERIMENTS``)."""
+    figures = ", ".join(
+        key.removeprefix("fig").replace("_", "/") for key in im_reproduction.EXPERIMENTS
+    )
+    return (
+        "## Not reproduced here\n\n"
+        f"- The time-domain half of seed 002 (Figs. {figures}: experiments and the VSI "
+        "simulation) is not part of this frequency-domain report: `acdrive reproduce im` runs "
+        "each as a built-in scenario and compares it in `im-current-control.md` "
+        f"({', '.join(f'`{name}`' for name in im_reproduction.EXPERIMENTS.values())}).\n"
+        "- Table I of seed 002 is an image absent from the text; only the values quoted in the "
+        "text are compared.\n"
+        "- The ranges of w_gen / w_r of seed 001 Figs. 4, 6-8 are not printed; 0 ... rated speed "
+        "is used.\n"
+    )
 
 
 def build_sections(fig_dir: Path) -> list[Section]:
@@ -89,7 +100,7 @@ def render(sections: list[Section], fig_rel: str) -> str:
     for sec in sections:
         out += render_section(sec, fig_rel)
     out.append(figure_index(fig_rel))
-    out.append(NOT_REPRODUCED)
+    out.append(not_reproduced())
     return "\n".join(out)
 
 

@@ -101,6 +101,8 @@ class PrintedIMMatrix:
 
 
 UGALDE_IM_MATRIX_80 = PrintedIMMatrix(UGALDE, "(80)", -359.2, 139.4, 9.0, 22.3, -15.4, 9.7)
+#: C of Ugalde-Loo (80) row by row as printed: three rows, the first with three entries.
+UGALDE_IM_C_80_ROWS = ((1, 0, 0), (0, 1, 0, 0), (0, 1, 0, 0))
 DELORENZO_MATRIX_13 = PrintedIMMatrix(AMEZQUITA, "(13)", -359.2, 141.8, 9.2, 21.9, -15.4, 9.7)
 
 #: PMSG A, B of Ugalde-Loo sec. 3.5: A = [[-14.0466, 2 w_gen], [-2 w_gen, -14.0466]],

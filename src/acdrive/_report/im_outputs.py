@@ -60,6 +60,43 @@ def linear_step_response(params, w_mech: float, k, t: np.ndarray) -> np.ndarray:
     return np.atleast_2d(y).reshape(t.size, 2)
 
 
+def delayed_linear_step_response(
+    params, w_mech: float, k, t: np.ndarray, delay: float, substeps: int = 50
+) -> np.ndarray:
+    """``linear_step_response`` with the controller's command reaching the plant ``delay`` [s]
+    late (a single loop delay, e.g. the average delay N T_s / 2 of a sample-and-hold,
+    ``analysis._coupling.hold_delay``): plant and controller discretised with a zero-order hold
+    at dt = delay / ``substeps`` (exact for inputs constant over dt), the command delayed by
+    ``substeps`` steps, the outputs interpolated onto ``t``."""
+    plant = plant_from_params(params, params.n_p * w_mech)
+    dt = delay / substeps if delay > 0 else float(np.min(np.diff(t))) / 10.0
+    lag = substeps if delay > 0 else 0
+
+    def zoh(A, B):
+        n, m = B.shape
+        M = scipy.linalg.expm(np.block([[A, B], [np.zeros((m, n + m))]]) * dt)
+        return M[:n, :n], M[:n, n:]
+
+    Ap, Bp = zoh(plant.A, plant.B)
+    Ak, Bk = zoh(scipy.linalg.block_diag(k.A, k.A), scipy.linalg.block_diag(k.B, k.B))
+    Ck = scipy.linalg.block_diag(k.C, k.C)
+    Dk = float(k.D[0, 0])
+    steps = int(np.ceil(t[-1] / dt)) + 1
+    x, xk = np.zeros(Ap.shape[0]), np.zeros(Ak.shape[0])
+    r = np.array([1.0, 0.0])
+    pending = [np.zeros(2)] * lag
+    out = np.empty((steps, 2))
+    for i in range(steps):
+        y = plant.C @ x
+        out[i] = y
+        e = r - y
+        pending.append(Ck @ xk + Dk * e)
+        xk = Ak @ xk + Bk @ e
+        x = Ap @ x + Bp @ pending.pop(0)
+    grid = dt * np.arange(steps)
+    return np.column_stack([np.interp(t, grid, out[:, j]) for j in range(2)])
+
+
 def step_comparison(result: IMDriveResult) -> dict | None:
     """Simulated step response of the alpha current against the linear closed loop, both per
     unit of the step, after the step: overshoots, final values, largest difference and the

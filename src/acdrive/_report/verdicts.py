@@ -66,8 +66,20 @@ def relative_difference(value, reference) -> float:
     return float(d.real if not isinstance(d, complex) else abs(d)) / scale
 
 
-def _percent_or_ratio(x: float, tol: float, signed_: bool = True) -> tuple[str, str]:
-    """Relative numbers in % for tolerances of 0.1 % and above, as plain ratios below."""
+def below_floor(x: float, floor: float) -> bool:
+    """A non-zero relative number smaller in magnitude than ``floor``: floating-point round-off,
+    whose digits differ between machines and libraries, printed as the bound "< floor" so that a
+    report regenerates identically (``floor`` = 0: never)."""
+    return 0.0 < abs(x) < floor
+
+
+def _percent_or_ratio(
+    x: float, tol: float, signed_: bool = True, floor: float = 0.0
+) -> tuple[str, str]:
+    """Relative numbers in % for tolerances of 0.1 % and above, as plain ratios below; a
+    round-off-level number (``below_floor``) as "< floor"."""
+    if below_floor(x, floor):
+        return f"< {floor:g}", f"{100 * tol:g} %" if tol >= 1e-3 else f"{tol:g}"
     if tol >= 1e-3:
         return (signed(100 * x, 2) if signed_ else num(100 * abs(x), 2)) + " %", f"{100 * tol:g} %"
     return num(abs(x), 2), f"{tol:g}"
@@ -84,20 +96,31 @@ def within_abs(
     )
 
 
-def within_rel(value, reference, tol: float, yes="agrees", no="differs") -> Verdict:
-    """|value - reference| <= tol |reference| (real or complex)."""
+def within_rel(
+    value, reference, tol: float, yes="agrees", no="differs", *, floor: float = 0.0
+) -> Verdict:
+    """|value - reference| <= tol |reference| (real or complex); a relative difference below
+    ``floor`` is printed as the bound (``below_floor``)."""
     r = relative_difference(value, reference)
     ok = abs(r) <= tol
-    shown, tol_shown = _percent_or_ratio(r, tol, not isinstance(value - reference, complex))
+    shown, tol_shown = _percent_or_ratio(r, tol, not isinstance(value - reference, complex), floor)
     return Verdict(ok, f"{yes if ok else no} (relative difference {shown}, tolerance {tol_shown})")
 
 
 def error_within(
-    err: float, tol: float, what: str = "max relative difference", yes="agrees", no="differs"
+    err: float,
+    tol: float,
+    what: str = "max relative difference",
+    yes="agrees",
+    no="differs",
+    *,
+    floor: float = 0.0,
 ) -> Verdict:
-    """An error measure already computed (e.g. a maximum over a frequency grid) <= tol."""
+    """An error measure already computed (e.g. a maximum over a frequency grid) <= tol; a
+    relative error below ``floor`` is printed as the bound (``below_floor``)."""
     ok = err <= tol
-    return Verdict(ok, f"{yes if ok else no} ({what} {num(err, 2)}, tolerance {tol:g})")
+    shown = f"< {floor:g}" if below_floor(err, floor) else num(err, 2)
+    return Verdict(ok, f"{yes if ok else no} ({what} {shown}, tolerance {tol:g})")
 
 
 def half_unit(printed: str) -> float:
@@ -113,18 +136,29 @@ def half_unit(printed: str) -> float:
 
 
 def printed_digits(
-    printed: str, value: float, yes="agrees to the printed digits", no="differs"
+    printed: str,
+    value: float,
+    yes="agrees to the printed digits",
+    no="differs",
+    *,
+    floor: float = 0.0,
 ) -> Verdict:
     """``value`` rounds to the number printed as ``printed``: |value - printed| <= half a unit of
-    its last digit (the tolerance, ``half_unit``)."""
+    its last digit (the tolerance, ``half_unit``); a difference below ``floor`` relative to the
+    printed number is printed as that bound (``below_floor``)."""
     reference = float(printed.replace(",", ""))
     tol = half_unit(printed)
     d = value - reference
     ok = abs(d) <= tol
     rel = "" if ok or reference == 0 else f", {signed(100 * d / abs(reference), 2)} %"
+    shown = (
+        f"< {floor:g} relative"
+        if reference != 0 and below_floor(d / reference, floor)
+        else signed(d)
+    )
     return Verdict(
         ok,
-        f"{yes if ok else no} (difference {signed(d)}{rel}, tolerance {tol:g}: half a unit of the "
+        f"{yes if ok else no} (difference {shown}{rel}, tolerance {tol:g}: half a unit of the "
         "last printed digit)",
     )
 

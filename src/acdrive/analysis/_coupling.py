@@ -93,6 +93,12 @@ def pmsg_pi(p: PMSGParams, bandwidth: float) -> LTI:
     return LTI.pi(bandwidth * p.L_d, bandwidth * p.R_s, name=f"PMSG PI, a = {bandwidth:g} rad/s")
 
 
+def hold_delay(hold_samples: int, sample_time: float) -> float:
+    """Average delay [s] of a sample-and-hold that keeps a command for ``hold_samples`` samples
+    of ``sample_time``: N T_s / 2 (module docstring)."""
+    return hold_samples * sample_time / 2.0
+
+
 def _plant(params, w_e: float):
     return plant_from_params(params, w_e)
 
@@ -175,8 +181,8 @@ class CouplingSetup:
 
     @property
     def delay(self) -> float:
-        """Average delay of the sample-and-hold, N T_s / 2 [s]."""
-        return self.hold_samples * self.sample_time / 2.0
+        """Average delay of the sample-and-hold, N T_s / 2 [s] (``hold_delay``)."""
+        return hold_delay(self.hold_samples, self.sample_time)
 
     def window_for(self, w: float) -> float:
         period = 2.0 * math.pi / w

@@ -128,7 +128,8 @@ class ModelComparison:
 
 
 def compare_design_models(params: IMParams, w_r: float, w) -> ModelComparison:
-    """Compare models B, C, D with the full channel model A at speed w_r on the band ``w``."""
+    """Compare the design models B, C, D with the full channel model A (Amezquita-Brooks et al.
+    sec. V-A, Fig. 4) at speed w_r on the band ``w``."""
     w = check_frequency_grid(w)
     models = design_models(params, w_r)
     resp = {k: m.model.freqresp(w) for k, m in models.items()}

@@ -152,7 +152,8 @@ def _kernel_outputs(G, k1, k2):
 
 
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
-    """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...).
+    """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...):
+    the quantities of Ugalde-Loo et al. (1)-(6) = Amezquita-Brooks et al. (5)-(10).
 
     G[..., 0, 0], k1 and k2 are broadcast together; the results have that broadcast shape
     (channel arrays with a further last axis of length 2):

@@ -32,5 +32,9 @@ __all__, __getattr__, __dir__ = namespace(
         "SpeedEstimator": "._bodson",
         "SupplyFrequencyEstimator": "._bodson",
         "Synchroniser": "._bodson",
+        "PI_OF_22": "._lti",
+        "FIG17_K_I": "._lti",
+        "FIG17_K_P": "._lti",
+        "current_loop_gains": "._dfim",
     },
 )

@@ -16,6 +16,8 @@ import numpy as np
 from scipy.optimize import brentq
 
 from acdrive._report import icad_targets as targets
+from acdrive._report import verdicts
+from acdrive._report.verdicts import Verdict, below_floor
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import icad_quantities
 
@@ -43,6 +45,34 @@ GM_TOL_DB = 1.0
 #: Open-loop gains quoted as 'approximately' / 'near' a value (approx 20 dB at the resonance,
 #: sec. VII; PI 'dropping near 0 dB around 375 rad/s', sec. VI-D).
 APPROX_GAIN_TOL_DB = 2.0
+
+# --- round-off ----------------------------------------------------------------------------------
+#: A relative difference below this is floating-point round-off (a closed form against the state
+#: space, an identity): its digits change between machines and libraries, so the report prints
+#: the bound "< 1e-12" and regenerates identically. Every tolerance of the report is above it.
+ROUNDOFF_FLOOR = 1e-12
+
+
+def within_rel(value, reference, tol: float, yes="agrees", no="differs") -> Verdict:
+    """``verdicts.within_rel`` with round-off printed as a bound (``ROUNDOFF_FLOOR``)."""
+    return verdicts.within_rel(value, reference, tol, yes, no, floor=ROUNDOFF_FLOOR)
+
+
+def error_within(
+    err: float, tol: float, what: str = "max relative difference", yes="agrees", no="differs"
+) -> Verdict:
+    """``verdicts.error_within`` with round-off printed as a bound (``ROUNDOFF_FLOOR``)."""
+    return verdicts.error_within(err, tol, what, yes, no, floor=ROUNDOFF_FLOOR)
+
+
+def printed_digits(printed: str, value: float, yes="agrees to the printed digits", no="differs"):
+    """``verdicts.printed_digits`` with round-off printed as a bound (``ROUNDOFF_FLOOR``)."""
+    return verdicts.printed_digits(printed, value, yes, no, floor=ROUNDOFF_FLOOR)
+
+
+def fmt_rel(x: float, digits: int = 2) -> str:
+    """A relative difference for a table cell: round-off as "< 1e-12" (``ROUNDOFF_FLOOR``)."""
+    return f"< {ROUNDOFF_FLOOR:g}" if below_floor(x, ROUNDOFF_FLOOR) else f"{x:.{digits}g}"
 
 
 def channel_response(plant, k: LTI, w: np.ndarray) -> dict[str, np.ndarray]:

@@ -10,9 +10,8 @@ plus the parameter set acdrive derives from Amezquita-Brooks et al. matrix (13)
 from __future__ import annotations
 
 from acdrive._report import icad_targets as targets
-from acdrive._report.icad.common import EXACT_REL_TOL
+from acdrive._report.icad.common import EXACT_REL_TOL, within_rel
 from acdrive._report.markdown import Row, Section, fmt
-from acdrive._report.verdicts import within_rel
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W
 from acdrive.machines._pmsm import PMSG_2MW
 

@@ -27,10 +27,11 @@ from acdrive._report.icad.common import (
     W_NYQ,
     W_R,
     channel_response,
+    within_rel,
 )
 from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import at_least, within_abs, within_rel
+from acdrive._report.verdicts import at_least, within_abs
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._icad import analyse, gm_min, icad_response
 from acdrive.analysis._plants import plant_from_params

@@ -32,9 +32,11 @@ from acdrive._report.icad.common import (
     W_BODE,
     W_R,
     channel_response,
+    fmt_rel,
+    within_rel,
 )
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import Verdict, at_least, at_most, within_abs, within_rel
+from acdrive._report.verdicts import Verdict, at_least, at_most, within_abs
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._icad import analyse
 from acdrive.analysis._plants import plant_from_params
@@ -129,7 +131,7 @@ def section_pi_comparison(fig_dir: Path, k20: LTI) -> Section:
         "w_r = 375 rad/s, `delorenzo-im-13`. The PI family of sec. VII: for each K_I, K_P is "
         f"solved (brentq) so that c_i crosses 0 dB at the crossover of (20), {fmt(wc20)} rad/s "
         "(the built-in family `acdrive.control._lti.FIG17_PI_FAMILY`, which the simulator runs, "
-        f"stores these K_P: largest relative difference to the solution here {kp_diff:.1e})."
+        f"stores these K_P: largest relative difference to the solution here {fmt_rel(kp_diff)})."
     )
     m_pi = api.channels[0].margins
     s.rows.append(

@@ -24,11 +24,15 @@ from acdrive._report.icad.common import (
     EXACT_REL_TOL,
     FREQRESP_REL_TOL,
     SPEEDS_PMSG,
+    error_within,
+    fmt_rel,
     gamma_real_axis_crossing,
+    printed_digits,
+    within_rel,
 )
 from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, fmt, save_figure
-from acdrive._report.verdicts import at_most, error_within, printed_digits, within_rel
+from acdrive._report.verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import icad_response, pmsg_msf, structure_conditions
 from acdrive.analysis._plants import plant_from_params
@@ -138,7 +142,7 @@ def section_pmsg(fig_dir: Path) -> Section:
             "gamma(s) of (18) vs state space",
             "(18)",
             "closed form",
-            f"max rel. diff {fmt(err, 2)}",
+            f"max rel. diff {fmt_rel(err)}",
             str(error_within(err, FREQRESP_REL_TOL)),
         )
     )

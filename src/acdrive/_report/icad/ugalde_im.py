@@ -29,12 +29,16 @@ from acdrive._report.icad.common import (
     ROOT_REL_TOL,
     SPEEDS_001_IM,
     W_NYQ,
+    error_within,
+    fmt_rel,
     gamma_real_axis_crossing,
+    within_rel,
 )
+from acdrive._report.icad.rounding import rounding_reach, rounding_rows
 from acdrive._report.icad.stator_matrix import entries_with_verdict, matrix_entry_rows
 from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, fmt, save_figure
-from acdrive._report.verdicts import at_most, error_within, within_rel
+from acdrive._report.verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import (
     icad_response,
@@ -116,6 +120,58 @@ def _printed_closed_forms(p: IMParams, w_r: float) -> dict[str, float]:
     return out
 
 
+def _gamma_60_as_printed(p: IMParams, w_r: float, w: np.ndarray) -> np.ndarray:
+    """gamma(j w) of Ugalde-Loo (60) with d_gamma_w as printed there: its term
+    -j w sigma L_s L_s^3 w_r^2 where (61) has -j w sigma L_s L_r^3 w_r^2 (the rest of d_gamma_w
+    as (61), ``im_dgamma_re_im``)."""
+    re, im = im_dgamma_re_im(p, w_r, w)
+    extra = -w * p.sigma * p.L_s * (p.L_s**3 - p.L_r**3) * w_r**2
+    num = p.L_r**2 * p.L_m**4 * p.R_r**2 * w_r**2 * w**2
+    return num / (re + 1j * (im + extra)) ** 2
+
+
+def c_of_80_row(p: IMParams) -> Row:
+    """C of (80) as printed (``targets.UGALDE_IM_C_80_ROWS``) against C of (41) built by
+    ``stator_current_ss``: the shape of each printed row and which row of (41)'s C it matches."""
+    C = stator_current_ss(p, 0.0)[2]
+    printed = targets.UGALDE_IM_C_80_ROWS
+    lengths = [len(r) for r in printed]
+    identity = np.array_equal(C, np.eye(2, 4))
+
+    def matches(row) -> list[int]:
+        # rows of (41)'s C equal to the printed row, or to it padded with trailing zeros
+        padded = np.array(list(row) + [0] * (C.shape[1] - len(row)), dtype=float)
+        return [i + 1 for i in range(C.shape[0]) if np.array_equal(C[i], padded)]
+
+    found = [matches(r) for r in printed]
+    covered = sorted({i for m in found for i in m})
+    note = (
+        f"printed with {len(printed)} rows of {', '.join(str(n) for n in lengths)} entries; "
+        f"(41) has {C.shape[0]} outputs and {C.shape[1]} states. Printed row -> row of (41)'s C "
+        "(a short row padded with zeros): "
+        + "; ".join(
+            f"{i + 1} -> {', '.join(str(j) for j in m) if m else 'none'}"
+            for i, m in enumerate(found)
+        )
+        + ". "
+    )
+    if covered == list(range(1, C.shape[0] + 1)) and all(found):
+        note += (
+            "Every printed row is a row of (41)'s C and every row of it is printed: a "
+            "typesetting misprint of C = [I_2 0]"
+        )
+    else:
+        note += "The printed rows do not reduce to (41)'s C: the difference is open"
+    note += f"; acdrive's C {'equals' if identity else 'differs from'} [I_2 0]"
+    return Row(
+        "C of (80)",
+        "(80)",
+        "; ".join(" ".join(str(x) for x in r) for r in printed),
+        "; ".join(" ".join(f"{x:g}" for x in r) for r in C),
+        note,
+    )
+
+
 def section_ugalde_im(fig_dir: Path) -> Section:
     """The 300 W IM section; Figs. 6-8 are written into ``fig_dir``."""
     p = UGALDE_IM_300W
@@ -128,6 +184,11 @@ def section_ugalde_im(fig_dir: Path) -> Section:
     )
     rows80, verdicts80 = matrix_entry_rows("sec. 4.5 parameters", targets.UGALDE_IM_MATRIX_80, p)
     s.rows += rows80
+    s.rows += rounding_rows(
+        rounding_reach(targets.UGALDE_IM_PRINTED, targets.UGALDE_IM_MATRIX_80),
+        "sec. 4.5",
+        "Ugalde-Loo (80)",
+    )
     m80, m13 = targets.UGALDE_IM_MATRIX_80, targets.DELORENZO_MATRIX_13
     same = (
         within_rel(m80.a11, m13.a11, EXACT_REL_TOL).holds
@@ -146,15 +207,7 @@ def section_ugalde_im(fig_dir: Path) -> Section:
             "acdrive uses the parameters (machine ugalde-im-300w).",
         )
     )
-    s.rows.append(
-        Row(
-            "C of (80)",
-            "(80)",
-            "printed as a 3-row matrix with a 3-column first row",
-            "C = [I_2 0]",
-            "typesetting misprint; (41) gives C = [I_2 0]",
-        )
-    )
+    s.rows.append(c_of_80_row(p))
     w_r = 300.0
     pr = _printed_closed_forms(p, w_r)
     plant = plant_from_params(p, w_r)
@@ -210,15 +263,22 @@ def section_ugalde_im(fig_dir: Path) -> Section:
     G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * wv)
     gam = G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
     err = float(np.max(np.abs(im_msf_closed_form(p, w_r, wv) - gam) / np.abs(gam)))
+    err60 = float(np.max(np.abs(_gamma_60_as_printed(p, w_r, wv) - gam) / np.abs(gam)))
+    as_printed_60 = error_within(err60, FREQRESP_REL_TOL)
     s.rows.append(
         Row(
             "gamma(j w) of (60)-(61) vs state space",
             "(60)-(61)",
             "closed form",
-            f"max rel. diff {fmt(err, 2)}",
+            f"max rel. diff {fmt_rel(err)}",
             f"{error_within(err, FREQRESP_REL_TOL)} with the closed form written from (61); (60) "
-            "prints sigma L_s L_s^3 w_r^2 in d_gamma_w where (61) and the algebra give "
-            "sigma L_s L_r^3 w_r^2",
+            "as printed, with the term -j w sigma L_s L_s^3 w_r^2 in d_gamma_w where (61) has "
+            f"sigma L_s L_r^3 w_r^2: {as_printed_60}"
+            + (
+                " (a misprint of L_r^3 in (60))"
+                if not as_printed_60.holds and error_within(err, FREQRESP_REL_TOL).holds
+                else ""
+            ),
         )
     )
     f2 = brentq(lambda x: im_dgamma_re_im(p, w_r, x)[0], 1e-6, 1e6)
@@ -242,8 +302,10 @@ def section_ugalde_im(fig_dir: Path) -> Section:
             fmt(f3, 7),
             f"as printed: {as_printed}"
             + (
-                "; misprint: F(3) as printed is dimensionally wrong (Psi^3 in the denominator, "
-                "H^6) and Upsilon = 2 L_r R_s R_r + L_m^2 R_r^2 mixes units; the dimensionally "
+                "; the paper prints F(3) = +/- sqrt(Psi [Psi (w_r^2 L_r^2 + R_r^2) + Upsilon]) "
+                "/ Psi^2 with Psi = sigma L_s L_r and Upsilon = 2 L_r R_s R_r + L_m^2 R_r^2: in "
+                "units, Psi [Psi (...)] is H^4 ohm^2, so the square root over Psi^2 (H^4) is "
+                "ohm/H^2, not 1/s, and Upsilon adds H ohm^2 to H^2 ohm^2. The dimensionally "
                 "consistent sqrt((Psi (w_r^2 L_r^2 + R_r^2) + 2 L_r^2 R_s R_r + L_m^2 R_r^2) / "
                 f"(Psi L_r^2)) = {fmt(pr['F3_consistent'], 7)} {consistent} with the root of (61)"
                 if not as_printed.holds
