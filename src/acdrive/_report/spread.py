@@ -1,0 +1,79 @@
+"""Numbers of limit-cycling runs, printed only to the precision that survives the platform.
+
+A run that limit-cycles is sensitive to the last bit of its arithmetic: the compiled loop uses
+fast math, so another CPU or library version gives another trajectory, and its averages differ
+in the last printed digits. Such a number is printed as the mean over its window rounded to the
+*spread* of the same mean over ``SUBWINDOWS`` consecutive sub-windows (the sample standard
+deviation of the sub-window means): the rounding step is the power of ten at or above the
+spread, so that the printed digits are those the oscillation does not move. A deterministic
+run (no limit cycle) keeps its usual format.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: Number of consecutive sub-windows over which a limit-cycle average's spread is measured.
+SUBWINDOWS = 8
+
+
+def subwindow_means(x, n: int = SUBWINDOWS) -> np.ndarray:
+    """Means of ``x`` over ``n`` consecutive, nearly equal parts (fewer if ``x`` is shorter)."""
+    x = np.asarray(x, dtype=float)
+    parts = [p for p in np.array_split(x, min(n, x.size)) if p.size]
+    return np.array([float(np.mean(p)) for p in parts])
+
+
+def mean_and_spread(x, n: int = SUBWINDOWS) -> tuple[float, float]:
+    """(mean of ``x``, sample standard deviation of its ``n`` sub-window means); the spread is 0
+    with fewer than two samples."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        return math.nan, math.nan
+    means = subwindow_means(x, n)
+    spread = float(np.std(means, ddof=1)) if means.size > 1 else 0.0
+    return float(np.mean(x)), spread
+
+
+def peak_spread(x, n: int = SUBWINDOWS) -> float:
+    """Sample standard deviation of the largest value of ``x`` in each of ``n`` consecutive
+    sub-windows: how much a largest value over a limit cycle moves with the window."""
+    x = np.asarray(x, dtype=float)
+    parts = [p for p in np.array_split(x, min(n, x.size)) if p.size]
+    peaks = np.array([float(np.max(p)) for p in parts])
+    return float(np.std(peaks, ddof=1)) if peaks.size > 1 else 0.0
+
+
+def rounding_step(spread: float) -> float:
+    """The power of ten at or above ``spread`` (0 for a zero or undefined spread)."""
+    if not math.isfinite(spread) or spread <= 0.0:
+        return 0.0
+    return 10.0 ** math.ceil(math.log10(spread))
+
+
+def round_to_spread(value: float, spread: float, fmt: str = ".2f", sign: bool = False) -> str:
+    """``value`` rounded to the significance its ``spread`` allows: to the multiple of
+    ``rounding_step(spread)`` nearest to it, with as many decimals as that step has; formatted
+    with ``fmt`` when the spread is zero (a deterministic number). ``sign``: print '+' on
+    non-negative numbers."""
+    plus = "+" if sign else ""
+    if not math.isfinite(value):
+        return "n/a"
+    step = rounding_step(spread)
+    if step == 0.0:
+        return f"{value:{plus}{fmt}}"
+    decimals = max(0, -round(math.log10(step)))
+    rounded = round(value / step) * step
+    if rounded == 0.0:
+        rounded = 0.0  # no "-0"
+    return f"{rounded:{plus}.{decimals}f}"
+
+
+def order_of_magnitude(count: float) -> str:
+    """A count known only to its order of magnitude: '0', or '~10^k' with k the nearest integer
+    to log10(count)."""
+    if count <= 0:
+        return "0"
+    return f"~1e{round(math.log10(count))}"
