@@ -111,3 +111,28 @@ def test_steady_settling_over_stretches():
     s = steady_settling(t, drifting, mask, 0.1)
     assert not s.settled and s.drift == pytest.approx(1.0, rel=0.02)
     assert steady_settling(t, drifting, np.zeros(t.size, bool), 0.1) is None
+
+
+def test_spread_over_stretches_ignores_the_change_of_operating_point():
+    from acdrive._report.spread import mean_and_spread_over_stretches
+
+    x = np.r_[np.full(800, 5.0), np.full(800, -20.0)]
+    stretches = [slice(0, 800), slice(800, 1600)]
+    mean, spread = mean_and_spread_over_stretches(x, stretches)
+    assert mean == pytest.approx(-7.5) and spread == 0.0
+    # a cycle whose sub-window means scatter by about 1 inside each stretch
+    rng = np.random.default_rng(3)
+    y = x + np.repeat(rng.normal(0.0, 1.0, 16), 100)
+    _, spread = mean_and_spread_over_stretches(y, stretches)
+    assert 0.4 < spread < 2.0
+
+
+def test_a_comparison_finer_than_the_limit_cycle_is_not_decidable():
+    from acdrive._report.converter_effect import judged
+
+    base = _effect(True)
+    cycling = SideEffect(**{**base.__dict__, "q_s": 10.0, "q_spread": 5.0})  # step 10 > 3.74
+    verdict = cycling.reactive_power()
+    assert not verdict.holds and verdict.text.startswith("not decidable") and not judged(verdict)
+    fine = SideEffect(**{**base.__dict__, "q_s": 10.0, "q_spread": 0.3})  # step 1 < 3.74
+    assert judged(fine.reactive_power()) and "departs" in fine.reactive_power().text

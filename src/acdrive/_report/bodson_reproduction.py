@@ -23,6 +23,7 @@ from acdrive._report.converter_effect import (
     SideEffect,
     describe,
     ideal_converter,
+    judged,
     magnetising_reactive_power,
     measure,
     uses_bench_converter,
@@ -481,9 +482,9 @@ def _checks(name: str, outcome, ideal) -> list[str]:
         differ = spread > TORQUE_TOLERANCE_NM
         claim = Verdict(
             True,
-            f"motor {low + 1} needs the lower command, by {1e3 * spread:.1f} mN m "
+            f"motor {low + 1} needs the lower command, by {1e3 * spread:.1f} mN m"
             if differ
-            else f"the commands agree to {1e3 * spread:.1f} mN m ",
+            else f"the commands agree to {1e3 * spread:.1f} mN m",
         )
         states = {
             f"motor {k + 1} torque command": settling(
@@ -613,9 +614,9 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
     effects = {n: measure(o) for n, o in outcomes.items() if uses_bench_converter(o.setup)}
     ideal_effects = {n: measure(o) for n, o in ideals.items()}
     vc = [e for v in effects.values() for e in v if e.mode == "voltage" and e.samples]
-    departing = [e for e in vc if e.q_settled and not e.reactive_power().holds]
-    offset = [e for e in vc if e.offset_settled and not e.torque().holds]
-    unsettled = [e for e in vc if not (e.q_settled and e.offset_settled)]
+    departing = [e for e in vc if judged(e.reactive_power()) and not e.reactive_power().holds]
+    offset = [e for e in vc if judged(e.torque()) and not e.torque().holds]
+    unsettled = [e for e in vc if not (judged(e.reactive_power()) and judged(e.torque()))]
     twin = {(n, e.mode, e.motor): e for n, effects_n in ideal_effects.items() for e in effects_n}
     pairs = [
         (n, e, twin[(n, e.mode, e.motor)])
@@ -626,12 +627,12 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
     q_by_converter = [
         e
         for _, e, i in pairs
-        if e.q_settled and not e.reactive_power().holds and i.q_settled and not e.q_against(i).holds
+        if e in departing and judged(e.q_against(i)) and not e.q_against(i).holds
     ]
     comparable = [
         (n, e, i)
         for n, e, i in pairs
-        if e.offset_settled and not e.torque().holds and i.offset_settled and not i.limit_cycles
+        if e in offset and judged(e.torque_against(i)) and not i.limit_cycles
     ]
     t_by_converter = [(n, e, i) for n, e, i in comparable if not e.torque_against(i).holds]
     lines = [
@@ -715,7 +716,8 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
         "",
         (
             (
-                f"Voltage-command runs not settled over their steady part (not counted below): "
+                f"Voltage-command runs not settled over their steady part, or whose limit cycle "
+                f"moves a mean by more than the tolerance (not counted below): "
                 f"{len(unsettled)} of {len(vc)}. "
                 if unsettled
                 else ""

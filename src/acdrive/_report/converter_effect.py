@@ -22,7 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive._frames import K_PEAK
-from acdrive._report.spread import SUBWINDOWS, mean_and_spread, round_to_spread
+from acdrive._report.spread import (
+    SUBWINDOWS,
+    mean_and_spread_over_stretches,
+    round_to_spread,
+    rounding_step,
+)
 from acdrive._report.verdicts import (
     Settling,
     Verdict,
@@ -89,7 +94,7 @@ class SideEffect:
     means are NaN without any); ``q_tolerance`` [var]: Q_TOLERANCE_FRACTION of the magnetising
     reactive power at the nominal supply; ``oscillation_rpm``: the run's speed-error RMS in the
     limit-cycle band (``DriveResult.speed_oscillation``). ``q_spread``, ``offset_spread``: the
-    spread of the Q_S and tau_COM - tau_e means over sub-windows (``spread.mean_and_spread``),
+    spread of the Q_S and tau_COM - tau_e means over sub-windows (``spread.mean_and_spread_over_stretches``),
     taken when the run limit-cycles (0 otherwise: the means are printed in full);
     ``q_settling``, ``offset_settling``: whether Q_S and tau_COM - tau_e are settled over the
     steady stretches (``steady_settling``)."""
@@ -223,14 +228,33 @@ class SideEffect:
         return when_settled(verdict, states, " mN m")
 
 
+#: How the verdicts of this module begin when they could not compare the numbers.
+UNJUDGED = ("not settled", "not decidable")
+
+
+def judged(verdict: Verdict) -> bool:
+    """Whether ``verdict`` compared its numbers (not "not settled" or "not decidable")."""
+    return not verdict.text.startswith(UNJUDGED)
+
+
 def _renamed(states: dict[str, Settling], prefix: str) -> dict[str, Settling]:
     return {prefix + name: s for name, s in states.items()}
 
 
 def _rounded(verdict: Verdict, difference: float, spread: float, tol: float, unit: str) -> Verdict:
     """``verdict`` (a ``within_abs`` of a limit-cycle mean) restated with its difference rounded
-    to the spread of the limit cycle (``spread.round_to_spread``)."""
+    to the spread of the limit cycle (``spread.round_to_spread``); when the rounding step
+    exceeds the tolerance, the comparison cannot be decided and does not hold."""
     head = verdict.text.split(" (difference", 1)[0]
+    step = rounding_step(spread)
+    if step > tol:
+        return Verdict(
+            False,
+            f"not decidable: the limit cycle moves the mean by up to {step:g} {unit} (the "
+            f"rounding step of its spread over sub-windows), more than the tolerance "
+            f"{tol:.3g} {unit}",
+            verdict.kind,
+        )
     return Verdict(
         verdict.holds,
         f"{head} (difference {round_to_spread(difference, spread, sign=True)} {unit}, rounded "
@@ -266,10 +290,12 @@ def steady_stretches(mask: np.ndarray) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
 
 
-def steady_settling(t, x, mask, tolerance: float) -> Settling | None:
+def steady_settling(t, x, mask, tolerance: float, spread: float = 0.0) -> Settling | None:
     """Whether ``x`` is settled over the steady part ``mask``: the drift of each contiguous
     stretch (``verdicts.window_drift``), the stretch with the largest |drift| judged against
-    ``tolerance``. None without a stretch of two samples."""
+    ``tolerance``. None without a stretch of two samples. With a ``spread`` (a limit-cycling
+    run), the drift is rounded to it (``spread.round_to_spread``) before it is judged and
+    printed: the digits below it differ between platforms."""
     worst = None
     for part in steady_stretches(mask):
         if part.stop - part.start < 2:
@@ -277,6 +303,9 @@ def steady_settling(t, x, mask, tolerance: float) -> Settling | None:
         mean, drift, span = window_drift(t[part], x[part])
         if worst is None or abs(drift) > abs(worst.drift):
             worst = judge_settling(drift, span, tolerance, mean)
+    if worst is not None and spread > 0.0:
+        drift = float(round_to_spread(worst.drift, spread))
+        worst = judge_settling(drift, round(worst.window_s, 1), tolerance, worst.mean)
     return worst
 
 
@@ -297,9 +326,15 @@ def measure(outcome) -> list[SideEffect]:
                 return float(np.mean(result.signal(name, k)[steady])) if n else float("nan")
 
             def spread_of(name, result=result, steady=steady, k=k, cycling=cycling):
-                return mean_and_spread(result.signal(name, k)[steady])[1] if cycling else 0.0
+                if not cycling:
+                    return 0.0
+                x = result.signal(name, k)
+                return mean_and_spread_over_stretches(x, steady_stretches(steady))[1]
 
             tol_q = q_tolerance(setup, k)
+            stretches = steady_stretches(steady)
+            q_spread = mean_and_spread_over_stretches(q_s, stretches)[1] if cycling else 0.0
+            offset_spread = mean_and_spread_over_stretches(offset, stretches)[1] if cycling else 0.0
             out.append(
                 SideEffect(
                     mode=mode,
@@ -311,16 +346,19 @@ def measure(outcome) -> list[SideEffect]:
                     tau_e=mean("tau_e"),
                     q_tolerance=tol_q,
                     oscillation_rpm=oscillation,
-                    q_spread=mean_and_spread(q_s[steady])[1] if cycling else 0.0,
-                    offset_spread=mean_and_spread(offset[steady])[1] if cycling else 0.0,
+                    q_spread=q_spread,
+                    offset_spread=offset_spread,
                     tau_com_spread=spread_of("tau_com"),
                     tau_e_spread=spread_of("tau_e"),
-                    q_settling=steady_settling(result.t, q_s, steady, SETTLING_FRACTION * tol_q),
+                    q_settling=steady_settling(
+                        result.t, q_s, steady, SETTLING_FRACTION * tol_q, q_spread
+                    ),
                     offset_settling=steady_settling(
                         result.t,
                         1e3 * offset,
                         steady,
                         SETTLING_FRACTION * 1e3 * TORQUE_TOLERANCE_NM,
+                        1e3 * offset_spread,
                     ),
                 )
             )

@@ -8,8 +8,8 @@ number rounded to the significance the limit cycle allows whatever format the re
 - an RMS speed error: rounded to the spread of the mean square over sub-windows of the tracked
   samples, carried to the root (d sqrt(m) = dm / (2 sqrt(m)));
 - a largest speed error or a peak current: rounded to the limit cycle's own size, the largest
-  speed error over the tracked samples, or the spread of the current's peaks over sub-windows
-  of the tracked samples (where the largest value falls in the cycle is what moves);
+  speed error over the tracked samples, or the current's deviation from its slow course
+  (``cycle_amplitude``): where the largest value falls in the cycle is what moves;
 - an event count: its order of magnitude only (``spread.order_of_magnitude``).
 
 A run that does not limit-cycle keeps its summary unchanged.
@@ -22,7 +22,6 @@ import numpy as np
 from acdrive._report.spread import (
     mean_and_spread,
     order_of_magnitude,
-    peak_spread,
     round_to_spread,
 )
 from acdrive.sim._outcome import OSCILLATION_FINDING_RPM
@@ -56,6 +55,20 @@ def limit_cycles(outcome) -> bool:
     )
 
 
+#: Length [s] of the moving average that separates a signal's limit cycle (tens of Hz) from its
+#: slow course along the run (ramps, steps).
+CYCLE_AVERAGE_S = 0.1
+
+
+def cycle_amplitude(t, x, mask) -> float:
+    """Standard deviation of ``x`` about its CYCLE_AVERAGE_S moving average over the samples
+    in ``mask``: the size of the limit cycle in ``x``, by which its largest value moves."""
+    dt = float(t[1] - t[0])
+    n = max(1, round(CYCLE_AVERAGE_S / dt))
+    slow = np.convolve(x, np.ones(n) / n, mode="same")
+    return float(np.std((x - slow)[mask])) if np.any(mask) else 0.0
+
+
 def _shown_motor(result, k: int, entry: dict) -> dict:
     err = result.reference_rpm(k) - result.speed_rpm(k)
     tracking = result.tracking_mask(k)
@@ -73,7 +86,7 @@ def _shown_motor(result, k: int, entry: dict) -> dict:
             spread = amplitude
         elif key.startswith("peak_") and key.endswith("_a"):
             name = "i_r_mag" if "rotor" in key else "i_s_mag"
-            spread = peak_spread(result.peak(name, k)[tracking])
+            spread = cycle_amplitude(result.t, result.peak(name, k), tracking)
         else:
             continue
         out[key] = Shown(value, round_to_spread(value, spread, ".3f"))

@@ -37,6 +37,24 @@ def mean_and_spread(x, n: int = SUBWINDOWS) -> tuple[float, float]:
     return float(np.mean(x)), spread
 
 
+def mean_and_spread_over_stretches(x, stretches, n: int = SUBWINDOWS) -> tuple[float, float]:
+    """(mean of ``x`` over all ``stretches`` (slices), spread of that mean): each stretch, a
+    steady operating point of its own, is cut into ``n`` sub-windows; the spread is the RMS
+    deviation of the sub-window means from their own stretch's mean (sample-corrected), so that
+    different operating points do not count as spread. (nan, nan) without samples."""
+    x = np.asarray(x, dtype=float)
+    parts = [x[s] for s in stretches if x[s].size]
+    if not parts:
+        return math.nan, math.nan
+    deviations, dof = [], 0
+    for part in parts:
+        means = subwindow_means(part, n)
+        deviations.extend(means - float(np.mean(part)))
+        dof += means.size - 1
+    spread = math.sqrt(float(np.sum(np.square(deviations))) / dof) if dof > 0 else 0.0
+    return float(np.mean(np.concatenate(parts))), spread
+
+
 def peak_spread(x, n: int = SUBWINDOWS) -> float:
     """Sample standard deviation of the largest value of ``x`` in each of ``n`` consecutive
     sub-windows: how much a largest value over a limit cycle moves with the window."""
