@@ -136,3 +136,11 @@ def test_a_comparison_finer_than_the_limit_cycle_is_not_decidable():
     assert not verdict.holds and verdict.text.startswith("not decidable") and not judged(verdict)
     fine = SideEffect(**{**base.__dict__, "q_s": 10.0, "q_spread": 0.3})  # step 1 < 3.74
     assert judged(fine.reactive_power()) and "departs" in fine.reactive_power().text
+
+
+def test_round_to_spread_keeps_the_leading_digit_and_shows_the_step():
+    # a largest error of 14.2 whose cycle moves it by 14: not "0" but "10"
+    assert round_to_spread(14.175, 14.0, leading_digit=True) == "10"
+    assert round_to_spread(14.175, 14.0) == "0"
+    assert round_to_spread(-12.84, 0.3, sign=True, show_step=True) == "-13 (+-1)"
+    assert round_to_spread(0.004, 0.3, sign=True, show_step=True) == "+0 (+-1)"

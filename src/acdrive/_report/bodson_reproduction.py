@@ -574,7 +574,9 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
     osc_ideal = ramp_ideal.speed_oscillation(0)
     ramp = (ramp_ideal.t > 0.6) & (ramp_ideal.t < 9.4) & ramp_ideal.tracking_mask()
     ramp_errors = np.abs(ramp_ideal.reference_rpm() - ramp_ideal.speed_rpm())[ramp]
-    ramp_error = round_to_spread(float(np.max(ramp_errors)), peak_spread(ramp_errors), ".0f")
+    ramp_error = round_to_spread(
+        float(np.max(ramp_errors)), peak_spread(ramp_errors), ".0f", leading_digit=True
+    )
     cc_ideal = [
         ideals[name].results["current"].speed_oscillation(0)[0]
         for name in ("bodson-step", "bodson-mixed-steps")

@@ -117,13 +117,17 @@ class SideEffect:
 
     def q_text(self) -> str:
         """Q_S [var] as printed: rounded to its spread when the run limit-cycles."""
-        return round_to_spread(self.q_s, self.q_spread, ".2f", sign=True)
+        return round_to_spread(self.q_s, self.q_spread, ".2f", sign=True, show_step=True)
 
     def torques_text(self) -> str:
         """'torque command X mN m against tau_e = Y mN m', rounded to the spreads when the run
         limit-cycles."""
-        com = round_to_spread(1e3 * self.tau_com, 1e3 * self.tau_com_spread, ".2f", sign=True)
-        e = round_to_spread(1e3 * self.tau_e, 1e3 * self.tau_e_spread, ".2f", sign=True)
+        com = round_to_spread(
+            1e3 * self.tau_com, 1e3 * self.tau_com_spread, ".2f", sign=True, show_step=True
+        )
+        e = round_to_spread(
+            1e3 * self.tau_e, 1e3 * self.tau_e_spread, ".2f", sign=True, show_step=True
+        )
         return f"torque command {com} mN m against tau_e = {e} mN m"
 
     def offset_text(self) -> str:
@@ -257,7 +261,8 @@ def _rounded(verdict: Verdict, difference: float, spread: float, tol: float, uni
         )
     return Verdict(
         verdict.holds,
-        f"{head} (difference {round_to_spread(difference, spread, sign=True)} {unit}, rounded "
+        f"{head} (difference {round_to_spread(difference, spread, sign=True, show_step=True)} "
+        f"{unit}, rounded "
         f"to the limit cycle's spread; tolerance {tol:.3g} {unit})",
         verdict.kind,
     )

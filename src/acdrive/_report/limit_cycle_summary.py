@@ -10,7 +10,9 @@ number rounded to the significance the limit cycle allows whatever format the re
 - a largest speed error or a peak current: rounded to the limit cycle's own size, the largest
   speed error over the tracked samples, or the current's deviation from its slow course
   (``cycle_amplitude``): where the largest value falls in the cycle is what moves;
-- an event count: its order of magnitude only (``spread.order_of_magnitude``).
+- an event count: its order of magnitude only (``spread.order_of_magnitude``);
+
+never coarser than the number's leading digit, with the rounding step printed beside it.
 
 A run that does not limit-cycle keeps its summary unchanged.
 """
@@ -89,7 +91,9 @@ def _shown_motor(result, k: int, entry: dict) -> dict:
             spread = cycle_amplitude(result.t, result.peak(name, k), tracking)
         else:
             continue
-        out[key] = Shown(value, round_to_spread(value, spread, ".3f"))
+        out[key] = Shown(
+            value, round_to_spread(value, spread, ".3f", leading_digit=True, show_step=True)
+        )
     if "limit_events" in entry:
         out["limit_events"] = {
             name: Shown(count, order_of_magnitude(count)) if count else count

@@ -71,22 +71,34 @@ def rounding_step(spread: float) -> float:
     return 10.0 ** math.ceil(math.log10(spread))
 
 
-def round_to_spread(value: float, spread: float, fmt: str = ".2f", sign: bool = False) -> str:
+def round_to_spread(
+    value: float,
+    spread: float,
+    fmt: str = ".2f",
+    sign: bool = False,
+    leading_digit: bool = False,
+    show_step: bool = False,
+) -> str:
     """``value`` rounded to the significance its ``spread`` allows: to the multiple of
     ``rounding_step(spread)`` nearest to it, with as many decimals as that step has; formatted
     with ``fmt`` when the spread is zero (a deterministic number). ``sign``: print '+' on
-    non-negative numbers."""
+    non-negative numbers. ``leading_digit``: never round coarser than the value's leading digit
+    (for a largest value or an RMS, which a step above it would print as 0). ``show_step``:
+    append the rounding step, "(+-step)"."""
     plus = "+" if sign else ""
     if not math.isfinite(value):
         return "n/a"
     step = rounding_step(spread)
+    if step and leading_digit and value != 0.0:
+        step = min(step, 10.0 ** math.floor(math.log10(abs(value))))
     if step == 0.0:
         return f"{value:{plus}{fmt}}"
     decimals = max(0, -round(math.log10(step)))
     rounded = round(value / step) * step
     if rounded == 0.0:
         rounded = 0.0  # no "-0"
-    return f"{rounded:{plus}.{decimals}f}"
+    text = f"{rounded:{plus}.{decimals}f}"
+    return text + (f" (+-{step:.{decimals}f})" if show_step else "")
 
 
 def order_of_magnitude(count: float) -> str:
