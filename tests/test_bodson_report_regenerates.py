@@ -9,6 +9,8 @@ on another x86-64 machine.
 
 from pathlib import Path
 
+import pytest
+
 from acdrive._report.bodson_reproduction import write_report
 
 COMMITTED = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
@@ -18,6 +20,7 @@ def _files(folder: Path) -> set[str]:
     return {str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file()}
 
 
+@pytest.mark.slow  # about 1.5 min of CPU; over 5 min wall on a loaded machine
 def test_bodson_report_regenerates_identically(tmp_path):
     path = write_report(tmp_path)
     new = path.read_text().splitlines()

@@ -132,7 +132,9 @@ class SideEffect:
 
     def offset_text(self) -> str:
         """tau_COM - tau_e [mN m] as printed: rounded to its spread when the run limit-cycles."""
-        return round_to_spread(1e3 * self.torque_offset, 1e3 * self.offset_spread, ".2f", sign=True)
+        return round_to_spread(
+            1e3 * self.torque_offset, 1e3 * self.offset_spread, ".2f", sign=True, show_step=True
+        )
 
     @property
     def torque_offset(self) -> float:
