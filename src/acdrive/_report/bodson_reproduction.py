@@ -690,8 +690,13 @@ def _discussion(outcomes, ideals, poles0) -> list[str]:
         f"{bench_limit} with the bench converter and {ideal_limit} with an ideal converter; the "
         "paper reports a small excursion above 6 A for voltage command (Fig. 9)"
         + (
-            ", which the bench-converter model does not reproduce: the converter loss lowers the "
-            "rotor voltage and with it the peak current."
+            (
+                ", which the bench-converter model does not reproduce; the same drive with an "
+                "ideal converter exceeds the limit, so the converter loss is what keeps the "
+                "peak below it in the model."
+                if not ideal_limit.holds
+                else ", which neither model reproduces: the cause is open."
+            )
             if bench_limit.holds
             else ", as the bench-converter model does."
         ),
