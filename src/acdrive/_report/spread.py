@@ -3,9 +3,11 @@
 A run that limit-cycles is sensitive to the last bit of its arithmetic: the compiled loop uses
 fast math, so another CPU or library version gives another trajectory, and its averages differ
 in the last printed digits. Such a number is printed as the mean over its window rounded to the
-*spread* of the same mean over ``SUBWINDOWS`` consecutive sub-windows (the sample standard
-deviation of the sub-window means): the rounding step is the power of ten at or above the
-spread, so that the printed digits are those the oscillation does not move. A deterministic
+*spread* of that mean, measured over ``SUBWINDOWS`` consecutive sub-windows (the standard
+deviation of the sub-window means over the square root of their number, the standard error):
+the rounding step is the power of ten at or above the spread, so that the printed digits are
+those the oscillation does not move. The step itself can still change between platforms when a
+spread lies near a power of ten. A deterministic
 run (no limit cycle) keeps its usual format.
 """
 
@@ -28,21 +30,23 @@ def subwindow_means(x, n: int = SUBWINDOWS) -> np.ndarray:
 
 
 def mean_and_spread(x, n: int = SUBWINDOWS) -> tuple[float, float]:
-    """(mean of ``x``, sample standard deviation of its ``n`` sub-window means); the spread is 0
-    with fewer than two samples."""
+    """(mean of ``x``, spread of that mean): the sample standard deviation of its ``n``
+    sub-window means divided by sqrt(n), the standard error of the whole window's mean (how far
+    another trajectory of the same limit cycle moves it); 0 with fewer than two sub-windows."""
     x = np.asarray(x, dtype=float)
     if x.size == 0:
         return math.nan, math.nan
     means = subwindow_means(x, n)
-    spread = float(np.std(means, ddof=1)) if means.size > 1 else 0.0
+    spread = float(np.std(means, ddof=1) / math.sqrt(means.size)) if means.size > 1 else 0.0
     return float(np.mean(x)), spread
 
 
 def mean_and_spread_over_stretches(x, stretches, n: int = SUBWINDOWS) -> tuple[float, float]:
     """(mean of ``x`` over all ``stretches`` (slices), spread of that mean): each stretch, a
-    steady operating point of its own, is cut into ``n`` sub-windows; the spread is the RMS
-    deviation of the sub-window means from their own stretch's mean (sample-corrected), so that
-    different operating points do not count as spread. (nan, nan) without samples."""
+    steady operating point of its own, is cut into ``n`` sub-windows; the RMS deviation of the
+    sub-window means from their own stretch's mean (sample-corrected), so that different
+    operating points do not count, divided by the square root of the number of sub-windows:
+    the standard error of the mean (``mean_and_spread``). (nan, nan) without samples."""
     x = np.asarray(x, dtype=float)
     parts = [x[s] for s in stretches if x[s].size]
     if not parts:
@@ -52,7 +56,9 @@ def mean_and_spread_over_stretches(x, stretches, n: int = SUBWINDOWS) -> tuple[f
         means = subwindow_means(part, n)
         deviations.extend(means - float(np.mean(part)))
         dof += means.size - 1
-    spread = math.sqrt(float(np.sum(np.square(deviations))) / dof) if dof > 0 else 0.0
+    spread = (
+        math.sqrt(float(np.sum(np.square(deviations))) / dof / len(deviations)) if dof > 0 else 0.0
+    )
     return float(np.mean(np.concatenate(parts))), spread
 
 
