@@ -22,7 +22,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive._frames import K_PEAK
-from acdrive._report.verdicts import Verdict, within_abs
+from acdrive._report.spread import (
+    SUBWINDOWS,
+    mean_and_spread_over_stretches,
+    round_to_spread,
+    rounding_step,
+)
+from acdrive._report.verdicts import (
+    Settling,
+    Verdict,
+    judge_settling,
+    when_settled,
+    window_drift,
+    within_abs,
+)
 from acdrive.sim._outcome import OSCILLATION_FINDING_RPM
 from acdrive.sim._setup import ConverterLosses, DriveSetup
 
@@ -36,6 +49,10 @@ Q_TOLERANCE_FRACTION = 0.1
 #: The torque command counts as the produced torque within this [N m] (about 0.4 % of the
 #: paper's tau_LIM = 0.274 N m; the two motors of Bodson Fig. 13 differ by a few mN m).
 TORQUE_TOLERANCE_NM = 1e-3
+#: A steady-state mean is judged only when the signal is settled: over every steady stretch of
+#: the run its drift (``verdicts.window_drift``: least-squares slope times the stretch's length)
+#: stays within this fraction of the tolerance of the verdict that uses the mean.
+SETTLING_FRACTION = 0.5
 
 
 def magnetising_reactive_power(L_s: float, v_s: float, w_e: float) -> float:
@@ -76,7 +93,11 @@ class SideEffect:
     torque command and the electromagnetic torque [N m]; ``samples``: steady samples used (the
     means are NaN without any); ``q_tolerance`` [var]: Q_TOLERANCE_FRACTION of the magnetising
     reactive power at the nominal supply; ``oscillation_rpm``: the run's speed-error RMS in the
-    limit-cycle band (``DriveResult.speed_oscillation``)."""
+    limit-cycle band (``DriveResult.speed_oscillation``). ``q_spread``, ``offset_spread``: the
+    spread of the Q_S and tau_COM - tau_e means over sub-windows (``spread.mean_and_spread_over_stretches``),
+    taken when the run limit-cycles (0 otherwise: the means are printed in full);
+    ``q_settling``, ``offset_settling``: whether Q_S and tau_COM - tau_e are settled over the
+    steady stretches (``steady_settling``)."""
 
     mode: str
     motor: int
@@ -87,14 +108,41 @@ class SideEffect:
     tau_e: float
     q_tolerance: float
     oscillation_rpm: float
+    q_spread: float = 0.0
+    offset_spread: float = 0.0
+    tau_com_spread: float = 0.0
+    tau_e_spread: float = 0.0
+    q_settling: Settling | None = None
+    offset_settling: Settling | None = None
+
+    def q_text(self) -> str:
+        """Q_S [var] as printed: rounded to its spread when the run limit-cycles."""
+        return round_to_spread(self.q_s, self.q_spread, ".2f", sign=True, show_step=True)
+
+    def torques_text(self) -> str:
+        """'torque command X mN m against tau_e = Y mN m', rounded to the spreads when the run
+        limit-cycles."""
+        com = round_to_spread(
+            1e3 * self.tau_com, 1e3 * self.tau_com_spread, ".2f", sign=True, show_step=True
+        )
+        e = round_to_spread(
+            1e3 * self.tau_e, 1e3 * self.tau_e_spread, ".2f", sign=True, show_step=True
+        )
+        return f"torque command {com} mN m against tau_e = {e} mN m"
+
+    def offset_text(self) -> str:
+        """tau_COM - tau_e [mN m] as printed: rounded to its spread when the run limit-cycles."""
+        return round_to_spread(
+            1e3 * self.torque_offset, 1e3 * self.offset_spread, ".2f", sign=True, show_step=True
+        )
 
     @property
     def torque_offset(self) -> float:
         return self.tau_com - self.tau_e
 
     def reactive_power(self) -> Verdict:
-        """Q_S against Q_COM within ``q_tolerance``."""
-        return within_abs(
+        """Q_S against Q_COM within ``q_tolerance``, judged only if Q_S is settled."""
+        verdict = within_abs(
             self.q_s,
             self.q_com,
             self.q_tolerance,
@@ -102,10 +150,39 @@ class SideEffect:
             yes="holds Q_COM",
             no="departs from Q_COM",
         )
+        if self.q_spread > 0.0:
+            verdict = _rounded(
+                verdict, self.q_s - self.q_com, self.q_spread, self.q_tolerance, "var"
+            )
+        return when_settled(verdict, self._settlings("Q_S"), " var")
 
     def torque(self) -> Verdict:
-        """The torque command against the torque produced within TORQUE_TOLERANCE_NM."""
-        return torque_verdict(self.tau_com, self.tau_e)
+        """The torque command against the torque produced within TORQUE_TOLERANCE_NM, judged
+        only if tau_COM - tau_e is settled."""
+        verdict = torque_verdict(self.tau_com, self.tau_e)
+        if self.offset_spread > 0.0:
+            verdict = _rounded(
+                verdict,
+                1e3 * self.torque_offset,
+                1e3 * self.offset_spread,
+                1e3 * TORQUE_TOLERANCE_NM,
+                "mN m",
+            )
+        return when_settled(verdict, self._settlings("tau_COM - tau_e"), " mN m")
+
+    @property
+    def q_settled(self) -> bool:
+        """Q_S is settled over the steady part (no steady stretch: not settled)."""
+        return self.q_settling is not None and self.q_settling.settled
+
+    @property
+    def offset_settled(self) -> bool:
+        """tau_COM - tau_e is settled over the steady part (no steady stretch: not settled)."""
+        return self.offset_settling is not None and self.offset_settling.settled
+
+    def _settlings(self, which: str) -> dict[str, Settling]:
+        state = {"Q_S": self.q_settling, "tau_COM - tau_e": self.offset_settling}[which]
+        return {which: state} if state is not None else {}
 
     @property
     def limit_cycles(self) -> bool:
@@ -114,8 +191,9 @@ class SideEffect:
         return self.oscillation_rpm > OSCILLATION_FINDING_RPM
 
     def q_against(self, ideal: SideEffect) -> Verdict:
-        """Q_S of this (bench) run against the same run with an ideal converter."""
-        return within_abs(
+        """Q_S of this (bench) run against the same run with an ideal converter, judged only if
+        both are settled."""
+        verdict = within_abs(
             self.q_s,
             ideal.q_s,
             self.q_tolerance,
@@ -123,10 +201,16 @@ class SideEffect:
             yes="same as with an ideal converter",
             no="differs from the ideal converter's",
         )
+        spread = max(self.q_spread, ideal.q_spread)
+        if spread > 0.0:
+            verdict = _rounded(verdict, self.q_s - ideal.q_s, spread, self.q_tolerance, "var")
+        states = {**self._settlings("Q_S"), **_renamed(ideal._settlings("Q_S"), "ideal ")}
+        return when_settled(verdict, states, " var")
 
     def torque_against(self, ideal: SideEffect) -> Verdict:
-        """tau_COM - tau_e of this (bench) run against the same run with an ideal converter."""
-        return within_abs(
+        """tau_COM - tau_e of this (bench) run against the same run with an ideal converter,
+        judged only if both are settled."""
+        verdict = within_abs(
             1e3 * self.torque_offset,
             1e3 * ideal.torque_offset,
             1e3 * TORQUE_TOLERANCE_NM,
@@ -134,6 +218,56 @@ class SideEffect:
             yes="same as with an ideal converter",
             no="differs from the ideal converter's",
         )
+        spread = max(self.offset_spread, ideal.offset_spread)
+        if spread > 0.0:
+            verdict = _rounded(
+                verdict,
+                1e3 * (self.torque_offset - ideal.torque_offset),
+                1e3 * spread,
+                1e3 * TORQUE_TOLERANCE_NM,
+                "mN m",
+            )
+        states = {
+            **self._settlings("tau_COM - tau_e"),
+            **_renamed(ideal._settlings("tau_COM - tau_e"), "ideal "),
+        }
+        return when_settled(verdict, states, " mN m")
+
+
+#: How the verdicts of this module begin when they could not compare the numbers.
+UNJUDGED = ("not settled", "not decidable")
+
+
+def judged(verdict: Verdict) -> bool:
+    """Whether ``verdict`` compared its numbers (not "not settled" or "not decidable")."""
+    return not verdict.text.startswith(UNJUDGED)
+
+
+def _renamed(states: dict[str, Settling], prefix: str) -> dict[str, Settling]:
+    return {prefix + name: s for name, s in states.items()}
+
+
+def _rounded(verdict: Verdict, difference: float, spread: float, tol: float, unit: str) -> Verdict:
+    """``verdict`` (a ``within_abs`` of a limit-cycle mean) restated with its difference rounded
+    to the spread of the limit cycle (``spread.round_to_spread``); when the rounding step
+    exceeds the tolerance, the comparison cannot be decided and does not hold."""
+    head = verdict.text.split(" (difference", 1)[0]
+    step = rounding_step(spread)
+    if step > tol:
+        return Verdict(
+            False,
+            f"not decidable: the limit cycle moves the mean by up to {step:g} {unit} (the "
+            f"rounding step of its spread over sub-windows), more than the tolerance "
+            f"{tol:.3g} {unit}",
+            verdict.kind,
+        )
+    return Verdict(
+        verdict.holds,
+        f"{head} (difference {round_to_spread(difference, spread, sign=True, show_step=True)} "
+        f"{unit}, rounded "
+        f"to the limit cycle's spread; tolerance {tol:.3g} {unit})",
+        verdict.kind,
+    )
 
 
 def torque_verdict(tau_com: float, tau_e: float) -> Verdict:
@@ -157,6 +291,31 @@ def q_tolerance(setup: DriveSetup, motor: int = 0) -> float:
     )
 
 
+def steady_stretches(mask: np.ndarray) -> list[slice]:
+    """The contiguous runs of True in ``mask``, as slices."""
+    edges = np.flatnonzero(np.diff(np.r_[0, mask.astype(np.int8), 0]))
+    return [slice(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2])]
+
+
+def steady_settling(t, x, mask, tolerance: float, spread: float = 0.0) -> Settling | None:
+    """Whether ``x`` is settled over the steady part ``mask``: the drift of each contiguous
+    stretch (``verdicts.window_drift``), the stretch with the largest |drift| judged against
+    ``tolerance``. None without a stretch of two samples. With a ``spread`` (a limit-cycling
+    run), the drift is rounded to it (``spread.round_to_spread``) before it is judged and
+    printed: the digits below it differ between platforms."""
+    worst = None
+    for part in steady_stretches(mask):
+        if part.stop - part.start < 2:
+            continue
+        mean, drift, span = window_drift(t[part], x[part])
+        if worst is None or abs(drift) > abs(worst.drift):
+            worst = judge_settling(drift, span, tolerance, mean)
+    if worst is not None and spread > 0.0:
+        drift = float(round_to_spread(worst.drift, spread))
+        worst = judge_settling(drift, round(worst.window_s, 1), tolerance, worst.mean)
+    return worst
+
+
 def measure(outcome) -> list[SideEffect]:
     """The side effect of every motor in every run of a ``ScenarioOutcome``."""
     setup = outcome.setup
@@ -165,10 +324,24 @@ def measure(outcome) -> list[SideEffect]:
         for k in range(result.n_motors):
             steady = steady_mask(result, k)
             n = int(np.count_nonzero(steady))
+            q_s = result.signal("q_s", k)
+            offset = result.signal("tau_com", k) - result.signal("tau_e", k)
+            oscillation = result.speed_oscillation(k)[0]
+            cycling = oscillation > OSCILLATION_FINDING_RPM and n > 1
 
             def mean(name, result=result, steady=steady, k=k, n=n):
                 return float(np.mean(result.signal(name, k)[steady])) if n else float("nan")
 
+            def spread_of(name, result=result, steady=steady, k=k, cycling=cycling):
+                if not cycling:
+                    return 0.0
+                x = result.signal(name, k)
+                return mean_and_spread_over_stretches(x, steady_stretches(steady))[1]
+
+            tol_q = q_tolerance(setup, k)
+            stretches = steady_stretches(steady)
+            q_spread = mean_and_spread_over_stretches(q_s, stretches)[1] if cycling else 0.0
+            offset_spread = mean_and_spread_over_stretches(offset, stretches)[1] if cycling else 0.0
             out.append(
                 SideEffect(
                     mode=mode,
@@ -178,8 +351,22 @@ def measure(outcome) -> list[SideEffect]:
                     q_com=setup.motors[k].controller.reactive_power,
                     tau_com=mean("tau_com"),
                     tau_e=mean("tau_e"),
-                    q_tolerance=q_tolerance(setup, k),
-                    oscillation_rpm=result.speed_oscillation(k)[0],
+                    q_tolerance=tol_q,
+                    oscillation_rpm=oscillation,
+                    q_spread=q_spread,
+                    offset_spread=offset_spread,
+                    tau_com_spread=spread_of("tau_com"),
+                    tau_e_spread=spread_of("tau_e"),
+                    q_settling=steady_settling(
+                        result.t, q_s, steady, SETTLING_FRACTION * tol_q, q_spread
+                    ),
+                    offset_settling=steady_settling(
+                        result.t,
+                        1e3 * offset,
+                        steady,
+                        SETTLING_FRACTION * 1e3 * TORQUE_TOLERANCE_NM,
+                        1e3 * offset_spread,
+                    ),
                 )
             )
     return out
@@ -201,7 +388,8 @@ def describe(
         "- bench converter side effect (rotor converter loss "
         + ", ".join(f"{v:.2f} V" for v in losses)
         + f" of fundamental; means over the steady part: reference constant for {STEADY_SETTLE_S:g} s"
-        " or more, relay closed):"
+        " or more, relay closed; a mean is judged only if settled: its drift over every steady "
+        f"stretch within {SETTLING_FRACTION:g} x the verdict's tolerance):"
     ]
     twins = {(e.mode, e.motor): e for e in ideal or []}
     for e in bench:
@@ -210,18 +398,17 @@ def describe(
             lines.append(f"  - {who}: no steady samples")
             continue
         line = (
-            f"  - {who} ({e.samples} samples): stator reactive power Q_S = {e.q_s:+.2f} var against "
-            f"Q_COM = {e.q_com:g} var, {e.reactive_power()}; torque command "
-            f"{1e3 * e.tau_com:+.2f} mN m against tau_e = {1e3 * e.tau_e:+.2f} mN m, {e.torque()}"
+            f"  - {who} ({e.samples} samples): stator reactive power Q_S = {e.q_text()} var against "
+            f"Q_COM = {e.q_com:g} var, {e.reactive_power()}; {e.torques_text()}, {e.torque()}"
         )
         twin = twins.get((e.mode, e.motor))
         if twin is not None and twin.samples:
             line += (
-                f". Ideal converter: Q_S = {twin.q_s:+.2f} var, torque command "
-                f"{1e3 * twin.tau_com:+.2f} mN m against tau_e = {1e3 * twin.tau_e:+.2f} mN m "
+                f". Ideal converter: Q_S = {twin.q_text()} var, {twin.torques_text()} "
                 f"(speed oscillation {twin.oscillation_rpm:.1f} rpm RMS"
                 + (
-                    f" above the {OSCILLATION_FINDING_RPM:g} rpm threshold: means over a limit cycle"
+                    f" above the {OSCILLATION_FINDING_RPM:g} rpm threshold: means over a limit "
+                    f"cycle, rounded to their spread over {SUBWINDOWS} sub-windows"
                     if twin.limit_cycles
                     else ""
                 )
