@@ -60,6 +60,7 @@ def runs(tmp_path_factory):
 def test_default_is_parquet_with_units_and_descriptions_in_the_schema(tmp_path, capsys):
     folder, stdout = _run(tmp_path, "parquet", capsys)
     assert sorted(p.name for p in folder.iterdir()) == [
+        ".acdrive-output.json",  # the marker: acdrive wrote this folder (acdrive._output)
         "columns.md",
         "data.parquet",
         "summary.json",

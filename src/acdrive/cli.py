@@ -33,8 +33,9 @@ COMMANDS = {
     "stability": "drive stability (eigenvalues, map)",
     "reproduce": "regenerate a reproduction report",
     "sweep": "run a scenario over a grid of parameter values",
-    "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor with "
-    "both sides' accuracy, and the ICAD timing",
+    "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor (both "
+    "sides timed in interleaved process-CPU-time windows, with spread and load) with both "
+    "sides' accuracy, and the ICAD timing",
 }
 COMMAND_MODULES = tuple(COMMANDS)
 
