@@ -138,6 +138,11 @@ FIELD_FRAME = ("i_dq_ref",)
 STEADY_FRACTION = 0.1
 #: the shortest steady window [s]
 STEADY_MIN_S = 0.05
+#: why a position run's summary judges the position after a disturbance and not the speed
+POSITION_SPEED_NOT_JUDGED = (
+    "the speed reference of a position run is the position loop's own output (zero at rest), "
+    "not a target: a load is rejected when the position error recovers, judged instead"
+)
 
 
 def profile_at(profile: Profile, t) -> np.ndarray:
@@ -881,7 +886,7 @@ class IMDriveResult:
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
         steady = _steady_mask(t)
         err = w_ref - w
-        figures, tracking, _ = speed_tracking(
+        figures, tracking, mask = speed_tracking(
             t, w, w_ref, None, im_tracking_rule(self.setup), scale=1.0, unit="rad_s"
         )
         out = {
@@ -895,6 +900,7 @@ class IMDriveResult:
         if final_ref != 0.0:
             out["speed_overshoot_rad_s"] = float(np.max(np.sign(final_ref) * (w - final_ref)))
         out["load_changes"] = [self._deviation(tc, w) for tc in self.load_changes()]
+        out["speed_outcome"] = self.speed_outcome(mask)
         tau_e, tau_l, tau_f = (
             self.signal(n)[steady] for n in ("tau_e", "tau_load", "tau_friction")
         )
@@ -905,6 +911,57 @@ class IMDriveResult:
             "residual_n_m": float(np.mean(tau_e - tau_l - tau_f)),
         }
         return out
+
+    def speed_outcome(self, mask: np.ndarray) -> dict:
+        """What happened to the speed at each disturbance (``sim._recovery.im_disturbances``)
+        and at the end (``sim._recovery.judge_speed`` on the ``mask`` (tracked) samples, the
+        DFIM's rule): the speed converted once from rad/s to rpm, the rule's unit."""
+        from acdrive.sim._metrics import RPM_PER_RAD_S
+        from acdrive.sim._recovery import RULE, im_disturbances, judge_speed
+
+        found = im_disturbances(self.setup)
+        judged = judge_speed(
+            self.t, self.signal("w") * RPM_PER_RAD_S, self.signal("w_ref") * RPM_PER_RAD_S, mask,
+            [(d["what"], d["start_s"]) for d in found], self.label,
+        )  # fmt: skip
+        for d, a in zip(found, judged["disturbances"], strict=True):
+            d.update(a)
+        return {"rule": RULE, "unit": "rpm (the logged rad/s x 30/pi)", "disturbances": found,
+                "end_of_run": judged["end_of_run"], "warnings": judged["warnings"]}  # fmt: skip
+
+    def position_outcome(self) -> dict:
+        """The position error after each disturbance (``sim._recovery.judge_position``), the
+        claim a position drive makes; its speed is not judged (POSITION_SPEED_NOT_JUDGED)."""
+        from acdrive.sim._recovery import (
+            POSITION_RULE,
+            im_disturbances,
+            judge_position,
+            position_tracking_windows,
+        )
+
+        s, t = self.setup, self.t
+        found = im_disturbances(s)
+        windows = position_tracking_windows(s.position_reference, s.position.w_max,
+                                            s.position.K_theta)  # fmt: skip
+        mask = np.ones(t.size, dtype=bool)
+        for a, b in windows:
+            mask &= ~((t >= a) & (t < b))
+        theta = self.signal("theta") + s.sensors.offset
+        judged = judge_position(t, theta, self.signal("theta_ref"), mask,
+                                [(d["what"], d["start_s"]) for d in found])  # fmt: skip
+        warnings = []
+        for d, a in zip(found, judged, strict=True):
+            d.update(a)
+            if a["recovered"] is False:
+                warnings.append(
+                    f"{self.label}: the position did not recover after the {d['what']} at "
+                    f"{d['start_s']:g} s: the error stayed beyond {a['band_rad']:.3g} rad (largest "
+                    f"{a['largest_position_error_rad']:.3g} rad at {a['largest_at_s']:.3f} s) "
+                    f"until {a['judged_until_s']:.3f} s"
+                )
+        return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
+                "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
+                "warnings": warnings}  # fmt: skip
 
     def _deviation(self, t_change: float, x: np.ndarray, name: str = "speed") -> dict:
         """Largest deviation of ``x`` after a load change at ``t_change``, relative to its mean
@@ -976,6 +1033,7 @@ class IMDriveResult:
                 np.max(np.sign(final_ref or 1.0) * (theta[before] - ref[before]))
             ),
             "load_changes": [self._deviation(tc, theta, "position") for tc in self.load_changes()],
+            "position_outcome": self.position_outcome(),
         }
         return out
 
@@ -1198,6 +1256,8 @@ def warnings_of(setup: IMDriveSetup, results: dict, summaries: dict) -> list[str
     n = max(1, round(setup.duration / setup.sample_time))
     for label, s in summaries.items():
         ev, result = s["events"], results[label]
+        for key in ("speed_outcome", "position_outcome"):  # loss of control, no recovery
+            out += s.get(key, {}).pop("warnings", [])
         if ev["current_controller_saturation"]:
             check = s.get("voltage_check")
             why = ""
