@@ -57,7 +57,9 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
 * speed: the error against the reference (RMS and largest over the whole run and where tracking
   is expected, ``sim._metrics``, as the batch's rows), the mean error over the last
   ``STEADY_FRACTION`` of the run, the largest deviation after each load change, the steady torque balance
-  tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB));
+  tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB)); ``speed_outcome``: each disturbance
+  of the scenario (load, brake, DC link) judged for largest error, recovery, reversal and stall
+  by the DFIM drive's rule (``sim._recovery``, in rpm);
 * the saturated ramp of (21) (a speed step with ``speed-p``): the ideal response with perfect
   current control and no friction is the constant-torque ramp w_0 + (tau_max / J)(t - t_step)
   while k_p (w_ref - w) > tau_max, until t_sat = t_step + J (w_ref - w_0 - tau_max / k_p) /
@@ -65,6 +67,8 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
   ``ramp_slope_rad_s2`` the least-squares slope of w over the middle of that interval
   (from 10 % to 70 % of it);
 * position: the final error, the overshoot and the largest deviation after a load change;
+  ``position_outcome``: the position error's recovery after each disturbance (the speed is not
+  judged there: POSITION_SPEED_NOT_JUDGED);
 * peaks: stator current and voltage command in phase peak amperes and volts (a space vector's
   magnitude over sqrt(3/2)) against the linear SVPWM limit v_dc / sqrt(3), the electromagnetic
   torque; ``voltage_check`` (FOC modes): the field-oriented steady voltage ``foc_voltage`` at the
