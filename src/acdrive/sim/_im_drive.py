@@ -68,7 +68,7 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
   (from 10 % to 70 % of it);
 * position: the final error, the overshoot and the largest deviation after a load change;
   ``position_outcome``: the position error's recovery after each disturbance (the speed is not
-  judged there: POSITION_SPEED_NOT_JUDGED);
+  judged there: ``sim._recovery.POSITION_SPEED_NOT_JUDGED``);
 * peaks: stator current and voltage command in phase peak amperes and volts (a space vector's
   magnitude over sqrt(3/2)) against the linear SVPWM limit v_dc / sqrt(3), the electromagnetic
   torque; ``voltage_check`` (FOC modes): the field-oriented steady voltage ``foc_voltage`` at the
@@ -142,11 +142,6 @@ FIELD_FRAME = ("i_dq_ref",)
 STEADY_FRACTION = 0.1
 #: the shortest steady window [s]
 STEADY_MIN_S = 0.05
-#: why a position run's summary judges the position after a disturbance and not the speed
-POSITION_SPEED_NOT_JUDGED = (
-    "the speed reference of a position run is the position loop's own output (zero at rest), "
-    "not a target: a load is rejected when the position error recovers, judged instead"
-)
 
 
 def profile_at(profile: Profile, t) -> np.ndarray:
@@ -886,6 +881,7 @@ class IMDriveResult:
         where tracking is expected (``sim._metrics.speed_tracking`` under
         ``im_tracking_rule``: the batch's figures of the same names) with ``speed_tracking``."""
         from acdrive.sim._metrics import im_tracking_rule, speed_tracking
+        from acdrive.sim._recovery import im_speed_outcome
 
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
         steady = _steady_mask(t)
@@ -904,7 +900,7 @@ class IMDriveResult:
         if final_ref != 0.0:
             out["speed_overshoot_rad_s"] = float(np.max(np.sign(final_ref) * (w - final_ref)))
         out["load_changes"] = [self._deviation(tc, w) for tc in self.load_changes()]
-        out["speed_outcome"] = self.speed_outcome(mask)
+        out["speed_outcome"] = im_speed_outcome(self, mask)
         tau_e, tau_l, tau_f = (
             self.signal(n)[steady] for n in ("tau_e", "tau_load", "tau_friction")
         )
@@ -915,57 +911,6 @@ class IMDriveResult:
             "residual_n_m": float(np.mean(tau_e - tau_l - tau_f)),
         }
         return out
-
-    def speed_outcome(self, mask: np.ndarray) -> dict:
-        """What happened to the speed at each disturbance (``sim._recovery.im_disturbances``)
-        and at the end (``sim._recovery.judge_speed`` on the ``mask`` (tracked) samples, the
-        DFIM's rule): the speed converted once from rad/s to rpm, the rule's unit."""
-        from acdrive.sim._metrics import RPM_PER_RAD_S
-        from acdrive.sim._recovery import RULE, im_disturbances, judge_speed
-
-        found = im_disturbances(self.setup)
-        judged = judge_speed(
-            self.t, self.signal("w") * RPM_PER_RAD_S, self.signal("w_ref") * RPM_PER_RAD_S, mask,
-            [(d["what"], d["start_s"]) for d in found], self.label,
-        )  # fmt: skip
-        for d, a in zip(found, judged["disturbances"], strict=True):
-            d.update(a)
-        return {"rule": RULE, "unit": "rpm (the logged rad/s x 30/pi)", "disturbances": found,
-                "end_of_run": judged["end_of_run"], "warnings": judged["warnings"]}  # fmt: skip
-
-    def position_outcome(self) -> dict:
-        """The position error after each disturbance (``sim._recovery.judge_position``), the
-        claim a position drive makes; its speed is not judged (POSITION_SPEED_NOT_JUDGED)."""
-        from acdrive.sim._recovery import (
-            POSITION_RULE,
-            im_disturbances,
-            judge_position,
-            position_tracking_windows,
-        )
-
-        s, t = self.setup, self.t
-        found = im_disturbances(s)
-        windows = position_tracking_windows(s.position_reference, s.position.w_max,
-                                            s.position.K_theta)  # fmt: skip
-        mask = np.ones(t.size, dtype=bool)
-        for a, b in windows:
-            mask &= ~((t >= a) & (t < b))
-        theta = self.signal("theta") + s.sensors.offset
-        judged = judge_position(t, theta, self.signal("theta_ref"), mask,
-                                [(d["what"], d["start_s"]) for d in found])  # fmt: skip
-        warnings = []
-        for d, a in zip(found, judged, strict=True):
-            d.update(a)
-            if a["recovered"] is False:
-                warnings.append(
-                    f"{self.label}: the position did not recover after the {d['what']} at "
-                    f"{d['start_s']:g} s: the error stayed beyond {a['band_rad']:.3g} rad (largest "
-                    f"{a['largest_position_error_rad']:.3g} rad at {a['largest_at_s']:.3f} s) "
-                    f"until {a['judged_until_s']:.3f} s"
-                )
-        return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
-                "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
-                "warnings": warnings}  # fmt: skip
 
     def _deviation(self, t_change: float, x: np.ndarray, name: str = "speed") -> dict:
         """Largest deviation of ``x`` after a load change at ``t_change``, relative to its mean
@@ -1023,6 +968,8 @@ class IMDriveResult:
         }
 
     def position_metrics(self) -> dict:
+        from acdrive.sim._recovery import im_position_outcome
+
         t, theta = self.t, self.signal("theta") + self.setup.sensors.offset
         ref = self.signal("theta_ref")
         steady = _steady_mask(t)
@@ -1037,7 +984,7 @@ class IMDriveResult:
                 np.max(np.sign(final_ref or 1.0) * (theta[before] - ref[before]))
             ),
             "load_changes": [self._deviation(tc, theta, "position") for tc in self.load_changes()],
-            "position_outcome": self.position_outcome(),
+            "position_outcome": im_position_outcome(self),
         }
         return out
 

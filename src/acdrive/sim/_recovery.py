@@ -339,3 +339,55 @@ def judge_position(t, theta, theta_ref, mask, found) -> list[dict]:
             "recovery_time_s": r["recovery_time_s"],
         })  # fmt: skip
     return out
+
+
+#: why a position run's summary judges the position after a disturbance and not the speed
+POSITION_SPEED_NOT_JUDGED = (
+    "the speed reference of a position run is the position loop's own output (zero at rest), "
+    "not a target: a load is rejected when the position error recovers, judged instead"
+)
+
+
+def im_speed_outcome(result, mask: np.ndarray) -> dict:
+    """What happened to the speed of a cage-IM ``result`` (``sim._im_drive.IMDriveResult``) at
+    each disturbance (``im_disturbances``) and at the end (``judge_speed`` on the ``mask``
+    (tracked) samples, the DFIM's rule): the logged speed [rad/s] converted once to rpm, the
+    rule's unit; ``warnings`` name the run by its label."""
+    found = im_disturbances(result.setup)
+    judged = judge_speed(
+        result.t, result.signal("w") * RPM_PER_RAD_S, result.signal("w_ref") * RPM_PER_RAD_S,
+        mask, [(d["what"], d["start_s"]) for d in found], result.label,
+    )  # fmt: skip
+    for d, a in zip(found, judged["disturbances"], strict=True):
+        d.update(a)
+    return {"rule": RULE, "unit": "rpm (the logged rad/s x 30/pi)", "disturbances": found,
+            "end_of_run": judged["end_of_run"], "warnings": judged["warnings"]}  # fmt: skip
+
+
+def im_position_outcome(result) -> dict:
+    """The position error of a cage-IM position ``result`` after each disturbance
+    (``judge_position`` outside ``position_tracking_windows``), the claim a position drive
+    makes; its speed is not judged (POSITION_SPEED_NOT_JUDGED). ``warnings``: a position that
+    did not recover, naming the run by its label."""
+    s, t = result.setup, result.t
+    found = im_disturbances(s)
+    windows = position_tracking_windows(s.position_reference, s.position.w_max, s.position.K_theta)
+    mask = np.ones(t.size, dtype=bool)
+    for a, b in windows:
+        mask &= ~((t >= a) & (t < b))
+    theta = result.signal("theta") + s.sensors.offset
+    judged = judge_position(t, theta, result.signal("theta_ref"), mask,
+                            [(d["what"], d["start_s"]) for d in found])  # fmt: skip
+    warnings = []
+    for d, a in zip(found, judged, strict=True):
+        d.update(a)
+        if a["recovered"] is False:
+            warnings.append(
+                f"{result.label}: the position did not recover after the {d['what']} at "
+                f"{d['start_s']:g} s: the error stayed beyond {a['band_rad']:.3g} rad (largest "
+                f"{a['largest_position_error_rad']:.3g} rad at {a['largest_at_s']:.3f} s) until "
+                f"{a['judged_until_s']:.3f} s"
+            )
+    return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
+            "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
+            "warnings": warnings}  # fmt: skip
