@@ -74,7 +74,10 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
             rows.append((f"final position, {who}", text))
         for key, unit in (("speed_outcome", "rpm"), ("position_outcome", "rad")):
             for d in run.get(key, {}).get("disturbances", []):
-                rows.append((f"after {d['what']} at {d['start_s']:g} s", _recovery_words(d, unit)))
+                name = f"after {d['what']} at {d['start_s']:g} s" + (
+                    f", {label}" if several else ""
+                )
+                rows.append((name, _recovery_words(d, unit)))
         if f"step_overshoot_{label}" in summary:
             rows.append(
                 (
