@@ -72,6 +72,12 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
                         f"{change['max_deviation_rad']:+.3g} rad"
                     )
             rows.append((f"final position, {who}", text))
+        for key, unit in (("speed_outcome", "rpm"), ("position_outcome", "rad")):
+            for d in run.get(key, {}).get("disturbances", []):
+                name = f"after {d['what']} at {d['start_s']:g} s" + (
+                    f", {label}" if several else ""
+                )
+                rows.append((name, _recovery_words(d, unit)))
         if f"step_overshoot_{label}" in summary:
             rows.append(
                 (
@@ -85,6 +91,32 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
         events = ", ".join(f"{k} {v}" for k, v in run["events"].items() if v) or "none"
         rows.append((f"events (samples), {label}" if several else "events (samples)", events))
     return rows
+
+
+def _recovery_words(d: dict, unit: str) -> str:
+    """One disturbance's judgement (``sim._recovery``) in words: largest error, recovery."""
+    from acdrive.sim._metrics import RPM_PER_RAD_S
+
+    what = "speed" if unit == "rpm" else "position"
+    largest = d[f"largest_{what}_error_{unit}"]
+    if largest is None:
+        return "not judged (no tracked sample after it)"
+    text = f"largest {what} error {largest:.3g} {unit}"
+    if unit == "rpm":  # the IM's other speeds are in rad/s
+        text += f" ({largest / RPM_PER_RAD_S:.3g} rad/s)"
+    text += f" at {d['largest_at_s']:.3f} s; "
+    if d["recovered"]:
+        text += (
+            f"recovered in {d['recovery_time_s']:.3f} s (within {d[f'band_{unit}']:.3g} {unit} "
+            f"from {d['recovered_at_s']:.3f} s on)"
+        )
+    elif d["recovered"] is False:
+        text += f"not recovered (beyond {d[f'band_{unit}']:.3g} {unit} to the end)"
+    else:
+        text += "recovery not decided (back in the band too shortly before the window ends)"
+    lost = [f"{k.split('_')[0]} from {d[k]:.3f} s" for k in ("reversal_at_s", "stall_at_s")
+            if d.get(k) is not None]  # fmt: skip
+    return text + (f"; {', '.join(lost)}" if lost else "")
 
 
 def run_im(args, setup) -> int:

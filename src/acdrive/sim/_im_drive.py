@@ -57,7 +57,9 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
 * speed: the error against the reference (RMS and largest over the whole run and where tracking
   is expected, ``sim._metrics``, as the batch's rows), the mean error over the last
   ``STEADY_FRACTION`` of the run, the largest deviation after each load change, the steady torque balance
-  tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB));
+  tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB)); ``speed_outcome``: each disturbance
+  of the scenario (load, brake, DC link) judged for largest error, recovery, reversal and stall
+  by the DFIM drive's rule (``sim._recovery``, in rpm);
 * the saturated ramp of (21) (a speed step with ``speed-p``): the ideal response with perfect
   current control and no friction is the constant-torque ramp w_0 + (tau_max / J)(t - t_step)
   while k_p (w_ref - w) > tau_max, until t_sat = t_step + J (w_ref - w_0 - tau_max / k_p) /
@@ -65,6 +67,8 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
   ``ramp_slope_rad_s2`` the least-squares slope of w over the middle of that interval
   (from 10 % to 70 % of it);
 * position: the final error, the overshoot and the largest deviation after a load change;
+  ``position_outcome``: the position error's recovery after each disturbance (the speed is not
+  judged there: ``sim._recovery.POSITION_SPEED_NOT_JUDGED``);
 * peaks: stator current and voltage command in phase peak amperes and volts (a space vector's
   magnitude over sqrt(3/2)) against the linear SVPWM limit v_dc / sqrt(3), the electromagnetic
   torque; ``voltage_check`` (FOC modes): the field-oriented steady voltage ``foc_voltage`` at the
@@ -877,11 +881,12 @@ class IMDriveResult:
         where tracking is expected (``sim._metrics.speed_tracking`` under
         ``im_tracking_rule``: the batch's figures of the same names) with ``speed_tracking``."""
         from acdrive.sim._metrics import im_tracking_rule, speed_tracking
+        from acdrive.sim._recovery import im_speed_outcome
 
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
         steady = _steady_mask(t)
         err = w_ref - w
-        figures, tracking, _ = speed_tracking(
+        figures, tracking, mask = speed_tracking(
             t, w, w_ref, None, im_tracking_rule(self.setup), scale=1.0, unit="rad_s"
         )
         out = {
@@ -895,6 +900,7 @@ class IMDriveResult:
         if final_ref != 0.0:
             out["speed_overshoot_rad_s"] = float(np.max(np.sign(final_ref) * (w - final_ref)))
         out["load_changes"] = [self._deviation(tc, w) for tc in self.load_changes()]
+        out["speed_outcome"] = im_speed_outcome(self, mask)
         tau_e, tau_l, tau_f = (
             self.signal(n)[steady] for n in ("tau_e", "tau_load", "tau_friction")
         )
@@ -962,6 +968,8 @@ class IMDriveResult:
         }
 
     def position_metrics(self) -> dict:
+        from acdrive.sim._recovery import im_position_outcome
+
         t, theta = self.t, self.signal("theta") + self.setup.sensors.offset
         ref = self.signal("theta_ref")
         steady = _steady_mask(t)
@@ -976,6 +984,7 @@ class IMDriveResult:
                 np.max(np.sign(final_ref or 1.0) * (theta[before] - ref[before]))
             ),
             "load_changes": [self._deviation(tc, theta, "position") for tc in self.load_changes()],
+            "position_outcome": im_position_outcome(self),
         }
         return out
 
@@ -1198,6 +1207,8 @@ def warnings_of(setup: IMDriveSetup, results: dict, summaries: dict) -> list[str
     n = max(1, round(setup.duration / setup.sample_time))
     for label, s in summaries.items():
         ev, result = s["events"], results[label]
+        for key in ("speed_outcome", "position_outcome"):  # loss of control, no recovery
+            out += s.get(key, {}).pop("warnings", [])
         if ev["current_controller_saturation"]:
             check = s.get("voltage_check")
             why = ""

@@ -1,12 +1,15 @@
-"""What happened to the speed at each disturbance of a DFIM run and at its end.
+"""What happened to the speed at each disturbance of a run and at its end, for both drives.
 
-The disturbances are known from the scenario before the run (``disturbances``, after t = 0): a
-supply voltage, frequency or phase EMF that departs from its starting value (a sag, a frequency
-step, a collapsed phase) until it returns, a DC link that drops, a load torque that steps, a relay
-closed by force, current sensors that fail. Each is judged from its start to the next
-disturbance's start or the end of the run, on the samples where tracking is expected
-(``sim._metrics.TrackingRule``: the intended reference steps' settling and an open relay are not
-judged):
+The disturbances are known from the scenario before the run (after t = 0). DFIM
+(``disturbances``): a supply voltage, frequency or phase EMF that departs from its starting value
+(a sag, a frequency step, a collapsed phase) until it returns, a DC link that drops, a load torque
+that steps, a relay closed by force, current sensors that fail. Cage IM (``im_disturbances``): a
+change of the active load torque or of the eddy-current brake coefficient, a DC link that departs
+from its starting value. ``judge_speed`` takes the logged times, speed and reference [rpm], the
+tracking mask and the (what, start) of each disturbance reaching that shaft, and judges each from
+its start to the next one's start or the end of the run, on the samples where tracking is
+expected (``sim._metrics.TrackingRule``: the intended reference steps' settling and an open relay
+are not judged):
 
 * ``largest_speed_error_rpm`` and when;
 * recovery: the speed error back within the band max(min(RECOVERY_P99_FACTOR x the 99th
@@ -21,6 +24,10 @@ judged):
 The end of the run (its last END_FRACTION) is judged for reversal and stall the same way. A
 reversal or a stall is a loss of control, stated as a warning by that name (``warnings``), never
 as an oscillation.
+
+``judge_position`` judges a position loop's error after each disturbance by the same recovery rule
+(band floor POSITION_RECOVERY_MIN_RAD instead of RECOVERY_MIN_RPM; no reversal or stall: a
+position drive at rest has a zero speed reference).
 """
 
 from __future__ import annotations
@@ -29,7 +36,12 @@ import math
 
 import numpy as np
 
-from acdrive.sim._metrics import RPM_PER_RAD_S
+from acdrive.sim._metrics import (
+    RPM_PER_RAD_S,
+    SETTLE_TIME_CONSTANTS,
+    SLEW_MARGIN,
+    reference_change_windows,
+)
 
 RECOVERY_P99_FACTOR = 2.0
 RECOVERY_MIN_RPM = 2.0
@@ -42,6 +54,8 @@ REVERSAL_MIN_RPM = 5.0
 STALL_FRACTION = 0.05
 STALL_MIN_REFERENCE_RPM = 20.0
 END_FRACTION = 0.1
+#: a position loop's recovery band floor [rad] (0.01 rad, 0.57 degrees), as RECOVERY_MIN_RPM
+POSITION_RECOVERY_MIN_RAD = 0.01
 
 RULE = (
     f"recovered: |speed error| back within max(min({RECOVERY_P99_FACTOR:g} x its 99th percentile "
@@ -52,6 +66,15 @@ RULE = (
     f"stall: |speed| below {STALL_FRACTION:.0%} of |reference| (beyond "
     f"{STALL_MIN_REFERENCE_RPM:g} rpm); each held {HOLD_S * 1e3:g} ms; judged where tracking is "
     "expected (speed_tracking.rule)"
+)
+POSITION_RULE = (
+    f"recovered: |position error| back within max(min({RECOVERY_P99_FACTOR:g} x its 99th "
+    f"percentile over the {PRE_WINDOW_S:g} s before the disturbance, "
+    f"{RECOVERY_REFERENCE_FRACTION:.0%} of |position reference|), {POSITION_RECOVERY_MIN_RAD:g} "
+    f"rad) and staying there to the next disturbance or the end of the run (at least "
+    f"{HOLD_S * 1e3:g} ms; recovery time from the disturbance's start); not judged within "
+    f"{SLEW_MARGIN:g} x |d theta| / w_max + {SETTLE_TIME_CONSTANTS:g} / K_theta of a position "
+    "reference step (windows_s)"
 )
 
 
@@ -140,30 +163,18 @@ def lost_control(t, w_rpm, ref_rpm, judged) -> dict:
     return {"reversal_at_s": _held(t, reversed_), "stall_at_s": _held(t, stalled)}
 
 
-def assess(result, mask: np.ndarray, motor: int, start: float, stop: float) -> dict:
-    """The figures of the module docstring for motor ``motor`` of ``result`` from ``start`` to
-    ``stop`` [s], judged on the ``mask`` (tracked) samples."""
-    t = result.t
-    w = result.signal("w", motor) * RPM_PER_RAD_S
-    ref = result.signal("w_ref", motor) * RPM_PER_RAD_S
-    err = np.abs((result.signal("w_ref", motor) - result.signal("w", motor)) * RPM_PER_RAD_S)
-    before = mask & (t >= start - PRE_WINDOW_S) & (t < start)
-    inside = (t >= start) & (t < stop)
-    judged = mask & inside
+def _recovery(t, err, judged, before, start: float, cap: float, floor: float) -> dict:
+    """The band max(min(RECOVERY_P99_FACTOR x p99 of ``err`` over ``before``, ``cap``),
+    ``floor``), the largest ``err`` over the ``judged`` samples and when, and whether, when and
+    how long after ``start`` it came back within the band and stayed there (module docstring)."""
     p99 = float(np.percentile(err[before], 99)) if before.any() else None
-    at = int(np.searchsorted(t, start)) if t.size else 0
-    ref_at = abs(float(ref[min(at, t.size - 1)]))
-    cap = RECOVERY_REFERENCE_FRACTION * ref_at
-    band = max(min(RECOVERY_P99_FACTOR * p99, cap) if p99 is not None else cap, RECOVERY_MIN_RPM)
-    out = {"judged_until_s": float(min(stop, t[-1])), "pre_p99_error_rpm": p99, "band_rpm": band}
+    band = max(min(RECOVERY_P99_FACTOR * p99, cap) if p99 is not None else cap, floor)
+    out = {"pre_p99_error": p99, "band": band}
     if not judged.any():
-        return {**out, "largest_speed_error_rpm": None, "largest_at_s": None, "recovered": None,
-                "recovered_at_s": None, "recovery_time_s": None, "reversal_at_s": None,
-                "stall_at_s": None}  # fmt: skip
+        return {**out, "largest_error": None, "largest_at_s": None, "recovered": None,
+                "recovered_at_s": None, "recovery_time_s": None}  # fmt: skip
     idx = np.flatnonzero(judged)
     k = idx[int(np.argmax(err[idx]))]
-    out["largest_speed_error_rpm"] = float(err[k])
-    out["largest_at_s"] = float(t[k])
     outside = idx[err[idx] > band]
     if outside.size == 0:  # never left the band
         recovered, at_s = True, start
@@ -175,63 +186,208 @@ def assess(result, mask: np.ndarray, motor: int, start: float, stop: float) -> d
             recovered, at_s = True, float(t[after[0]])
         else:  # back in the band too shortly before the window ends to tell
             recovered, at_s = None, None
-    out.update(
-        recovered=recovered,
-        recovered_at_s=at_s if recovered else None,
-        recovery_time_s=(at_s - start) if recovered else None,
-        **lost_control(t, w, ref, judged),
+    return {**out, "largest_error": float(err[k]), "largest_at_s": float(t[k]),
+            "recovered": recovered, "recovered_at_s": at_s if recovered else None,
+            "recovery_time_s": (at_s - start) if recovered else None}  # fmt: skip
+
+
+def assess(t, w_rpm, ref_rpm, mask, start: float, stop: float) -> dict:
+    """The figures of the module docstring for the speed ``w_rpm`` against ``ref_rpm`` [rpm] at
+    times ``t`` [s] from ``start`` to ``stop`` [s], judged on the ``mask`` (tracked) samples."""
+    err = np.abs(ref_rpm - w_rpm)
+    before = mask & (t >= start - PRE_WINDOW_S) & (t < start)
+    judged = mask & (t >= start) & (t < stop)
+    at = int(np.searchsorted(t, start)) if t.size else 0
+    cap = RECOVERY_REFERENCE_FRACTION * abs(float(ref_rpm[min(at, t.size - 1)]))
+    r = _recovery(t, err, judged, before, start, cap, RECOVERY_MIN_RPM)
+    lost = (
+        lost_control(t, w_rpm, ref_rpm, judged)
+        if judged.any()
+        else {"reversal_at_s": None, "stall_at_s": None}
     )
-    return out
+    return {
+        "judged_until_s": float(min(stop, t[-1])),
+        "pre_p99_error_rpm": r["pre_p99_error"],
+        "band_rpm": r["band"],
+        "largest_speed_error_rpm": r["largest_error"],
+        "largest_at_s": r["largest_at_s"],
+        "recovered": r["recovered"],
+        "recovered_at_s": r["recovered_at_s"],
+        "recovery_time_s": r["recovery_time_s"],
+        **lost,
+    }
+
+
+def judge_speed(t, w_rpm, ref_rpm, mask, found, subject: str) -> dict:
+    """What happened to one shaft: ``disturbances``, the ``assess`` figures of each (``what``,
+    ``start_s``) in ``found`` (those reaching this shaft, by start time) from its start to the
+    next one's or the end of the run; ``end_of_run``: final speed, reference and error [rpm],
+    reversal and stall over the last END_FRACTION; ``warnings``: a loss of control (reversal or
+    stall) by that name, a speed that did not recover, each naming ``subject`` (e.g. "motor 1",
+    "voltage command, motor 2", "paper-20")."""
+    t, w_rpm, ref_rpm = (np.asarray(x, dtype=float) for x in (t, w_rpm, ref_rpm))
+    mask = np.asarray(mask, dtype=bool)
+    end_time = float(t[-1]) if t.size else 0.0
+    judged, warnings = [], []
+    for i, (what, start) in enumerate(found):
+        stop = found[i + 1][1] if i + 1 < len(found) else math.inf
+        a = assess(t, w_rpm, ref_rpm, mask, start, stop)
+        judged.append(a)
+        when = f"after the {what} at {start:g} s"
+        if a["reversal_at_s"] is not None or a["stall_at_s"] is not None:
+            warnings.append(_loss_words(subject, w_rpm, ref_rpm, a, when))
+        elif a["recovered"] is False:
+            warnings.append(
+                f"{subject}: the speed did not recover {when}: the error stayed beyond "
+                f"{a['band_rpm']:.3g} rpm (largest {a['largest_speed_error_rpm']:.1f} rpm at "
+                f"{a['largest_at_s']:.3f} s) until {a['judged_until_s']:.3f} s"
+            )
+    last = mask & (t >= end_time - END_FRACTION * end_time)
+    lost = lost_control(t, w_rpm, ref_rpm, last)
+    end = {"final_speed_rpm": float(w_rpm[-1]), "final_reference_rpm": float(ref_rpm[-1]),
+           "final_error_rpm": float(ref_rpm[-1] - w_rpm[-1]), **lost}  # fmt: skip
+    already = any(x.startswith(f"loss of control: {subject} ") for x in warnings)
+    if not already and (lost["reversal_at_s"] is not None or lost["stall_at_s"] is not None):
+        warnings.append(_loss_words(subject, w_rpm, ref_rpm, lost, "at the end of the run"))
+    return {"disturbances": judged, "end_of_run": end, "warnings": warnings}
 
 
 def speed_outcome(result, rules_masks: list, setup, who: str = "") -> dict:
-    """``disturbances`` (each with its per-motor ``assess`` figures), ``end_of_run`` (per
-    motor: final speed, reference and error, reversal and stall over the last END_FRACTION),
-    the ``rule``, and the ``warnings``: a loss of control (reversal or stall) by that name, a
-    speed that did not recover (``who`` names the run in them, e.g. "voltage command, ")."""
-    t = result.t
-    end_time = float(t[-1]) if t.size else 0.0
+    """``disturbances`` (each with its per-motor ``judge_speed`` figures: a motor is judged on
+    the shared supply's disturbances and its own, each up to the next of those), ``end_of_run``
+    (per motor), the ``rule``, and the ``warnings`` (``who`` names the run in them, e.g.
+    "voltage command, ") of a DFIM ``result``."""
     found = disturbances(setup)
-    warnings = []
-    for i, d in enumerate(found):
-        stop = found[i + 1]["start_s"] if i + 1 < len(found) else math.inf
-        motors = range(result.n_motors) if d["motor"] is None else [d["motor"]]
+    for d in found:
         d["motors"] = {}
-        for k in motors:
-            a = assess(result, rules_masks[k], k, d["start_s"], stop)
-            d["motors"][f"motor {k + 1}"] = a
-            when = f"after the {d['what']} at {d['start_s']:g} s"
-            if a["reversal_at_s"] is not None or a["stall_at_s"] is not None:
-                warnings.append(_loss_words(result, k, a, when, who))
-            elif a["recovered"] is False:
-                warnings.append(
-                    f"{who}motor {k + 1}: the speed did not recover {when}: the error stayed beyond "
-                    f"{a['band_rpm']:.3g} rpm (largest {a['largest_speed_error_rpm']:.1f} rpm at "
-                    f"{a['largest_at_s']:.3f} s) until {a['judged_until_s']:.3f} s"
-                )
-    end = []
+    warnings, end = [], []
     for k in range(result.n_motors):
-        w = result.signal("w", k) * RPM_PER_RAD_S
-        ref = result.signal("w_ref", k) * RPM_PER_RAD_S
-        last = rules_masks[k] & (t >= end_time - END_FRACTION * end_time)
-        lost = lost_control(t, w, ref, last)
-        end.append({"final_speed_rpm": float(w[-1]), "final_reference_rpm": float(ref[-1]),
-                    "final_error_rpm": float(ref[-1] - w[-1]), **lost})  # fmt: skip
-        already = any(x.startswith(f"loss of control: {who}motor {k + 1} ") for x in warnings)
-        if not already and (lost["reversal_at_s"] is not None or lost["stall_at_s"] is not None):
-            warnings.append(_loss_words(result, k, lost, "at the end of the run", who))
+        mine = [d for d in found if d["motor"] in (None, k)]
+        judged = judge_speed(
+            result.t, result.signal("w", k) * RPM_PER_RAD_S,
+            result.signal("w_ref", k) * RPM_PER_RAD_S, rules_masks[k],
+            [(d["what"], d["start_s"]) for d in mine], f"{who}motor {k + 1}",
+        )  # fmt: skip
+        for d, a in zip(mine, judged["disturbances"], strict=True):
+            d["motors"][f"motor {k + 1}"] = a
+        warnings += judged["warnings"]
+        end.append(judged["end_of_run"])
     return {"rule": RULE, "disturbances": found, "end_of_run": end, "warnings": warnings}
 
 
-def _loss_words(result, k: int, a: dict, when: str, who: str) -> str:
-    w = result.signal("w", k)[-1] * RPM_PER_RAD_S
-    ref = result.signal("w_ref", k)[-1] * RPM_PER_RAD_S
+def _loss_words(subject: str, w_rpm, ref_rpm, a: dict, when: str) -> str:
     what = []
     if a["reversal_at_s"] is not None:
         what.append(f"the speed reversed against its reference from {a['reversal_at_s']:.3f} s")
     if a["stall_at_s"] is not None:
         what.append(f"the shaft stalled from {a['stall_at_s']:.3f} s")
     return (
-        f"loss of control: {who}motor {k + 1} {when}: {' and '.join(what)}; it ends at {w:.0f} rpm "
-        f"against a {ref:.0f} rpm reference"
+        f"loss of control: {subject} {when}: {' and '.join(what)}; it ends at {w_rpm[-1]:.0f} "
+        f"rpm against a {ref_rpm[-1]:.0f} rpm reference"
     )
+
+
+# --- the cage-IM drive ---------------------------------------------------------------------
+
+
+def im_disturbances(setup) -> list[dict]:
+    """The disturbances of a cage-IM ``setup`` (``sim._im_drive.IMDriveSetup``), by start time:
+    ``what``, ``start_s``, ``cleared_s`` (None: it stays). A held shaft (prescribed speed) has
+    no load disturbances."""
+    m = setup.mechanics
+    found = []
+    if m.free:
+        found += _steps(m.load, "load torque", "N m")
+        found += _steps(m.brake, "brake coefficient", "N m s/rad")
+    found += _departures(setup.inverter.dc_link, "DC link", "V")
+    found = [d for d in found if 0.0 < d["start_s"] < setup.duration]
+    return sorted(found, key=lambda d: d["start_s"])
+
+
+def position_tracking_windows(position_reference, w_max: float, K_theta: float) -> tuple:
+    """(start, end) [s] after each position reference change faster than the loop can follow:
+    the speed-loop rule of ``sim._metrics.reference_change_windows`` with the slew rate w_max
+    [rad/s] (the position loop's speed limit) in place of tau / J, and SETTLE_TIME_CONSTANTS /
+    K_theta [s] to settle (the P position loop's pole, the inner speed loop being faster)."""
+    times, values = position_reference
+    return reference_change_windows(times, values, 1.0, w_max, SETTLE_TIME_CONSTANTS / K_theta)
+
+
+def judge_position(t, theta, theta_ref, mask, found) -> list[dict]:
+    """The position error |theta_ref - theta| [rad] after each (what, start) of ``found``, by
+    the recovery rule of the speed (module docstring) with the band floor
+    POSITION_RECOVERY_MIN_RAD, on the ``mask`` samples (outside ``position_tracking_windows``)."""
+    t = np.asarray(t, dtype=float)
+    mask = np.asarray(mask, dtype=bool)
+    err = np.abs(np.asarray(theta_ref, dtype=float) - np.asarray(theta, dtype=float))
+    out = []
+    for i, (_, start) in enumerate(found):
+        stop = found[i + 1][1] if i + 1 < len(found) else math.inf
+        before = mask & (t >= start - PRE_WINDOW_S) & (t < start)
+        judged = mask & (t >= start) & (t < stop)
+        at = min(int(np.searchsorted(t, start)), t.size - 1)
+        cap = RECOVERY_REFERENCE_FRACTION * abs(float(theta_ref[at]))
+        r = _recovery(t, err, judged, before, start, cap, POSITION_RECOVERY_MIN_RAD)
+        out.append({
+            "judged_until_s": float(min(stop, t[-1])),
+            "pre_p99_error_rad": r["pre_p99_error"],
+            "band_rad": r["band"],
+            "largest_position_error_rad": r["largest_error"],
+            "largest_at_s": r["largest_at_s"],
+            "recovered": r["recovered"],
+            "recovered_at_s": r["recovered_at_s"],
+            "recovery_time_s": r["recovery_time_s"],
+        })  # fmt: skip
+    return out
+
+
+#: why a position run's summary judges the position after a disturbance and not the speed
+POSITION_SPEED_NOT_JUDGED = (
+    "the speed reference of a position run is the position loop's own output (zero at rest), "
+    "not a target: a load is rejected when the position error recovers, judged instead"
+)
+
+
+def im_speed_outcome(result, mask: np.ndarray) -> dict:
+    """What happened to the speed of a cage-IM ``result`` (``sim._im_drive.IMDriveResult``) at
+    each disturbance (``im_disturbances``) and at the end (``judge_speed`` on the ``mask``
+    (tracked) samples, the DFIM's rule): the logged speed [rad/s] converted once to rpm, the
+    rule's unit; ``warnings`` name the run by its label."""
+    found = im_disturbances(result.setup)
+    judged = judge_speed(
+        result.t, result.signal("w") * RPM_PER_RAD_S, result.signal("w_ref") * RPM_PER_RAD_S,
+        mask, [(d["what"], d["start_s"]) for d in found], result.label,
+    )  # fmt: skip
+    for d, a in zip(found, judged["disturbances"], strict=True):
+        d.update(a)
+    return {"rule": RULE, "unit": "rpm (the logged rad/s x 30/pi)", "disturbances": found,
+            "end_of_run": judged["end_of_run"], "warnings": judged["warnings"]}  # fmt: skip
+
+
+def im_position_outcome(result) -> dict:
+    """The position error of a cage-IM position ``result`` after each disturbance
+    (``judge_position`` outside ``position_tracking_windows``), the claim a position drive
+    makes; its speed is not judged (POSITION_SPEED_NOT_JUDGED). ``warnings``: a position that
+    did not recover, naming the run by its label."""
+    s, t = result.setup, result.t
+    found = im_disturbances(s)
+    windows = position_tracking_windows(s.position_reference, s.position.w_max, s.position.K_theta)
+    mask = np.ones(t.size, dtype=bool)
+    for a, b in windows:
+        mask &= ~((t >= a) & (t < b))
+    theta = result.signal("theta") + s.sensors.offset
+    judged = judge_position(t, theta, result.signal("theta_ref"), mask,
+                            [(d["what"], d["start_s"]) for d in found])  # fmt: skip
+    warnings = []
+    for d, a in zip(found, judged, strict=True):
+        d.update(a)
+        if a["recovered"] is False:
+            warnings.append(
+                f"{result.label}: the position did not recover after the {d['what']} at "
+                f"{d['start_s']:g} s: the error stayed beyond {a['band_rad']:.3g} rad (largest "
+                f"{a['largest_position_error_rad']:.3g} rad at {a['largest_at_s']:.3f} s) until "
+                f"{a['judged_until_s']:.3f} s"
+            )
+    return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
+            "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
+            "warnings": warnings}  # fmt: skip
