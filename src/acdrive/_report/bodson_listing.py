@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from acdrive._report.verdicts import Verdict, num, within_rel
+from acdrive._report.verdicts import ROUNDOFF_FLOOR, Verdict, below_floor, num, within_rel
 from acdrive.machines._dfim import (
     DFIMParams,
     electromagnetic_torque,
@@ -112,13 +112,18 @@ def lossless_law_torque_simulated(
     return float(electromagnetic_torque(p, i_s, i_r))
 
 
+def relative_cell(x: float) -> str:
+    """A relative difference as printed: round-off (``verdicts.ROUNDOFF_FLOOR``) as its bound."""
+    return f"< {ROUNDOFF_FLOOR:g}" if below_floor(x, ROUNDOFF_FLOOR) else num(x, 2)
+
+
 def corrected_listing_verdict(max_rel: float) -> Verdict:
     """The corrected listing against (39): the same formula within LISTING_REL_TOL."""
     ok = max_rel <= LISTING_REL_TOL
     return Verdict(
         ok,
         f"{'the same as (39)' if ok else 'NOT the same as (39)'} (largest relative difference "
-        f"{num(max_rel, 2)} over the grid, tolerance {LISTING_REL_TOL:g})",
+        f"{relative_cell(max_rel)} over the grid, tolerance {LISTING_REL_TOL:g})",
     )
 
 
@@ -159,7 +164,9 @@ def listing_rows(machine: DFIMParams, w_e: float, v_s: float, tau_lim: float, ro
     )
     tau_e = lossless_law_torque(machine, w_e, v_s, tau_lim)
     tau_e_ss = lossless_law_torque_simulated(machine, w_e, 0.0, v_s, tau_lim)
-    same = within_rel(tau_e_ss, tau_e, TORQUE_FORM_REL_TOL, yes="agrees", no="differs")
+    same = within_rel(
+        tau_e_ss, tau_e, TORQUE_FORM_REL_TOL, yes="agrees", no="differs", floor=ROUNDOFF_FLOOR
+    )
     return [
         row(
             "core m-code: zr",
@@ -170,7 +177,7 @@ def listing_rows(machine: DFIMParams, w_e: float, v_s: float, tau_lim: float, ro
         row(
             "core m-code vrc, corrected zr, zmr, against (39) (Q_COM = 0)",
             "(39)",
-            f"max abs(dv_R) / abs(v_R) = {num(worst, 2)}",
+            f"max abs(dv_R) / abs(v_R) = {relative_cell(worst)}",
             f"{corrected_listing_verdict(worst)}; grid: {grid}",
         ),
         row(

@@ -66,11 +66,18 @@ def relative_difference(value, reference) -> float:
     return float(d.real if not isinstance(d, complex) else abs(d)) / scale
 
 
+#: A relative difference below this is floating-point round-off (a closed form against the state
+#: space, an identity, two orders of the same sum): its digits, zero among them, change between
+#: machines, libraries and even calls, so a report prints the bound "< 1e-12" and regenerates
+#: identically. Every tolerance of the reports is above it.
+ROUNDOFF_FLOOR = 1e-12
+
+
 def below_floor(x: float, floor: float) -> bool:
-    """A non-zero relative number smaller in magnitude than ``floor``: floating-point round-off,
-    whose digits differ between machines and libraries, printed as the bound "< floor" so that a
-    report regenerates identically (``floor`` = 0: never)."""
-    return 0.0 < abs(x) < floor
+    """A relative number smaller in magnitude than ``floor`` (exactly zero included: another
+    machine may give 1e-16 for it): floating-point round-off, printed as the bound "< floor" so
+    that a report regenerates identically (``floor`` = 0: never)."""
+    return floor > 0.0 and abs(x) < floor
 
 
 def _percent_or_ratio(

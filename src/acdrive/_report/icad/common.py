@@ -17,7 +17,7 @@ from scipy.optimize import brentq
 
 from acdrive._report import icad_targets as targets
 from acdrive._report import verdicts
-from acdrive._report.verdicts import Verdict, below_floor
+from acdrive._report.verdicts import ROUNDOFF_FLOOR, Verdict, below_floor
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import icad_quantities
 
@@ -46,11 +46,7 @@ GM_TOL_DB = 1.0
 #: sec. VII; PI 'dropping near 0 dB around 375 rad/s', sec. VI-D).
 APPROX_GAIN_TOL_DB = 2.0
 
-# --- round-off ----------------------------------------------------------------------------------
-#: A relative difference below this is floating-point round-off (a closed form against the state
-#: space, an identity): its digits change between machines and libraries, so the report prints
-#: the bound "< 1e-12" and regenerates identically. Every tolerance of the report is above it.
-ROUNDOFF_FLOOR = 1e-12
+# --- round-off: verdicts.ROUNDOFF_FLOOR -----------------------------------------------------------
 
 
 def within_rel(value, reference, tol: float, yes="agrees", no="differs") -> Verdict:
