@@ -781,3 +781,31 @@ def test_stability_map_names_an_unwritable_out_before_the_analysis(tmp_path, cap
     assert blocker.read_text() == "mine"
     code, _, err = _main(capsys, "run", _scenario(tmp_path), "--out", blocker / "runs")
     assert code == 2 and _one_line(err, "--out")
+
+
+@pytest.mark.parametrize(
+    "params, field",
+    [
+        ({"L_r": 1e308}, "motor[0].params.L_r"),  # sigma L_r a_C of (49) overflows through L_r
+    ],
+)
+def test_an_overflowing_design_names_the_machine_parameter_that_caused_it(
+    tmp_path, capsys, params, field
+):
+    """Found by the fuzz suite: K_P,C = sigma L_r a_C (49) overflowing because of an absurd L_r
+    was blamed on the current loop's bandwidth; the factor farther from 1 is named."""
+    data = {
+        "name": "fuzz",
+        "simulation": {"duration": 0.01},
+        "motor": [{
+            "speed_reference_rpm": [[0.0, 0.0], [0.01, 100.0]],
+            "params": {"R_s": 0.66, "R_r": 0.94, "L_s": 0.0131, "L_r": 0.0131, "M": 0.0097,
+                       "n_p": 2, "J": 0.00035, **params},
+        }],
+    }  # fmt: skip
+    path = tmp_path / "s.toml"
+    path.write_text(to_toml(data))
+    code, _, err = _main(capsys, "run", path, "--out", tmp_path / "out")
+    assert code == 2, err
+    assert _named(err) == field, err
+    assert not (tmp_path / "out").exists()

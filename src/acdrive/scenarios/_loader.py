@@ -200,8 +200,9 @@ def _check_gains(
     design_inertia: float,
 ) -> None:  # fmt: skip
     """The gains the design equations give must be numbers: K_P = 2 a J and K_I = a^2 J (27),
-    K_P,C = sigma L_r a_C and K_I,C = R_T a_C (49) overflow for extreme bandwidths or R_T; the
-    field named is the input that made the gain overflow."""
+    K_P,C = sigma L_r a_C and K_I,C = R_T a_C (49) overflow for extreme bandwidths, inductances
+    or R_T; the field named is the input that made the gain overflow (of a product, the factor
+    farther from 1 in decades)."""
     K_PC, K_IC = controller.current_gains(machine)
     motor = section.path.rsplit(".", 1)[0]
     inertia = (
@@ -216,7 +217,8 @@ def _check_gains(
     gains = [
         ("K_P (27)", controller.gains.K_P, speed),
         ("K_I (27)", controller.gains.K_I, speed),
-        ("K_P,C (49)", K_PC, current),
+        ("K_P,C (49)", K_PC, larger((current, controller.current_bandwidth),
+                                    (f"{motor}.params.L_r", machine.L_r - machine.M**2 / machine.L_s))),
         ("K_I,C (49)", K_IC, larger((current, controller.current_bandwidth),
                                     (section.field("R_T"), controller.R_T))),
     ]  # fmt: skip
