@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import tempfile
 import time
 
@@ -657,8 +658,6 @@ def run_case(
     finally:
         if proc is not None:
             proc.close()
-        for name in os.listdir(tmp):
-            os.remove(os.path.join(tmp, name))
-        os.rmdir(tmp)
+        shutil.rmtree(tmp, ignore_errors=True)  # the run's own temporary folder (mkdtemp)
     out["matched_case"] = MATCHED
     return out
