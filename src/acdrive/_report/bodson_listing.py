@@ -38,6 +38,9 @@ TORQUE_DELIVERED_REL_TOL = 0.002
 #: the speed range of the paper's experiments (0 to 2,700 rpm) and motoring and generating torque.
 LISTING_SPEEDS_RPM = (0.0, 900.0, 1500.0, 1800.0, 2100.0, 2700.0)
 LISTING_TORQUE_FRACTIONS = (-1.0, -0.5, 0.0, 0.5, 1.0)
+#: Torque commands [N m] at which the R_S = 0 law's torque on the 0.66 ohm motor is shown, besides
+#: tau_LIM: a round command inside the range, so the quadratic growth of the shortfall shows.
+SHORTFALL_COMMANDS = (0.1, 0.2)
 
 
 def listing_rotor_voltage(
@@ -162,11 +165,6 @@ def listing_rows(machine: DFIMParams, w_e: float, v_s: float, tau_lim: float, ro
         f"{len(LISTING_SPEEDS_RPM)} speeds {LISTING_SPEEDS_RPM[0]:g}-{LISTING_SPEEDS_RPM[-1]:g} rpm"
         f" x tau_COM = {', '.join(f'{f:g}' for f in LISTING_TORQUE_FRACTIONS)} x tau_LIM"
     )
-    tau_e = lossless_law_torque(machine, w_e, v_s, tau_lim)
-    tau_e_ss = lossless_law_torque_simulated(machine, w_e, 0.0, v_s, tau_lim)
-    same = within_rel(
-        tau_e_ss, tau_e, TORQUE_FORM_REL_TOL, yes="agrees", no="differs", floor=ROUNDOFF_FLOOR
-    )
     return [
         row(
             "core m-code: zr",
@@ -186,12 +184,27 @@ def listing_rows(machine: DFIMParams, w_e: float, v_s: float, tau_lim: float, ro
             f"abs(v_R,printed) / abs(v_R,(39)) = {num(low, 3)} to {num(high, 4)}",
             str(printed_listing_verdict(low, high)),
         ),
-        row(
-            f"torque of the listing's R_S = 0 law on the R_S = {machine.R_s:g} ohm motor at "
-            f"tau_COM = tau_LIM = {tau_lim:.4f} N m",
-            "(not printed; the listing assumes R_S = 0)",
-            f"{tau_e:.4f} N m (steady state (19): {tau_e_ss:.4f} N m)",
-            f"{delivered_torque_verdict(tau_e, tau_lim)}: (31) loses n_P R_S i_S^2 / w_e; "
-            f"closed form vs steady state {same}",
+        *(
+            _shortfall_row(machine, w_e, v_s, tau, tau == tau_lim, row)
+            for tau in (*SHORTFALL_COMMANDS, tau_lim)
         ),
     ]
+
+
+def _shortfall_row(machine: DFIMParams, w_e: float, v_s: float, tau_com: float, is_limit: bool,
+                   row) -> str:  # fmt: skip
+    """The torque the R_S = 0 law produces on ``machine`` at ``tau_com``, two ways."""
+    tau_e = lossless_law_torque(machine, w_e, v_s, tau_com)
+    tau_e_ss = lossless_law_torque_simulated(machine, w_e, 0.0, v_s, tau_com)
+    same = within_rel(
+        tau_e_ss, tau_e, TORQUE_FORM_REL_TOL, yes="agrees", no="differs", floor=ROUNDOFF_FLOOR
+    )
+    command = f"tau_LIM = {tau_com:.4f}" if is_limit else f"{tau_com:g}"
+    return row(
+        f"torque of the listing's R_S = 0 law on the R_S = {machine.R_s:g} ohm motor at "
+        f"tau_COM = {command} N m",
+        "(not printed; the listing assumes R_S = 0)",
+        f"{tau_e:.4f} N m (steady state (19): {tau_e_ss:.4f} N m)",
+        f"{delivered_torque_verdict(tau_e, tau_com)}: (31) loses n_P R_S i_S^2 / w_e "
+        f"= {tau_com - tau_e:.4f} N m; closed form vs steady state {same}",
+    )
