@@ -13,7 +13,9 @@ behind it move, so a snapshot taken on one commit compares with one taken on ano
 ``compare`` prints JSON: per data file the worst column and its largest difference relative to
 that column's peak magnitude, and exits 1 when any column differs by more than the tolerance
 (1e-15 of its peak), when a file or column exists on one side only, or when the lengths differ.
-Text columns (event names, modes) must be equal.
+Text columns (event names, modes) must be equal. Each scenario's ``summary.json`` is compared too:
+every number within SUMMARY_REL_TOL relative, every text and flag equal, the same keys on both
+sides; timing entries (wall or CPU time, compile time) are left out.
 """
 
 from __future__ import annotations
@@ -28,6 +30,10 @@ import numpy as np
 import pandas as pd
 
 TOLERANCE = 1e-15
+#: summary numbers are computed from the signals: equal signals give them to rounding
+SUMMARY_REL_TOL = 1e-12
+#: summary entries that measure the machine, not the result
+TIMING_WORDS = ("wall", "cpu", "compile", "elapsed")
 #: the console script installed beside this interpreter
 ACDRIVE = str(Path(sys.executable).with_name("acdrive"))
 
@@ -79,6 +85,32 @@ def compare_frames(a: pd.DataFrame, b: pd.DataFrame) -> dict:
     return out
 
 
+def _flatten(x, path: str = "") -> dict:
+    if isinstance(x, dict):
+        return {k: v for key, val in x.items() for k, v in _flatten(val, f"{path}/{key}").items()}
+    if isinstance(x, list):
+        return {k: v for i, val in enumerate(x) for k, v in _flatten(val, f"{path}[{i}]").items()}
+    return {path: x}
+
+
+def compare_summaries(a: dict, b: dict) -> list[str]:
+    """The summary entries that differ (timing entries left out)."""
+    fa, fb = _flatten(a), _flatten(b)
+    differ = []
+    for key in sorted(set(fa) | set(fb)):
+        if any(word in key.lower() for word in TIMING_WORDS):
+            continue
+        x, y = fa.get(key, "<missing>"), fb.get(key, "<missing>")
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (x, y))
+        if numbers:
+            same = x == y or abs(x - y) <= SUMMARY_REL_TOL * max(abs(x), abs(y))
+        else:
+            same = x == y
+        if not same:
+            differ.append(f"{key}: {x!r} -> {y!r}")
+    return differ
+
+
 def compare(before: Path, after: Path) -> int:
     files_a = {p.relative_to(before) for p in before.rglob("*.parquet")}
     files_b = {p.relative_to(after) for p in after.rglob("*.parquet")}
@@ -99,6 +131,16 @@ def compare(before: Path, after: Path) -> int:
         failed |= not ok
         report[str(rel)] = {"worst_column": worst, "relative_difference": numeric[worst],
                             "within_tolerance": ok}  # fmt: skip
+    for path in sorted(before.rglob("summary.json")):
+        rel = path.relative_to(before)
+        other = after / rel
+        if not other.exists():
+            report[str(rel)] = {"only_in": "before"}
+            failed = True
+            continue
+        differ = compare_summaries(json.loads(path.read_text()), json.loads(other.read_text()))
+        report[str(rel)] = {"entries_differ": differ[:20], "n_differ": len(differ)}
+        failed |= bool(differ)
     print(json.dumps({"tolerance": TOLERANCE, "files": report, "all_within": not failed},
                      indent=2))  # fmt: skip
     return 1 if failed or not report else 0
