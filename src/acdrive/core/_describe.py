@@ -102,6 +102,26 @@ class PartDescription:
             lines += ["", f"Events: {', '.join(self.events)}"]
         return "\n".join(indent + line if line else line for line in lines)
 
+    def rst(self) -> str:
+        """The same table as reStructuredText (one ``list-table`` per section), for the API
+        reference."""
+        lines = [f"**{self.part_kind.capitalize()} part.**", ""]
+        for s in self.sections:
+            title = s.title.capitalize()
+            if s.note or not s.rows:
+                lines += [f"*{title}:* {_rst_text(s.note or 'none')}", ""]
+                continue
+            columns = COLUMNS[s.title]
+            header = [self.value_label if c == "value" else c for c in columns]
+            lines += [f".. list-table:: {title}", "   :header-rows: 1", ""]
+            for row in [header, *([_cell(r.cell(c)) for c in columns] for r in s.rows)]:
+                lines.append(f"   * - {_rst_text(row[0])}")
+                lines += [f"     - {_rst_text(cell)}" for cell in row[1:]]
+            lines.append("")
+        if self.events:
+            lines += [f"*Events:* {_rst_text(', '.join(self.events))}", ""]
+        return "\n".join(lines)
+
     def __str__(self) -> str:
         return self.table()
 
@@ -111,6 +131,14 @@ class PartDescription:
 
 def _cell(text: str) -> str:
     return text if text else "-"
+
+
+#: characters that mean markup in reStructuredText, escaped so a cell reads as written
+RST_SPECIAL = re.compile(r"([\\*`|_\[\]<>:])")
+
+
+def _rst_text(text: str) -> str:
+    return RST_SPECIAL.sub(r"\\\1", text)
 
 
 def rule_text(var: Var) -> str:
@@ -160,7 +188,7 @@ SENTENCE_END = re.compile(r"(?<!\bal)(?<!\be\.g)(?<!\bi\.e)(?<!\bcf)\.\s+(?=[A-Z
 def summary_of(cls, width: int | None = None) -> str:
     """First sentence of the part class's own docstring on one line, cut to ``width``."""
     doc = getattr(cls, "_own_doc", "") or ""
-    paragraph = " ".join(doc.split("\n\n", 1)[0].split())
+    paragraph = " ".join(doc.split("\n\n", 1)[0].replace("``", "").split())
     end = SENTENCE_END.search(paragraph)
     sentence = paragraph if end is None else paragraph[: end.start() + 1]
     if width is not None and len(sentence) > width:
@@ -232,6 +260,11 @@ def ports_repr(part_name: str, layout, direction: str) -> str:
     return f"<{part_name} {what}: {layout_text(layout)}>"
 
 
+#: the line that starts the generated part of a part class's docstring (the API reference
+#: replaces what follows it by ``PartDescription.rst()``)
+DECLARATIONS_HEADING = "Declarations (generated from PARAMS, STATES, INPUTS and OUTPUTS)::"
+
+
 def class_docstring(cls) -> str:
     """The part class's own docstring followed by its declarations table, as a literal block
     (plain text in ``help()``, preformatted in the API reference)."""
@@ -240,7 +273,7 @@ def class_docstring(cls) -> str:
     if not declared:  # a base kind (ContinuousPart, ...): nothing to tabulate
         return own
     table = describe(cls).table(indent="    ", summary=False)
-    heading = "Declarations (generated from PARAMS, STATES, INPUTS and OUTPUTS)::"
+    heading = DECLARATIONS_HEADING
     return f"{own}\n\n{heading}\n\n{table}\n" if own else f"{heading}\n\n{table}\n"
 
 
