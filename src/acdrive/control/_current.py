@@ -61,6 +61,7 @@ from acdrive.control._lti import LTI, DiscreteLTI, LTIMatrix, discretise
 from acdrive.control._open_loop import complex_program_step
 from acdrive.core._describe import layout_text
 from acdrive.core._parts import SampledPart
+from acdrive.core._profile import Profile
 from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.errors import InputError
 from acdrive.plant._converter import max_voltage_magnitude
@@ -411,4 +412,4 @@ class CurrentProgram(SampledPart):
         """Tabulate a Python function of time (complex amperes) at ``times``."""
         times = np.asarray(times, dtype=float)
         values = np.array([complex(function(t)) for t in times])
-        return cls(name, re=(times, values.real), im=(times, values.imag))
+        return cls(name, re=Profile(times, values.real), im=Profile(times, values.imag))
