@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.core._signals import RULES, Var
+from acdrive.core._signals import RULES, Var, pack_table
 
 #: (section title, layout attribute) in the order a table lists them
 SECTIONS = (
@@ -164,8 +164,6 @@ def format_value(var: Var, value) -> str:
     """A parameter value without its unit: a number, or a profile's point count and span."""
     if var.kind != "table":
         return format_number(value)
-    from acdrive.core._signals import pack_table
-
     try:
         packed = pack_table(var.name, value)
     except (ValueError, TypeError):

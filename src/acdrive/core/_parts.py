@@ -126,8 +126,8 @@ class Part:
         super().__init_subclass__(**kwargs)
         cls._own_doc = _describe.own_doc(cls)
         cls.__doc__ = _describe.class_docstring(cls)
-        if cls.__init__ is Part.__init__:
-            cls.__signature__ = _describe.signature(cls)
+        # None: an own constructor's signature is its own, not a parent's generated one
+        cls.__signature__ = _describe.signature(cls) if cls.__init__ is Part.__init__ else None
 
     def __init__(self, name: str, **params):
         if not isinstance(name, str) or not name.isidentifier():
