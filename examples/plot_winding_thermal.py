@@ -131,7 +131,8 @@ t, T, P = result.t, result.signal(thermal.out.T), result.signal(thermal.out.P_cu
 #   (fitted between 0.5 and 3 time constants; a slope is blind to the few milliseconds the
 #   currents take to settle);
 # * energy: the heat stored, ``C_th (T_end - T_0)``, equals the losses minus the heat given to
-#   the ambient, both integrated over the run (trapezoidal rule).
+#   the ambient, both integrated over the run (trapezoidal rule on the logged samples, the only
+#   approximation here; 1e-3 of the total losses bounds it).
 R_th, C_th, T_amb = (thermal.values[k] for k in ("R_th", "C_th", "T_amb"))
 settled = t >= duration - tau
 rise, expected_rise = T[settled].mean() - T_amb, R_th * P[settled].mean()
