@@ -39,8 +39,30 @@ class _Collect:
 
 def render_or_verbatim(app, what, name, obj, options, lines: list[str]) -> None:
     """``autodoc-process-docstring`` handler: keep ``lines`` if they parse cleanly as reST (with
-    Sphinx roles taken as plain interpreted text), else replace them by a literal block."""
+    Sphinx roles taken as plain interpreted text), else replace them by a literal block.
+
+    A part class's docstring ends with its declarations table, generated from its layouts
+    (``acdrive.core._describe``); that part is rendered as real tables from the same
+    declarations (``describe().rst()``), the written part before it as above."""
     if not lines:
+        return
+    table = _declarations(obj, lines)
+    _written(lines)
+    lines += table
+
+
+def _declarations(obj, lines: list[str]) -> list[str]:
+    """Cut the generated declarations off ``lines``; their reST tables (none if not a part)."""
+    from acdrive.core._describe import DECLARATIONS_HEADING
+
+    if not isinstance(obj, type) or DECLARATIONS_HEADING not in lines:
+        return []
+    del lines[lines.index(DECLARATIONS_HEADING) :]
+    return ["", *obj.describe().rst().splitlines(), ""]
+
+
+def _written(lines: list[str]) -> None:
+    if not "".join(lines).strip():
         return
     text = "\n".join(lines)
     probe = text.replace(":class:", "").replace(":func:", "").replace(":meth:", "")

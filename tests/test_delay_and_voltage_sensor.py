@@ -7,6 +7,7 @@ import pytest
 
 from acdrive.control._delay import ComputationDelay
 from acdrive.control._open_loop import ComplexProgram
+from acdrive.core import Profile
 from acdrive.errors import InputError
 from acdrive.plant._converter import AveragedConverter
 from acdrive.plant._sensors import VoltageSensor
@@ -17,7 +18,7 @@ T_S = 1e-3
 
 def ramp_program():
     times = np.array([0.0, 0.02])
-    return ComplexProgram("command", re=(times, [0.0, 20.0]), im=(times, [5.0, -5.0]))
+    return ComplexProgram("command", re=Profile(times, [0.0, 20.0]), im=Profile(times, [5.0, -5.0]))
 
 
 def test_the_delay_outputs_the_previous_samples_input_and_the_converter_applies_it_a_period_late():

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from acdrive.control._speed import speed_pi
+from acdrive.core import Profile
 from acdrive.machines._dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
 from acdrive.scenarios._loader import build_setup, load_scenario
 from acdrive.sim._dfim_drive import DFIMDrive, simulate_slow
@@ -29,9 +30,7 @@ def test_engine_matches_radau_reference():
     setup = dataclasses.replace(
         setup,
         motors=(
-            dataclasses.replace(
-                setup.motors[0], speed_reference=(np.array([0.0, 0.12]), np.array([0.0, 40.0]))
-            ),
+            dataclasses.replace(setup.motors[0], speed_reference=Profile([0.0, 0.12], [0.0, 40.0])),
         ),
     )
     fast = simulate(setup)

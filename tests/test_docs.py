@@ -43,6 +43,9 @@ def test_site_builds_without_warnings_and_runs_every_example(tmp_path):
     api = (out / "api.html").read_text()
     for name in ("DFIMParams", "System", "LTI", "analyse", "IMDrive"):
         assert name in api
+    # each part's declarations table (generated from its layouts): e.g. the converter's input
+    assert "v_ref" in api and "commanded voltage space vector" in api
+    assert "plot_winding_thermal" in examples  # the gallery writes its own part
     index = (out / "index.html").read_text()
     assert "Getting started" in index and "Gallery" in index
 

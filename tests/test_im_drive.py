@@ -24,6 +24,7 @@ from acdrive._frames import complex_to_abc
 from acdrive._report.im_outputs import closed_loop_reference_ss, linear_step_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.cli import main
+from acdrive.core import Profile
 from acdrive.errors import InputError, SimulationDiverged
 from acdrive.scenarios._im_loader import build_im_setup
 from acdrive.scenarios._loader import builtin_names, builtin_text, load_scenario
@@ -241,7 +242,7 @@ def test_a_dc_link_too_low_for_the_flux_is_reported_not_refused():
     71 V, space vectors): the run goes ahead, the current controller saturates, and the summary says so with
     the numbers."""
     setup = load_scenario("im-foc-speed")
-    inverter = dataclasses.replace(setup.inverter, dc_link=(np.array([0.0]), np.array([100.0])))
+    inverter = dataclasses.replace(setup.inverter, dc_link=Profile.constant(100.0))
     setup = dataclasses.replace(setup, inverter=inverter, duration=0.3)
     outcome = run_im_scenario(setup)
     check = outcome.summary["voltage_check"]

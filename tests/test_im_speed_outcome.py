@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from acdrive.core import Profile
 from acdrive.scenarios import load_scenario
 from acdrive.sim._im_drive import (
     IMDriveResult,
@@ -119,7 +120,7 @@ def _synthetic_reversal():
     setup = IMDriveSetup(
         mode="speed-pi",
         speed_reference=constant(100.0),
-        mechanics=Mechanics(J=J, load=(np.array([0.0, 0.3, 0.3]), np.array([0.0, 0.0, load]))),
+        mechanics=Mechanics(J=J, load=Profile.step(0.3, 0.0, load)),
         speed_pi=SpeedPISetup.design(J, 50.0, tau_max=tau_max),
         duration=0.6,
         sample_time=1e-4,

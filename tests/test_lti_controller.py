@@ -35,6 +35,7 @@ from acdrive.control._lti import (
     discretise,
     tustin_constant,
 )
+from acdrive.core import Profile
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._induction import DELORENZO_IM_13
@@ -306,8 +307,8 @@ def test_part_in_a_system_reproduces_the_difference_equation():
     rng = np.random.default_rng(7)
     ref = rng.normal(size=N) + 1j * rng.normal(size=N)
     meas = 0.5 * np.sin(300.0 * t) + 1j * rng.normal(scale=0.2, size=N)
-    ref_part = CurrentProgram("ref", re=(t, ref.real), im=(t, ref.imag))
-    meas_part = CurrentProgram("meas", re=(t, meas.real), im=(t, meas.imag))
+    ref_part = CurrentProgram("ref", re=Profile(t, ref.real), im=Profile(t, ref.imag))
+    meas_part = CurrentProgram("meas", re=Profile(t, meas.real), im=Profile(t, meas.imag))
     cc = StationaryCurrentController("cc", LTIMatrix.diagonal(PAPER_20, PAPER_PI), T)
     system = System(
         [ref_part, meas_part, cc],

@@ -17,6 +17,7 @@ import numpy as np
 
 from acdrive._report.converter_effect import ideal_converter
 from acdrive._report.verdicts import Verdict
+from acdrive.core._profile import Profile
 from acdrive.scenarios._loader import load_scenario
 from acdrive.sim._outcome import run_scenario
 
@@ -46,9 +47,9 @@ def step_setup():
     started at STEP_FROM_RPM and stepped by STEP_RAD_S at STEP_TIME_S."""
     setup = ideal_converter(load_scenario(STEP_SCENARIO)).with_mode(STEP_MODE)
     w0 = STEP_FROM_RPM * np.pi / 30.0
-    reference = (
-        np.array([0.0, STEP_TIME_S, STEP_TIME_S, STEP_DURATION_S]),
-        np.array([w0, w0, w0 + STEP_RAD_S, w0 + STEP_RAD_S]),
+    reference = Profile(
+        [0.0, STEP_TIME_S, STEP_TIME_S, STEP_DURATION_S],
+        [w0, w0, w0 + STEP_RAD_S, w0 + STEP_RAD_S],
     )
     motors = tuple(
         dataclasses.replace(m, speed_reference=reference, initial_speed=w0) for m in setup.motors

@@ -59,7 +59,9 @@ from acdrive._frames import beyond_limit
 from acdrive._jit import jit
 from acdrive.control._lti import LTI, DiscreteLTI, LTIMatrix, discretise
 from acdrive.control._open_loop import complex_program_step
+from acdrive.core._describe import layout_text
 from acdrive.core._parts import SampledPart
+from acdrive.core._profile import Profile
 from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.errors import InputError
 from acdrive.plant._converter import max_voltage_magnitude
@@ -255,6 +257,12 @@ class StationaryCurrentController(SampledPart):
 
     OUTPUTS = CONTROLLER_OUTPUTS
     EVENTS = ("saturated", "period_mismatch")
+    PER_INSTANCE: ClassVar[dict] = {
+        "PARAMS": layout_text(_FIXED) + ", then the discrete controller's matrices (set by "
+        "its order; derived: give controller, T_s, method)",
+        "STATES": "the discrete controller's states (as many as its order)",
+        "INPUTS": layout_text(_ALL_INPUTS) + " (v_dc only with v_dc_input=True)",
+    }
     #: v_max 1e12 V: no limit unless one is given
     DEFAULTS: ClassVar[dict] = {"v_max": 1e12, "aw_gain": 1.0}
     step = current_controller_step
@@ -404,4 +412,4 @@ class CurrentProgram(SampledPart):
         """Tabulate a Python function of time (complex amperes) at ``times``."""
         times = np.asarray(times, dtype=float)
         values = np.array([complex(function(t)) for t in times])
-        return cls(name, re=(times, values.real), im=(times, values.imag))
+        return cls(name, re=Profile(times, values.real), im=Profile(times, values.imag))

@@ -9,6 +9,8 @@ is declared per instance (unit and kind), so one part serves any wire.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from acdrive._jit import jit
 from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, cplx, real
@@ -29,6 +31,11 @@ class ComputationDelay(SampledPart):
     previous sample (zero, or ``initial=`` the first held value, before that)."""
 
     step = delay_step
+    PER_INSTANCE: ClassVar[dict] = {
+        "STATES": "stored, of the unit and kind given",
+        "INPUTS": "x, of the unit and kind given (default V, complex)",
+        "OUTPUTS": "x, the input of the previous sample (same unit and kind)",
+    }
 
     def __init__(self, name: str, unit: str = "V", kind: str = "complex", initial=0.0):
         if kind not in ("real", "complex"):

@@ -15,6 +15,7 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._jit import jit
 from acdrive.core._parts import SampledPart
+from acdrive.core._profile import Profile
 from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.core._tables import table_at, table_offset
 
@@ -79,4 +80,4 @@ class ComplexProgram(SampledPart):
         """Tabulate a Python function of time (complex volts) at ``times``."""
         times = np.asarray(times, dtype=float)
         values = np.array([complex(function(t)) for t in times])
-        return cls(name, re=(times, values.real), im=(times, values.imag))
+        return cls(name, re=Profile(times, values.real), im=Profile(times, values.imag))

@@ -1,6 +1,7 @@
 """Building blocks of a part: declared quantities (``real``, ``cplx``, ``table`` in a
 ``Layout``), the part kinds a system is made of (``ContinuousPart``, ``SampledPart``,
-``Modulator``) with their ports, and the compiled profile lookup a kernel uses (``table_at``)."""
+``Modulator``) with their ports, the time profiles a table parameter takes (``Profile``) and the
+compiled profile lookup a kernel uses (``table_at``)."""
 
 from acdrive._lazy import namespace
 
@@ -17,6 +18,7 @@ __all__, __getattr__, __dir__ = namespace(
         "SampledPart": "._parts",
         "Modulator": "._parts",
         "Port": "._parts",
+        "Profile": "._profile",
         "table_at": "._tables",
         "table_offset": "._tables",
     },

@@ -34,11 +34,13 @@ packed and validated against ``PARAMS`` at construction (an ``InputError`` namin
 
 from __future__ import annotations
 
+import types
 from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
 
+from acdrive.core import _describe
 from acdrive.core._signals import Layout, Var
 from acdrive.errors import InputError
 
@@ -85,6 +87,21 @@ class _Ports:
     def __dir__(self):
         return [v.name for v in self._layout]
 
+    def __repr__(self) -> str:
+        return _describe.ports_repr(self._part.name, self._layout, self._direction)
+
+
+class _KindOrInstanceMethod:
+    """A method bound to the instance when called on one, else to the class: ``part.describe()``
+    shows the values, ``PartKind.describe()`` the defaults."""
+
+    def __init__(self, function):
+        self.function = function
+        self.__doc__ = function.__doc__
+
+    def __get__(self, instance, owner):
+        return types.MethodType(self.function, owner if instance is None else instance)
+
 
 class Part:
     """Base of every part. Subclasses set the layouts, the kernels and ``DEFAULTS``."""
@@ -100,6 +117,17 @@ class Part:
     INITIAL: ClassVar[dict] = {}
     #: names of the event bits the kernels return (bit i is EVENTS[i])
     EVENTS: tuple[str, ...] = ()
+    #: layouts the constructor sets per instance (attribute -> what decides them, e.g.
+    #: ``{"INPUTS": "one i_s, a, b per machine (n_machines)"}``), told as such by ``describe()``
+    PER_INSTANCE: ClassVar[dict] = {}
+
+    def __init_subclass__(cls, **kwargs):
+        """Append the declarations table to the class docstring (``help()``, API reference)."""
+        super().__init_subclass__(**kwargs)
+        cls._own_doc = _describe.own_doc(cls)
+        cls.__doc__ = _describe.class_docstring(cls)
+        # None: an own constructor's signature is its own, not a parent's generated one
+        cls.__signature__ = _describe.signature(cls) if cls.__init__ is Part.__init__ else None
 
     def __init__(self, name: str, **params):
         if not isinstance(name, str) or not name.isidentifier():
@@ -143,8 +171,16 @@ class Part:
         """Kernel role -> numba function, for the code generator."""
         raise NotImplementedError
 
+    @_KindOrInstanceMethod
+    def describe(self) -> _describe.PartDescription:
+        """The declarations as a table (parameters with value or default, unit, kind and rule;
+        states; inputs; outputs): ``part.describe()`` for an instance's values,
+        ``PartKind.describe()`` for a kind's defaults. Printing it (or the REPL) shows the
+        aligned table; its ``sections`` hold the rows."""
+        return _describe.describe(self)
+
     def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.name!r})"
+        return _describe.part_repr(self)
 
 
 class ContinuousPart(Part):

@@ -11,7 +11,8 @@ Kinds:
 
 * ``real``: one float.
 * ``complex``: a space vector (Bodson (6)) stored as two floats, real then imaginary part.
-* ``table``: a piecewise-linear profile of ``[time_s, value]`` points, stored at the *end* of a
+* ``table``: a piecewise-linear profile (``core._profile``: a number, ``Profile(times, values)``
+  or a list of ``[time_s, value]`` points), stored at the *end* of a
   parameter layout as ``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]``; its length is chosen per instance,
   so kernels find it with :func:`acdrive.core.table_at` from a fixed start slot.
 """
@@ -22,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive.core._profile import ACCEPTED, Profile
 from acdrive.errors import InputError
 
 KINDS = ("real", "complex", "table")
@@ -178,7 +180,7 @@ class Layout:
         return out
 
     def pack(self, owner: str, values: dict, defaults: dict | None = None) -> np.ndarray:
-        """Flat array of ``values`` (name -> number, complex number or (times, values) table).
+        """Flat array of ``values`` (name -> number, complex number or a table's profile).
 
         Every declared quantity must be given (or have a default); an unknown name, a non-finite
         number, or a malformed table is an ``InputError`` naming ``owner.name``.
@@ -239,19 +241,29 @@ def _number(field: str, value, allow_complex: bool):
 
 
 def pack_table(field: str, value) -> np.ndarray:
-    """``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]`` from a number (constant), a (times, values) pair
-    or a sequence of [time, value] points; times finite, >= 0 and non-decreasing."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
+    """``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]`` from one of the three forms of
+    ``core._profile``: a number (constant), a ``Profile(times, values)`` or a list of
+    ``[time_s, value]`` points; times finite, >= 0 and non-decreasing. Anything else, a bare
+    ``(times, values)`` tuple included (it reads like a list of two points), is an InputError
+    naming ``field`` and the accepted forms."""
+    if isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool):
         times, values = np.array([0.0]), np.array([_number(field, value, False)])
-    elif isinstance(value, tuple) and len(value) == 2 and np.ndim(value[0]) == 1:
-        times, values = np.asarray(value[0], dtype=float), np.asarray(value[1], dtype=float)
+    elif isinstance(value, Profile):
+        times, values = value
+    elif isinstance(value, tuple):
+        raise InputError(field, f"a bare (times, values) tuple is ambiguous: give {ACCEPTED}")
     else:
-        points = np.asarray(value, dtype=float)
-        if points.ndim != 2 or points.shape[1] != 2:
-            raise InputError(field, "must be a number or a list of [time_s, value] points")
+        try:
+            points = (
+                np.asarray(value, dtype=float) if isinstance(value, (list, np.ndarray)) else None
+            )
+        except (TypeError, ValueError):
+            points = None
+        if points is None or points.ndim != 2 or points.shape[1] != 2:
+            raise InputError(field, f"must be {ACCEPTED}")
         times, values = points[:, 0], points[:, 1]
     if times.size == 0 or times.shape != values.shape:
-        raise InputError(field, "must have as many times as values, at least one")
+        raise InputError(field, f"must have as many times as values, at least one ({ACCEPTED})")
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
         raise InputError(field, "must be finite (not NaN or infinite)")
     if times[0] < 0 or np.any(np.diff(times) < 0):

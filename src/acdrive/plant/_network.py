@@ -28,6 +28,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 from acdrive._jit import jit, jit_fast
+from acdrive.core._describe import layout_text
 from acdrive.core._parts import ContinuousPart, SampledPart
 from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
@@ -89,6 +90,10 @@ class SupplyBus(ContinuousPart):
 
     PARAMS, OUTPUTS = BUS_PARAMS, BUS_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"R": 0.0, "L": 0.0}
+    PER_INSTANCE: ClassVar[dict] = {
+        "INPUTS": "set by n_machines (wires_from connects machine k); with one machine: "
+        + layout_text(_bus_inputs(1)),
+    }
     DIRECT_OUTPUTS = ("v",)
     state_outputs = no_state_outputs
     direct_outputs = bus_direct_outputs

@@ -13,8 +13,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
-
+from acdrive.core._profile import Profile
 from acdrive.errors import InputError, require_finite, require_nonnegative
 from acdrive.machines import _registry as registry
 from acdrive.sim._setup import constant
@@ -117,7 +116,7 @@ class Section:
         return value
 
     def profile(self, key, scale=1.0, rule=require_finite):
-        """A list of [t, value] pairs with non-decreasing t >= 0, as (times, values) arrays."""
+        """A list of [t, value] pairs with non-decreasing t >= 0, as a ``core.Profile``."""
         value = self.get(key)
         name = self.field(key)
         if not isinstance(value, list) or not value:
@@ -130,7 +129,7 @@ class Section:
             values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
         if any(b < a for a, b in itertools.pairwise(times)):
             raise InputError(name, "times must be non-decreasing")
-        return np.array(times), np.array(values)
+        return Profile(times, values)
 
     def constant_or_profile(self, key, default, scale=1.0, rule=require_finite):
         if self.has(key) and self.has(f"{key}_profile"):

@@ -15,16 +15,15 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive.control import _dfim as ctl
 from acdrive.control._speed import SpeedPIGains
+from acdrive.core._profile import Profile
 from acdrive.errors import InputError
 from acdrive.machines._dfim import DFIMParams
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.sim._result import DriveResult
 
-Profile = tuple[np.ndarray, np.ndarray]
-
 
 def constant(value: float) -> Profile:
-    return np.array([0.0]), np.array([float(value)])
+    return Profile.constant(float(value))
 
 
 @dataclass(frozen=True)
