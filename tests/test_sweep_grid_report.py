@@ -184,3 +184,15 @@ def test_a_real_grid_sweep_report_plots_every_metric_against_the_grid(tmp_path):
     worst = report.split("## Worst cases")[1].split("\n## ")[0]
     loads = {line.split(" | ")[1] for line in worst.splitlines() if line.startswith("| 0")}
     assert loads and loads <= {"0", "0.1", "0.2", "0.3"}
+
+
+def test_a_long_axis_labels_every_kth_grid_value():
+    spec = _spec(THREE.split("[[vary]]")[0] + "[[vary]]" + THREE.split("[[vary]]")[1].replace(
+        "points = 4", "points = 31"))  # fmt: skip
+    table = _table(spec, lambda load: load)
+    plot = grid_plot(spec, table, "m")
+    ticks = [t.get_text() for t in draw(plot).axes[0].get_xticklabels()]
+    labels = [grid_labels(plot.x_values)[x] for x in plot.x_values]
+    assert len(plot.x_values) == 31
+    assert ticks == labels[::3] and len(ticks) == 11  # every ceil(31 / 12) = 3rd value
+    assert ticks[:2] == ["0", "0.03"]  # steps of 0.01 (0.3 / 30)

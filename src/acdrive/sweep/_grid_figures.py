@@ -31,6 +31,8 @@ from acdrive.sweep._spec import SweepSpec, Vary
 
 MAX_LINES = 8
 MAX_PANELS = 6
+#: At most this many labelled ticks on an axis (every k-th grid value beyond).
+MAX_TICKS = 12
 
 
 def _is_number(value) -> bool:
@@ -152,6 +154,12 @@ def grid_plot(spec: SweepSpec, table, metric: str) -> GridPlot | None:
     return plot
 
 
+def _ticks(positions, labels) -> tuple[list, list]:
+    """Every k-th of ``positions`` and ``labels``, at most :data:`MAX_TICKS` of them."""
+    k = max(math.ceil(len(labels) / MAX_TICKS), 1)
+    return list(positions)[::k], list(labels)[::k]
+
+
 def draw(plot: GridPlot):
     """The matplotlib figure of ``plot`` (Agg); tick and legend texts are the grid labels."""
     import matplotlib
@@ -169,7 +177,7 @@ def draw(plot: GridPlot):
         if plot.x_log:
             ax.set_xscale("log")
             ax.minorticks_off()
-        ax.set_xticks(x, x_labels)
+        ax.set_xticks(*_ticks(x, x_labels))
         if len(x_labels) > 6:
             plt.setp(ax.get_xticklabels(), rotation=45, ha="right")
         ax.set_xlabel(plot.x_field)
@@ -189,8 +197,8 @@ def draw(plot: GridPlot):
         for ax, (text, grid) in zip(axes[0], plot.panels, strict=True):
             image = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto",
                               cmap=cmap, vmin=low, vmax=high)  # fmt: skip
-            ax.set_xticks(range(len(x_labels)), x_labels, rotation=45, ha="right")
-            ax.set_yticks(range(len(y_labels)), y_labels)
+            ax.set_xticks(*_ticks(range(len(x_labels)), x_labels), rotation=45, ha="right")
+            ax.set_yticks(*_ticks(range(len(y_labels)), y_labels))
             ax.set_xlabel(plot.x_field)
             if ax is axes[0][0]:
                 ax.set_ylabel(plot.y_field)
