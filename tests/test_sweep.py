@@ -405,6 +405,13 @@ def test_an_interrupted_sweep_prints_the_command_that_resumes_it(tmp_path, capsy
     )
     with pytest.warns(Notice, match=f"2 of 6 variants done; resume with: {command}"):
         assert len(read_table(out / "tiny")) == 2
+    (tmp_path / "other").mkdir()
+    other = _tiny(tmp_path / "other", loads="[0.5]")  # another sweep of the same name and --out
+    assert main(["sweep", str(other), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "holds a different sweep" in err and err.endswith(
+        f"(that sweep is unfinished: 2 of 6 variants done; resume with: {command})"
+    )
     monkeypatch.setattr(_engine, "run_chunk", real)
     monkeypatch.chdir(Path("/"))  # the command holds absolute paths: it works from anywhere
     assert main(shlex.split(command)[1:]) == 0
