@@ -1,4 +1,5 @@
-"""`acdrive reproduce bodson` regenerates the committed docs/reproduction/bodson.md byte for byte.
+"""`acdrive reproduce bodson --out docs/reproduction` regenerates the committed
+docs/reproduction/bodson.md byte for byte.
 
 The report is written into a temporary folder and compared with the committed one: the Markdown
 byte for byte, the figures by the set of files written (their pixels depend on the plotting

@@ -1,6 +1,6 @@
-"""``acdrive reproduce icad`` regenerates the committed report: the Markdown byte for byte, and the
-same set of figure files (figures are compared by name, not by pixels: their rendering depends
-on the installed matplotlib and fonts). Round-off-level differences are printed as a bound
+"""``acdrive reproduce icad --out docs/reproduction`` regenerates the committed report: the
+Markdown byte for byte, and the same set of figure files (figures are compared by name, not by
+pixels: their rendering depends on the installed matplotlib and fonts). Round-off-level differences are printed as a bound
 (``_report.icad.common.ROUNDOFF_FLOOR``) and the rounding analysis prints a unique point, so the
 text does not depend on the machine. Takes one to two minutes."""
 

@@ -393,3 +393,30 @@ def test_folders_created_for_out_are_removed_when_nothing_is_published(tmp_path)
         with make() as output:
             assert output.staging.parent == tmp_path / "new" / "deeper" / "out"
         assert sorted(p.name for p in tmp_path.iterdir()) == ["keep"]
+
+
+def test_reproduce_without_out_writes_under_acdrive_out_not_docs(tmp_path, monkeypatch, capsys):
+    """Without --out the report goes to ./acdrive-out/ (as `acdrive run`'s output), never into a
+    docs/ folder of the current directory; the help says so."""
+    from pathlib import Path
+
+    import acdrive._report.icad_reproduction as module
+    from acdrive._commands import reproduce, run
+    from acdrive.cli import main
+
+    def fake(out_dir):
+        (Path(out_dir) / "icad").mkdir()
+        (Path(out_dir) / "icad.md").write_text(NEW_REPORT)
+        return Path(out_dir) / "icad.md"
+
+    monkeypatch.setattr(module, "write_report", fake)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "docs" / "reproduction").mkdir(parents=True)  # a project's own docs/
+    assert main(["reproduce", "icad"]) == 0
+    assert capsys.readouterr().out.strip() == str(Path("acdrive-out") / "icad.md")
+    assert (tmp_path / "acdrive-out" / "icad.md").read_text() == NEW_REPORT
+    assert not any((tmp_path / "docs" / "reproduction").iterdir())
+    assert reproduce.DEFAULT_OUT == run.DEFAULT_OUT == "acdrive-out"
+    with pytest.raises(SystemExit):
+        main(["reproduce", "--help"])
+    assert "default ./acdrive-out" in " ".join(capsys.readouterr().out.split())

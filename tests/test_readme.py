@@ -57,3 +57,48 @@ def test_scenario_example_runs_every_mode_and_saves_into_new_folders(tmp_path, m
         assert (tmp_path / "bodson-step" / mode / "data.parquet").exists()
         assert (tmp_path / "bodson-step" / mode / "columns.md").exists()
     assert "units" in scope["frame"].attrs
+
+
+def _command_table() -> dict[str, str]:
+    """The README's command table: command name -> the row's first cell (its synopsis)."""
+    text = README.read_text()
+    section = text[text.index("## What you can do") :]
+    section = section[: section.index("\n\n", section.index("| command |"))]
+    rows = {}
+    for line in section.splitlines():
+        cells = re.split(r"(?<!\\)\|", line)  # a cell may hold an escaped \|
+        match = re.match(r" `acdrive ([a-z][a-z-]*)", cells[1]) if len(cells) > 2 else None
+        if match:
+            rows[match.group(1)] = cells[1]
+    return rows
+
+
+def _subcommands() -> dict:
+    """Every subcommand of the ``acdrive`` parser (each with its full parser)."""
+    import argparse
+
+    from acdrive.cli import build_parser
+
+    parser = build_parser()  # without argv: every command's full parser
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(action.choices)
+
+
+def test_command_table_lists_every_command_of_the_parser():
+    """Derived from the parser, so a new command without its README row fails here."""
+    commands = _subcommands()
+    rows = _command_table()
+    assert {"run", "sweep", "bench"} <= set(commands)  # the parser is really read
+    missing = sorted(set(commands) - set(rows))
+    assert not missing, f"commands missing from the README's command table: {missing}"
+
+
+def test_options_in_the_command_table_exist():
+    """Every ``--option`` a row's synopsis shows is an option of that command."""
+    commands = _subcommands()
+    for name, synopsis in _command_table().items():
+        if name not in commands:
+            continue  # a command of another branch, not built here
+        options = {s for a in commands[name]._actions for s in a.option_strings}
+        shown = set(re.findall(r"--[a-z][a-z-]*", synopsis))
+        assert shown <= options, (name, sorted(shown - options))

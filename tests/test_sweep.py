@@ -330,3 +330,123 @@ def test_builtin_bandwidth_sweep_is_valid_and_cross_checked():
     spec = load_sweep("dfim-bandwidth")
     assert spec.crosscheck["bandwidth_field"] == "motor[0].controller.speed_bandwidth"
     assert V.count(spec) == 32
+
+
+# --- the command explains itself: --list, --out, how to resume --------------------------------
+
+
+def test_list_names_every_builtin_sweep_with_its_size(capsys):
+    from acdrive.sweep._spec import builtin_sweeps
+
+    assert main(["sweep", "--list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    names = builtin_sweeps()
+    assert names and len(lines) == len(names)
+    for name, line in zip(names, lines, strict=True):
+        spec = load_sweep(name)
+        assert line.split()[0] == name
+        assert f"{spec.method} of {V.count(spec)} variants on {spec.base}:" in line
+        assert spec.description.split()[0] in line  # its own description, first words
+
+
+def test_list_takes_no_sweep_and_a_missing_sweep_is_one_line(capsys):
+    assert main(["sweep", "--list", "dfim-bandwidth"]) == 2
+    assert main(["sweep"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and err[0].startswith("acdrive: error: --list:")
+    assert err[1].startswith("acdrive: error: sweep:") and "--list" in err[1]
+
+
+def test_out_is_the_folder_the_help_says(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        main(["sweep", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "DIR/<sweep name>/" in help_text and "./acdrive-sweeps" in help_text
+    out = tmp_path / "o"
+    assert main(["sweep", str(_tiny(tmp_path, loads="[0.0]")), "--out", str(out), "--quiet"]) == 0
+    assert capsys.readouterr().out.strip() == str(out / "tiny")
+    assert [p.name for p in out.iterdir()] == ["tiny"]  # DIR/<sweep name>/, nothing beside it
+    assert len(read_table(out / "tiny")) == 2 and (out / "tiny" / "report.md").is_file()
+
+
+def _resume_line(err: str) -> str:
+    lines = [line for line in err.splitlines() if "resume with: " in line]
+    assert len(lines) == 1, err
+    return lines[0].split("resume with: ", 1)[1].rstrip(")")
+
+
+def test_an_interrupted_sweep_prints_the_command_that_resumes_it(tmp_path, capsys, monkeypatch):
+    """KeyboardInterrupt after the second chunk (progress-based): exit 130, one line with the
+    command; the half-done folder says the same from Python; that very command finishes it."""
+    import shlex
+
+    from acdrive.errors import Notice
+    from acdrive.sweep import _engine
+
+    spec_path = _tiny(tmp_path, chunk=1)  # 6 variants, one per chunk
+    out = tmp_path / "o"
+    real, calls = _engine.run_chunk, []
+
+    def interrupted_after_two(payload, c):
+        calls.append(c)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(payload, c)
+
+    monkeypatch.setattr(_engine, "run_chunk", interrupted_after_two)
+    monkeypatch.chdir(tmp_path)
+    argv = ["sweep", "s.toml", "--out", "o", "--quiet", "--no-report"]
+    assert main(argv) == 130
+    err = capsys.readouterr().err
+    assert "acdrive: sweep tiny stopped (2 of 6 variants done; resume with:" in err
+    command = _resume_line(err)
+    assert command == shlex.join(
+        ["acdrive", "sweep", str(spec_path), "--out", str(out), "--no-report", "--quiet"]
+    )
+    with pytest.warns(Notice, match=f"2 of 6 variants done; resume with: {command}"):
+        assert len(read_table(out / "tiny")) == 2
+    (tmp_path / "other").mkdir()
+    other = _tiny(tmp_path / "other", loads="[0.5]")  # another sweep of the same name and --out
+    assert main(["sweep", str(other), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "holds a different sweep" in err and err.endswith(
+        f"(that sweep is unfinished: 2 of 6 variants done; resume with: {command})"
+    )
+    monkeypatch.setattr(_engine, "run_chunk", real)
+    monkeypatch.chdir(Path("/"))  # the command holds absolute paths: it works from anywhere
+    assert main(shlex.split(command)[1:]) == 0
+    assert "resuming sweep tiny: 2 of 6 variants were done" in capsys.readouterr().err
+    table = read_table(out / "tiny")
+    assert list(table["variant"]) == list(range(6)) and table["variant_id"].is_unique
+
+
+def test_sigterm_prints_the_exact_command_that_resumes(tmp_path):
+    """SIGTERM after the first finished chunk (progress-based, as the SIGKILL test): exit 143,
+    one line naming the command, and running that command completes the same table."""
+    import shlex
+
+    spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "acdrive.cli", "sweep", str(spec_path), "--out", str(out),
+         "--quiet", "--no-report"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    table_dir = out / "tiny" / "table"
+    deadline = time.monotonic() + 240
+    while time.monotonic() < deadline and proc.poll() is None:
+        if table_dir.is_dir() and any(table_dir.glob("chunk-*.parquet")):
+            break
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert err.splitlines()[-1] == "acdrive: terminated (SIGTERM)"
+    command = _resume_line(err)
+    assert shlex.split(command)[:5] == ["acdrive", "sweep", str(spec_path), "--out", str(out)]
+    done = len(list(table_dir.glob("chunk-*.parquet")))
+    assert 1 <= done < 10, "the signal came too late to test a resume"
+    again = _cli(*shlex.split(command)[1:])
+    assert again.returncode == 0, again.stderr
+    table = read_table(out / "tiny")
+    assert list(table["variant"]) == list(range(10)) and table["variant_id"].is_unique

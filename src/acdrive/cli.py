@@ -18,7 +18,13 @@ import warnings
 
 from acdrive import __version__
 from acdrive._progress import ACTIVE_BARS
-from acdrive.errors import InputError, Notice, SimulationDiverged, call_interruptible
+from acdrive.errors import (
+    InputError,
+    Notice,
+    SimulationDiverged,
+    Terminated,
+    call_interruptible,
+)
 
 DESCRIPTION = "acdrive: AC-machine drives -- DFIM speed control, ICAD analysis and design, compiled simulation."
 
@@ -98,10 +104,6 @@ def build_parser(argv: list[str] | None = None) -> argparse.ArgumentParser:
 def _one_line(text) -> str:
     """``text`` on one line (a message may quote a multi-line parser error or a file name)."""
     return " ".join(str(text).splitlines())
-
-
-class Terminated(BaseException):
-    """SIGTERM turned into an exception, so cleanup (``finally``, output staging) runs."""
 
 
 def _raise_terminated(signum, frame):

@@ -25,6 +25,13 @@ class Notice(UserWarning):
     """
 
 
+class Terminated(BaseException):
+    """SIGTERM turned into an exception by the ``acdrive`` command (``acdrive.cli.main``), so
+    cleanup (``finally``, output staging) runs and a command can say how to carry on. Defined
+    here, not in ``acdrive.cli``, so that ``python -m acdrive.cli`` raises the class the commands
+    catch."""
+
+
 class SimulationDiverged(RuntimeError):
     """A simulation whose state stopped being finite at ``time`` [s].
 

@@ -43,6 +43,63 @@ BANDWIDTH_RANGE = (1e-6, 1e9)
 MAX_SWEEP_POINTS = 100
 
 
+#: The plain output's rows: JSON key -> (unit, meaning); each margin is the worse of the two
+#: channels (docs/icad.md, "Margins and bandwidth"). Seed 001 is Ugalde-Loo et al., seed 002
+#: Amezquita-Brooks et al.
+ROWS = {
+    "conditions.i": ("-", "structure condition i: the plant's eigenvalues in the open LHP"),
+    "conditions.ii": ("-", "condition ii, seed 002 (a.1): gamma has no RHP pole"),
+    "conditions.iii": ("-", "condition iii, seed 002 (a.3): gamma -> 0 as s -> inf"),
+    "conditions.iv": (
+        "-",
+        "condition iv, seed 002 (a.2): gamma neither encircles nor meets (1, 0)",
+    ),
+    "gm_min_db": ("dB", "least gain margin gamma leaves, seed 002 (19) (induction motors)"),
+    "msf_at_wr_db": ("dB", "|gamma| at w = w_r, seed 002 (18) (induction motors)"),
+    "crossover_rad_s": ("rad/s", "highest gain crossover of the channel c_i"),
+    "pm_deg": ("deg", "phase margin of c_i"),
+    "gm_db": ("dB", "upward gain margin of c_i"),
+    "gm_reduction_db": ("dB", "gain-reduction margin of c_i (conditionally stable loop)"),
+    "bandwidth_rad_s": ("rad/s", "-3 dB bandwidth of c_i / (1 + c_i)"),
+    "kg_pm_deg": ("deg", "phase margin of k_i g_ii"),
+    "kg_gm_db": ("dB", "gain margin of k_i g_ii"),
+    "structural_gm_db": ("dB", "structural gain margin of gamma"),
+    "structural_gm_h_db": ("dB", "structural gain margin of gamma h_j"),
+    "coupling_peak_db": ("dB", "peak coupling |y_i / r_j|"),
+    "closed_loop_stable": ("-", "the closed loop with k_1 = k_2 is stable"),
+    "b1": ("-", "seed 002 (b.1): both c_i and both h_i closed loops stable"),
+    "b2": ("-", "seed 002 (b.2): gamma and gamma h_j neither encircle nor meet (1, 0)"),
+    "encirclements.gamma": ("-", "encirclements of (1, 0) by gamma"),
+    "encirclements.gamma_h": ("-", "encirclements of (1, 0) by gamma h_1, gamma h_2"),
+    "encirclements.channels": ("-", "encirclements of -1 by c_1, c_2"),
+}
+#: Below a table holding a None value: what it means.
+NOT_AVAILABLE_NOTE = "n/a: infinite (no crossing) or not defined for this machine (null in --json)"
+
+
+def _flat(report: dict, prefix: str = "") -> dict:
+    """``report`` with nested tables flattened to dotted keys (``conditions.i``)."""
+    out = {}
+    for key, value in report.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def table_lines(report: dict, rows: dict) -> list[str]:
+    """The aligned table of ``report``'s quantities named in ``rows`` (JSON key -> unit,
+    meaning), and the note on n/a values if any is None."""
+    from acdrive._commands._table import aligned
+
+    flat = _flat(report)
+    lines = aligned((key, flat[key], *rows[key]) for key in rows if key in flat)
+    if any(flat[key] is None for key in rows if key in flat):
+        lines.append(NOT_AVAILABLE_NOTE)
+    return lines
+
+
 def check_speed(flag: str, value) -> float:
     """An electrical speed from the command line: finite, |w| <= MAX_SPEED, 0 or >= MIN_SPEED."""
     value = require_finite(flag, value)
@@ -150,8 +207,8 @@ def run(args) -> int:
     if args.json:
         print(strict_json(report, indent=2))
     else:
-        for key, value in report.items():
-            print(f"{key:20s} {value}")
+        print(f"ICAD of {args.machine} at w_r = {speed:g} rad/s (electrical), controller {name}")
+        print("\n".join(table_lines(report, ROWS)))
     return 0
 
 
@@ -227,6 +284,16 @@ def _sweep(args, params, name, k) -> int:
     if args.json:
         print(strict_json(report, indent=2))
     else:
-        for key, value in report.items():
-            print(f"{key:20s} {value}")
+        print(
+            f"ICAD of {args.machine}, controller {name}, over {n} electrical speeds from "
+            f"{speeds[0]:g} to {speeds[-1]:g} rad/s (worst over the speeds)"
+        )
+        rows = {
+            "all_conditions": ("-", "structure conditions i-iv hold at every speed"),
+            "closed_loop_stable": ("-", "the closed loop is stable at every speed"),
+            **{f"worst.{key}": ROWS[key] for key in report["worst"]},
+        }
+        print("\n".join(table_lines(report, rows)))
+        print("figures:")
+        print("\n".join(f"  {path}" for path in report["figures"]))
     return 0

@@ -8,6 +8,21 @@ import math
 #: enough that no limit overflows (squares of 1e154 and more are infinite in float64).
 FLAG_RANGE = (1e-6, 1e6)
 
+#: The plain output's rows: JSON key -> (unit, meaning). Bodson case 1 (Q = 0), (29)-(37).
+ROWS = {
+    "tau_max_1": ("N m", "motoring: keeps the root of (24) real, Bodson (30)"),
+    "tau_max_2": ("N m", "motoring: stator current at its limit, (32)"),
+    "tau_max_3": ("N m", "motoring: rotor current at its limit, (33)-(37)"),
+    "tau_lim": ("N m", "motoring torque limit, the smallest of the three"),
+    "tau_min_2": ("N m", "generating: stator current at its limit, (32)"),
+    "tau_min_3": ("N m", "generating: rotor current at its limit, (33)-(37)"),
+    "tau_lim_generating": ("N m", "generating torque limit, the larger (nearer 0) of the two"),
+    "rotor_limit_feasible": (
+        "-",
+        "the rotor current limit exceeds the magnetising current the supply needs",
+    ),
+}
+
 
 def register(subparsers):
     p = subparsers.add_parser(
@@ -63,6 +78,11 @@ def run(args) -> int:
     if args.json:
         print(strict_json(out))  # never NaN / Infinity (null instead)
     else:
-        for k, v in out.items():
-            print(f"{k:<20} {v:.4f}" if isinstance(v, float) else f"{k:<20} {v}")
+        from acdrive._commands._table import aligned
+
+        print(
+            f"Torque limits of the built-in DFIM (Bodson case 1, Q = 0) at {v_pk:g} V peak, "
+            f"{f:g} Hz, current limit {i_pk:g} A peak"
+        )
+        print("\n".join(aligned((key, out[key], *ROWS[key]) for key in out)))
     return 0

@@ -5,7 +5,9 @@ Each paper maps to a module ``acdrive._report.<name>_reproduction`` exposing
 with exit code 2.
 
 The report is ``DIR/<stem>.md`` beside its figure folder ``DIR/<stem>/`` (the stem is the
-paper's name unless ``STEMS`` gives another). Both are written like
+paper's name unless ``STEMS`` gives another); ``DIR`` is ``./acdrive-out`` unless ``--out`` says
+otherwise, as for ``acdrive run``. The committed reports in ``docs/reproduction/`` are regenerated
+with an explicit ``--out docs/reproduction``. Both entries are written like
 ``acdrive run``'s output (``acdrive._output.OutputEntries``): DIR and the two entries are checked
 before any computation (an existing ``<paper>.md`` must be a file and ``<paper>`` a folder, never
 a symbolic link), the writer works in a hidden staging folder inside DIR, and the two entries are
@@ -24,12 +26,16 @@ REPORTS = {
     "bodson": "acdrive._report.bodson_reproduction",
     "im": "acdrive._report.im_reproduction",
 }
+#: Default --out: the folder every acdrive command writes into unless told otherwise (the same as
+#: ``acdrive run``'s; never the project's docs/, which a user's run must not overwrite).
+DEFAULT_OUT = "acdrive-out"
 #: Paper name -> report file stem, where it is not the paper's name.
 STEMS = {"im": "im-current-control"}
 
 HELP = """Recompute every number and figure of a paper's analysis and write a Markdown report
-(DIR/<paper>.md, figures in DIR/<paper>/) with the printed value beside acdrive's and the reason
-for each difference. Papers: icad (Ugalde-Loo et al. and Amezquita-Brooks et al.), bodson, im
+(DIR/<paper>.md, figures in DIR/<paper>/; default DIR ./acdrive-out) with the printed value
+beside acdrive's and the reason for each difference. The committed reports are regenerated with
+--out docs/reproduction. Papers: icad (Ugalde-Loo et al. and Amezquita-Brooks et al.), bodson, im
 (Amezquita-Brooks et al. secs. VI-VIII, im-current-control.md)."""
 
 
@@ -40,8 +46,10 @@ def register(subparsers) -> None:
     parser.add_argument("paper", choices=sorted(REPORTS), help="which paper(s)")
     parser.add_argument(
         "--out",
-        default="docs/reproduction",
-        help="output folder: <paper>.md and <paper>/ in it are replaced together",
+        default=DEFAULT_OUT,
+        metavar="DIR",
+        help=f"output folder (default ./{DEFAULT_OUT}): DIR/<paper>.md and DIR/<paper>/ are "
+        "replaced together; nothing else in DIR is touched",
     )
     parser.set_defaults(handler=run)
 

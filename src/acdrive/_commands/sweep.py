@@ -1,26 +1,39 @@
-"""``acdrive sweep FILE.toml``: run a parameter sweep (``acdrive.sweep``).
+"""``acdrive sweep SWEEP``: run a parameter sweep (``acdrive.sweep``).
 
-``acdrive sweep FILE.toml [--out DIR] [--scheduler tcp://host:port] [--timeout S] [--chunk N]
+``acdrive sweep SWEEP [--out DIR] [--scheduler tcp://host:port] [--timeout S] [--chunk N]
 [--no-report] [--quiet]`` runs (or resumes: run the same command again) the sweep into
-``DIR/<name>/`` with a progress bar on stderr, and prints that folder. FILE may also be the name
-of a built-in sweep (``acdrive.sweep.builtin``).
+``DIR/<sweep name>/`` (default ``DIR`` ``./acdrive-sweeps``, as ``acdrive run`` writes
+``DIR/<scenario name>/``) with a progress bar on stderr, and prints that folder. SWEEP is a sweep
+file (TOML) or the name of a built-in sweep (``acdrive.sweep.builtin``); ``acdrive sweep --list``
+names the built-in sweeps with their size and description. Interrupted (SIGINT, SIGTERM), the
+command prints one line with the exact command that resumes the sweep (absolute paths, so it
+works from any folder) before the CLI's own ``interrupted`` line.
 """
 
 from __future__ import annotations
 
 HELP = """Run a scenario over a grid or a seeded random set of parameter values, in chunks, into a
 Parquet dataset (one file per chunk, written atomically; run the same command again to resume
-after an interruption), then write report.md with figures. --scheduler sends the chunks to a
-Dask cluster."""
+after an interruption: an interrupted sweep prints that command), then write report.md with
+figures. --scheduler sends the chunks to a Dask cluster. --list names the built-in sweeps."""
+
+DEFAULT_OUT = "acdrive-sweeps"
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "sweep", help="run a scenario over a grid of parameter values", description=HELP
     )
-    p.add_argument("sweep", help="sweep file (TOML) or built-in sweep name")
+    p.add_argument("sweep", nargs="?", help="sweep file (TOML) or built-in sweep name (see --list)")
     p.add_argument(
-        "--out", default="acdrive-sweeps", help="output folder (default: ./acdrive-sweeps/<name>)"
+        "--list", action="store_true", help="name the built-in sweeps with a line on each"
+    )
+    p.add_argument(
+        "--out",
+        default=DEFAULT_OUT,
+        help=f"the sweep is written to DIR/<sweep name>/ (default DIR: ./{DEFAULT_OUT}); a "
+        "folder there that acdrive did not write is refused",
+        metavar="DIR",
     )
     p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
     p.add_argument(
@@ -32,15 +45,55 @@ def register(subparsers) -> None:
     p.set_defaults(handler=run)
 
 
+def list_builtin() -> list[str]:
+    """One aligned line per built-in sweep: name, sampling and size, base scenario, description
+    (the sweep file's ``description``, first sentence)."""
+    from acdrive.sweep import _variants as V
+    from acdrive.sweep._spec import builtin_sweeps, load_sweep
+
+    specs = [load_sweep(name) for name in builtin_sweeps()]
+    width = max((len(s.name) for s in specs), default=0)
+    lines = []
+    for s in specs:
+        first = s.description.split("; ")[0].split(". ")[0].rstrip(".")
+        size = f"{s.method} of {V.count(s)} variants on {s.base}"
+        lines.append(f"{s.name:<{width}}  {size}: {first}")
+    return lines
+
+
+def resume_command(args) -> str:
+    """The shell command that runs this sweep again into the same folder (so resumes it): the
+    options given, with the sweep file and ``--out`` as absolute paths."""
+    import os
+    import shlex
+
+    from acdrive.sweep._spec import builtin_sweeps
+
+    source = args.sweep if args.sweep in builtin_sweeps() else os.path.abspath(args.sweep)
+    words = ["acdrive", "sweep", source, "--out", os.path.abspath(args.out)]
+    if args.scheduler:
+        words += ["--scheduler", args.scheduler, "--timeout", f"{args.timeout:g}"]
+    words += ["--no-report"] * args.no_report + ["--quiet"] * args.quiet
+    return shlex.join(words)  # a resume keeps the first run's chunk size: no --chunk
+
+
 def run(args) -> int:
     import dataclasses
     import math
+    import sys
 
     from acdrive._output import require_out
-    from acdrive.errors import InputError
-    from acdrive.sweep._engine import run_sweep
+    from acdrive.errors import InputError, Terminated, call_interruptible
+    from acdrive.sweep._engine import run_sweep, sweep_progress
     from acdrive.sweep._spec import MAX_CHUNK, load_sweep
 
+    if args.list:
+        if args.sweep is not None:
+            raise InputError("--list", "names the built-in sweeps and takes no SWEEP")
+        print("\n".join(list_builtin()))
+        return 0
+    if args.sweep is None:
+        raise InputError("sweep", "give a sweep file (TOML) or a built-in sweep name (--list)")
     out = require_out("--out", args.out)  # before anything else: "" would mean "here"
     spec = load_sweep(args.sweep)
     if args.chunk is not None:
@@ -48,8 +101,20 @@ def run(args) -> int:
             raise InputError("--chunk", f"must be an integer from 1 to {MAX_CHUNK}")
         spec = dataclasses.replace(spec, chunk=args.chunk)
     if not (math.isfinite(args.timeout) and 0 < args.timeout <= 600):
-        raise InputError("--timeout", "must be a number of seconds in (0, 600]")
-    folder = run_sweep(spec, out, scheduler=args.scheduler, timeout=args.timeout,
-                       progress=not args.quiet, report=not args.no_report)  # fmt: skip
+        raise InputError(
+            "--timeout", f"must be a number of seconds in (0, 600], got {args.timeout:g}"
+        )
+    command = resume_command(args)
+    try:
+        folder = call_interruptible(
+            lambda: run_sweep(spec, out, scheduler=args.scheduler, timeout=args.timeout,
+                              progress=not args.quiet, report=not args.no_report,
+                              command=command)
+        )  # fmt: skip
+    except (KeyboardInterrupt, Terminated):
+        state = sweep_progress(out / spec.name)
+        done = f"{state[0]} of {state[1]} variants done; " if state else ""
+        sys.stderr.write(f"acdrive: sweep {spec.name} stopped ({done}resume with: {command})\n")
+        raise
     print(folder)
     return 0

@@ -2,7 +2,8 @@
 
 ``write_report(out_dir)`` recomputes the numbers from the equations and the paper's parameters,
 runs the section IV experiments (built-in scenarios), and writes ``<out_dir>/bodson.md`` with the
-figures under ``<out_dir>/bodson/``. Regenerate with ``acdrive reproduce bodson``.
+figures under ``<out_dir>/bodson/``. Regenerate the committed report with
+``acdrive reproduce bodson --out docs/reproduction``.
 """
 
 from __future__ import annotations

@@ -3,7 +3,8 @@
 Output folder ``<out>/<name>/``:
 
 * ``sweep.json`` -- the manifest: the sweep's digest (``SweepSpec.digest``), the number of
-  variants and the chunk size, written (atomically) before the first chunk;
+  variants and the chunk size, written (atomically) before the first chunk, and the command that
+  runs (and resumes) it when the command line started it (``command``);
 * ``table/chunk-NNNNNN.parquet`` -- one file per chunk of ``chunk`` consecutive variants,
   written to a temporary file in the same folder, flushed to disk and renamed into place
   (``os.replace``), so a chunk file exists complete or not at all;
@@ -15,7 +16,9 @@ Output folder ``<out>/<name>/``:
 digest is refused: it would mix two sweeps), deletes left-over temporary files, checks each
 finished chunk file (readable, holding exactly the variant ids expected for its index) and runs
 only the missing chunks. A kill at any moment loses at most the chunks in progress and never
-leaves a partial or duplicated one.
+leaves a partial or duplicated one. Wherever a folder with unfinished chunks is met (a resume, a
+refused second sweep, ``read_table``) the message says how many variants are done and the command
+that resumes it (:func:`resume_hint`); ``acdrive sweep`` prints that command when interrupted.
 
 **Bounded memory.** A chunk holds one row of scalars per variant (plus its decimated traces if
 asked for); the batch loop logs nothing per sample otherwise (``acdrive.batch``). Before anything
@@ -315,7 +318,43 @@ class _Lock:
         self.release()
 
 
-def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
+def sweep_progress(folder: Path) -> tuple[int, int] | None:
+    """(variants in finished chunk files, variants of the sweep) of the sweep folder ``folder``
+    from its manifest and chunk file names, or None without a readable manifest. Names only:
+    the contents are checked when the sweep resumes (:func:`finished_chunks`)."""
+    try:
+        manifest = json.loads((Path(folder) / MANIFEST).read_text())
+        n, chunk = int(manifest["variants"]), int(manifest["chunk"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    done = 0
+    for path in (Path(folder) / "table").glob("chunk-*.parquet"):
+        try:
+            c = int(path.stem.split("-")[1])
+        except (ValueError, IndexError):
+            continue
+        if 0 <= c * chunk < n:
+            done += min(chunk, n - c * chunk)
+    return done, n
+
+
+def resume_hint(folder: Path) -> str:
+    """``"K of N variants done; resume with: COMMAND"`` for a sweep folder with unfinished chunks
+    (the command its manifest recorded; "run the same sweep into the same --out" if none was),
+    or "" for a finished folder or one that holds no sweep."""
+    state = sweep_progress(folder)
+    if state is None or state[0] >= state[1]:
+        return ""
+    try:
+        command = json.loads((Path(folder) / MANIFEST).read_text()).get("command")
+    except (OSError, ValueError):
+        command = None
+    how = f"resume with: {command}" if command else "resume by running the same sweep into the "
+    how = how if command else how + f"same --out ({Path(folder).parent})"
+    return f"{state[0]} of {state[1]} variants done; {how}"
+
+
+def _prepare_folder(spec: SweepSpec, folder: Path, n: int, command: str | None = None) -> int:
     """Open the (locked) sweep folder: write or check its manifest and remove the temporary
     files of an interrupted run; returns the chunk size in force (the manifest's on a resume,
     so chunk files stay aligned). A manifest of a different sweep is refused unless the folder
@@ -331,15 +370,19 @@ def _prepare_folder(spec: SweepSpec, folder: Path, n: int) -> int:
         if old.get("digest") == spec.digest() and old.get("variants") == n:
             chunk = int(old["chunk"])
         elif started:
+            hint = resume_hint(folder)
             raise InputError(
                 "--out", f"{folder} holds a different sweep (its file or base scenario changed): "
                 "choose another --out or delete that folder"
+                + (f" (that sweep is unfinished: {hint})" if hint else "")
             )  # fmt: skip
+        if chunk is not None and command and old.get("command") != command:
+            _write_json_atomic({**old, "command": command}, manifest)
     if chunk is None:
         chunk = spec.chunk
         _write_json_atomic(
             {"name": spec.name, "digest": spec.digest(), "variants": n, "chunk": chunk,
-             "base": spec.base},
+             "base": spec.base, **({"command": command} if command else {})},
             manifest,
         )  # fmt: skip
     for sub in ("table", "traces"):
@@ -375,9 +418,17 @@ def finished_chunks(spec: SweepSpec, folder: Path, n: int) -> set[int]:
 
 
 def read_table(folder: Path):
-    """The sweep's table: every finished chunk, in variant order."""
+    """The sweep's table: every finished chunk, in variant order. A folder with unfinished chunks
+    gives its finished variants and a :class:`~acdrive.errors.Notice` saying how to resume."""
+    import warnings
+
     import pandas as pd
 
+    from acdrive.errors import Notice
+
+    hint = resume_hint(folder)
+    if hint:
+        warnings.warn(f"sweep {Path(folder).name} is unfinished: {hint}", Notice, stacklevel=2)
     files = sorted((Path(folder) / "table").glob("chunk-*.parquet"))
     if not files:
         return pd.DataFrame()
@@ -448,8 +499,10 @@ def _dask(payload, pending, client):
 
 def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
               timeout: float = CONNECT_TIMEOUT_S, progress: bool = True,
-              report: bool = True) -> Path:  # fmt: skip
-    """Run (or resume) ``spec`` into ``out/<name>``; returns that folder."""
+              report: bool = True, command: str | None = None) -> Path:  # fmt: skip
+    """Run (or resume) ``spec`` into ``out/<name>``; returns that folder. ``command`` (the
+    shell command that runs this sweep, given by ``acdrive sweep``) is kept in the manifest, so
+    every later message about the unfinished folder can quote it."""
     from acdrive._output import require_out
 
     folder = require_out("--out", out) / spec.name
@@ -462,7 +515,7 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
     try:
         _open_folder(folder)
         lock = _Lock(folder)
-        chunk = _prepare_folder(spec, folder, n)
+        chunk = _prepare_folder(spec, folder, n, command)
         if chunk != spec.chunk:
             import dataclasses
 
@@ -471,6 +524,15 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
         n_chunks = math.ceil(n / spec.chunk)
         pending = [c for c in range(n_chunks) if c not in done]
         finished = sum(len(V.chunk_range(spec, c, n)) for c in done)
+        if done and pending:
+            import warnings
+
+            from acdrive.errors import Notice
+
+            warnings.warn(
+                f"resuming sweep {spec.name}: {finished} of {n} variants were done, running the "
+                f"other {n - finished}", Notice, stacklevel=2,
+            )  # fmt: skip
         payload = spec.to_payload()
         from tqdm import tqdm
 

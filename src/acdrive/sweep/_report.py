@@ -1,13 +1,15 @@
 """The report of a sweep: ``report.md`` and ``figures/*.png`` (matplotlib, Agg).
 
-Sections: what ran (variants, valid, ok, diverged); the distribution of every metric (count,
-min, 5th percentile, median, 95th percentile, max; a histogram per metric); the worst cases
+Sections: what ran (variants, valid, ok, diverged); for a grid sweep, every metric against the
+swept parameters (``sweep._grid_figures``: lines, or heat maps); the distribution of every metric
+(count, min, 5th percentile, median, 95th percentile, max; a histogram per metric); the worst cases
 (largest ``report.worst``); the invalid variants with their reasons; the variants that tripped
 a limit (any ``*_over_limit`` metric > 0, or a ``limit`` / ``saturat`` event counted on at least
 one sample); the unstable variants (``stable`` false: diverged, or late speed oscillation above
 ``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
 speed-loop bandwidth per combination of the other varied fields, simulated against the
-linearised sampled drive (``analysis.max_stable_bandwidth``), with the verdict.
+linearised sampled drive (``analysis.max_stable_bandwidth``), with the verdict. Grid values in
+the tables are written to their grid's resolution (``sweep._grid_figures.grid_labels``).
 
 **Cross-check verdict.** The bandwidth grid b_0 < b_1 < ... is the varied field. Simulated
 tolerance: the largest b_i such that every variant with bandwidth <= b_i is stable. Linearised
@@ -26,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive.sweep._grid_figures import sweep_labels, write_grid_figures
 from acdrive.sweep._spec import SweepSpec
 
 MAX_FIGURES = 16
@@ -64,9 +67,19 @@ def _fmt(x) -> str:
     return str(x)
 
 
-def _md_table(header: list[str], rows: list[list]) -> list[str]:
+def _md_table(header: list[str], rows: list[list], labels: dict | None = None) -> list[str]:
+    """A Markdown table; ``labels``: column name -> {value: text} (a grid's rounded values)."""
+    labels = labels or {}
+
+    def cell(name, value):
+        text = labels.get(name, {}).get(value) if name in labels else None
+        return (text if text is not None else _fmt(value)).replace("|", "/")
+
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(_fmt(v).replace("|", "/") for v in r) + " |" for r in rows]
+    lines += [
+        "| " + " | ".join(cell(name, v) for name, v in zip(header, r, strict=True)) + " |"
+        for r in rows
+    ]
     return lines
 
 
@@ -174,6 +187,12 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
         "",
     ]
     metrics = metric_columns(table) if n else []
+    labels = sweep_labels(spec)
+    if metrics and spec.method == "grid":
+        files = write_grid_figures(spec, table, metrics, folder, MAX_FIGURES)
+        if files:
+            lines += ["## Metrics against the swept parameters", ""]
+            lines += [f"![{f}](figures/{f})" for f in files] + [""]
     if metrics:
         lines += ["## Distributions", ""]
         rows = []
@@ -197,7 +216,7 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
         top = table[np.isfinite(table[worst].to_numpy(dtype=float))]
         top = top.sort_values(worst, ascending=False).head(spec.worst_count)
         cols = ["variant_id", *[c for c in table.columns if c.startswith("vary.")], worst]
-        lines += _md_table(cols, top[cols].values.tolist()) + [""]
+        lines += _md_table(cols, top[cols].values.tolist(), labels) + [""]
     lines += ["## Invalid variants", ""]
     bad = table[~valid] if n else table
     if len(bad):
@@ -229,7 +248,10 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
         lines += ["", "## Cross-check: tolerated bandwidth, simulation against linearisation", ""]
         if rows:
             header = list(rows[0])
-            lines += _md_table(header, [list(r.values()) for r in rows])
+            bandwidth = labels.get(f"vary.{spec.crosscheck['bandwidth_field']}", {})
+            named = {name[5:]: values for name, values in labels.items()}
+            named |= {"simulated_tolerated": bandwidth, "simulated_first_unstable": bandwidth}
+            lines += _md_table(header, [list(r.values()) for r in rows], named)
         verdict = "AGREE" if agree else "DISAGREE"
         lines += [
             "",
