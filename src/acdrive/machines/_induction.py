@@ -7,23 +7,14 @@ states (i_alpha_s, i_beta_s, psi_alpha_r, psi_beta_r), inputs (v_alpha_s, v_beta
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.errors import InputError, require_finite, require_positive
+from acdrive.errors import require_finite, require_positive
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._record import machine_record
 from acdrive.machines._windings import leakage_factor
-
-
-def _pole_pairs(value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError("n_p", "must be a positive integer")
-    if not math.isfinite(float(value)) or float(value) != int(value) or int(value) < 1:
-        raise InputError("n_p", f"must be a positive integer, got {value}")
-    return int(value)
 
 
 @machine_record(CageInductionMachine, inertia_required=False)
