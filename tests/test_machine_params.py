@@ -201,3 +201,43 @@ def test_dfim_vector_and_controller_estimates_use_the_parts_slots():
             if v.name != "V_loss":
                 assert layout.slot(v.name) == DoublyFedMachine.PARAMS.slot(v.name)
                 assert layout.var(v.name).unit == v.unit and layout.var(v.name).rule == v.rule
+
+
+def test_ifoc_estimates_are_the_cage_parts_declarations_with_delorenzo_defaults():
+    """The IFOC's machine estimates carry the cage IM part's units and rules, and its defaults
+    are the DeLorenzo machine's values (not typed again)."""
+    from acdrive.control._foc import IFOC_ESTIMATES, IFOC_PARAMS, IndirectFOC
+
+    for name in IFOC_ESTIMATES:
+        declared = CageInductionMachine.PARAMS.var(name)
+        assert (IFOC_PARAMS.var(name).unit, IFOC_PARAMS.var(name).rule) == (
+            declared.unit,
+            declared.rule,
+        )
+        assert IndirectFOC("ifoc").values[name] == getattr(DELORENZO_IM, name)
+    with pytest.raises(InputError, match=r"ifoc\.L_r: must be > 0"):
+        IndirectFOC("ifoc", L_r=-1.0)
+
+
+def test_layout_relation_is_checked_on_packing_and_kept_by_extended():
+    """A Relation names the blamed field with the owner and lists every field's value and unit;
+    ``extended`` keeps the relation and every slot; a relation on an undeclared or complex
+    quantity is refused when the layout is declared."""
+    from acdrive.core._signals import Layout, Relation, cplx, real
+
+    ordered = Relation(("lo", "hi"), "lo must be below hi", lambda lo, hi: lo < hi)
+    layout = Layout(real("lo", "V", "lower"), real("hi", "V", "upper"), relations=(ordered,))
+    assert list(layout.pack("box", {"lo": 1.0, "hi": 2.0})) == [1.0, 2.0]
+    with pytest.raises(InputError) as exc:
+        layout.pack("box", {"lo": 3.0, "hi": 2.0})
+    assert exc.value.field == "box.hi"
+    assert exc.value.rule == "lo must be below hi (lo = 3 V, hi = 2 V)"
+    longer = layout.extended(real("x", "", "extra"))
+    assert longer.relations == (ordered,)
+    assert [longer.slot(n) for n in ("lo", "hi", "x")] == [0, 1, 2]
+    with pytest.raises(InputError, match="box.hi"):
+        longer.pack("box", {"lo": 3.0, "hi": 2.0, "x": 0.0})
+    with pytest.raises(ValueError, match="not a declared real"):
+        Layout(real("lo", "V", "lower"), relations=(ordered,))
+    with pytest.raises(ValueError, match="not a declared real"):
+        Layout(real("lo", "V", "lower"), cplx("hi", "V", "upper"), relations=(ordered,))
