@@ -8,7 +8,6 @@ import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.errors import SimulationDiverged
-from acdrive.machines._dfim import machine_vector
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.sim import DriveResult
 from acdrive.sim._setup import DriveSetup, MotorSetup, Supply, divergence_hint
@@ -26,6 +25,7 @@ from .dfim_bus import (
     project_phasors,
 )
 from .profiles import pad_profiles
+from .vector import machine_vector
 
 
 def _controller_arrays(motor: MotorSetup, supply: Supply, T_s: float) -> np.ndarray:

@@ -33,21 +33,18 @@ import numpy as np
 
 from acdrive._jit import jit_fast
 from acdrive.machines._dfim import (
-    B_VISCOUS,
-    J_INERTIA,
     L_R,
     L_S,
     M_SR,
-    N_MACHINE_PARAMS,
     N_P,
     R_R,
     R_S,
-    TAU_COULOMB,
     currents_from_fluxes,
     electromagnetic_torque,
 )
 
 from .profiles import profile_at
+from .vector import B_VISCOUS, J_INERTIA, N_MACHINE_PARAMS, TAU_COULOMB
 
 STATES_PER_MOTOR = 8
 PSI_S_RE, PSI_S_IM, PSI_R_RE, PSI_R_IM, THETA, OMEGA, ROT_RE, ROT_IM = range(STATES_PER_MOTOR)

@@ -103,22 +103,6 @@ def require_safe_name(field: str, value) -> str:
     return value
 
 
-def require_leakage(field: str, L_s: float, L_r: float, mutual: float) -> None:
-    """Raise InputError unless the leakage factor sigma = 1 - mutual^2 / (L_s L_r) is > 0 (a
-    physical winding pair leaks). ``field`` names the mutual inductance; the error names the
-    inductance out of proportion: a self inductance if it alone is below the mutual one (sigma
-    > 0 needs one of them above it at least), else the mutual inductance."""
-    if 1.0 - mutual * mutual / (L_s * L_r) <= 0.0:
-        prefix, _, symbol = field.rpartition(".")
-        below = [name for name, L in (("L_s", L_s), ("L_r", L_r)) if L < mutual]
-        named = below[0] if len(below) == 1 else symbol
-        raise InputError(
-            f"{prefix}.{named}" if prefix else named,
-            f"leakage factor sigma = 1 - {symbol}^2/(L_s L_r) must be > 0 (L_s = {L_s:g} H, "
-            f"L_r = {L_r:g} H, {symbol} = {mutual:g} H)",
-        )
-
-
 def interrupt_behind(exc: BaseException) -> BaseException | None:
     """The interrupt (KeyboardInterrupt, a SIGTERM exception, SystemExit: a BaseException that is
     not an Exception) hidden behind ``exc``, or None.

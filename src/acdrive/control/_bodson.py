@@ -24,6 +24,7 @@ speed controller's. Events use the names of ``acdrive.control._dfim.EVENT_NAMES`
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -44,18 +45,14 @@ from acdrive.machines._dfim import (
     torque_limit_case2,
     torque_window,
 )
-from acdrive.machines._windings import winding_params
+from acdrive.machines._dfim_part import WINDINGS
 
 MODE_VOLTAGE, MODE_CURRENT = 0.0, 1.0
 
-#: the controller's estimates of the machine, in the slots machines._dfim's functions read
-ESTIMATES = tuple(winding_params("M", "stator-rotor mutual inductance (controller's estimate)"))
-
-
-def _check_estimate_slots(layout: Layout) -> None:
-    slots = tuple(layout.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p"))
-    if slots != (dfim.R_S, dfim.R_R, dfim.L_S, dfim.L_R, dfim.M_SR, dfim.N_P):
-        raise ImportError("controller estimates no longer match machines._dfim's parameter slots")
+#: the controller's estimates of the machine: the DFIM part's winding parameters as declared
+#: there, first in the controller's layouts, so they take the slots (declaration order) at which
+#: machines._dfim's compiled functions read them
+ESTIMATES = tuple(replace(v, doc=f"{v.doc} (controller's estimate)") for v in WINDINGS)
 
 
 @jit
@@ -153,7 +150,6 @@ SYNC_PARAMS = Layout(
     real("theta_adj", "rad", "initial phase adjustment theta_adj"),
     real("m_adj", "", "initial magnitude adjustment m_adj", "positive"),
 )
-_check_estimate_slots(SYNC_PARAMS)
 SYNC_STATES = Layout(
     real("started", "", "1 once the first sample has run"),
     real("closed", "", "1 once the relay has been closed"),
@@ -298,7 +294,6 @@ CTRL_PARAMS = Layout(
     real("v_r_max", "V", "rotor voltage the converter can apply (anti-windup)", "positive"),
     real("lossless", "", "1: the R_s = 0 law (38)-(39) with the case-2 limits (40)-(42)"),
 )
-_check_estimate_slots(CTRL_PARAMS)
 CTRL_STATES = Layout(
     real("started", "", "1 once the first sample has run"),
     real("was_closed", "", "relay state at the previous sample"),

@@ -51,6 +51,7 @@ sample (0.003 rad at 150 rad/s and 20 us); no angle advance is added for it.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -61,7 +62,8 @@ from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.core._tables import table_at
 from acdrive.errors import InputError
-from acdrive.machines._induction import UGALDE_IM_300W
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._induction import DELORENZO_IM, UGALDE_IM_300W
 
 # --- default numbers, from the DeLorenzo DL10115A1 machine of the paper --------------------------
 
@@ -149,11 +151,14 @@ def _clip(x, limit):
 
 # --- IFOC: torque and flux references -> stator current reference ------------------------------
 
+#: the machine parameters the IFOC uses, as the cage IM part declares them (its estimates of them)
+IFOC_ESTIMATES = ("R_r", "L_r", "L_m", "n_p")
 IFOC_PARAMS = Layout(
-    real("R_r", "ohm", "rotor resistance (controller's estimate)", "positive"),
-    real("L_r", "H", "rotor self inductance (controller's estimate)", "positive"),
-    real("L_m", "H", "magnetising inductance (controller's estimate)", "positive"),
-    real("n_p", "", "pole pairs (controller's value)", "count"),
+    *(
+        replace(v, doc=f"{v.doc} (controller's estimate)")
+        for v in CageInductionMachine.PARAMS
+        if v.name in IFOC_ESTIMATES
+    ),
     real("i_max", "A", "stator current magnitude limit (space vector)", "positive"),
     real("psi_min", "Wb", "flux estimate below which no torque current is given", "nonnegative"),
     table("psi_ref", "Wb", "rotor-flux reference profile"),
@@ -247,7 +252,7 @@ class IndirectFOC(SampledPart):
     """
 
     PARAMS, STATES, INPUTS, OUTPUTS = IFOC_PARAMS, IFOC_STATES, IFOC_INPUTS, IFOC_OUTPUTS
-    DEFAULTS: ClassVar[dict] = {"R_r": 23.2, "L_r": 1.5, "L_m": 1.42, "n_p": 1,
+    DEFAULTS: ClassVar[dict] = {**{n: getattr(DELORENZO_IM, n) for n in IFOC_ESTIMATES},
                                 "i_max": CURRENT_LIMIT, "psi_min": MIN_FLUX,
                                 "psi_ref": RATED_FLUX}  # fmt: skip
     EVENTS = IFOC_EVENTS
@@ -266,7 +271,7 @@ class IndirectFOC(SampledPart):
     def from_params(cls, name, params, **values) -> IndirectFOC:
         """With the estimates taken from an ``acdrive.machines.IMParams`` (``values``
         override them, e.g. a detuned ``R_r``)."""
-        estimates = {"R_r": params.R_r, "L_r": params.L_r, "L_m": params.L_m, "n_p": params.n_p}
+        estimates = {n: getattr(params, n) for n in IFOC_ESTIMATES}
         return cls(name, **{**estimates, **values})
 
 

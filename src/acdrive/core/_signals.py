@@ -19,6 +19,7 @@ Kinds:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +63,11 @@ class Var:
                 f"Var {self.name}: rule must be one of {list(RULES)} on a real or a table"
             )
 
+    def checked(self, field: str, value) -> float:
+        """A real ``value`` as float if it is a finite number obeying the declared rule, else an
+        InputError naming ``field`` (what packing does with one real quantity)."""
+        return self.check(field, _number(field, value, allow_complex=False))
+
     def check(self, field: str, value: float) -> float:
         """``value`` if it obeys the declared rule, else an InputError naming ``field``."""
         ok = {
@@ -90,6 +96,35 @@ class Var:
         return 2 if self.kind == "complex" else 1
 
 
+@dataclass(frozen=True)
+class Relation:
+    """A rule over several real parameters (a cross-field check), declared with them.
+
+    ``rule`` is the rule as one phrase ("leakage factor sigma = 1 - M^2/(L_s L_r) must be > 0"),
+    ``holds`` tells, from the values of ``fields`` in that order, whether it is met; ``blame``
+    (same arguments) names the field out of proportion, ``fields[-1]`` if not given. A broken
+    relation is an InputError naming that field, the rule and the values of every field in it.
+    """
+
+    fields: tuple[str, ...]
+    rule: str
+    holds: Callable[..., bool]
+    blame: Callable[..., str] | None = None
+
+    def check(self, owner: str, values: dict, units: dict) -> None:
+        """Raise InputError (field ``owner.<field>``, or ``<field>`` if ``owner`` is empty)
+        unless the relation holds for ``values`` (name -> float)."""
+        args = [values[f] for f in self.fields]
+        if self.holds(*args):
+            return
+        named = self.blame(*args) if self.blame is not None else self.fields[-1]
+        given = ", ".join(
+            f"{f} = {v:g}" + (f" {units[f]}" if units.get(f) else "")
+            for f, v in zip(self.fields, args, strict=True)
+        )
+        raise InputError(f"{owner}.{named}" if owner else named, f"{self.rule} ({given})")
+
+
 def real(name: str, unit: str, doc: str, rule: str = "") -> Var:
     return Var(name, unit, doc, "real", rule)
 
@@ -106,15 +141,22 @@ class Layout:
     """Ordered declarations and the flat float64 slots they occupy.
 
     Tables, if any, must come after every real and complex quantity: the fixed part of the layout
-    then has the same slots for every instance, whatever the table lengths.
+    then has the same slots for every instance, whatever the table lengths. ``relations`` are the
+    cross-field rules (:class:`Relation`) over its real quantities, checked by ``pack`` after
+    each value's own rule.
     """
 
-    def __init__(self, *variables: Var):
+    def __init__(self, *variables: Var, relations: tuple[Relation, ...] = ()):
         self.vars = tuple(variables)
         names = [v.name for v in self.vars]
         duplicates = {n for n in names if names.count(n) > 1}
         if duplicates:
             raise ValueError(f"duplicate declarations: {', '.join(sorted(duplicates))}")
+        self.relations = tuple(relations)
+        for relation in self.relations:
+            for f in relation.fields:
+                if f not in names or self.var(f).kind != "real":
+                    raise ValueError(f"relation {relation.rule!r}: {f} is not a declared real")
         seen_table = False
         self._slots: dict[str, int] = {}
         offset = 0
@@ -130,6 +172,17 @@ class Layout:
             offset += v.width
         self.fixed_size = offset
         self.tables = tuple(v for v in self.vars if v.kind == "table")
+
+    def extended(self, *variables: Var) -> Layout:
+        """This layout with ``variables`` appended and the same relations: every quantity
+        declared here keeps its slot (slots follow the order of declaration)."""
+        return Layout(*self.vars, *variables, relations=self.relations)
+
+    def check_relations(self, owner: str, values: dict) -> None:
+        """Each relation on ``values`` (name -> float; InputError naming the field)."""
+        units = {v.name: v.unit for v in self.vars}
+        for relation in self.relations:
+            relation.check(owner, values, units)
 
     def __iter__(self):
         return iter(self.vars)
@@ -183,7 +236,8 @@ class Layout:
         """Flat array of ``values`` (name -> number, complex number or a table's profile).
 
         Every declared quantity must be given (or have a default); an unknown name, a non-finite
-        number, or a malformed table is an ``InputError`` naming ``owner.name``.
+        number, a malformed table, a value against its rule or a broken relation is an
+        ``InputError`` naming ``owner.name``.
         """
         merged = dict(defaults or {})
         merged.update(values)
@@ -208,7 +262,9 @@ class Layout:
                 z = _number(field, value, allow_complex=True)
                 fixed[s], fixed[s + 1] = z.real, z.imag
             else:
-                fixed[s] = v.check(field, _number(field, value, allow_complex=False))
+                fixed[s] = v.checked(field, value)
+        if self.relations:
+            self.check_relations(owner, {n: float(fixed[s]) for n, s in self._slots.items()})
         return np.concatenate([fixed, *tables]) if tables else fixed
 
     def unpack(self, array: np.ndarray) -> dict:
@@ -225,6 +281,8 @@ class Layout:
 
 
 def _number(field: str, value, allow_complex: bool):
+    if value is None:
+        raise InputError(field, "must be given (got None)")
     if isinstance(value, bool) or not isinstance(value, (int, float, complex, np.number)):
         raise InputError(field, f"must be a number, got {type(value).__name__}")
     if isinstance(value, (complex, np.complexfloating)):

@@ -19,8 +19,10 @@ import numpy as np
 
 from acdrive._jit import jit_fast
 from acdrive.core._signals import Layout, cplx, real
-from acdrive.machines._windings import InductionWindings, winding_params
+from acdrive.machines._record import MachinePart
+from acdrive.machines._windings import winding_params
 
+#: the cage IM's parameters, declared once: ``machines.IMParams`` is generated from them
 PARAMS = winding_params("L_m", "magnetising (mutual) inductance")
 STATES = Layout(
     cplx("i_s", "A", "stator current, stationary frame"),
@@ -75,18 +77,10 @@ def cage_rhs(t, x, u, p, y, dx):
     dx[_PSI_R], dx[_PSI_R + 1] = dpsi_r.real, dpsi_r.imag
 
 
-class CageInductionMachine(InductionWindings):
+class CageInductionMachine(MachinePart):
     """Cage induction motor, Amezquita-Brooks et al. (1)-(2); parameters as ``IMParams``."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
-    MUTUAL = "L_m"
     DEFAULTS: ClassVar[dict] = {"n_p": 1}
     state_outputs = cage_state_outputs
     rhs = cage_rhs
-
-    @classmethod
-    def from_params(cls, name, params) -> CageInductionMachine:
-        """From an ``acdrive.machines.IMParams`` (e.g. ``DELORENZO_IM``,
-        ``DELORENZO_IM_13``; its J goes to a ``plant.Shaft``)."""
-        return cls(name, R_s=params.R_s, R_r=params.R_r, L_s=params.L_s, L_r=params.L_r,
-                   L_m=params.L_m, n_p=params.n_p)  # fmt: skip

@@ -7,51 +7,33 @@ power-invariant scaling of Bodson (1)-(8); rotor quantities are referred to the 
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-
 import numpy as np
 
-from acdrive._jit import jit, jit_fast
-from acdrive.errors import InputError, require_leakage, require_nonnegative, require_positive
+from acdrive._jit import jit
+from acdrive.machines._dfim_part import (  # noqa: F401 (the model's, here for its users)
+    L_R,
+    L_S,
+    M_SR,
+    N_P,
+    R_R,
+    R_S,
+    DoublyFedMachine,
+    currents_from_fluxes,
+    electromagnetic_torque,
+)
+from acdrive.machines._record import machine_record
+from acdrive.machines._windings import leakage_factor
 
 
-@dataclass(frozen=True)
+@machine_record(DoublyFedMachine, leave_out=("V_loss",))
 class DFIMParams:
-    """Electrical and mechanical parameters of a DFIM (Bodson (9), (26)).
-
-    R_s, R_r: stator and rotor resistances [ohm]; L_s, L_r: stator and rotor self inductances [H];
-    M: stator-rotor mutual inductance [H]; n_p: pole pairs; J: inertia of motor and load [kg m^2];
-    B: viscous friction [N m s/rad]; tau_c: Coulomb friction [N m].
-    """
-
-    R_s: float
-    R_r: float
-    L_s: float
-    L_r: float
-    M: float
-    n_p: int
-    J: float
-    B: float = 0.0
-    tau_c: float = 0.0
-
-    def __post_init__(self):
-        for name in ("R_s", "R_r", "L_s", "L_r", "M", "J"):
-            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
-        for name in ("B", "tau_c"):
-            object.__setattr__(self, name, require_nonnegative(name, getattr(self, name)))
-        n_p = self.n_p
-        if isinstance(n_p, bool) or not isinstance(n_p, (int, float, np.integer, np.floating)):
-            raise InputError("n_p", "must be a positive integer")
-        if not math.isfinite(float(n_p)) or float(n_p) != int(n_p) or int(n_p) < 1:
-            raise InputError("n_p", f"must be a positive integer, got {n_p}")
-        object.__setattr__(self, "n_p", int(n_p))
-        require_leakage("M", self.L_s, self.L_r, self.M)
+    """Electrical and mechanical parameters of a DFIM (Bodson (9), (26)): the parameters of
+    ``DoublyFedMachine`` and of the ``plant.Shaft`` it drives (J of motor and load)."""
 
     @property
     def sigma(self) -> float:
         """Leakage factor sigma = 1 - M^2 / (L_s L_r) (Bodson, after (45))."""
-        return 1.0 - self.M**2 / (self.L_s * self.L_r)
+        return leakage_factor(self.L_s, self.L_r, self.M)
 
 
 #: The laboratory DFIM of Bodson section III-D / IV-A (standstill estimates, J of motor + DC load).
@@ -59,40 +41,15 @@ BODSON_DFIM = DFIMParams(R_s=0.66, R_r=0.94, L_s=13.1e-3, L_r=9.8e-3, M=9.7e-3, 
 
 
 # ---------------------------------------------------------------------------------------------
-# Parameter vector used by compiled code. Index names are module constants (compile-time
-# constants for numba), so compiled code reads ``p[R_S]`` like the paper reads R_S.
+# Compiled code reads the parameter vector of ``DoublyFedMachine.PARAMS`` through its slot
+# constants (compile-time constants for numba), so it reads ``p[R_S]`` like the paper reads R_S.
 # ---------------------------------------------------------------------------------------------
-R_S, R_R, L_S, L_R, M_SR, N_P, J_INERTIA, B_VISCOUS, TAU_COULOMB = range(9)
-N_MACHINE_PARAMS = 9
 
 
 def machine_vector(params: DFIMParams) -> np.ndarray:
-    """Pack ``params`` in the float64 layout read by the compiled functions below."""
-    p = np.empty(N_MACHINE_PARAMS)
-    p[R_S], p[R_R], p[L_S], p[L_R], p[M_SR] = (
-        params.R_s,
-        params.R_r,
-        params.L_s,
-        params.L_r,
-        params.M,
-    )
-    p[N_P], p[J_INERTIA], p[B_VISCOUS], p[TAU_COULOMB] = (
-        params.n_p,
-        params.J,
-        params.B,
-        params.tau_c,
-    )
-    return p
-
-
-@jit_fast
-def currents_from_fluxes(p, psi_s, psi_r):
-    """(i_s, i_r) from the flux linkages: the inverse of psi_s = L_s i_s + M i_r,
-    psi_r = M i_s + L_r i_r (Bodson (9)), with a real determinant (no complex division)."""
-    inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
-    i_s = (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det
-    i_r = (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
-    return i_s, i_r
+    """``params`` packed as the ``DoublyFedMachine`` part packs them (V_loss = 0): the float64
+    vector read by the compiled functions below."""
+    return DoublyFedMachine.from_params("machine", params).p
 
 
 @jit
@@ -129,12 +86,6 @@ def steady_state_currents(p, w_e, w_m, v_s, v_r):
     i_s = (Z_R * v_s - Z_MS * v_r) / det
     i_r = (Z_S * v_r - Z_MR * v_s) / det
     return i_s, i_r
-
-
-@jit
-def electromagnetic_torque(p, i_s, i_r):
-    """tau_e = n_p M Im(i_s i_r*) (Bodson (9), third line)."""
-    return p[N_P] * p[M_SR] * (i_s * np.conj(i_r)).imag
 
 
 @jit

@@ -34,18 +34,19 @@ from typing import ClassVar
 
 import numpy as np
 
-from acdrive._jit import jit_fast, jit_inline
+from acdrive._jit import jit, jit_fast, jit_inline
 from acdrive.core._signals import Layout, cplx, real
-from acdrive.machines import _dfim as dfim
-from acdrive.machines._dfim import currents_from_fluxes, electromagnetic_torque
-from acdrive.machines._windings import InductionWindings, winding_params
+from acdrive.machines._record import MachinePart
+from acdrive.machines._windings import winding_params
 
 #: current scale [A] below which the converter loss fades out (keeps the right-hand side smooth)
 LOSS_CURRENT_SCALE = 0.05
 
-_WINDINGS = winding_params("M", "stator-rotor mutual inductance")
-PARAMS = Layout(
-    *_WINDINGS,
+#: the DFIM's parameters, declared once: ``machines.DFIMParams`` is generated from them (less
+#: V_loss, the rotor converter's), and every compiled DFIM function (``machines._dfim``, the
+#: controller's estimates in ``control._bodson``) reads the slots below
+WINDINGS = winding_params("M", "stator-rotor mutual inductance")
+PARAMS = WINDINGS.extended(
     real(
         "V_loss",
         "V",
@@ -53,20 +54,8 @@ PARAMS = Layout(
         "nonnegative",
     ),
 )
-_R_S, _R_R, _L_S, _L_R, _M, _N_P = (
-    PARAMS.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p")
-)
+R_S, R_R, L_S, L_R, M_SR, N_P = (PARAMS.slot(n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p"))
 _V_LOSS = PARAMS.slot("V_loss")
-# machines._dfim's compiled torque and current functions, reused here, read the same slots
-if (_R_S, _R_R, _L_S, _L_R, _M, _N_P) != (
-    dfim.R_S,
-    dfim.R_R,
-    dfim.L_S,
-    dfim.L_R,
-    dfim.M_SR,
-    dfim.N_P,
-):
-    raise ImportError("DoublyFedMachine.PARAMS no longer matches machines._dfim's parameter slots")
 STATES = Layout(
     cplx("psi_s", "Wb", "stator flux linkage, stationary frame"),
     cplx("psi_r", "Wb", "rotor flux linkage referred to the stator, stationary frame"),
@@ -97,12 +86,28 @@ _Y_I_S, _Y_I_R, _Y_I_RR, _Y_TAU, _Y_V_OPEN, _Y_DPSI_R, _Y_A, _Y_B = (
 )
 
 
+@jit_fast
+def currents_from_fluxes(p, psi_s, psi_r):
+    """(i_s, i_r) from the flux linkages: the inverse of psi_s = L_s i_s + M i_r,
+    psi_r = M i_s + L_r i_r (Bodson (9)), with a real determinant (no complex division)."""
+    inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
+    i_s = (p[L_R] * psi_s - p[M_SR] * psi_r) * inv_det
+    i_r = (p[L_S] * psi_r - p[M_SR] * psi_s) * inv_det
+    return i_s, i_r
+
+
+@jit
+def electromagnetic_torque(p, i_s, i_r):
+    """tau_e = n_p M Im(i_s i_r*) (Bodson (9), third line)."""
+    return p[N_P] * p[M_SR] * (i_s * np.conj(i_r)).imag
+
+
 @jit_inline
 def winding_currents(p, psi_s, psi_r, connected):
     """(i_s, i_r) from the flux linkages; i_s = 0 while the stator is disconnected."""
     if connected:
         return currents_from_fluxes(p, psi_s, psi_r)
-    return 0.0 + 0.0j, psi_r * (1.0 / p[_L_R])
+    return 0.0 + 0.0j, psi_r * (1.0 / p[L_R])
 
 
 @jit_inline
@@ -113,7 +118,7 @@ def rotor_flux_derivative(x, u, p, i_r, psi_r):
     if p[_V_LOSS] > 0.0:
         squared = i_r.real * i_r.real + i_r.imag * i_r.imag + LOSS_CURRENT_SCALE**2
         v_r -= p[_V_LOSS] / np.sqrt(squared) * i_r
-    return v_r - p[_R_R] * i_r + 1j * (p[_N_P] * u[_W]) * psi_r
+    return v_r - p[R_R] * i_r + 1j * (p[N_P] * u[_W]) * psi_r
 
 
 @jit_fast
@@ -129,13 +134,13 @@ def dfim_direct_outputs(t, x, u, p, y):
     y[_Y_TAU] = electromagnetic_torque(p, i_s, i_r)
     y[_Y_DPSI_R], y[_Y_DPSI_R + 1] = dpsi_r.real, dpsi_r.imag
     if connected:
-        inv_det = 1.0 / (p[_L_S] * p[_L_R] - p[_M] * p[_M])
-        b = (-p[_L_R] * p[_R_S] * i_s - p[_M] * dpsi_r) * inv_det
-        y[_Y_A] = p[_L_R] * inv_det
+        inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
+        b = (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) * inv_det
+        y[_Y_A] = p[L_R] * inv_det
         y[_Y_B], y[_Y_B + 1] = b.real, b.imag
         y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = 0.0, 0.0
     else:
-        v_open = (p[_M] / p[_L_R]) * dpsi_r
+        v_open = (p[M_SR] / p[L_R]) * dpsi_r
         y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = v_open.real, v_open.imag
         y[_Y_A], y[_Y_B], y[_Y_B + 1] = 0.0, 0.0, 0.0
 
@@ -150,12 +155,12 @@ def dfim_rhs(t, x, u, p, y, dx):
     """Bodson (9) with theta_e = 0 (module docstring); the currents and dpsi_r/dt are this
     evaluation's outputs ``y``."""
     if u[_CONNECTED] != 0.0:
-        dx[_PSI_S] = u[_V_S] - p[_R_S] * y[_Y_I_S]
-        dx[_PSI_S + 1] = u[_V_S + 1] - p[_R_S] * y[_Y_I_S + 1]
+        dx[_PSI_S] = u[_V_S] - p[R_S] * y[_Y_I_S]
+        dx[_PSI_S + 1] = u[_V_S + 1] - p[R_S] * y[_Y_I_S + 1]
     else:
         dx[_PSI_S], dx[_PSI_S + 1] = y[_Y_V_OPEN], y[_Y_V_OPEN + 1]
     dx[_PSI_R], dx[_PSI_R + 1] = y[_Y_DPSI_R], y[_Y_DPSI_R + 1]
-    w_el = p[_N_P] * u[_W]
+    w_el = p[N_P] * u[_W]
     de_r = 1j * w_el * complex(x[_E_R], x[_E_R + 1])
     dx[_THETA] = u[_W]
     dx[_E_R], dx[_E_R + 1] = de_r.real, de_r.imag
@@ -163,26 +168,19 @@ def dfim_rhs(t, x, u, p, y, dx):
 
 @jit_fast
 def dfim_project(x, p):
-    angle = p[_N_P] * x[_THETA]
+    angle = p[N_P] * x[_THETA]
     x[_E_R], x[_E_R + 1] = np.cos(angle), np.sin(angle)
 
 
-class DoublyFedMachine(InductionWindings):
+class DoublyFedMachine(MachinePart):
     """DFIM electrical model, Bodson (9); parameters as ``DFIMParams`` (mechanics separate)."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"V_loss": 0.0}
     INITIAL: ClassVar[dict] = {"e_r": 1.0}
-    MUTUAL = "M"
     DIRECT_FROM = ("v_r", "w", "connected")
     DIRECT_OUTPUTS = ("i_s", "i_r", "i_r_rotor", "tau_e", "v_open", "bus_gain", "bus_drive")
     state_outputs = dfim_state_outputs
     direct_outputs = dfim_direct_outputs
     rhs = dfim_rhs
     project = dfim_project
-
-    @classmethod
-    def from_params(cls, name, params, V_loss: float = 0.0) -> DoublyFedMachine:
-        """From an ``acdrive.machines.DFIMParams`` (its J, B, tau_c go to a ``Shaft``)."""
-        return cls(name, R_s=params.R_s, R_r=params.R_r, L_s=params.L_s, L_r=params.L_r,
-                   M=params.M, n_p=params.n_p, V_loss=V_loss)  # fmt: skip

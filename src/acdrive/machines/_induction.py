@@ -7,51 +7,26 @@ states (i_alpha_s, i_beta_s, psi_alpha_r, psi_beta_r), inputs (v_alpha_s, v_beta
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.errors import InputError, require_finite, require_leakage, require_positive
+from acdrive.errors import require_finite, require_positive
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._record import machine_record
+from acdrive.machines._windings import leakage_factor
 
 
-def _pole_pairs(value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError("n_p", "must be a positive integer")
-    if not math.isfinite(float(value)) or float(value) != int(value) or int(value) < 1:
-        raise InputError("n_p", f"must be a positive integer, got {value}")
-    return int(value)
-
-
-@dataclass(frozen=True)
+@machine_record(CageInductionMachine, inertia_required=False)
 class IMParams:
-    """Electrical parameters of a cage induction motor (Ugalde-Loo et al. (37)-(39)).
-
-    R_s, R_r: stator and rotor resistances [ohm]; L_s, L_r: stator and rotor self inductances [H];
-    L_m: mutual inductance [H]; n_p: pole pairs (the papers' P/2); J: rotor inertia [kg m^2],
-    optional because the current subsystem does not use it.
-    """
-
-    R_s: float
-    R_r: float
-    L_s: float
-    L_r: float
-    L_m: float
-    n_p: int = 1
-    J: float | None = None
-
-    def __post_init__(self):
-        for name in ("R_s", "R_r", "L_s", "L_r", "L_m"):
-            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
-        object.__setattr__(self, "n_p", _pole_pairs(self.n_p))
-        if self.J is not None:
-            object.__setattr__(self, "J", require_positive("J", self.J))
-        require_leakage("L_m", self.L_s, self.L_r, self.L_m)
+    """Electrical parameters of a cage induction motor (Ugalde-Loo et al. (37)-(39)), those of
+    ``CageInductionMachine``, and the mechanics of its ``plant.Shaft``; J may be None (unknown)
+    because the current subsystem does not use it."""
 
     @property
     def sigma(self) -> float:
         """Dispersion (leakage) coefficient sigma = 1 - L_m^2/(L_s L_r) (Ugalde-Loo et al. (38))."""
-        return 1.0 - self.L_m**2 / (self.L_s * self.L_r)
+        return leakage_factor(self.L_s, self.L_r, self.L_m)
 
 
 def stator_current_ss(p: IMParams, w_r: float):
@@ -98,14 +73,22 @@ class StationaryMatrixFit:
 
 
 def params_from_stationary_matrix(
-    a11: float, a13: float, a14_per_wr: float, a31: float, a33: float, b11: float, n_p: int = 1
+    a11: float,
+    a13: float,
+    a14_per_wr: float,
+    a31: float,
+    a33: float,
+    b11: float,
+    n_p: int = 1,
+    J: float | None = None,
 ) -> StationaryMatrixFit:
     """Invert Ugalde-Loo et al. (41): IM parameters from the numeric entries of A and B.
 
     a11 = -(L_r^2 R_s + L_m^2 R_r)/(sigma L_s L_r^2), a13 = L_m R_r/(sigma L_s L_r^2),
     a14 = (L_m/(sigma L_s L_r)) w_r, a31 = L_m R_r/L_r, a33 = -R_r/L_r, b11 = 1/(sigma L_s).
     Five parameters follow from a11, a14/w_r, a31, a33, b11; a13 is redundant and is returned
-    for comparison. Used to reconcile Amezquita-Brooks et al. (13) with their Appendix.
+    for comparison. Used to reconcile Amezquita-Brooks et al. (13) with their Appendix. ``n_p``
+    and the inertia ``J`` do not enter (41) and are passed through.
     """
     c = require_positive("a14_per_wr", a14_per_wr)
     b = require_positive("b11", b11)
@@ -116,7 +99,7 @@ def params_from_stationary_matrix(
     R_r = d * L_r
     L_s = 1.0 / b + L_m**2 / L_r
     R_s = (-require_finite("a11", a11) - c * e) / b
-    params = IMParams(R_s=R_s, R_r=R_r, L_s=L_s, L_r=L_r, L_m=L_m, n_p=n_p)
+    params = IMParams(R_s=R_s, R_r=R_r, L_s=L_s, L_r=L_r, L_m=L_m, n_p=n_p, J=J)
     return StationaryMatrixFit(params, require_finite("a13", a13), c * d)
 
 
@@ -133,9 +116,13 @@ UGALDE_IM_300W = IMParams(R_s=16.19, R_r=24.0, L_s=1.45, L_r=1.56, L_m=1.45, n_p
 #: L_s = 1.451 H instead of 1.44 H: sigma L_s = L_s - L_m^2/L_r is a small difference of large
 #: numbers, so the 0.8 % change in L_s moves 1/(sigma L_s) by 8 %. The printed G_M,min = 0.75
 #: (-2.47 dB) of (19) follows from (13)'s parameters (0.752); the Appendix ones give 0.766.
-DELORENZO_IM = IMParams(R_s=16.2, R_r=23.2, L_s=1.44, L_r=1.5, L_m=1.42, n_p=1)
+#: The paper gives no inertia: J is the one every DeLorenzo scenario and the IM drive's defaults
+#: assume (``control.foc.J_ESTIMATE``), the 300 W IM's of Ugalde-Loo et al. section 4.5, whose
+#: parameters the same group identified with the same method.
+DELORENZO_IM = IMParams(R_s=16.2, R_r=23.2, L_s=1.44, L_r=1.5, L_m=1.42, n_p=1, J=UGALDE_IM_300W.J)
 
-#: Parameters recovered from the printed matrix (13) of Amezquita-Brooks et al. (see above).
+#: Parameters recovered from the printed matrix (13) of Amezquita-Brooks et al. (see above), with
+#: the same assumed inertia.
 DELORENZO_IM_13 = params_from_stationary_matrix(
-    a11=-359.2, a13=141.8, a14_per_wr=9.2, a31=21.9, a33=-15.4, b11=9.7, n_p=1
+    a11=-359.2, a13=141.8, a14_per_wr=9.2, a31=21.9, a33=-15.4, b11=9.7, n_p=1, J=DELORENZO_IM.J
 ).params

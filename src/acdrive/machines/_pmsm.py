@@ -7,35 +7,18 @@ magnet back-EMF term psi_m n_P w_gen of (7) is an input disturbance and does not
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from acdrive.errors import require_finite, require_positive
-from acdrive.machines._induction import _pole_pairs
+from acdrive.errors import require_finite
+from acdrive.machines._pmsm_part import PermanentMagnetMachine
+from acdrive.machines._record import machine_record
 
 
-@dataclass(frozen=True)
+@machine_record(PermanentMagnetMachine, inertia_required=False)
 class PMSGParams:
-    """PMSG parameters (Ugalde-Loo et al. (7)-(8)).
-
-    R_s: stator resistance [ohm]; L_d, L_q: dq self inductances [H]; psi_m: magnet flux
-    linkage [V s]; n_p: pole pairs; J: combined rotor and generator inertia [kg m^2] (optional).
-    """
-
-    R_s: float
-    L_d: float
-    L_q: float
-    psi_m: float
-    n_p: int
-    J: float | None = None
-
-    def __post_init__(self):
-        for name in ("R_s", "L_d", "L_q", "psi_m"):
-            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
-        object.__setattr__(self, "n_p", _pole_pairs(self.n_p))
-        if self.J is not None:
-            object.__setattr__(self, "J", require_positive("J", self.J))
+    """PMSG/PMSM parameters (Ugalde-Loo et al. (7)-(8)), those of ``PermanentMagnetMachine``,
+    and the mechanics of its ``plant.Shaft``; J (combined rotor and generator inertia) may be
+    None (unknown) because the current subsystem does not use it."""
 
 
 def dq_current_ss(p: PMSGParams, w_r: float):

@@ -49,15 +49,25 @@ import numpy as np
 
 from acdrive._frames import K_PEAK
 from acdrive._jit import jit_fast, jit_inline
-from acdrive.core._parts import ContinuousPart
-from acdrive.core._signals import Layout, cplx, real
+from acdrive.core._signals import Layout, Relation, cplx, real
+from acdrive.machines._record import MachinePart
 
+#: the PM machine's parameters, declared once: ``machines.PMSGParams`` is generated from them.
+#: psi_m = 0 is allowed: a synchronous reluctance machine (torque from L_d != L_q alone, (8));
+#: without magnet and without saliency the machine makes no torque, which the relation refuses.
 PARAMS = Layout(
     real("R_s", "ohm", "stator resistance", "positive"),
     real("L_d", "H", "direct-axis stator self inductance", "positive"),
     real("L_q", "H", "quadrature-axis stator self inductance", "positive"),
     real("psi_m", "Wb", "magnet flux linkage, peak per phase (the paper's psi_m)", "nonnegative"),
     real("n_p", "", "pole pairs", "count"),
+    relations=(
+        Relation(
+            ("L_d", "L_q", "psi_m"),
+            "torque needs a magnet or saliency: psi_m > 0 or L_d != L_q",
+            lambda L_d, L_q, psi_m: psi_m > 0.0 or L_d != L_q,
+        ),
+    ),
 )
 STATES = Layout(
     cplx("i_dq", "A", "stator current in rotor coordinates, i_d + j i_q"),
@@ -128,12 +138,11 @@ def pmsm_project(x, p):
     x[_E_R], x[_E_R + 1] = np.cos(angle), np.sin(angle)
 
 
-class PermanentMagnetMachine(ContinuousPart):
+class PermanentMagnetMachine(MachinePart):
     """PMSM/PMSG, Ugalde-Loo et al. (7)-(8), motor reference arrows (module docstring);
     parameters as ``machines.PMSGParams`` (its J goes to a ``Shaft``)."""
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
-    DEFAULTS: ClassVar[dict] = {"n_p": 1}
     INITIAL: ClassVar[dict] = {"e_r": 1.0}
     state_outputs = pmsm_state_outputs
     rhs = pmsm_rhs
@@ -144,9 +153,3 @@ class PermanentMagnetMachine(ContinuousPart):
         if "theta" in values and "e_r" not in values:
             values["e_r"] = complex(np.exp(1j * self.values["n_p"] * float(values["theta"])))
         return super().initial_state(**values)
-
-    @classmethod
-    def from_params(cls, name, params) -> PermanentMagnetMachine:
-        """From an ``acdrive.machines.PMSGParams``."""
-        return cls(name, R_s=params.R_s, L_d=params.L_d, L_q=params.L_q, psi_m=params.psi_m,
-                   n_p=params.n_p)  # fmt: skip

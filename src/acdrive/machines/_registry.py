@@ -13,12 +13,9 @@ inertia and friction go to a ``plant.Shaft``).
 from __future__ import annotations
 
 from acdrive.errors import InputError
-from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._dfim import BODSON_DFIM, DFIMParams
-from acdrive.machines._dfim_part import DoublyFedMachine
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
-from acdrive.machines._pmsm_part import PermanentMagnetMachine
 
 MACHINES: dict[str, IMParams | PMSGParams | DFIMParams] = {
     "ugalde-im-300w": UGALDE_IM_300W,
@@ -42,17 +39,10 @@ def machine_params(name: str, kind: type | None = None, field: str = "machine"):
     raise InputError(field, f"unknown '{name}', known: {', '.join(names(kind))}")
 
 
-#: the plant part of each parameter class (each part has ``from_params``)
-PARTS = {
-    IMParams: CageInductionMachine,
-    PMSGParams: PermanentMagnetMachine,
-    DFIMParams: DoublyFedMachine,
-}
-
-
 def machine_part(name: str, part_name: str, field: str = "machine", **extra):
     """The continuous plant part named ``part_name`` of the built-in machine ``name``: a
-    ``CageInductionMachine``, ``PermanentMagnetMachine`` or ``DoublyFedMachine`` by its parameter
-    class; ``extra`` goes to its ``from_params`` (e.g. a DFIM's ``V_loss``)."""
+    ``CageInductionMachine``, ``PermanentMagnetMachine`` or ``DoublyFedMachine``, the part its
+    parameter record was generated from; ``extra`` goes to its ``from_params`` (e.g. a DFIM's
+    ``V_loss``)."""
     params = machine_params(name, field=field)
-    return PARTS[type(params)].from_params(part_name, params, **extra)
+    return type(params).PART.from_params(part_name, params, **extra)
