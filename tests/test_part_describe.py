@@ -60,6 +60,20 @@ def test_describe_lists_exactly_the_declarations(name):
         if title == "parameters":
             for row in section.rows:
                 assert (row.value == "required") == (row.name not in kind.DEFAULTS)
+    # the rules across parameters (sigma > 0, a magnet or saliency) are shown, each once
+    rules = [r.rule for r in getattr(kind.PARAMS, "relations", ())]
+    assert description.relations == tuple(rules)
+    text = description.table()
+    for rule in rules:
+        assert text.count(f"across parameters: {rule}") == 1
+
+
+def test_the_machines_cross_field_rules_are_described():
+    from acdrive.machines import CageInductionMachine, DoublyFedMachine, PermanentMagnetMachine
+
+    for kind in (DoublyFedMachine, CageInductionMachine):
+        assert any("sigma" in r for r in kind.describe().relations)
+    assert any("psi_m" in r for r in PermanentMagnetMachine.describe().relations)
 
 
 def test_an_instance_describes_its_values_and_a_kind_its_defaults():

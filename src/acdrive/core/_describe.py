@@ -70,6 +70,8 @@ class PartDescription:
     sections: tuple[Section, ...]
     events: tuple[str, ...]
     value_label: str
+    #: the rules over several parameters (``Layout.relations``), each as its phrase
+    relations: tuple[str, ...] = ()
 
     def section(self, title: str) -> Section:
         for s in self.sections:
@@ -92,12 +94,17 @@ class PartDescription:
                 continue
             lines.append(f"{s.title.capitalize()}:")
             columns = COLUMNS[s.title]
+            if s.title == "parameters" and self.relations:
+                rules = [f"  across parameters: {r}" for r in self.relations]
+            else:
+                rules = []
             header = [self.value_label if c == "value" else c for c in columns]
             cells = [[_cell(r.cell(c)) for c in columns] for r in s.rows]
             widths = [max(len(h), *(len(row[i]) for row in cells)) for i, h in enumerate(header)]
             for row in [header, *cells]:
                 text = "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))
                 lines.append("  " + text.rstrip())
+            lines += rules
         if self.events:
             lines += ["", f"Events: {', '.join(self.events)}"]
         return "\n".join(indent + line if line else line for line in lines)
@@ -118,6 +125,9 @@ class PartDescription:
                 lines.append(f"   * - {_rst_text(row[0])}")
                 lines += [f"     - {_rst_text(cell)}" for cell in row[1:]]
             lines.append("")
+            if s.title == "parameters" and self.relations:
+                lines += [f"*Across parameters:* {_rst_text(r)}" for r in self.relations]
+                lines.append("")
         if self.events:
             lines += [f"*Events:* {_rst_text(', '.join(self.events))}", ""]
         return "\n".join(lines)
@@ -228,6 +238,7 @@ def describe(target) -> PartDescription:
         sections=tuple(sections),
         events=tuple(cls.EVENTS),
         value_label="default" if is_kind else "value",
+        relations=tuple(r.rule for r in getattr(cls.PARAMS, "relations", ())),
     )
 
 
