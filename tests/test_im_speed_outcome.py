@@ -8,8 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.scenarios import load_scenario
-from acdrive.sim._im_drive import (
+from acdrive.drives.cage_im._drive import (
     IMDriveResult,
     IMDriveSetup,
     Mechanics,
@@ -17,6 +16,8 @@ from acdrive.sim._im_drive import (
     run_im_scenario,
     warnings_of,
 )
+from acdrive.scenarios import load_scenario
+from acdrive.scenarios._files import constant
 from acdrive.sim._metrics import RPM_PER_RAD_S, SETTLE_TIME_CONSTANTS, SLEW_MARGIN
 from acdrive.sim._recovery import (
     HOLD_S,
@@ -27,7 +28,6 @@ from acdrive.sim._recovery import (
     RECOVERY_REFERENCE_FRACTION,
     im_disturbances,
 )
-from acdrive.sim._setup import constant
 
 
 def _recovered_at(t, err, judged, band):

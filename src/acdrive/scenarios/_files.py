@@ -2,8 +2,7 @@
 
 ``Section`` wraps one TOML table: every field read through it is checked (type, finiteness, the
 rule given) and named by its path in an ``InputError``; ``done()`` reports keys nobody read. The
-drive-specific loaders (``scenarios._loader`` for the DFIM drive, ``scenarios._im_loader`` for the
-cage induction motor drive) build their setups with it.
+drives' loaders (``drives.<kind>._schema``) build their setups with it.
 """
 
 from __future__ import annotations
@@ -17,7 +16,14 @@ import numpy as np
 
 from acdrive.errors import InputError, require_finite, require_nonnegative
 from acdrive.machines import _registry as registry
-from acdrive.sim._setup import constant
+
+#: a quantity that varies with time: (times [s], values), linear between the points
+Profile = tuple[np.ndarray, np.ndarray]
+
+
+def constant(value: float) -> Profile:
+    """The profile of a constant ``value``."""
+    return np.array([0.0]), np.array([float(value)])
 
 
 def builtin_names() -> list[str]:

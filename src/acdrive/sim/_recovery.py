@@ -291,7 +291,7 @@ def _loss_words(subject: str, w_rpm, ref_rpm, a: dict, when: str) -> str:
 
 
 def im_disturbances(setup) -> list[dict]:
-    """The disturbances of a cage-IM ``setup`` (``sim._im_drive.IMDriveSetup``), by start time:
+    """The disturbances of a cage-IM ``setup`` (``drives.cage_im._drive.IMDriveSetup``), by start time:
     ``what``, ``start_s``, ``cleared_s`` (None: it stays). A held shaft (prescribed speed) has
     no load disturbances."""
     m = setup.mechanics
@@ -349,7 +349,7 @@ POSITION_SPEED_NOT_JUDGED = (
 
 
 def im_speed_outcome(result, mask: np.ndarray) -> dict:
-    """What happened to the speed of a cage-IM ``result`` (``sim._im_drive.IMDriveResult``) at
+    """What happened to the speed of a cage-IM ``result`` (``drives.cage_im._drive.IMDriveResult``) at
     each disturbance (``im_disturbances``) and at the end (``judge_speed`` on the ``mask``
     (tracked) samples, the DFIM's rule): the logged speed [rad/s] converted once to rpm, the
     rule's unit; ``warnings`` name the run by its label."""

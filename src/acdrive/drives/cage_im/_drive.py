@@ -1,9 +1,9 @@
 """The cage induction motor drive of Amezquita-Brooks et al. (sections VI-VIII) built from parts.
 
-Data flow (as the DFIM drive, ``sim._dfim_drive``): scenario (TOML, ``scenarios._im_loader``) ->
+Data flow (as the DFIM drive, ``drives.dfim._drive``): scenario (TOML, ``drives.cage_im._schema``) ->
 ``IMDriveSetup`` (frozen dataclasses) -> ``IMDrive`` (parts and wires) -> ``sim.System``
 -> compiled loop -> ``IMDriveResult`` (named signals with units, events, ``summary()``) ->
-``run_im_scenario`` (one run per compared current controller) -> ``_report.im_outputs`` (data,
+``run_im_scenario`` (one run per compared current controller) -> ``drives.cage_im._outputs`` (data,
 figures, summary.json).
 
 **Parts** (names as in the logs and event counts):
@@ -126,7 +126,7 @@ from acdrive.plant._inverter import CarrierLatch, Inverter, carrier_samples
 from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
 from acdrive.plant._sensors import Encoder, encoder_angle
 from acdrive.plant._sources import DCSource
-from acdrive.sim._setup import Profile, constant
+from acdrive.scenarios._files import Profile, constant
 from acdrive.sim._system import System
 
 MODES = ("current", "speed-p", "speed-pi", "position")
@@ -880,7 +880,8 @@ class IMDriveResult:
         """The speed figures of the module docstring; the speed error over the whole run and
         where tracking is expected (``sim._metrics.speed_tracking`` under
         ``im_tracking_rule``: the batch's figures of the same names) with ``speed_tracking``."""
-        from acdrive.sim._metrics import im_tracking_rule, speed_tracking
+        from acdrive.drives.cage_im._tracking import im_tracking_rule
+        from acdrive.sim._metrics import speed_tracking
         from acdrive.sim._recovery import im_speed_outcome
 
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
@@ -1193,8 +1194,8 @@ def _span(result: IMDriveResult, flag: str) -> str:
 
 
 def im_control_period_warnings(setup: IMDriveSetup) -> list[str]:
-    """``sim._period.im_control_period_warnings`` (imported when called)."""
-    from acdrive.sim._period import im_control_period_warnings as warnings
+    """``drives.cage_im._period.im_control_period_warnings`` (imported when called)."""
+    from acdrive.drives.cage_im._period import im_control_period_warnings as warnings
 
     return warnings(setup)
 
