@@ -171,7 +171,7 @@ def test_cage_im_speed_figures_are_the_single_runs():
     """A cage-IM speed loop: the batch row's speed error columns are the single run's summary
     figures of the same names (one kernel, ``sim._metrics``; the samples the run logs, here every
     fifth): equal to the last bits of the compiled loop (rel 1e-9)."""
-    from acdrive.drives.cage_im._drive import run_im_scenario
+    from acdrive.drives.cage_im._outcome import run_im_scenario
 
     variant = {"simulation.duration": 0.1}
     row = simulate_batch("im-foc-speed", [variant]).rows[0]

@@ -8,14 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.drives.cage_im._drive import (
-    IMDriveResult,
-    IMDriveSetup,
-    Mechanics,
-    SpeedPISetup,
-    run_im_scenario,
-    warnings_of,
-)
+from acdrive.drives.cage_im._outcome import run_im_scenario, warnings_of
+from acdrive.drives.cage_im._recovery import im_disturbances
+from acdrive.drives.cage_im._result import IMDriveResult
+from acdrive.drives.cage_im._setup import IMDriveSetup, Mechanics, SpeedPISetup
 from acdrive.scenarios import load_scenario
 from acdrive.scenarios._files import constant
 from acdrive.sim._metrics import RPM_PER_RAD_S, SETTLE_TIME_CONSTANTS, SLEW_MARGIN
@@ -26,7 +22,6 @@ from acdrive.sim._recovery import (
     RECOVERY_MIN_RPM,
     RECOVERY_P99_FACTOR,
     RECOVERY_REFERENCE_FRACTION,
-    im_disturbances,
 )
 
 

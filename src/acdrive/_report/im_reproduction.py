@@ -62,19 +62,15 @@ from acdrive.analysis._coupling import (
     pmsg_pi,
 )
 from acdrive.control._lti import PAPER_20, PAPER_PI
-from acdrive.drives.cage_im._drive import (
-    IMDriveResult,
-    IMOutcome,
-    _steady_mask,
-    foc_voltage,
-    run_im_scenario,
-)
+from acdrive.drives.cage_im._outcome import IMOutcome, run_im_scenario
 from acdrive.drives.cage_im._outputs import (
     delayed_linear_step_response,
     step_comparison,
     write_comparison_figures,
     write_run_figures,
 )
+from acdrive.drives.cage_im._physics import foc_voltage
+from acdrive.drives.cage_im._result import IMDriveResult, _steady_mask
 from acdrive.machines._induction import DELORENZO_IM
 from acdrive.machines._pmsm import PMSG_2MW
 from acdrive.scenarios._loader import load_scenario
@@ -240,7 +236,7 @@ def _peak_modulation(outcome: IMOutcome) -> float:
 
 def _steady_drift(result: IMDriveResult, signal: str) -> tuple[float, float, float]:
     """(mean, drift, window [s]) of a logged signal over the summary's steady window
-    (``drives.cage_im._drive._steady_mask``, the window of its final values): the numbers of the
+    (``drives.cage_im._result._steady_mask``, the window of its final values): the numbers of the
     settling test (``_report.verdicts.window_drift``)."""
     mask = _steady_mask(result.t)
     return window_drift(result.t[mask], result.signal(signal)[mask])

@@ -23,9 +23,9 @@ __all__, __getattr__, __dir__ = namespace(
         "ScenarioOutcome": ".dfim._outcome",
         "run_scenario": ".dfim._outcome",
         "IMDrive": ".cage_im._drive",
-        "IMDriveSetup": ".cage_im._drive",
-        "IMDriveResult": ".cage_im._drive",
-        "IMOutcome": ".cage_im._drive",
-        "run_im_scenario": ".cage_im._drive",
+        "IMDriveSetup": ".cage_im._setup",
+        "IMDriveResult": ".cage_im._result",
+        "IMOutcome": ".cage_im._outcome",
+        "run_im_scenario": ".cage_im._outcome",
     },
 )

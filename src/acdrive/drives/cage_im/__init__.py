@@ -6,10 +6,10 @@ __all__, __getattr__, __dir__ = namespace(
     __name__,
     {
         "IMDrive": "._drive",
-        "IMDriveSetup": "._drive",
-        "IMDriveResult": "._drive",
-        "IMOutcome": "._drive",
-        "run_im_scenario": "._drive",
+        "IMDriveSetup": "._setup",
+        "IMDriveResult": "._result",
+        "IMOutcome": "._outcome",
+        "run_im_scenario": "._outcome",
         "DRIVE": "._plugin",
     },
 )

@@ -26,7 +26,8 @@ from acdrive._output import strict_json
 from acdrive._report.markdown import save_figure
 from acdrive._report.plotting import new_figure, plot_trace
 from acdrive.analysis._plants import plant_from_params
-from acdrive.drives.cage_im._drive import IMDriveResult, IMOutcome, ideal_ramp
+from acdrive.drives.cage_im._outcome import IMOutcome
+from acdrive.drives.cage_im._result import IMDriveResult, ideal_ramp
 
 
 def _save(fig, path: Path) -> Path:

@@ -5,7 +5,7 @@ it, each answered by the module that computes it."""
 from __future__ import annotations
 
 from acdrive.drives._registry import Drive
-from acdrive.drives.cage_im._drive import IMDriveSetup
+from acdrive.drives.cage_im._setup import IMDriveSetup
 from acdrive.errors import InputError
 from acdrive.machines._induction import IMParams
 
@@ -24,7 +24,7 @@ class CageIMDriveKind(Drive):
         return build_im_setup(data)
 
     def run(self, setup: IMDriveSetup, on_run=None):
-        from acdrive.drives.cage_im._drive import run_im_scenario
+        from acdrive.drives.cage_im._outcome import run_im_scenario
 
         if on_run is not None:
             n = len(list(setup.runs()))

@@ -50,7 +50,7 @@ Rules checked before the run, each naming its field:
   carrier period, and every edge is delayed by the dead time), and only with the switching model;
 - the controller's discretisation at the sample time (``control.discretise``: an unstable
   discretisation, a pre-warping frequency beyond the Nyquist frequency) and its anti-windup;
-- the sampled current loop (``drives.cage_im._drive.current_loop_radius``: plant (1) of the simulated
+- the sampled current loop (``drives.cage_im._physics.current_loop_radius``: plant (1) of the simulated
   machine held over each sample, the discretised controller, the command latched for the carrier
   period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
   is unstable without the latch) or ``inverter.pwm_frequency_hz`` (the latch's delay) is refused;
@@ -74,7 +74,9 @@ from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
 from acdrive.control._speed import require_feedforward_fraction
-from acdrive.drives.cage_im._drive import (
+from acdrive.drives.cage_im._period import check_im_control_period
+from acdrive.drives.cage_im._physics import current_loop_radius
+from acdrive.drives.cage_im._setup import (
     INVERTER_MODELS,
     MODES,
     PAPER_DC_LINK,
@@ -91,9 +93,7 @@ from acdrive.drives.cage_im._drive import (
     SensorSetup,
     SpeedPISetup,
     SpeedPSetup,
-    current_loop_radius,
 )
-from acdrive.drives.cage_im._period import check_im_control_period
 from acdrive.errors import (
     InputError,
     require_nonnegative,

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.drives.dfim._period import control_period_warnings
+from acdrive.drives.dfim._recovery import speed_outcome
 from acdrive.drives.dfim._result import DriveResult
 from acdrive.drives.dfim._setup import DriveSetup, simulate
 from acdrive.drives.dfim._tracking import tracking_rule
@@ -25,7 +26,6 @@ from acdrive.sim._metrics import (
     limit_cycle,
     speed_tracking,
 )
-from acdrive.sim._recovery import speed_outcome
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
 
