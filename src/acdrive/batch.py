@@ -1,8 +1,8 @@
 """Many variants of one scenario in the compiled batch loop, on all cores, reduced on line.
 
 ``simulate_batch(base, variants)`` takes a base scenario (built-in name, TOML path or parsed
-dict; or a ``DriveSetup`` / ``IMDriveSetup`` when the variants only change parts and initial
-states) and a list of variants, each a dict of overrides in three forms:
+dict; or the setup of a registered drive, ``acdrive.drives``, when the variants only change parts
+and initial states) and a list of variants, each a dict of overrides in three forms:
 
 * ``"motor[0].controller.speed_bandwidth": 100`` -- a field of the scenario file, dotted as the
   loader names it in its errors (``motor[0].params.R_s`` expands ``machine = "<name>"`` into its
