@@ -3,10 +3,10 @@ through ``acdrive run``, a batch and a sweep with no other edit of acdrive (issu
 
 The toy drive: a balanced three-phase source (``plant.ThreePhaseSource``, v = sqrt(3/2) V_pk
 e^{j w t}) feeding a star-connected series R-L load, L di/dt = v - R i (space vectors), a part
-declared in this file. In steady state the current is the phasor quotient i = v / (R + j w L): a
-space vector of constant magnitude sqrt(3/2) V_pk / |R + j w L|, lagging v by atan(w L / R). The
-transient decays as exp(-t R / L); every figure checked below is taken after 20 time constants,
-where it is below 1e-8 of the amplitude.
+declared outside acdrive (``tests/rl_load.py``). In steady state the current is the phasor
+quotient i = v / (R + j w L): a space vector of constant magnitude sqrt(3/2) V_pk / |R + j w L|,
+lagging v by atan(w L / R). The transient decays as exp(-t R / L); every figure checked below is
+taken after 20 time constants, where it is below 1e-8 of the amplitude.
 """
 
 from __future__ import annotations
@@ -19,11 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import pytest
-from numba import njit
+from rl_load import RLLoad
 
 from acdrive.batch import Reducer, simulate_batch
 from acdrive.cli import main
-from acdrive.core import ContinuousPart, Layout, cplx, real
 from acdrive.drives import Drive, for_data, get, kinds, register, unregister
 from acdrive.errors import InputError, require_positive
 from acdrive.plant import ThreePhaseSource
@@ -34,36 +33,6 @@ KIND = "toy-rl"
 #: relative agreement of a simulated steady amplitude with the phasor formula: RK4 at
 #: h w = 2 pi 50 x 25 us = 0.008 rad has a local error ~ (h w)^5 / 120, far below this
 TOL = 1e-7
-
-
-# --- the part ---------------------------------------------------------------------------------
-
-RL_PARAMS = Layout(
-    real("R", "ohm", "series resistance per phase", "positive"),
-    real("L", "H", "series inductance per phase", "positive"),
-)
-RL_STATES = Layout(cplx("i", "A", "load current space vector"))
-RL_INPUTS = Layout(cplx("v", "V", "terminal voltage space vector"))
-RL_OUTPUTS = Layout(cplx("i", "A", "load current space vector"))
-
-
-@njit(cache=True)
-def toy_rl_state_outputs(t, x, p, y):
-    y[0], y[1] = x[0], x[1]
-
-
-@njit(cache=True)
-def toy_rl_rhs(t, x, u, p, y, dx):
-    dx[0] = (u[0] - p[0] * x[0]) / p[1]
-    dx[1] = (u[1] - p[0] * x[1]) / p[1]
-
-
-class ToyRLLoad(ContinuousPart):
-    """Series R-L per phase: L di/dt = v - R i."""
-
-    PARAMS, STATES, INPUTS, OUTPUTS = RL_PARAMS, RL_STATES, RL_INPUTS, RL_OUTPUTS
-    state_outputs = toy_rl_state_outputs
-    rhs = toy_rl_rhs
 
 
 # --- the drive --------------------------------------------------------------------------------
@@ -95,7 +64,7 @@ class ToyBuilt:
     def __init__(self, setup: ToySetup):
         self.setup = setup
         self.grid = ThreePhaseSource("grid", V_pk=setup.V_pk, f=setup.f)
-        self.load = ToyRLLoad("load", R=setup.R, L=setup.L)
+        self.load = RLLoad("load", R=setup.R, L=setup.L)
         self.system = System(
             [self.grid, self.load], [(self.grid.out.v, self.load.inp.v)], method=setup.integrator
         )
@@ -140,7 +109,7 @@ class ToyDrive(Drive):
         result = built.system.compile().run(
             setup.duration, setup.sample_time, substeps=setup.substeps, log_every=setup.log_every
         )
-        i = result.signal(built.load.out.i)
+        i = result.signal(built.load.out.i_s)
         settled = result.t >= setup.settled_from()
         summary = {"current_amplitude_a": float(np.mean(np.abs(i[settled]))),
                    "current_amplitude_spread_a": float(np.ptp(np.abs(i[settled])))}  # fmt: skip
@@ -155,8 +124,8 @@ class ToyDrive(Drive):
         return f"toy {outcome.setup.name}", [("current", f"{summary['current_amplitude_a']:g} A")]
 
     def reducers(self, setup):
-        return [Reducer("peak_current_a", "peak", "load.i", start=setup.settled_from()),
-                Reducer("final_current_a", "final", "load.i")]  # fmt: skip
+        return [Reducer("peak_current_a", "peak", "load.i_s", start=setup.settled_from()),
+                Reducer("final_current_a", "final", "load.i_s")]  # fmt: skip
 
 
 SCENARIO = f"""drive = "{KIND}"
@@ -212,7 +181,7 @@ def test_acdrive_run_runs_the_toy_drive(toy, tmp_path, capsys):
     assert "toy toy" in printed and "current" in printed
     # the phase of the logged current against the source: i / v = 1 / (R + j w L)
     t = frame["t"].to_numpy()
-    i = frame["load.i.re"].to_numpy() + 1j * frame["load.i.im"].to_numpy()
+    i = frame["load.i_s.re"].to_numpy() + 1j * frame["load.i_s.im"].to_numpy()
     v = frame["grid.v.re"].to_numpy() + 1j * frame["grid.v.im"].to_numpy()
     late = t >= setup.settled_from()
     ratio = i[late] / v[late]
