@@ -810,3 +810,25 @@ def test_an_overflowing_design_names_the_machine_parameter_that_caused_it(
     assert code == 2, err
     assert _named(err) == field, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("scenario", "sample_time"), [("bodson-ramp", 200e-6), ("im-foc-speed", 2e-5)]
+)
+def test_a_run_shorter_than_the_default_sample_time_names_the_duration_with_its_numbers(
+    scenario, sample_time
+):
+    """Both drives' loaders share ``scenarios._files.simulation_span``: the message carries the
+    default sample time and the duration given (the duration was once printed as a template)."""
+    from acdrive.errors import InputError
+    from acdrive.scenarios import build_setup, read_scenario
+
+    data = read_scenario(scenario)
+    data.setdefault("simulation", {}).pop("sample_time", None)
+    data["simulation"]["duration"] = sample_time / 2
+    with pytest.raises(InputError) as info:
+        build_setup(data)
+    assert str(info.value) == (
+        f"simulation.duration: must be at least one sample, simulation.sample_time = "
+        f"{sample_time:g} s (the default), got {sample_time / 2:g} s"
+    )

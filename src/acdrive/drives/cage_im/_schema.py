@@ -102,7 +102,7 @@ from acdrive.errors import (
 )
 from acdrive.machines._induction import IMParams
 from acdrive.scenarios._files import Section as _Section
-from acdrive.scenarios._files import machine_from
+from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 DRIVE = "cage-im"
@@ -403,25 +403,10 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     compare = _compare(top)
 
     sim = _Section(top.get("simulation", {}), "simulation")
-    duration = sim.number("duration", 0.2, require_positive)
-    sample_time = sim.number("sample_time", PAPER_SAMPLE_TIME, require_positive)
-    if sample_time > duration:
-        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
-            raise InputError(
-                "simulation.duration",
-                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
-                "(the default), got {duration:g} s",
-            )
-        raise InputError("simulation.sample_time", "must not exceed simulation.duration")
+    duration, sample_time = simulation_span(sim, 0.2, PAPER_SAMPLE_TIME)
     substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
     integrator = sim.text("integrator", "rk4", choices=tuple(INTEGRATORS))
-    log_every = sim.integer("log_every", 1)
-    if log_every > round(duration / sample_time):
-        raise InputError(
-            "simulation.log_every",
-            f"must not exceed the number of control steps of the run "
-            f"({round(duration / sample_time)} = simulation.duration / simulation.sample_time)",
-        )
+    log_every = log_every_of(sim, duration, sample_time)
     metrics_from = sim.number("metrics_from", 0.0, require_nonnegative)
     if metrics_from >= duration:
         raise InputError(

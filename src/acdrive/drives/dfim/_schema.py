@@ -81,7 +81,7 @@ from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
 from acdrive.scenarios._files import Section as _Section
-from acdrive.scenarios._files import machine_from
+from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 __all__ = ["KIND", "build_dfim_setup", "choose_substeps", "fastest_mode"]
@@ -509,26 +509,10 @@ def build_dfim_setup(data: dict) -> DriveSetup:
             f"got {compare}"
         )  # fmt: skip
     sim = _Section(top.get("simulation", {}), "simulation")
-    duration = sim.number("duration", 1.0, require_positive)
-    sample_time = sim.number("sample_time", DEFAULT_SAMPLE_TIME, require_positive)
-    if sample_time > duration:
-        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
-            raise InputError(
-                "simulation.duration",
-                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
-                "(the default), got {duration:g} s",
-            )
-        raise InputError("simulation.sample_time", "must not exceed simulation.duration")
+    duration, sample_time = simulation_span(sim, 1.0, DEFAULT_SAMPLE_TIME)
     substeps_given = sim.has("substeps")
     substeps = sim.integer("substeps", DEFAULT_SUBSTEPS, maximum=MAX_SUBSTEPS)
-    steps = duration / sample_time  # control steps (a float: may be astronomically large)
-    log_every = sim.integer("log_every", 1)
-    if math.isfinite(steps) and log_every > round(steps):
-        raise InputError(
-            "simulation.log_every",
-            f"must not exceed the number of control steps of the run "
-            f"({round(steps)} = simulation.duration / simulation.sample_time)",
-        )
+    log_every = log_every_of(sim, duration, sample_time)
     sim.done()
 
     sup = _Section(top.get("supply", {}), "supply")
