@@ -28,7 +28,7 @@ COLD_SNIPPET = """
 import time; t0 = time.perf_counter()
 import dataclasses
 from acdrive.scenarios import load_scenario
-from acdrive.sim import simulate
+from acdrive.drives import simulate
 s = dataclasses.replace(load_scenario({scenario!r}), duration=0.01)
 t1 = time.perf_counter(); simulate(s); t2 = time.perf_counter()
 print(t1 - t0, t2 - t1)
@@ -55,9 +55,9 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
 
+    from acdrive.drives.dfim._drive import simulate_slow
+    from acdrive.drives.dfim._setup import n_steps, simulate
     from acdrive.scenarios import load_scenario
-    from acdrive.sim._dfim_drive import simulate_slow
-    from acdrive.sim._setup import n_steps, simulate
 
     report: dict = {"benchmark": "dfim-drive", "python": sys.version.split()[0]}
     with tempfile.TemporaryDirectory() as cache:

@@ -29,7 +29,7 @@ HERE = Path(__file__).resolve().parent
 IMPORTS = {
     "simulate_previous_engine": f"import sys; sys.path.insert(0, {str(HERE)!r}); "
     "from previous_engine import simulate_previous_engine as run",
-    "simulate": "from acdrive.sim._setup import simulate as run",
+    "simulate": "from acdrive.drives.dfim._setup import simulate as run",
 }
 START_SNIPPET = """
 import time; t0 = time.perf_counter()
@@ -71,7 +71,7 @@ def steps_per_second(engines: dict, setup) -> dict:
 
 def main() -> None:
     from acdrive.scenarios import load_scenario
-    from acdrive.sim import simulate
+    from acdrive.drives import simulate
 
     sys.path.insert(0, str(HERE))
     from previous_engine import simulate_previous_engine

@@ -1,4 +1,4 @@
-"""Compare the parts-built DFIM drive (``acdrive.sim._dfim_drive``) with the previous engine
+"""Compare the parts-built DFIM drive (``acdrive.drives.dfim._drive``) with the previous engine
 (frozen in ``benchmarks/previous_engine``) on the nine built-in scenarios it knows (``ORIGINAL``; the
 fault scenarios added later use parts it does not have): prints JSON with, per scenario and mode,
 the largest difference of each logged signal relative to that signal's peak magnitude.
@@ -23,9 +23,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from previous_engine import simulate_previous_engine
 
 from acdrive._jit import STRICT_MATH
+from acdrive.drives.dfim import _drive as dfim_drive
+from acdrive.drives.dfim._result import LOG_NAMES
 from acdrive.scenarios import load_scenario
-from acdrive.sim import _dfim_drive as dfim_drive
-from acdrive.sim._result import LOG_NAMES
 
 TOLERANCE = 1e-12
 #: the built-in scenarios the previous engine can run (its parts: balanced source, fixed DC link,

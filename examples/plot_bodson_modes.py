@@ -8,8 +8,8 @@ rotor-current feedback. ``DriveSetup.with_mode`` switches every controller of a 
 
 import matplotlib.pyplot as plt
 
+from acdrive.drives import simulate
 from acdrive.scenarios import load_scenario
-from acdrive.sim import simulate
 
 setup = load_scenario("bodson-step")
 fig, ax = plt.subplots(figsize=(7, 3.5))

@@ -11,8 +11,8 @@ stated in the scenario's note).
 
 import matplotlib.pyplot as plt
 
+from acdrive.drives import simulate
 from acdrive.scenarios import load_scenario
-from acdrive.sim import simulate
 
 setup = load_scenario("bodson-ramp")
 result = simulate(setup)

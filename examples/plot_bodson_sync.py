@@ -10,8 +10,8 @@ zero torque.
 
 import matplotlib.pyplot as plt
 
+from acdrive.drives import simulate
 from acdrive.scenarios import load_scenario
-from acdrive.sim import simulate
 
 result = simulate(load_scenario("bodson-sync"))
 

@@ -10,8 +10,8 @@ gives both controllers' RMS speed error to the ideal ramp, the same metric for b
 
 import matplotlib.pyplot as plt
 
+from acdrive.drives import run_im_scenario
 from acdrive.scenarios import load_scenario
-from acdrive.sim import run_im_scenario
 
 outcome = run_im_scenario(load_scenario("im-icad-vs-pi"))
 

@@ -9,8 +9,8 @@ controllers; the summary gives each one's RMS tracking error.
 
 import matplotlib.pyplot as plt
 
+from acdrive.drives import run_im_scenario
 from acdrive.scenarios import load_scenario
-from acdrive.sim import run_im_scenario
 
 outcome = run_im_scenario(load_scenario("im-locked-rotor"))
 

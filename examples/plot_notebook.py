@@ -11,8 +11,8 @@ MATLAB ``.mat`` with a ``columns.md`` beside the data.
 import tempfile
 from pathlib import Path
 
+from acdrive.drives import simulate
 from acdrive.scenarios import load_scenario
-from acdrive.sim import simulate
 
 result = simulate(load_scenario("bodson-two-motors"))
 result  # noqa: B018 - a notebook shows the repr of the last expression

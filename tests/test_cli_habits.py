@@ -175,7 +175,7 @@ def _ramp_and_stop():
 
 
 def _result(setup, t, w, relay=None):
-    from acdrive.sim._result import LOG_NAMES, N_LOG, DriveResult
+    from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, DriveResult
 
     times, values = setup.motors[0].speed_reference
     signals = np.zeros((t.size, 1, N_LOG))
@@ -188,9 +188,9 @@ def _result(setup, t, w, relay=None):
 
 def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth():
     from acdrive._frames import K_PEAK
+    from acdrive.drives.dfim._outcome import tracking_windows
     from acdrive.machines._dfim import machine_vector, torque_limits_case1
     from acdrive.sim._metrics import SETTLE_TIME_CONSTANTS, SLEW_MARGIN
-    from acdrive.sim._outcome import tracking_windows
 
     setup = _ramp_and_stop()
     m = setup.motors[0]
@@ -222,7 +222,7 @@ def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth()
 
 
 def test_an_open_relay_is_not_tracking():
-    from acdrive.sim._outcome import tracking_windows
+    from acdrive.drives.dfim._outcome import tracking_windows
 
     setup = _ramp_and_stop()
     t = np.arange(0.0, 2.0, 1e-3)

@@ -64,7 +64,7 @@ def _strict(text: str):
 
 #: RK4 step 2 ms, far beyond the stability limit of the fastest electrical pole of a machine
 #: with an 8-ohm rotor (R_r / (sigma L_r) + 2 pi f = 3,433 1/s: 6.9 per step); the controller
-#: works at that period (a_D,VEL T_s = 0.63 < 0.83, 8 samples per supply period: sim._period)
+#: works at that period (a_D,VEL T_s = 0.63 < 0.83, 8 samples per supply period: drives.dfim._period)
 LONG_STEP = "duration = 0.2\nsample_time = 2e-3\nsubsteps = 1"
 RESISTIVE_ROTOR = """
 [motor.params]
@@ -750,7 +750,8 @@ def test_a_supply_above_a_kilohertz_is_refused(tmp_path, capsys, supply, field):
 
 
 def test_more_motors_than_the_bound_are_refused_before_compiling(tmp_path, capsys):
-    from acdrive.scenarios._loader import MAX_MOTORS, build_setup
+    from acdrive.drives.dfim._schema import MAX_MOTORS
+    from acdrive.scenarios._loader import build_setup
 
     data = _base()
     data["motor"] = [dict(data["motor"][0]) for _ in range(MAX_MOTORS)]
@@ -809,3 +810,25 @@ def test_an_overflowing_design_names_the_machine_parameter_that_caused_it(
     assert code == 2, err
     assert _named(err) == field, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    ("scenario", "sample_time"), [("bodson-ramp", 200e-6), ("im-foc-speed", 2e-5)]
+)
+def test_a_run_shorter_than_the_default_sample_time_names_the_duration_with_its_numbers(
+    scenario, sample_time
+):
+    """Both drives' loaders share ``scenarios._files.simulation_span``: the message carries the
+    default sample time and the duration given (the duration was once printed as a template)."""
+    from acdrive.errors import InputError
+    from acdrive.scenarios import build_setup, read_scenario
+
+    data = read_scenario(scenario)
+    data.setdefault("simulation", {}).pop("sample_time", None)
+    data["simulation"]["duration"] = sample_time / 2
+    with pytest.raises(InputError) as info:
+        build_setup(data)
+    assert str(info.value) == (
+        f"simulation.duration: must be at least one sample, simulation.sample_time = "
+        f"{sample_time:g} s (the default), got {sample_time / 2:g} s"
+    )

@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
+from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim._setup import simulate
 from acdrive.errors import InputError
 from acdrive.machines._dfim import BODSON_DFIM, L_R, L_S, M_SR, machine_vector
 from acdrive.scenarios._loader import build_setup
-from acdrive.sim._dfim_drive import DFIMDrive
-from acdrive.sim._outcome import run_scenario
-from acdrive.sim._setup import simulate
 
 PAPER_PARAMS = {"R_s": 0.66, "R_r": 0.94, "L_s": 13.1e-3, "L_r": 9.8e-3, "M": 9.7e-3, "n_p": 2}
 

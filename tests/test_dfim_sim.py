@@ -8,10 +8,10 @@ import pytest
 
 from acdrive.control._speed import speed_pi
 from acdrive.core import Profile
+from acdrive.drives.dfim._drive import DFIMDrive, simulate_slow
+from acdrive.drives.dfim._setup import simulate
 from acdrive.machines._dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
 from acdrive.scenarios._loader import build_setup, load_scenario
-from acdrive.sim._dfim_drive import DFIMDrive, simulate_slow
-from acdrive.sim._setup import simulate
 
 
 def short_ramp(duration=0.1, **overrides):
@@ -200,7 +200,7 @@ def test_batch_axis_runs_variants_in_parallel():
 
 
 def test_speed_oscillation_metric_recovers_a_known_sinusoid():
-    from acdrive.sim._result import LOG_NAMES, DriveResult
+    from acdrive.drives.dfim._result import LOG_NAMES, DriveResult
 
     t = np.arange(20000) * 200e-6
     signals = np.zeros((t.size, 1, len(LOG_NAMES)))
@@ -251,7 +251,7 @@ def test_paper_gains_limit_cycle_in_voltage_mode_only():
 def test_converter_loss_opposes_rotor_current():
     """First-harmonic dead-time / drop model: the applied rotor voltage differs from the command by
     sqrt(3/2) (4/pi) (V_dc t_d f_sw + V_drop) along -i_R / |i_R|."""
-    from acdrive.sim._setup import ConverterLosses
+    from acdrive.drives.dfim._setup import ConverterLosses
 
     losses = ConverterLosses(dead_time=2e-6, switching_frequency=1e4, device_drop=0.5)
     expected = np.sqrt(1.5) * 4 / np.pi * (30.0 * 2e-6 * 1e4 + 0.5)
@@ -283,7 +283,7 @@ def test_numerical_blow_up_is_an_error_not_nan():
     """An integration step beyond the stability limit of RK4 (h |lambda| > 2.8 for the fast electrical
     pole, here h = 2 ms on a rotor of 8 ohm: about 3,400 1/s) makes the state blow up; the engine
     stops and says so instead of returning NaN. (A 10 ms control period is refused before it
-    runs: sim._period.)"""
+    runs: drives.dfim._period.)"""
     params = {"R_s": 0.66, "R_r": 8.0, "L_s": 13.1e-3, "L_r": 9.8e-3, "M": 9.7e-3, "n_p": 2,
               "J": 3.5e-4}  # fmt: skip
     data = {

@@ -18,6 +18,7 @@ from acdrive.analysis._drive_stability import (
     stability_map,
 )
 from acdrive.cli import main
+from acdrive.drives.dfim._setup import simulate
 from acdrive.errors import InputError
 from acdrive.machines._dfim import (
     BODSON_DFIM,
@@ -25,7 +26,6 @@ from acdrive.machines._dfim import (
     shifted_delta_z_coefficients,
 )
 from acdrive.scenarios._loader import build_setup
-from acdrive.sim._setup import simulate
 
 W_E = 2 * math.pi * 60.0
 

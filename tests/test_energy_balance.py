@@ -101,14 +101,14 @@ from hypothesis import strategies as st
 
 from acdrive._frames import K_PEAK, abc_to_complex, complex_to_abc
 from acdrive.control._dfim import EVENT_NAMES
+from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim._outcome import run_scenario
 from acdrive.errors import Notice
 from acdrive.machines._dfim import BODSON_DFIM, currents_from_fluxes, electromagnetic_torque
 from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import load_torque
 from acdrive.scenarios._loader import build_setup
-from acdrive.sim._dfim_drive import DFIMDrive
-from acdrive.sim._outcome import run_scenario
 
 RPM = math.pi / 30.0  # rad/s per rpm
 #: safety factor on the expected trapezoid error (w_max T_s)^2 / (12 sigma) (module docstring)
@@ -322,7 +322,8 @@ def tracking(setup, k: int, t: np.ndarray, err_rpm: np.ndarray, closed: np.ndarr
     """The tracking window as ``acdrive.sim._metrics`` documents it, written out here: the relay
     closed, and not within SLEW_MARGIN J |dw| / tau + SETTLE_TIME_CONSTANTS / a_D,VEL of a
     reference segment steeper than tau / J (from its start) or of a relay closing."""
-    from acdrive.sim._metrics import SETTLE_TIME_CONSTANTS, SLEW_MARGIN, slew_torque
+    from acdrive.drives.dfim._tracking import slew_torque
+    from acdrive.sim._metrics import SETTLE_TIME_CONSTANTS, SLEW_MARGIN
 
     m = setup.motors[k]
     J, tau = m.machine.J, slew_torque(setup, k)

@@ -38,6 +38,9 @@ from acdrive._jit import STRICT_MATH
 from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
 from acdrive.cli import main
 from acdrive.control._dfim import EVENT_NAMES
+from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM, run_scenario
+from acdrive.drives.dfim._result import LOG_NAMES, RPM_PER_RAD_S
 from acdrive.errors import InputError
 from acdrive.machines._dfim import BODSON_DFIM
 from acdrive.plant._converter import max_voltage_magnitude
@@ -48,9 +51,6 @@ from acdrive.plant._sources import (
     unbalanced_state_outputs,
 )
 from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text
-from acdrive.sim._dfim_drive import DFIMDrive
-from acdrive.sim._outcome import OSCILLATION_FINDING_RPM, run_scenario
-from acdrive.sim._result import LOG_NAMES, RPM_PER_RAD_S
 
 ALPHA = np.exp(2j * np.pi / 3)
 #: a decaying mode is down to e^-5 (< 1 %) of its start after five of its time constants

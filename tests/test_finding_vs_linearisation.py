@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive.drives.dfim._outcome import run_scenario
 from acdrive.errors import InputError
 from acdrive.scenarios._loader import load_scenario
-from acdrive.sim._outcome import run_scenario
 
 SCENARIOS = ("bodson-ramp", "bodson-ramp-ideal", "bodson-step", "bodson-mixed-steps")
 

@@ -21,21 +21,18 @@ import pytest
 from scipy.signal import lsim, lti
 
 from acdrive._frames import complex_to_abc
-from acdrive._report.im_outputs import closed_loop_reference_ss, linear_step_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.cli import main
 from acdrive.core import Profile
+from acdrive.drives.cage_im._drive import IMDrive
+from acdrive.drives.cage_im._outcome import run_im_scenario
+from acdrive.drives.cage_im._outputs import closed_loop_reference_ss, linear_step_response
+from acdrive.drives.cage_im._physics import foc_voltage, modulation_signals
+from acdrive.drives.cage_im._result import IMDriveResult
+from acdrive.drives.cage_im._schema import build_im_setup
+from acdrive.drives.cage_im._setup import IMDriveSetup
 from acdrive.errors import InputError, SimulationDiverged
-from acdrive.scenarios._im_loader import build_im_setup
 from acdrive.scenarios._loader import builtin_names, builtin_text, load_scenario
-from acdrive.sim._im_drive import (
-    IMDrive,
-    IMDriveResult,
-    IMDriveSetup,
-    foc_voltage,
-    modulation_signals,
-    run_im_scenario,
-)
 
 IM_SCENARIOS = (
     "im-locked-rotor",
@@ -340,7 +337,7 @@ def test_step_responses_match_the_linear_loops_without_the_pwm_hold():
 
 
 def test_step_summary_and_the_papers_ordering(tmp_path, outcomes):
-    from acdrive._report.im_outputs import write_im_outcome
+    from acdrive.drives.cage_im._outputs import write_im_outcome
 
     outcome = outcomes["im-step-responses"]
     summary = write_im_outcome(outcome, tmp_path, figures=False)
@@ -492,7 +489,7 @@ def test_other_rules(tmp_path):
     assert isinstance(build_im_setup(data), IMDriveSetup)
     path = tmp_path / "drive.toml"
     path.write_text(text.replace('drive = "cage-im"', 'drive = "pmsm"'))
-    with pytest.raises(InputError, match=r'^drive: must be "cage-im"'):
+    with pytest.raises(InputError, match=r'^drive: must be one of "dfim", "cage-im"'):
         load_scenario(path)
     both = dict(data, compare_controllers={"a": "paper-20"})
     both["current_control"] = {"controller": "paper-pi"}

@@ -9,15 +9,12 @@ import numpy as np
 import pytest
 
 from acdrive.core import Profile
+from acdrive.drives.cage_im._outcome import run_im_scenario, warnings_of
+from acdrive.drives.cage_im._recovery import im_disturbances
+from acdrive.drives.cage_im._result import IMDriveResult
+from acdrive.drives.cage_im._setup import IMDriveSetup, Mechanics, SpeedPISetup
 from acdrive.scenarios import load_scenario
-from acdrive.sim._im_drive import (
-    IMDriveResult,
-    IMDriveSetup,
-    Mechanics,
-    SpeedPISetup,
-    run_im_scenario,
-    warnings_of,
-)
+from acdrive.scenarios._files import constant
 from acdrive.sim._metrics import RPM_PER_RAD_S, SETTLE_TIME_CONSTANTS, SLEW_MARGIN
 from acdrive.sim._recovery import (
     HOLD_S,
@@ -26,9 +23,7 @@ from acdrive.sim._recovery import (
     RECOVERY_MIN_RPM,
     RECOVERY_P99_FACTOR,
     RECOVERY_REFERENCE_FRACTION,
-    im_disturbances,
 )
-from acdrive.sim._setup import constant
 
 
 def _recovered_at(t, err, judged, band):

@@ -10,12 +10,10 @@ from itertools import pairwise
 
 import numpy as np
 import pytest
+from rl_load import RLLoad
 
 from acdrive import _frames as frames
-from acdrive._jit import jit_fast
 from acdrive.control._open_loop import VoltageProgram
-from acdrive.core._parts import ContinuousPart
-from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
 from acdrive.plant._converter import AVERAGED_OUTPUTS, AveragedConverter, averaged_segments
 from acdrive.plant._inverter import INPUTS, OUTPUTS, Inverter, inverter_segments
@@ -221,34 +219,6 @@ def test_dead_time_must_be_shorter_than_half_the_carrier_period():
 
 
 # --- an RL load driven through a compiled system ------------------------------------------------
-RL_PARAMS = Layout(
-    real("R", "ohm", "resistance per phase", "positive"),
-    real("L", "H", "inductance per phase", "positive"),
-)
-RL_STATES = Layout(cplx("i", "A", "load current"))
-RL_INPUTS = Layout(cplx("v", "V", "phase-to-neutral voltage"))
-RL_OUTPUTS = Layout(cplx("i_s", "A", "load current"))
-
-
-@jit_fast
-def rl_state_outputs(t, x, p, y):
-    y[0], y[1] = x[0], x[1]
-
-
-@jit_fast
-def rl_rhs(t, x, u, p, y, dx):
-    dx[0] = (u[0] - p[0] * x[0]) / p[1]
-    dx[1] = (u[1] - p[0] * x[1]) / p[1]
-
-
-class RLLoad(ContinuousPart):
-    """Balanced star-connected R-L load: L di/dt = v - R i (space vectors)."""
-
-    PARAMS, STATES, INPUTS, OUTPUTS = RL_PARAMS, RL_STATES, RL_INPUTS, RL_OUTPUTS
-    state_outputs = rl_state_outputs
-    rhs = rl_rhs
-
-
 R_LOAD, L_LOAD = 1.0, 0.5e-3  # time constant 0.5 ms: 2.5 carrier periods
 V_PK = 150.0  # phase peak: |v_ref| = 184 V, inside the 219 V limit
 

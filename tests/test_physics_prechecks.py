@@ -19,22 +19,14 @@ import numpy as np
 import pytest
 
 from acdrive.cli import main
+from acdrive.drives._period import speed_loop_radius
+from acdrive.drives.cage_im._period import im_control_period_warnings
+from acdrive.drives.dfim._period import control_period_warnings, current_loop_radius
+from acdrive.drives.dfim._schema import fastest_mode
+from acdrive.drives.dfim._setup import RK4_STEP_LIMIT, ConverterLosses, fastest_electrical_rate
 from acdrive.errors import InputError, Notice
 from acdrive.plant._converter import max_voltage_magnitude
-from acdrive.scenarios._loader import (
-    build_setup,
-    builtin_names,
-    builtin_text,
-    fastest_mode,
-    load_scenario,
-)
-from acdrive.sim._period import (
-    control_period_warnings,
-    current_loop_radius,
-    im_control_period_warnings,
-    speed_loop_radius,
-)
-from acdrive.sim._setup import RK4_STEP_LIMIT, ConverterLosses, fastest_electrical_rate
+from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text, load_scenario
 from acdrive.sim._system import MAX_SUBSTEPS
 
 V_DC = 30.0  # the built-ins' DC link
@@ -175,7 +167,7 @@ def test_a_dead_time_within_both_bounds_runs(capsys, tmp_path):
 #: 5 ms samples of a machine with an 8-ohm rotor: the rotor flux mode R_r / (sigma L_r) is about
 #: 3,100 1/s, and 4 substeps (1.25 ms) exceed RK4's limit; the estimate (3,433 1/s) asks for 7.
 #: The speed loop is slowed to a_D,VEL = 50 rad/s so the controller works at that period
-#: (a_D,VEL T_s = 0.25, 3.3 samples per supply period: sim._period) and only the plant's
+#: (a_D,VEL T_s = 0.25, 3.3 samples per supply period: drives.dfim._period) and only the plant's
 #: integration is at stake here.
 COARSE = "duration = 0.5\nsample_time = 0.005"
 
@@ -323,7 +315,7 @@ def test_refusals_are_input_errors_for_library_callers(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------------
-# (e) the control period (sim._period): supply aliasing, sampled speed and current loops, PWM
+# (e) the control period (drives.dfim._period): supply aliasing, sampled speed and current loops, PWM
 # ---------------------------------------------------------------------------------------------
 
 
@@ -456,7 +448,7 @@ def test_a_megavolt_supply_names_the_supply_voltage(capsys, tmp_path):
 
 
 def test_a_meganewton_metre_load_names_the_load(capsys, tmp_path):
-    from acdrive.sim._setup import peak_torque_window
+    from acdrive.drives.dfim._setup import peak_torque_window
 
     path = _scenario(tmp_path, motor="load_torque = 1e6")
     line = _refused(capsys, tmp_path, path, "motor[0].load_torque")
@@ -471,9 +463,9 @@ def test_the_im_current_loop_bandwidth_is_that_of_its_closed_loop_and_warned_whe
     machine at standstill) is where |L / (1 + L)| crosses 1/sqrt(2), checked against the loop
     evaluated there independently; 250 us samples (4 per 4 kHz carrier period, a stable
     latched loop) give a_C T_s > 1 and a warning, the paper's 20 us none."""
+    from acdrive.drives.cage_im._period import im_current_bandwidth
+    from acdrive.drives.cage_im._schema import build_im_setup
     from acdrive.machines._induction import stator_current_ss
-    from acdrive.scenarios._im_loader import build_im_setup
-    from acdrive.sim._period import im_current_bandwidth
 
     data = tomllib.loads(builtin_text("im-locked-rotor"))
     paper = build_im_setup(data)

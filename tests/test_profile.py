@@ -100,7 +100,7 @@ def test_the_scenarios_profiles_load_as_profiles(name):
 
 def test_scenario_profiles_reach_the_parts():
     """The file's points [[0, 11.1], [1.5, 11.1], [3.0, 8.0], ...] arrive in the source's table."""
-    from acdrive.sim import DFIMDrive, IMDrive
+    from acdrive.drives import DFIMDrive, IMDrive
 
     setup = load_scenario("bodson-varying-supply")
     grid = DFIMDrive(setup).grid

@@ -13,8 +13,8 @@ from acdrive._report import im_reproduction as rep
 from acdrive._report import verdicts as V
 from acdrive._report.icad.rounding import matrix_entries, rounding_reach, rounding_rows
 from acdrive._report.icad.ugalde_im import c_of_80_row
-from acdrive._report.im_outputs import delayed_linear_step_response, linear_step_response
 from acdrive.control._lti import PAPER_20
+from acdrive.drives.cage_im._outputs import delayed_linear_step_response, linear_step_response
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W
 
 # --- round-off printed as a bound ---------------------------------------------------------------

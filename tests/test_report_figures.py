@@ -8,11 +8,11 @@ import pytest
 from PIL import Image
 
 from acdrive._frames import K_PEAK
-from acdrive._report import dfim_figures
-from acdrive._report.dfim_figures import current_limits, drive_figures
 from acdrive._report.markdown import DPI, save_figure
 from acdrive._report.plotting import ENVELOPE_BINS, envelope, new_figure
-from acdrive.sim._result import LOG_NAMES, N_LOG, DriveResult
+from acdrive.drives.dfim import _figures as dfim_figures
+from acdrive.drives.dfim._figures import current_limits, drive_figures
+from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, DriveResult
 
 # --- the envelope ----------------------------------------------------------------------------
 
@@ -142,9 +142,9 @@ def test_currents_figure_draws_the_given_limits_and_the_true_peak():
 
 
 def test_a_scenario_limit_reaches_the_currents_figure(tmp_path, monkeypatch):
-    from acdrive._report.drive_outputs import write_outcome
+    from acdrive.drives.dfim._outcome import run_scenario
+    from acdrive.drives.dfim._outputs import write_outcome
     from acdrive.scenarios._loader import load_scenario
-    from acdrive.sim._outcome import run_scenario
 
     path = tmp_path / "limits.toml"
     path.write_text("""

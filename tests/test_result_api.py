@@ -11,9 +11,9 @@ import pytest
 
 matplotlib.use("Agg")
 
+from acdrive.drives.cage_im._drive import IMDrive
+from acdrive.drives.dfim._setup import simulate
 from acdrive.scenarios._loader import load_scenario
-from acdrive.sim._im_drive import IMDrive
-from acdrive.sim._setup import simulate
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,8 @@ import pytest
 from acdrive._frames import K_PEAK
 from acdrive.cli import main
 from acdrive.columns import FORMATS, Column, check_names, read_units, write_table
+from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, DriveResult
 from acdrive.errors import InputError
-from acdrive.sim._result import LOG_NAMES, N_LOG, DriveResult
 
 SCENARIO = """
 name = "short"

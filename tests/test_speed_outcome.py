@@ -6,6 +6,8 @@ RMS above the threshold to the end of the tracked stretch and a period that repe
 import numpy as np
 import pytest
 
+from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim._recovery import disturbances
 from acdrive.scenarios._loader import build_setup, load_scenario, read_scenario
 from acdrive.sim._metrics import (
     OSCILLATION_FINDING_RPM,
@@ -13,8 +15,7 @@ from acdrive.sim._metrics import (
     limit_cycle,
     period_correlation,
 )
-from acdrive.sim._outcome import run_scenario
-from acdrive.sim._recovery import HOLD_S, disturbances, lost_control
+from acdrive.sim._recovery import HOLD_S, lost_control
 
 
 def _sag(load: float, sag_s: float):

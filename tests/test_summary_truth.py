@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
+from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
 from acdrive.scenarios._loader import build_setup
 from acdrive.sim._metrics import TrackingRule
-from acdrive.sim._outcome import run_scenario
-from acdrive.sim._result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
 
 
 def synthetic(t, w_ref, w, i_r_pk=None, tracking=None):
@@ -168,7 +168,7 @@ def _figures_agree(step_time, ramp_s, target_rpm, load, bandwidth, mode, duratio
 
     from acdrive.batch import simulate_batch
     from acdrive.cli import main
-    from acdrive.sim._setup import simulate
+    from acdrive.drives.dfim._setup import simulate
 
     data = _valid_scenario(step_time, ramp_s, target_rpm, load, bandwidth, mode, duration,
                            log_every)  # fmt: skip

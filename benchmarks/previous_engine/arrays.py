@@ -7,10 +7,10 @@ import time
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
+from acdrive.drives import DriveResult
+from acdrive.drives.dfim._setup import DriveSetup, MotorSetup, Supply, divergence_hint
 from acdrive.errors import SimulationDiverged
 from acdrive.plant._converter import max_voltage_magnitude
-from acdrive.sim import DriveResult
-from acdrive.sim._setup import DriveSetup, MotorSetup, Supply, divergence_hint
 
 from . import controller as ctl
 from . import engine

@@ -15,12 +15,12 @@ from numba import njit, prange
 
 from acdrive._frames import complex_to_abc_nb
 from acdrive._jit import jit, jit_fast
+
+# fmt: off
+from acdrive.drives.dfim._result import N_LOG
 from acdrive.machines._dfim import electromagnetic_torque
 from acdrive.plant._converter import converter_output
 from acdrive.plant._sensors import encoder_angle
-
-# fmt: off
-from acdrive.sim._result import N_LOG
 
 from .controller import (
     CS_I_R_COM,

@@ -1,8 +1,8 @@
 """Many variants of one scenario in the compiled batch loop, on all cores, reduced on line.
 
 ``simulate_batch(base, variants)`` takes a base scenario (built-in name, TOML path or parsed
-dict; or a ``DriveSetup`` / ``IMDriveSetup`` when the variants only change parts and initial
-states) and a list of variants, each a dict of overrides in three forms:
+dict; or the setup of a registered drive, ``acdrive.drives``, when the variants only change parts
+and initial states) and a list of variants, each a dict of overrides in three forms:
 
 * ``"motor[0].controller.speed_bandwidth": 100`` -- a field of the scenario file, dotted as the
   loader names it in its errors (``motor[0].params.R_s`` expands ``machine = "<name>"`` into its
@@ -35,12 +35,13 @@ with the reducer-free loop bit for bit under ``ACDRIVE_STRICT_MATH=1`` and to th
 (fast-math contraction in a larger compiled loop) otherwise (docs/design.md, "Batches and
 sweeps"). A variant in a batch equals the same variant alone in the same loop bit for bit.
 
-**Stability verdict** (DFIM): a variant is ``unstable`` if its state stopped being finite, or if
-the speed error's RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-order high-pass
-sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run
-exceeds ``OSCILLATION_FINDING_RPM`` (1 rpm): the threshold of the single run's limit-cycle
-finding (``sim._outcome``). The ratio of that RMS to the one over the 0.25 s before
-(``speed_oscillation_late_rpm_growth``) tells a growing oscillation from a settled limit cycle.
+**The drive** of each variant answers what is particular to it (``acdrive.drives``): its
+scenario schema, its system of parts (``Drive.build``), its default metrics
+(``Drive.reducers``) and its stability verdict (``Drive.verdict``). An ``oscillation`` reducer
+measures the RMS in ``OSCILLATION_BAND_HZ`` (20-200 Hz; on line: two first-order high-pass
+sections at 20 Hz, one low-pass at 200 Hz) over the last ``LATE_WINDOW_S`` (0.25 s) of the run;
+its ``_growth`` (the ratio to the RMS over the 0.25 s before) tells a growing oscillation from a
+settled limit cycle. A variant whose state stopped being finite is ``unstable`` whatever its drive.
 """
 
 from __future__ import annotations
@@ -65,8 +66,6 @@ from acdrive.errors import InputError
 from acdrive.sim._metrics import (
     LATE_WINDOW_S,
     OSCILLATION_BAND_HZ,
-    OSCILLATION_FINDING_RPM,
-    RPM_PER_RAD_S,
     SPEED_ERROR_STATES,
     TrackingRule,
     speed_error_figures,
@@ -77,14 +76,10 @@ __all__ = [
     "BatchResult",
     "Reducer",
     "default_reducers",
-    "dfim_reducers",
-    "im_reducers",
     "prepare_variant",
     "simulate_batch",
 ]
 
-#: sqrt(3/2): space-vector magnitude of a balanced three-phase set per peak phase value
-SQRT_3_2 = math.sqrt(1.5)
 REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error")
 #: prefix of the parts appended to a system for its reducers
 REDUCER_PREFIX = "reducer_"
@@ -161,76 +156,11 @@ def check_reducer(r: Reducer, where: str) -> Reducer:
     return r
 
 
-def dfim_reducers(setup) -> list[Reducer]:
-    """The default metrics of a DFIM drive, per motor k (suffix ``_m<k>`` beyond the first):
-    the speed error over the whole run and where tracking is expected (the columns of
-    ``sim._metrics.speed_error_figures``, the window of ``sim._metrics.tracking_rule``: the
-    single run's figures of the same names), the band-limited speed oscillation over the last
-    ``LATE_WINDOW_S`` and its growth (``speed_oscillation_late_rpm``), peak phase currents [A]
-    and samples above the controller's current limits, peak torque, final speed."""
-    from acdrive.sim._metrics import tracking_rule
-
-    out = []
-    for k, motor in enumerate(setup.motors):
-        sfx = "" if k == 0 else f"_m{k}"
-        c = motor.controller
-        w, ref = f"shaft{k}.w", f"reference{k}.w_ref"
-        out += [
-            Reducer(
-                "speed",
-                "speed_error",
-                w,
-                ref,
-                gate=f"relay{k}.closed",
-                rule=tracking_rule(setup, k),
-                scale=RPM_PER_RAD_S,
-                unit="rpm",
-                suffix=sfx,
-            ),
-            Reducer(f"speed_oscillation_late_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
-            Reducer(f"peak_stator_current_a{sfx}", "peak", f"dfim{k}.i_s", scale=1 / SQRT_3_2),
-            Reducer(f"peak_rotor_current_a{sfx}", "peak", f"dfim{k}.i_r_rotor", scale=1 / SQRT_3_2),
-            Reducer(
-                f"stator_current_over_limit{sfx}",
-                "exceed",
-                f"dfim{k}.i_s",
-                limit=SQRT_3_2 * c.stator_current_limit_pk,
-            ),
-            Reducer(
-                f"rotor_current_over_limit{sfx}",
-                "exceed",
-                f"dfim{k}.i_r_rotor",
-                limit=SQRT_3_2 * c.rotor_current_limit_pk,
-            ),
-            Reducer(f"peak_torque_nm{sfx}", "peak", f"dfim{k}.tau_e"),
-            Reducer(f"final_speed_rpm{sfx}", "final", w, scale=RPM_PER_RAD_S),
-        ]
-    return out
-
-
 def default_reducers(setup) -> list[Reducer]:
-    """The default metrics of ``setup``'s drive (DFIM or cage IM)."""
-    return dfim_reducers(setup) if hasattr(setup, "motors") else im_reducers(setup)
+    """The default metrics of ``setup``'s drive (``acdrive.drives``: its ``reducers``)."""
+    from acdrive.drives import for_setup
 
-
-def im_reducers(setup) -> list[Reducer]:
-    """The default metrics of a cage-IM drive: current tracking RMS error and peak current [A,
-    space vector], peak torque, final speed, and with a speed loop its speed error over the
-    whole run and where tracking is expected [rad/s] (``sim._metrics.im_tracking_rule``; the
-    single run's figures of the same names)."""
-    from acdrive.sim._metrics import im_tracking_rule
-
-    reference = "reference.i" if setup.mode == "current" else "ifoc.i_s_ref"  # IMDrive's
-    out = [
-        Reducer("current_error_rms_a", "rms", "machine.i_s", reference),
-        Reducer("peak_stator_current_a", "peak", "machine.i_s"),
-        Reducer("peak_torque_nm", "peak", "machine.tau_e"),
-        Reducer("final_speed_rad_s", "final", "shaft.w"),
-    ]
-    if setup.mode in ("speed-p", "speed-pi"):
-        out.append(Reducer("speed", "speed_error", "shaft.w", "speed_reference.w_ref",
-                           rule=im_tracking_rule(setup), unit="rad_s"))  # fmt: skip
-    return out
+    return list(for_setup(setup).reducers(setup))
 
 
 # --- variants -------------------------------------------------------------------------------
@@ -251,29 +181,20 @@ def _segments(path: str) -> list[tuple[str, int | None]]:
     return out
 
 
-def _default_machine(data: dict) -> str:
-    return "delorenzo-im" if data.get("drive") == "cage-im" else "bodson-dfim"
-
-
-#: the fields of a scenario's [params] table per machine class (scenarios._loader, im_loader)
-_PARAMS_FIELDS = {
-    "DFIMParams": ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J"),
-    "IMParams": ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p"),
-}
-
-
 def _expand_machine(table: dict, root: dict, path: str) -> None:
-    """Replace ``machine = "<built-in>"`` in ``table`` by its ``params`` (the required fields of
-    its parameter class), so one of them can be changed."""
+    """Replace ``machine = "<built-in>"`` in ``table`` by its ``params`` (the fields of its
+    ``[params]`` form, ``Drive.params_fields``), so one of them can be changed."""
+    from acdrive.drives import for_data
     from acdrive.machines import _registry as registry
 
     if "params" in table:
         return
-    name = table.get("machine", _default_machine(root))
+    drive = for_data(root)
+    name = table.get("machine", drive.default_machine)
     if name not in registry.MACHINES:
         raise InputError(path, f"machine {name!r} is not built in: give [params] instead")
     machine = registry.MACHINES[name]
-    fields = _PARAMS_FIELDS.get(type(machine).__name__)
+    fields = drive.params_fields(machine)
     if fields is None:
         raise InputError(path, f"machine {name!r} has no [params] form in a scenario")
     table.pop("machine", None)
@@ -346,42 +267,30 @@ def _split(overrides: dict) -> tuple[dict, dict, dict]:
 
 def _base_data(base):
     """(parsed scenario dict or None, setup or None) of ``base``."""
-    from acdrive.scenarios._loader import read_scenario
+    from acdrive.drives import is_setup
+    from acdrive.scenarios._files import read_scenario
 
     if isinstance(base, dict):
         return copy.deepcopy(base), None
     if isinstance(base, str) or hasattr(base, "__fspath__"):
         return read_scenario(base), None
-    if hasattr(base, "motors") or hasattr(base, "mechanics"):
+    if is_setup(base):
         return None, base
     raise InputError("base", "must be a scenario name, a TOML path, a parsed dict or a setup")
 
 
 def build_variant_setup(data: dict):
-    """The setup of a parsed scenario (DFIM or cage IM), validated by the scenario loaders."""
+    """The setup of a parsed scenario, validated by its drive's loader (``Drive.load``)."""
     from acdrive.scenarios._loader import build_setup
 
-    if "drive" in data:
-        if data["drive"] != "cage-im":
-            raise InputError("drive", 'must be "cage-im" (omit it for a DFIM scenario)')
-        from acdrive.scenarios._im_loader import build_im_setup
-
-        return build_im_setup(data)
     return build_setup(data)
 
 
 def _drive_of(setup):
-    from acdrive.sim._im_drive import IMDrive, IMDriveSetup
+    """The built system of one variant (``Drive.build``)."""
+    from acdrive.drives import for_setup
 
-    if isinstance(setup, IMDriveSetup):
-        if setup.runs() and len(setup.runs()) > 1:
-            raise InputError("compare", "a batch runs one controller per variant: no comparisons")
-        return IMDrive(setup)
-    if setup.compare_modes:
-        raise InputError("compare_modes", "a batch runs one mode per variant: no comparisons")
-    from acdrive.sim._dfim_drive import DFIMDrive
-
-    return DFIMDrive(setup)
+    return for_setup(setup).build(setup)
 
 
 def _port(system: System, path: str, where: str):
@@ -705,16 +614,10 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
 
 
 def _verdict(setup, row: dict, finite: bool):
-    """DFIM: False if diverged or the late speed oscillation of any motor exceeds
-    ``OSCILLATION_FINDING_RPM``; True otherwise; None without the oscillation metric."""
+    """False if the state stopped being finite; else the drive's own verdict on the row
+    (``Drive.verdict``: the DFIM's late speed oscillation; None for a drive without one)."""
     if not finite:
         return False
-    keys = [
-        k for k in row if k.startswith("speed_oscillation_late_rpm") and not k.endswith("_growth")
-    ]
-    if not keys or not hasattr(setup, "motors"):
-        return None
-    values = [row[k] for k in keys]
-    if any(math.isnan(v) for v in values):
-        return None
-    return bool(max(values) <= OSCILLATION_FINDING_RPM)
+    from acdrive.drives import for_setup
+
+    return for_setup(setup).verdict(setup, row)

@@ -29,7 +29,6 @@ from acdrive._report.converter_effect import (
     measure,
     uses_bench_converter,
 )
-from acdrive._report.drive_outputs import write_outcome
 from acdrive._report.limit_cycle_summary import shown_summary
 from acdrive._report.speed_overshoot import overshoot_rows
 from acdrive._report.spread import SUBWINDOWS, peak_spread, round_to_spread
@@ -52,6 +51,9 @@ from acdrive.analysis._drive_stability import (
 )
 from acdrive.control._dfim import current_loop_gains
 from acdrive.control._speed import SpeedPIGains
+from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM, run_scenario, synchronous_rpm
+from acdrive.drives.dfim._outputs import write_outcome
+from acdrive.drives.dfim._result import OSCILLATION_BAND_HZ
 from acdrive.machines._dfim import (
     BODSON_DFIM,
     electrical_poles,
@@ -61,8 +63,6 @@ from acdrive.machines._dfim import (
     torque_limits_case1,
 )
 from acdrive.scenarios._loader import load_scenario
-from acdrive.sim._outcome import OSCILLATION_FINDING_RPM, run_scenario, synchronous_rpm
-from acdrive.sim._result import OSCILLATION_BAND_HZ
 
 A_VEL, A_CUR, R_T = 314.0, 3142.0, 1.0
 

@@ -3,7 +3,7 @@
 Bodson's voltage-command law ((20) with the stator current command (22)) computes the rotor
 voltage that makes the stator absorb the commanded reactive power Q_COM while the machine
 produces tau_COM, assuming the converter applies that voltage. A rotor converter with dead time
-and device drops (``acdrive.sim._setup.ConverterLosses.fundamental_loss``) applies less, against
+and device drops (``acdrive.drives.dfim._setup.ConverterLosses.fundamental_loss``) applies less, against
 the rotor current. In steady state the stator then absorbs a reactive power Q_S = Im(v_S i_S*)
 (Bodson (5)) other than Q_COM, and the speed PI (25) settles on a torque command other than the
 torque tau_e the machine produces. The current-command mode closes a loop on the rotor current
@@ -36,8 +36,8 @@ from acdrive._report.verdicts import (
     window_drift,
     within_abs,
 )
-from acdrive.sim._outcome import OSCILLATION_FINDING_RPM
-from acdrive.sim._setup import ConverterLosses, DriveSetup
+from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
+from acdrive.drives.dfim._setup import ConverterLosses, DriveSetup
 
 #: A sample is steady once the speed reference has been constant for this long [s] with the
 #: stator relay closed (the speed loop's transient after a step or a ramp end has settled).

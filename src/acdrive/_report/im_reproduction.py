@@ -2,7 +2,7 @@
 domain (``acdrive reproduce im`` -> ``im-current-control.md``).
 
 Every experiment of the paper's time-domain half (Figs. 11, 13, 14, 16, 18, 20, 23) is run as a
-built-in scenario (``scenarios/builtin/im-*.toml``) through ``sim.run_im_scenario``,
+built-in scenario (``scenarios/builtin/im-*.toml``) through ``drives.run_im_scenario``,
 and the coupling between the two current channels is measured in simulation and set beside the
 ICAD prediction (10) (``analysis._coupling``; the last paragraph of the issue "Cage induction
 motor drives in the time domain"). The paper prints few numbers for these experiments; where it
@@ -36,12 +36,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from acdrive._report import icad_targets as targets
-from acdrive._report.im_outputs import (
-    delayed_linear_step_response,
-    step_comparison,
-    write_comparison_figures,
-    write_run_figures,
-)
 from acdrive._report.markdown import Row, Section, fmt, render_section, save_figure
 from acdrive._report.verdicts import (
     INPUT,
@@ -68,16 +62,18 @@ from acdrive.analysis._coupling import (
     pmsg_pi,
 )
 from acdrive.control._lti import PAPER_20, PAPER_PI
+from acdrive.drives.cage_im._outcome import IMOutcome, run_im_scenario
+from acdrive.drives.cage_im._outputs import (
+    delayed_linear_step_response,
+    step_comparison,
+    write_comparison_figures,
+    write_run_figures,
+)
+from acdrive.drives.cage_im._physics import foc_voltage
+from acdrive.drives.cage_im._result import IMDriveResult, _steady_mask
 from acdrive.machines._induction import DELORENZO_IM
 from acdrive.machines._pmsm import PMSG_2MW
 from acdrive.scenarios._loader import load_scenario
-from acdrive.sim._im_drive import (
-    IMDriveResult,
-    IMOutcome,
-    _steady_mask,
-    foc_voltage,
-    run_im_scenario,
-)
 
 STEM = "im-current-control"
 
@@ -240,7 +236,7 @@ def _peak_modulation(outcome: IMOutcome) -> float:
 
 def _steady_drift(result: IMDriveResult, signal: str) -> tuple[float, float, float]:
     """(mean, drift, window [s]) of a logged signal over the summary's steady window
-    (``sim._im_drive._steady_mask``, the window of its final values): the numbers of the
+    (``drives.cage_im._result._steady_mask``, the window of its final values): the numbers of the
     settling test (``_report.verdicts.window_drift``)."""
     mask = _steady_mask(result.t)
     return window_drift(result.t[mask], result.signal(signal)[mask])
@@ -815,7 +811,7 @@ FIGURES = {
 
 
 def write_figures(outcomes: dict[str, IMOutcome], fig_dir: Path) -> dict[str, list]:
-    """Draw every run's figures (``_report.im_outputs``) in a scratch folder and copy those of
+    """Draw every run's figures (``drives.cage_im._outputs``) in a scratch folder and copy those of
     ``FIGURES`` into ``fig_dir`` as ``<experiment>_<name>``; returns experiment -> [(file,
     caption)]."""
     out: dict[str, list] = {}

@@ -28,7 +28,7 @@ from acdrive._report.spread import (
     order_of_magnitude,
     round_to_spread,
 )
-from acdrive.sim._outcome import OSCILLATION_FINDING_RPM
+from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
 
 
 class Shown(float):

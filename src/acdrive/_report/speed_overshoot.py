@@ -18,8 +18,8 @@ import numpy as np
 from acdrive._report.converter_effect import ideal_converter
 from acdrive._report.verdicts import Verdict
 from acdrive.core._profile import Profile
+from acdrive.drives.dfim._outcome import run_scenario
 from acdrive.scenarios._loader import load_scenario
-from acdrive.sim._outcome import run_scenario
 
 #: "Without overshoot" holds when the speed exceeds its new reference by at most this fraction of
 #: the step (0.1 %: well above the speed ripple of the simulated run, far below a visible bump).

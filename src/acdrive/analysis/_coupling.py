@@ -16,7 +16,7 @@ after ``settle`` seconds the sinusoidal component at W of y_2 (and of y_1) is fi
 squares (cos, sin and a constant) over an integer number of periods and divided by that of r_1.
 
 Within the linear range of the paper's 310 V link (|v| <= v_dc / sqrt(2), checked: ``peak_voltage``
-against ``VOLTAGE_LIMIT``) the latched ideal voltage *is* the averaged inverter of ``sim._im_drive``
+against ``VOLTAGE_LIMIT``) the latched ideal voltage *is* the averaged inverter of ``drives.cage_im._drive``
 (the carrier-period average of the SVPWM bridge), so no converter part is needed.
 
 **Frames.** The cage IM (Amezquita-Brooks (1)) is controlled in the stationary frame (sec. VI):
@@ -66,7 +66,7 @@ from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._inverter import CarrierLatch
 from acdrive.plant._mechanics import PrescribedSpeed
-from acdrive.sim._setup import constant
+from acdrive.scenarios._files import constant
 from acdrive.sim._system import System
 
 #: The paper's DC link [V] (sec. VI): the linear SVPWM range v_dc / sqrt(2) (space vector) within

@@ -10,7 +10,7 @@ gains from (27), and the torque controller in either mode:
 * ``current``: rotor current command (43) from the same stator current command, and the rotor
   current loop (45)-(47) with its integrator and the gains (49) (Bodson III-E).
 
-Both linearisations use the simulator's parts-built drive (``acdrive.sim.DFIMDrive``)
+Both linearisations use the simulator's parts-built drive (``acdrive.drives.DFIMDrive``)
 and its compiled loop; they are kept clearly apart:
 
 ``continuous``  the controller as the continuous-time law of the paper, evaluated with the
@@ -58,6 +58,18 @@ from acdrive.analysis._linearise import (
 from acdrive.control import _dfim as ctl
 from acdrive.control._bodson import rotor_current_loop
 from acdrive.control._speed import SpeedPIGains, speed_pi
+from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim._setup import (
+    ConverterLosses,
+    DFIMController,
+    DriveSetup,
+    MotorSetup,
+    Supply,
+    constant,
+)
+from acdrive.drives.dfim._setup import (
+    speed_range as setup_speed_range,
+)
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines._dfim import (
     BODSON_DFIM,
@@ -69,18 +81,6 @@ from acdrive.machines._dfim import (
     torque_window,
 )
 from acdrive.plant._converter import max_voltage_magnitude
-from acdrive.sim._dfim_drive import DFIMDrive
-from acdrive.sim._setup import (
-    ConverterLosses,
-    DFIMController,
-    DriveSetup,
-    MotorSetup,
-    Supply,
-    constant,
-)
-from acdrive.sim._setup import (
-    speed_range as setup_speed_range,
-)
 
 RAD_S_PER_RPM = math.pi / 30.0
 MODES = ("voltage", "current")
@@ -248,7 +248,7 @@ class StabilityResult:
 
 def speed_range(model: DriveModel) -> tuple[float, float]:
     """(lowest, highest) speed [rad/s] the drive can hold (converter rotor-voltage limit,
-    ``sim._setup.speed_range``)."""
+    ``drives.dfim._setup.speed_range``)."""
     return setup_speed_range(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
 
 

@@ -2,21 +2,25 @@
 
 ``Section`` wraps one TOML table: every field read through it is checked (type, finiteness, the
 rule given) and named by its path in an ``InputError``; ``done()`` reports keys nobody read. The
-drive-specific loaders (``scenarios._loader`` for the DFIM drive, ``scenarios._im_loader`` for the
-cage induction motor drive) build their setups with it.
+drives' loaders (``drives.<kind>._schema``) build their setups with it.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import tomllib
 from importlib import resources
 from pathlib import Path
 
 from acdrive.core._profile import Profile
-from acdrive.errors import InputError, require_finite, require_nonnegative
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines import _registry as registry
-from acdrive.sim._setup import constant
+
+
+def constant(value: float) -> Profile:
+    """The profile of a constant ``value``."""
+    return Profile.constant(float(value))
 
 
 def builtin_names() -> list[str]:
@@ -170,3 +174,35 @@ def machine_from(
             raise InputError(params.field(exc.field), exc.rule) from None
     name = section.text("machine", default, choices=registry.names(kind))
     return registry.MACHINES[name]
+
+
+def simulation_span(sim: Section, duration: float, sample_time: float) -> tuple[float, float]:
+    """(duration, sample time) [s] of a ``[simulation]`` table (defaults ``duration`` and
+    ``sample_time``), both > 0 and the run at least one sample long (a run shorter than the
+    default sample time blames the duration, one shorter than a given sample time the latter)."""
+    default_sample_time = sample_time
+    duration = sim.number("duration", duration, require_positive)
+    sample_time = sim.number("sample_time", default_sample_time, require_positive)
+    if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                sim.field("duration"),
+                f"must be at least one sample, {sim.field('sample_time')} = {sample_time:g} s "
+                f"(the default), got {duration:g} s",
+            )
+        raise InputError(sim.field("sample_time"), f"must not exceed {sim.field('duration')}")
+    return duration, sample_time
+
+
+def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
+    """``log_every`` of a ``[simulation]`` table: a positive integer at most the number of
+    control steps of the run (default 1)."""
+    log_every = sim.integer("log_every", 1)
+    steps = duration / sample_time  # a float: may be astronomically large
+    if math.isfinite(steps) and log_every > round(steps):
+        raise InputError(
+            sim.field("log_every"),
+            f"must not exceed the number of control steps of the run ({round(steps)} = "
+            f"{sim.field('duration')} / {sim.field('sample_time')})",
+        )
+    return log_every

@@ -1,5 +1,5 @@
-"""Simulation: systems from parts and their compiled loop, the DFIM and cage-IM drives, and
-running scenarios."""
+"""Simulation engine: systems from parts, their compiled loop, integrators, results. The drives
+built on it are in ``acdrive.drives``."""
 
 from acdrive._lazy import namespace
 
@@ -10,14 +10,5 @@ __all__, __getattr__, __dir__ = namespace(
         "CompiledSystem": "._system",
         "SystemResult": "._system",
         "INTEGRATORS": "._system",
-        "DriveSetup": "._setup",
-        "simulate": "._setup",
-        "DFIMDrive": "._dfim_drive",
-        "DriveResult": "._result",
-        "IMDrive": "._im_drive",
-        "IMDriveSetup": "._im_drive",
-        "IMDriveResult": "._im_drive",
-        "run_im_scenario": "._im_drive",
-        "run_scenario": "._outcome",
     },
 )

@@ -74,24 +74,6 @@ class TrackingRule:
         return np.array([x for w in self.windows for x in w], dtype=float)
 
 
-def slew_torque(setup, motor: int) -> float:
-    """The smaller of the motoring and generating torque limits [N m] of DFIM ``motor`` at the
-    nominal supply (Bodson (30)-(37), as ``acdrive limits``): the torque a reference step is
-    slewed with at most."""
-    from acdrive._frames import K_PEAK
-    from acdrive.machines._dfim import machine_vector, torque_limits_case1
-
-    m = setup.motors[motor]
-    c = m.controller
-    v_pk = float(setup.supply.voltage_pk[1][0])
-    w_e = 2.0 * math.pi * float(setup.supply.frequency_hz[1][0])
-    t1, t2, t3, m2, m3, _ = torque_limits_case1(
-        machine_vector(m.machine), w_e, K_PEAK * v_pk, K_PEAK * c.stator_current_limit_pk,
-        K_PEAK * c.rotor_current_limit_pk,
-    )  # fmt: skip
-    return min(abs(min(t1, t2, t3)), abs(max(m2, m3)))
-
-
 def reference_change_windows(times, values, J: float, tau: float, settle: float) -> tuple:
     """(start, end) [s] after each change of a speed reference profile (``times`` [s],
     ``values`` [rad/s]) faster than tau / J: a step, or a segment steeper than the torque limit
@@ -127,30 +109,6 @@ def reference_tracking_rule(speed_reference, J: float, tau: float, a: float, rel
         relay=relay,
         text=text,
     )
-
-
-def tracking_rule(setup, motor: int = 0) -> TrackingRule:
-    """The ``TrackingRule`` of DFIM motor ``motor`` of ``setup`` (module docstring): tau from
-    ``slew_torque`` at the nominal supply, a = a_D,VEL = K_P / (2 J) (Bodson (27))."""
-    m = setup.motors[motor]
-    J = m.machine.J
-    a = m.controller.gains.K_P / (2.0 * J)
-    return reference_tracking_rule(m.speed_reference, J, slew_torque(setup, motor), a, True,
-                                   "a_D,VEL")  # fmt: skip
-
-
-def im_tracking_rule(setup) -> TrackingRule | None:
-    """The ``TrackingRule`` of a cage-IM speed loop (modes ``speed-p`` and ``speed-pi``; None
-    otherwise): tau = its torque limit tau_max; a = k_p / J for the P loop (21) (its one pole),
-    K_P / (2 J) for the PI (both roots at -a, Bodson (27))."""
-    if setup.mode == "speed-p":
-        a, tau = setup.speed_p.k_p / setup.mechanics.J, setup.speed_p.tau_max
-    elif setup.mode == "speed-pi":
-        a, tau = setup.speed_pi.K_P / (2.0 * setup.mechanics.J), setup.speed_pi.tau_max
-    else:
-        return None
-    return reference_tracking_rule(setup.speed_reference, setup.mechanics.J, tau, a, False,
-                                   "the speed loop's bandwidth")  # fmt: skip
 
 
 #: the state of the speed-error kernel (``speed_error_update``), one float each

@@ -1,11 +1,9 @@
-"""What happened to the speed at each disturbance of a run and at its end, for both drives.
+"""How a speed (or position) came through each disturbance of a run and its end: the rules every
+drive's summary judges by.
 
-The disturbances are known from the scenario before the run (after t = 0). DFIM
-(``disturbances``): a supply voltage, frequency or phase EMF that departs from its starting value
-(a sag, a frequency step, a collapsed phase) until it returns, a DC link that drops, a load torque
-that steps, a relay closed by force, current sensors that fail. Cage IM (``im_disturbances``): a
-change of the active load torque or of the eddy-current brake coefficient, a DC link that departs
-from its starting value. ``judge_speed`` takes the logged times, speed and reference [rpm], the
+The disturbances are known from the scenario before the run (after t = 0); each drive lists its
+own (``drives.dfim._recovery.disturbances``, ``drives.cage_im._recovery.im_disturbances``, from
+the profile helpers ``_departures`` and ``_steps`` here). ``judge_speed`` takes the logged times, speed and reference [rpm], the
 tracking mask and the (what, start) of each disturbance reaching that shaft, and judges each from
 its start to the next one's start or the end of the run, on the samples where tracking is
 expected (``sim._metrics.TrackingRule``: the intended reference steps' settling and an open relay
@@ -37,7 +35,6 @@ import math
 import numpy as np
 
 from acdrive.sim._metrics import (
-    RPM_PER_RAD_S,
     SETTLE_TIME_CONSTANTS,
     SLEW_MARGIN,
     reference_change_windows,
@@ -108,31 +105,6 @@ def _steps(profile, what: str, unit: str) -> list[dict]:
             out.append({"what": f"{what} {values[i - 1]:g} -> {values[i]:g} {unit}",
                         "start_s": float(times[i - 1]), "cleared_s": None})  # fmt: skip
     return out
-
-
-def disturbances(setup) -> list[dict]:
-    """The disturbances of a DFIM ``setup`` (module docstring), by start time: ``what``,
-    ``start_s``, ``cleared_s`` (None: it stays) and ``motor`` (None: the shared supply)."""
-    s = setup.supply
-    found = [
-        *({**d, "motor": None} for d in _departures(s.voltage_pk, "supply voltage", "V peak")),
-        *({**d, "motor": None} for d in _departures(s.frequency_hz, "supply frequency", "Hz")),
-    ]
-    if s.phase_scales is not None:
-        for phase, scale in zip("abc", s.phase_scales, strict=True):
-            found += [{**d, "motor": None}
-                      for d in _departures(scale, f"supply phase {phase} EMF x", "")]  # fmt: skip
-    for k, m in enumerate(setup.motors):
-        if m.dc_link_profile is not None:
-            found += [{**d, "motor": k} for d in _departures(m.dc_link_profile, "DC link", "V")]
-        found += [{**d, "motor": k} for d in _steps(m.load_torque, "load torque", "N m")]
-        for time, what in ((m.relay_forced_close_time, "stator relay closed by force"),
-                           (m.current_sensor_fault_time, "current sensors fail")):  # fmt: skip
-            if math.isfinite(time):
-                found.append({"what": what, "start_s": float(time), "cleared_s": None, "motor": k})
-    # a step at t = 0 is the starting condition: there is no state before it to recover to
-    found = [d for d in found if 0.0 < d["start_s"] < setup.duration]
-    return sorted(found, key=lambda d: d["start_s"])
 
 
 def _held(t: np.ndarray, condition: np.ndarray) -> float | None:
@@ -252,29 +224,6 @@ def judge_speed(t, w_rpm, ref_rpm, mask, found, subject: str) -> dict:
     return {"disturbances": judged, "end_of_run": end, "warnings": warnings}
 
 
-def speed_outcome(result, rules_masks: list, setup, who: str = "") -> dict:
-    """``disturbances`` (each with its per-motor ``judge_speed`` figures: a motor is judged on
-    the shared supply's disturbances and its own, each up to the next of those), ``end_of_run``
-    (per motor), the ``rule``, and the ``warnings`` (``who`` names the run in them, e.g.
-    "voltage command, ") of a DFIM ``result``."""
-    found = disturbances(setup)
-    for d in found:
-        d["motors"] = {}
-    warnings, end = [], []
-    for k in range(result.n_motors):
-        mine = [d for d in found if d["motor"] in (None, k)]
-        judged = judge_speed(
-            result.t, result.signal("w", k) * RPM_PER_RAD_S,
-            result.signal("w_ref", k) * RPM_PER_RAD_S, rules_masks[k],
-            [(d["what"], d["start_s"]) for d in mine], f"{who}motor {k + 1}",
-        )  # fmt: skip
-        for d, a in zip(mine, judged["disturbances"], strict=True):
-            d["motors"][f"motor {k + 1}"] = a
-        warnings += judged["warnings"]
-        end.append(judged["end_of_run"])
-    return {"rule": RULE, "disturbances": found, "end_of_run": end, "warnings": warnings}
-
-
 def _loss_words(subject: str, w_rpm, ref_rpm, a: dict, when: str) -> str:
     what = []
     if a["reversal_at_s"] is not None:
@@ -285,23 +234,6 @@ def _loss_words(subject: str, w_rpm, ref_rpm, a: dict, when: str) -> str:
         f"loss of control: {subject} {when}: {' and '.join(what)}; it ends at {w_rpm[-1]:.0f} "
         f"rpm against a {ref_rpm[-1]:.0f} rpm reference"
     )
-
-
-# --- the cage-IM drive ---------------------------------------------------------------------
-
-
-def im_disturbances(setup) -> list[dict]:
-    """The disturbances of a cage-IM ``setup`` (``sim._im_drive.IMDriveSetup``), by start time:
-    ``what``, ``start_s``, ``cleared_s`` (None: it stays). A held shaft (prescribed speed) has
-    no load disturbances."""
-    m = setup.mechanics
-    found = []
-    if m.free:
-        found += _steps(m.load, "load torque", "N m")
-        found += _steps(m.brake, "brake coefficient", "N m s/rad")
-    found += _departures(setup.inverter.dc_link, "DC link", "V")
-    found = [d for d in found if 0.0 < d["start_s"] < setup.duration]
-    return sorted(found, key=lambda d: d["start_s"])
 
 
 def position_tracking_windows(position_reference, w_max: float, K_theta: float) -> tuple:
@@ -346,48 +278,3 @@ POSITION_SPEED_NOT_JUDGED = (
     "the speed reference of a position run is the position loop's own output (zero at rest), "
     "not a target: a load is rejected when the position error recovers, judged instead"
 )
-
-
-def im_speed_outcome(result, mask: np.ndarray) -> dict:
-    """What happened to the speed of a cage-IM ``result`` (``sim._im_drive.IMDriveResult``) at
-    each disturbance (``im_disturbances``) and at the end (``judge_speed`` on the ``mask``
-    (tracked) samples, the DFIM's rule): the logged speed [rad/s] converted once to rpm, the
-    rule's unit; ``warnings`` name the run by its label."""
-    found = im_disturbances(result.setup)
-    judged = judge_speed(
-        result.t, result.signal("w") * RPM_PER_RAD_S, result.signal("w_ref") * RPM_PER_RAD_S,
-        mask, [(d["what"], d["start_s"]) for d in found], result.label,
-    )  # fmt: skip
-    for d, a in zip(found, judged["disturbances"], strict=True):
-        d.update(a)
-    return {"rule": RULE, "unit": "rpm (the logged rad/s x 30/pi)", "disturbances": found,
-            "end_of_run": judged["end_of_run"], "warnings": judged["warnings"]}  # fmt: skip
-
-
-def im_position_outcome(result) -> dict:
-    """The position error of a cage-IM position ``result`` after each disturbance
-    (``judge_position`` outside ``position_tracking_windows``), the claim a position drive
-    makes; its speed is not judged (POSITION_SPEED_NOT_JUDGED). ``warnings``: a position that
-    did not recover, naming the run by its label."""
-    s, t = result.setup, result.t
-    found = im_disturbances(s)
-    windows = position_tracking_windows(s.position_reference, s.position.w_max, s.position.K_theta)
-    mask = np.ones(t.size, dtype=bool)
-    for a, b in windows:
-        mask &= ~((t >= a) & (t < b))
-    theta = result.signal("theta") + s.sensors.offset
-    judged = judge_position(t, theta, result.signal("theta_ref"), mask,
-                            [(d["what"], d["start_s"]) for d in found])  # fmt: skip
-    warnings = []
-    for d, a in zip(found, judged, strict=True):
-        d.update(a)
-        if a["recovered"] is False:
-            warnings.append(
-                f"{result.label}: the position did not recover after the {d['what']} at "
-                f"{d['start_s']:g} s: the error stayed beyond {a['band_rad']:.3g} rad (largest "
-                f"{a['largest_position_error_rad']:.3g} rad at {a['largest_at_s']:.3f} s) until "
-                f"{a['judged_until_s']:.3f} s"
-            )
-    return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
-            "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
-            "warnings": warnings}  # fmt: skip

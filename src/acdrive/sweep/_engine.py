@@ -88,11 +88,11 @@ def _pluck(summary: dict, path: str):
 
 
 def _summary_metrics(spec: SweepSpec, overrides: dict) -> dict:
-    """The ``summary.json`` keys of one variant: a full single run (``sim._outcome``)."""
+    """The ``summary.json`` keys of one variant: a full single run of its drive (``Drive.run``)."""
     import dataclasses
 
     from acdrive.batch import apply_overrides, build_variant_setup
-    from acdrive.sim._outcome import run_scenario
+    from acdrive.drives import for_setup
 
     setup = build_variant_setup(apply_overrides(spec.base_data, overrides))
     changes = {}
@@ -101,7 +101,7 @@ def _summary_metrics(spec: SweepSpec, overrides: dict) -> dict:
     if spec.substeps:
         changes["substeps"] = spec.substeps
     setup = dataclasses.replace(setup, **changes) if changes else setup
-    summary = run_scenario(setup).summary
+    summary = for_setup(setup).run(setup).summary
     return {f"summary.{key}": _pluck(summary, key) for key in spec.summary}
 
 

@@ -112,8 +112,8 @@ def _figures(table, metrics, folder: Path) -> list[str]:
 def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
     """Per combination of the other varied fields: the simulated and the linearised tolerated
     bandwidth and whether they agree (module docstring). Returns (rows, all agree)."""
-    from acdrive.analysis._drive_stability import max_stable_bandwidth
     from acdrive.batch import apply_overrides, build_variant_setup
+    from acdrive.drives import for_setup
 
     cc = spec.crosscheck
     bw = f"vary.{cc['bandwidth_field']}"
@@ -136,25 +136,15 @@ def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
         fields = {**spec.fixed, **dict(zip([o[5:] for o in others], key, strict=True))}
         fields[cc["bandwidth_field"]] = grid[0]
         setup = build_variant_setup(apply_overrides(spec.base_data, fields))
-        m = setup.motors[0]
-        speed_rpm = float(m.speed_reference[1][-1]) * 30 / math.pi
-        load = float(m.load_torque[1][-1])
-        loss = float(m.converter.fundamental_loss(m.dc_link_voltage))
-        linear = max_stable_bandwidth(
-            m.controller.mode, [speed_rpm], [load], kind="sampled",
-            lower=min(grid) / 2, upper=max(grid) * 2, tol=1.0,
-            machine=m.machine, K_F=m.controller.gains.K_F,
-            supply_voltage_pk=float(setup.supply.voltage_pk[1][0]),
-            supply_frequency_hz=float(setup.supply.frequency_hz[1][0]),
-            current_limit_pk=m.controller.stator_current_limit_pk,
-            sample_time=setup.sample_time, substeps=setup.substeps, converter_loss=loss,
-        )  # fmt: skip
+        point = for_setup(setup).crosscheck(setup, min(grid) / 2, max(grid) * 2)
+        linear = point["linearised_tolerated"]
         j_lin = sum(1 for b in grid if b <= linear) - 1
         tol = cc["tolerance"]
         agree = abs(j_lin - i_sim) <= tol
         rows.append({
             **{o[5:]: v for o, v in zip(others, key, strict=True)},
-            "speed_rpm": speed_rpm, "load_nm": load, "converter_loss_v": loss,
+            "speed_rpm": point["speed_rpm"], "load_nm": point["load_nm"],
+            "converter_loss_v": point["converter_loss_v"],
             "simulated_tolerated": grid[i_sim] if i_sim >= 0 else 0.0,
             "simulated_first_unstable": grid[i_sim + 1] if i_sim + 1 < len(grid) else math.inf,
             "linearised_tolerated": linear, "grid_step_difference": j_lin - i_sim,

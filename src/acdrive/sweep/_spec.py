@@ -27,7 +27,7 @@ Schema (units as in the scenario files; every table optional except ``[[vary]]``
     log = false
 
     [metrics]
-    default = true                  # the drive's own on-line metrics (acdrive.batch.dfim_reducers)
+    default = true                  # the drive's own on-line metrics (its Drive.reducers)
     summary = ["speed_oscillation_rms_rpm"]   # summary.json keys (a full single run per variant)
     [[metrics.reducer]]             # more on-line metrics (acdrive.batch.Reducer)
     name = "peak_speed_rpm"

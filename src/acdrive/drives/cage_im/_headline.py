@@ -1,10 +1,7 @@
-"""``acdrive run`` for a cage induction motor drive (``drive = "cage-im"``): simulate every run of
-the scenario, write data, figures and summary.json (``_report.im_outputs``) and print the headline
-figures computed from the runs. ``_commands.run`` dispatches here on the setup's type."""
+"""The lines ``acdrive run`` prints for a cage induction motor drive run (``drive = "cage-im"``),
+each computed from the summary the run wrote (``drives.cage_im._outputs``)."""
 
 from __future__ import annotations
-
-from acdrive._output import OutputFolder
 
 
 def _rows(summary: dict, setup) -> list[tuple[str, str]]:
@@ -119,36 +116,16 @@ def _recovery_words(d: dict, unit: str) -> str:
     return text + (f"; {', '.join(lost)}" if lost else "")
 
 
-def run_im(args, setup) -> int:
-    from acdrive._progress import Progress
-    from acdrive._report.im_outputs import write_im_outcome
-    from acdrive.columns import print_headline
-    from acdrive.sim import _codegen as codegen
-    from acdrive.sim._im_drive import run_im_scenario
-
-    n = len(list(setup.runs()))
-    with (
-        OutputFolder(args.out, setup.name) as output,  # --out checked before the simulation
-        Progress(2, f"run {setup.name}") as bar,
-    ):
-        bar.phase(f"simulating ({n} run{'s' * (n > 1)})")
-        outcome = run_im_scenario(setup)
-        codegen.record_compile_times()
-        bar.advance()
-        bar.phase("writing data" + (" and figures" if not args.no_figures else ""))
-        summary = write_im_outcome(
-            outcome, output.staging, figures=not args.no_figures, fmt=args.format
-        )
-        target = output.publish()
-        bar.advance()
+def headline(outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
+    """(first line, rows) of ``acdrive run``'s headline of a cage-IM ``outcome`` whose written
+    summary is ``summary``."""
+    setup = outcome.setup
     wall = sum(r.wall_time for r in outcome.results.values())
     n = len(outcome.results)
     inv = setup.inverter
-    print(
+    first = (
         f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s "
         f"({n} run{'s' * (n > 1)}, mode {setup.mode}, {inv.model} inverter at "
         f"{inv.f_pwm:g} Hz, sampling {1.0 / setup.sample_time:g} Hz)"
     )
-    rows = _rows(summary, setup)
-    print_headline(rows, summary, target, args.format)
-    return 0
+    return first, _rows(summary, setup)

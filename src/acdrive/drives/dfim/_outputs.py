@@ -1,4 +1,4 @@
-"""The files of one scenario run: data (Parquet, CSV or .mat) with columns.md, figures and
+"""The files of one DFIM scenario run: data (Parquet, CSV or .mat) with columns.md, figures and
 summary.json."""
 
 from __future__ import annotations
@@ -8,14 +8,15 @@ from pathlib import Path
 from acdrive._output import strict_json
 from acdrive._report import converter_effect
 from acdrive.columns import DEFAULT_FORMAT
-from acdrive.sim._outcome import ScenarioOutcome, synchronous_rpm
+from acdrive.drives.dfim._outcome import ScenarioOutcome, synchronous_rpm
 
 
 def write_outcome(
     outcome: ScenarioOutcome, folder: Path, figures: bool = True, fmt: str = DEFAULT_FORMAT
-) -> None:
+) -> dict:
     """Write every result of ``outcome`` (one sub-folder per compared mode) into ``folder``: the
-    data as ``fmt`` (``acdrive.columns.FORMATS``) with columns.md, figures, summary.json.
+    data as ``fmt`` (``acdrive.columns.FORMATS``) with columns.md, figures, summary.json;
+    returns the summary written.
 
     summary.json is the outcome's summary plus, where a rotor converter has dead time or device
     drops, ``converter_side_effect``: the steady-state stator reactive power and torque-command
@@ -23,7 +24,7 @@ def write_outcome(
     folder = Path(folder)
     setup = outcome.setup
     if figures:
-        from acdrive._report.dfim_figures import (
+        from acdrive.drives.dfim._figures import (
             current_limits,
             write_comparison_figures,
             write_drive_figures,
@@ -46,3 +47,4 @@ def write_outcome(
         summary["converter_side_effect"] = side_effect
     # strict JSON: a non-finite figure (e.g. an RMS over no samples) is written as null
     (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
+    return summary

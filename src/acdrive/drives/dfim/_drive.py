@@ -24,6 +24,8 @@ from acdrive._frames import complex_to_abc
 from acdrive.control import _bodson as bodson
 from acdrive.control._dfim import EVENT_NAMES, MODE_CURRENT, MODE_VOLTAGE
 from acdrive.control._speed import SpeedReference
+from acdrive.drives.dfim._result import LOG_NAMES, DriveResult
+from acdrive.drives.dfim._tracking import tracking_rule
 from acdrive.errors import SimulationDiverged
 from acdrive.machines._dfim_part import DoublyFedMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter, max_voltage_magnitude
@@ -31,8 +33,6 @@ from acdrive.plant._mechanics import Shaft
 from acdrive.plant._network import ForcedRelay, StatorRelay, SupplyBus
 from acdrive.plant._sensors import CurrentSensors, Encoder
 from acdrive.plant._sources import DCSource, ThreePhaseSource, UnbalancedSource
-from acdrive.sim._metrics import tracking_rule
-from acdrive.sim._result import LOG_NAMES, DriveResult
 from acdrive.sim._system import CompiledSystem, System
 
 #: the converter's event and the parts whose events make up the flags column of a DriveResult

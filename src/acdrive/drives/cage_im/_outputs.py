@@ -1,7 +1,7 @@
-"""The files of one cage-IM drive run (``sim._im_drive``): data (Parquet, CSV or .mat, with
+"""The files of one cage-IM drive run (``drives.cage_im._drive``): data (Parquet, CSV or .mat, with
 columns.md), figures and summary.json, and the linear closed-loop step responses of the ICAD model beside simulated steps.
 
-Layout as the DFIM drive's (``_report.drive_outputs``): one run writes into the folder itself;
+Layout as the DFIM drive's (``drives.dfim._outputs``): one run writes into the folder itself;
 several runs (compared controllers) each into ``<folder>/<label>/``, with the comparison figures
 and the one summary.json in the folder. Figures follow Amezquita-Brooks et al.: currents with
 references (Figs. 11, 13(c), 14(c), 23), speed (13(a)), load torque (13(b), 14(b)), the phase-a
@@ -26,7 +26,8 @@ from acdrive._output import strict_json
 from acdrive._report.markdown import save_figure
 from acdrive._report.plotting import new_figure, plot_trace
 from acdrive.analysis._plants import plant_from_params
-from acdrive.sim._im_drive import IMDriveResult, IMOutcome, ideal_ramp
+from acdrive.drives.cage_im._outcome import IMOutcome
+from acdrive.drives.cage_im._result import IMDriveResult, ideal_ramp
 
 
 def _save(fig, path: Path) -> Path:

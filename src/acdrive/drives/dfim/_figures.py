@@ -11,7 +11,7 @@ import numpy as np
 
 from acdrive._report.markdown import save_figure
 from acdrive._report.plotting import new_figure, plot_trace
-from acdrive.sim._result import DriveResult
+from acdrive.drives.dfim._result import DriveResult
 
 #: Colours of the stator and rotor curves of the current figures, and of their limit lines.
 _COLOURS = {"stator": "C0", "rotor": "C1"}

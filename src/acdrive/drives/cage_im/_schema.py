@@ -50,11 +50,11 @@ Rules checked before the run, each naming its field:
   carrier period, and every edge is delayed by the dead time), and only with the switching model;
 - the controller's discretisation at the sample time (``control.discretise``: an unstable
   discretisation, a pre-warping frequency beyond the Nyquist frequency) and its anti-windup;
-- the sampled current loop (``sim._im_drive.current_loop_radius``: plant (1) of the simulated
+- the sampled current loop (``drives.cage_im._physics.current_loop_radius``: plant (1) of the simulated
   machine held over each sample, the discretised controller, the command latched for the carrier
   period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
   is unstable without the latch) or ``inverter.pwm_frequency_hz`` (the latch's delay) is refused;
-- the sampled speed loop (``sim._period.check_im_control_period``), as for the DFIM drive;
+- the sampled speed loop (``drives.cage_im._period.check_im_control_period``), as for the DFIM drive;
 - the size of the run (log memory, integration steps), as for the DFIM drive.
 
 A DC link too low for the flux reference at the requested speed is *not* refused: the drive then
@@ -74,16 +74,9 @@ from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
 from acdrive.control._speed import require_feedforward_fraction
-from acdrive.errors import (
-    InputError,
-    require_nonnegative,
-    require_positive,
-    require_safe_name,
-)
-from acdrive.machines._induction import IMParams
-from acdrive.scenarios._files import Section as _Section
-from acdrive.scenarios._files import machine_from
-from acdrive.sim._im_drive import (
+from acdrive.drives.cage_im._period import check_im_control_period
+from acdrive.drives.cage_im._physics import current_loop_radius
+from acdrive.drives.cage_im._setup import (
     INVERTER_MODELS,
     MODES,
     PAPER_DC_LINK,
@@ -100,12 +93,23 @@ from acdrive.sim._im_drive import (
     SensorSetup,
     SpeedPISetup,
     SpeedPSetup,
-    current_loop_radius,
 )
-from acdrive.sim._period import check_im_control_period
+from acdrive.errors import (
+    InputError,
+    require_nonnegative,
+    require_positive,
+    require_safe_name,
+)
+from acdrive.machines._induction import IMParams
+from acdrive.scenarios._files import Section as _Section
+from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 DRIVE = "cage-im"
+#: the built-in machine of a machine table without ``name`` or ``[machine.params]``
+DEFAULT_MACHINE = "delorenzo-im"
+#: the fields of the ``[machine.params]`` table
+PARAMS_FIELDS = ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p")
 #: relative tolerance of "the sample time divides the carrier period" (as plant._inverter)
 _N_TOLERANCE = 1e-9
 #: speeds (fractions of the run's top speed) at which the sampled current loop is checked
@@ -121,7 +125,7 @@ def _require_nothing(section: _Section, mode: str, why: str) -> None:
 def _machine(sec: _Section) -> tuple[IMParams, IMParams]:
     """(nominal machine, simulated plant)."""
     nominal = machine_from(
-        sec, IMParams, ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p"), "delorenzo-im",
+        sec, IMParams, PARAMS_FIELDS, DEFAULT_MACHINE,
         params_label="[machine.params]",
     )  # fmt: skip
     plant = nominal
@@ -399,25 +403,10 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     compare = _compare(top)
 
     sim = _Section(top.get("simulation", {}), "simulation")
-    duration = sim.number("duration", 0.2, require_positive)
-    sample_time = sim.number("sample_time", PAPER_SAMPLE_TIME, require_positive)
-    if sample_time > duration:
-        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
-            raise InputError(
-                "simulation.duration",
-                f"must be at least one sample, simulation.sample_time = {sample_time:g} s "
-                "(the default), got {duration:g} s",
-            )
-        raise InputError("simulation.sample_time", "must not exceed simulation.duration")
+    duration, sample_time = simulation_span(sim, 0.2, PAPER_SAMPLE_TIME)
     substeps = sim.integer("substeps", 4, maximum=MAX_SUBSTEPS)
     integrator = sim.text("integrator", "rk4", choices=tuple(INTEGRATORS))
-    log_every = sim.integer("log_every", 1)
-    if log_every > round(duration / sample_time):
-        raise InputError(
-            "simulation.log_every",
-            f"must not exceed the number of control steps of the run "
-            f"({round(duration / sample_time)} = simulation.duration / simulation.sample_time)",
-        )
+    log_every = log_every_of(sim, duration, sample_time)
     metrics_from = sim.number("metrics_from", 0.0, require_nonnegative)
     if metrics_from >= duration:
         raise InputError(

@@ -2,7 +2,7 @@
 
 ``run_scenario`` runs a ``DriveSetup`` (once, or once per controller mode for comparisons) and
 returns a ``ScenarioOutcome``: the results and the summary (summary.json);
-``acdrive._report.drive_outputs.write_outcome`` saves data, figures and summary.
+``acdrive.drives.dfim._outputs.write_outcome`` saves data, figures and summary.
 """
 
 from __future__ import annotations
@@ -12,6 +12,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.drives.dfim._period import control_period_warnings
+from acdrive.drives.dfim._recovery import speed_outcome
+from acdrive.drives.dfim._result import DriveResult
+from acdrive.drives.dfim._setup import DriveSetup, simulate
+from acdrive.drives.dfim._tracking import tracking_rule
 from acdrive.sim._metrics import (
     LATE_WINDOW_S,
     OSCILLATION_BAND_HZ,
@@ -20,12 +25,7 @@ from acdrive.sim._metrics import (
     RPM_PER_RAD_S,
     limit_cycle,
     speed_tracking,
-    tracking_rule,
 )
-from acdrive.sim._period import control_period_warnings
-from acdrive.sim._recovery import speed_outcome
-from acdrive.sim._result import DriveResult
-from acdrive.sim._setup import DriveSetup, simulate
 
 MODE_SUFFIX = {"voltage": "vc", "current": "cc"}
 

@@ -79,7 +79,7 @@ class DriveResult:
     sample_time: float
     final_state: np.ndarray
     wall_time: float = 0.0
-    #: per motor, where the speed is expected to track (``sim._metrics.tracking_rule`` of the
+    #: per motor, where the speed is expected to track (``drives.dfim._tracking.tracking_rule`` of the
     #: scenario); None (a result built by hand): every sample
     tracking: tuple[TrackingRule, ...] | None = None
 

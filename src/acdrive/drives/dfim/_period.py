@@ -35,42 +35,19 @@ import math
 
 import numpy as np
 
+from acdrive.drives._period import (
+    CURRENT_BANDWIDTH_T_S_WARN,
+    SPEED_BANDWIDTH_T_S_WARN,
+    speed_loop_radius,
+)
+from acdrive.drives.dfim._setup import IMPLAUSIBLE_FACTOR, DriveSetup, MotorSetup
 from acdrive.errors import InputError
-from acdrive.sim._setup import IMPLAUSIBLE_FACTOR, DriveSetup, MotorSetup
 
 #: fewer samples than this per supply period are warned (the grid voltage then turns by more
 #: than 18 degrees within one held command)
 SUPPLY_SAMPLES_WARN = 20
-#: a_D,VEL T_s above which the sampled speed loop is warned about
-SPEED_BANDWIDTH_T_S_WARN = 0.5
-#: a_D,CUR T_s above which the sampled rotor current loop is warned about
-CURRENT_BANDWIDTH_T_S_WARN = 1.0
 #: the sample time of the built-in DFIM scenarios [s]: a refused loop with a longer T_s names it
 USUAL_SAMPLE_TIME = 200e-6
-#: the same for the cage IM drive (the paper's 50 kHz)
-USUAL_IM_SAMPLE_TIME = 20e-6
-
-
-def speed_loop_radius(K_P: float, K_I: float, J: float, T_s: float, filter_tau: float) -> float:
-    """Spectral radius of the sampled speed loop of Bodson (25)-(26) (module docstring).
-
-    State [w_k, w_{k-1}, e_k, w_f,k-1]: with the torque u_k held over the sample the encoder's
-    backward difference at t_k is (w_{k-1} + w_k) / 2; the filter w_f,k = w_f,k-1 + c (that -
-    w_f,k-1), c = T_s / (tau + T_s); u_k = -K_P w_f,k + K_I e_k; e_k+1 = e_k - T_s w_f,k (the
-    reference is zero: stability does not depend on it); w_k+1 = w_k + T_s u_k / J. With
-    K_I = 0 (a proportional speed loop) the integral state is left out."""
-    c = T_s / (filter_tau + T_s)
-
-    def step(x):
-        w, w_prev, e, wf_prev = x
-        wf = wf_prev + c * (0.5 * (w + w_prev) - wf_prev)
-        u = -K_P * wf + K_I * e
-        return np.array([w + T_s * u / J, w, e - T_s * wf, wf])
-
-    A = np.column_stack([step(col) for col in np.eye(4)])
-    if K_I == 0.0:  # a P loop: the integral state acts on nothing and is left out
-        A = np.delete(np.delete(A, 2, axis=0), 2, axis=1)
-    return float(np.max(np.abs(np.linalg.eigvals(A))))
 
 
 def current_loop_radius(
@@ -199,95 +176,4 @@ def control_period_warnings(setup: DriveSetup) -> list[str]:
                 "converter applies every command for a whole sample, which a converter "
                 "switching less than once per sample cannot"
             )
-    return out
-
-
-# --- the cage induction motor drive (``sim._im_drive``) ------------------------------------------
-# Its sampled current loop, with the inverter's carrier latch, is checked exactly by
-# ``scenarios._im_loader`` (``sim._im_drive.current_loop_radius``: refused when unstable), and
-# the sample time must divide the PWM period; the speed loop is checked here like the DFIM's,
-# and both loops' a T_s are warned above the DFIM's limits.
-
-
-def _im_speed_gains(setup) -> tuple[float, float, str] | None:
-    """(K_P, K_I, field) of the IM drive's speed loop, None without one (current mode)."""
-    if setup.mode == "speed-p":
-        return setup.speed_p.k_p, 0.0, "speed_controller.k_p"
-    if setup.mode in ("speed-pi", "position"):
-        return setup.speed_pi.K_P, setup.speed_pi.K_I, "speed_controller.K_P"
-    return None
-
-
-def _im_speed_bandwidth(K_P: float, K_I: float, J: float) -> float:
-    """The speed loop's design root: a = 2 K_I / K_P of J s^2 + K_P s + K_I with both roots at
-    -a (``SpeedPISetup.design``), or K_P / J for a proportional loop."""
-    return 2.0 * K_I / K_P if K_I > 0.0 and K_P > 0.0 else K_P / J
-
-
-def check_im_control_period(setup) -> None:
-    """Refuse an IM drive whose sampled speed loop (as :func:`speed_loop_radius`, the torque
-    taken as commanded through the fast current loop) is unstable."""
-    gains = _im_speed_gains(setup)
-    if gains is None:
-        return
-    K_P, K_I, key = gains
-    T_s, J = setup.sample_time, setup.mechanics.J
-    rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
-    if rho >= 1.0:
-        a = _im_speed_bandwidth(K_P, K_I, J)
-        raise InputError(
-            key if setup.sample_time <= USUAL_IM_SAMPLE_TIME else "simulation.sample_time",
-            f"the sampled speed loop (K_P = {K_P:.4g}, K_I = {K_I:.4g}, J = {J:.4g} kg m^2: "
-            f"a = {a:.4g} rad/s, a T_s = {a * T_s:.3g} at T_s = {T_s:g} s) is unstable "
-            f"(spectral radius {rho:.4g} >= 1): shorten simulation.sample_time or lower the "
-            "speed controller's gains",
-        )
-
-
-def im_current_bandwidth(setup) -> float:
-    """The -3 dB bandwidth [rad/s] of the IM drive's current loop as designed: the continuous
-    controller on the nominal machine's stator-current plant (Amezquita-Brooks (1)-(4)) at
-    standstill, channel alpha, |T(j w)| = |L / (1 + L)| first below 1/sqrt(2) on a logarithmic
-    grid of 1 to 1e7 rad/s (inf if never)."""
-    from acdrive.machines._induction import stator_current_ss
-
-    A, B, C, D = stator_current_ss(setup.machine, 0.0)
-    w = np.geomspace(1.0, 1e7, 1401)
-    k = setup.current_control.lti.freqresp(w)
-    eye = np.eye(A.shape[0])
-    g = np.array([(C @ np.linalg.solve(1j * x * eye - A, B) + D)[0, 0] for x in w])
-    loop = g * k
-    below = np.abs(loop / (1.0 + loop)) < 1.0 / math.sqrt(2.0)
-    return float(w[np.argmax(below)]) if below.any() else math.inf
-
-
-def im_control_period_warnings(setup) -> list[str]:
-    """The IM drive's control-period warnings: a speed loop with a T_s above
-    :data:`SPEED_BANDWIDTH_T_S_WARN`, a current loop with a_C T_s above
-    :data:`CURRENT_BANDWIDTH_T_S_WARN` (a_C: :func:`im_current_bandwidth`). The PWM period needs
-    none: the sample time must divide it, and the current loop with the inverter's latch is
-    checked exactly before the run (``scenarios._im_loader``)."""
-    out = []
-    T_s = setup.sample_time
-    a_cur = im_current_bandwidth(setup)
-    if a_cur * T_s > CURRENT_BANDWIDTH_T_S_WARN:
-        out.append(
-            f"control period: the current loop ({setup.current_control.controller}) has "
-            f"a_C T_s = {a_cur * T_s:.3g} (-3 dB bandwidth a_C = {a_cur:.4g} rad/s as designed, "
-            f"T_s = {T_s:g} s), above {CURRENT_BANDWIDTH_T_S_WARN:g}: the sampled loop no "
-            "longer behaves as designed"
-        )
-    gains = _im_speed_gains(setup)
-    if gains is None:
-        return out
-    K_P, K_I, _ = gains
-    J = setup.mechanics.J
-    a = _im_speed_bandwidth(K_P, K_I, J)
-    if a * T_s > SPEED_BANDWIDTH_T_S_WARN:
-        rho = speed_loop_radius(K_P, K_I, J, T_s, setup.sensors.speed_filter_tau)
-        out.append(
-            f"control period: the speed loop has a T_s = {a * T_s:.3g} (a = {a:.4g} rad/s, "
-            f"T_s = {T_s:g} s), above {SPEED_BANDWIDTH_T_S_WARN:g}: the sampled loop departs "
-            f"from its design (spectral radius {rho:.3g})"
-        )
     return out

@@ -1,7 +1,7 @@
 """Typed description of a DFIM drive simulation.
 
 ``DriveSetup`` holds validated physical data (machines, supply, loads, sensors, controllers,
-references); ``simulate`` runs it on the drive built from parts (``sim._dfim_drive``) and returns
+references); ``simulate`` runs it on the drive built from parts (``drives.dfim._drive``) and returns
 a ``DriveResult``.
 """
 
@@ -15,15 +15,11 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive.control import _dfim as ctl
 from acdrive.control._speed import SpeedPIGains
-from acdrive.core._profile import Profile
+from acdrive.drives.dfim._result import DriveResult
 from acdrive.errors import InputError
 from acdrive.machines._dfim import DFIMParams
 from acdrive.plant._converter import max_voltage_magnitude
-from acdrive.sim._result import DriveResult
-
-
-def constant(value: float) -> Profile:
-    return Profile.constant(float(value))
+from acdrive.scenarios._files import Profile, constant
 
 
 @dataclass(frozen=True)
@@ -223,12 +219,12 @@ def divergence_hint(setup: DriveSetup) -> str:
 
 
 def simulate(setup: DriveSetup) -> DriveResult:
-    """Run ``setup`` on its parts-built system (``sim._dfim_drive``) and return its typed result.
+    """Run ``setup`` on its parts-built system (``drives.dfim._drive``) and return its typed result.
 
     Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
     the state stops being finite (a simulation never returns NaN silently).
     """
-    from acdrive.sim import _dfim_drive as dfim_drive
+    from acdrive.drives.dfim import _drive as dfim_drive
 
     return dfim_drive.simulate(setup, divergence_hint)
 

@@ -1,0 +1,165 @@
+"""The registry of drive kinds and the ``Drive`` interface the command line, batches, sweeps
+and reports use (docs/design.md, "Drives as plug-ins").
+
+A drive kind is one folder (``acdrive/drives/<kind>/``) and one ``Drive`` object. Everything
+above the engine asks the registry instead of naming a kind: ``acdrive run`` loads a scenario
+with ``for_data(data).load(data)``, runs it with ``run``, writes it with ``write`` and prints
+``headline``; a batch builds each variant's system with ``build`` and reduces it with
+``reducers``; a sweep does both. A built-in drive is registered below by one line, the path of
+the module that defines its ``DRIVE`` object, imported on first use (``acdrive --help`` and
+``import acdrive.drives`` stay light); any other drive, e.g. one defined in a user's script or
+a test, is registered with ``register(drive)`` and is then used exactly as the built-ins are.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+from acdrive.errors import InputError
+
+#: the scenario's ``drive`` value -> the module defining that built-in drive's ``DRIVE``
+BUILTIN = {
+    "dfim": "acdrive.drives.dfim._plugin",
+    "cage-im": "acdrive.drives.cage_im._plugin",
+}
+#: the drive of a scenario that names none (the scenarios written before ``drive`` existed)
+DEFAULT_KIND = "dfim"
+
+_REGISTERED: dict[str, Drive] = {}
+
+
+class Drive:
+    """One drive kind: the answers the command line, batches, sweeps and reports need.
+
+    A subclass sets ``kind`` (the scenario file's ``drive = "<kind>"``) and ``setup_types`` (the
+    classes ``load`` returns) and implements the methods that raise ``NotImplementedError``;
+    the others have defaults that fit a drive without the feature.
+
+    * ``load(data)``: the validated setup of a parsed scenario (a ``dict`` from TOML); every
+      error an ``InputError`` naming the field by its dotted path, before any simulation.
+    * ``run(setup, on_run=None)``: simulate; returns the outcome, an object with ``results``
+      (label -> result with ``wall_time`` [s]) and ``summary`` (a dict: summary.json's
+      figures). ``on_run(label)`` is called before each simulation (``runs(setup)`` of them).
+    * ``write(outcome, folder, figures, fmt)``: the data files (``acdrive.columns.FORMATS``),
+      figures and summary.json into ``folder``; returns the summary written.
+    * ``headline(outcome, summary)``: (first line, rows of (label, text)) that ``acdrive run``
+      prints, each computed from the summary.
+    * ``build(setup)``: the drive's system of parts for one run, an object with ``system``
+      (``acdrive.sim.System``) and ``initial()`` -> (initial states, held outputs): what a batch
+      variant runs (a setup that compares several runs is refused with an ``InputError``).
+    * ``reducers(setup)``: the default on-line metrics of a batch or sweep
+      (``acdrive.batch.Reducer``); ``verdict(setup, row)`` the batch row's ``stable`` column
+      (None: the drive has no such verdict).
+    * ``default_machine`` and ``params_fields(machine)``: the built-in machine a scenario's
+      machine table defaults to and the fields of its ``[params]`` form, so a batch can vary
+      one parameter of a built-in machine (None: no such form).
+    * ``crosscheck(setup, lower, upper)``: the linearised tolerated speed-loop bandwidth of a
+      setup for a sweep's ``[crosscheck]`` (drives without a linearisation refuse it).
+    """
+
+    kind: str = ""
+    setup_types: tuple[type, ...] = ()
+    default_machine: str | None = None
+
+    def load(self, data: dict):
+        raise NotImplementedError
+
+    def owns(self, setup) -> bool:
+        """True if ``setup`` is a setup of this drive."""
+        return isinstance(setup, self.setup_types)
+
+    def runs(self, setup) -> int:
+        """The number of simulations ``run(setup)`` makes."""
+        return 1
+
+    def run(self, setup, on_run=None):
+        raise NotImplementedError
+
+    def write(self, outcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
+        raise NotImplementedError
+
+    def headline(self, outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
+        raise NotImplementedError
+
+    def build(self, setup):
+        raise NotImplementedError
+
+    def reducers(self, setup) -> list:
+        return []
+
+    def verdict(self, setup, row: dict) -> bool | None:
+        return None
+
+    def params_fields(self, machine) -> tuple[str, ...] | None:
+        return None
+
+    def crosscheck(self, setup, lower: float, upper: float) -> dict:
+        raise InputError("crosscheck", f"the {self.kind} drive has no linearised speed loop")
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} kind={self.kind!r}>"
+
+
+def register(drive: Drive) -> Drive:
+    """Register ``drive`` under ``drive.kind`` (a scenario's ``drive = "<kind>"`` then selects
+    it); returns it. A kind already taken by another drive is refused (``ValueError``)."""
+    kind = getattr(drive, "kind", None)
+    if not isinstance(kind, str) or not kind:
+        raise ValueError("a drive needs a non-empty string kind")
+    if not isinstance(drive, Drive):
+        raise TypeError(f"drive {kind!r} must be an acdrive.drives.Drive")
+    taken = _REGISTERED.get(kind)
+    if (taken is not None and taken is not drive) or (taken is None and kind in BUILTIN):
+        raise ValueError(f"drive kind {kind!r} is registered already")
+    _REGISTERED[kind] = drive
+    return drive
+
+
+def unregister(kind: str) -> None:
+    """Remove a drive registered with ``register`` (built-in drives stay)."""
+    if kind in BUILTIN:
+        raise ValueError(f"drive kind {kind!r} is built in")
+    _REGISTERED.pop(kind, None)
+
+
+def kinds() -> list[str]:
+    """Every drive kind a scenario can name, built-in first."""
+    return list(BUILTIN) + sorted(k for k in _REGISTERED if k not in BUILTIN)
+
+
+def get(kind: str) -> Drive:
+    """The drive of ``kind`` (a built-in is imported now); an ``InputError`` on field ``drive``
+    naming the kinds if there is none."""
+    drive = _REGISTERED.get(kind) if isinstance(kind, str) else None
+    if drive is not None:
+        return drive
+    if isinstance(kind, str) and kind in BUILTIN:
+        drive = importlib.import_module(BUILTIN[kind]).DRIVE
+        _REGISTERED[kind] = drive
+        return drive
+    names = ", ".join(f'"{k}"' for k in kinds())
+    raise InputError("drive", f'must be one of {names} (omitted: "{DEFAULT_KIND}")')
+
+
+def for_data(data) -> Drive:
+    """The drive of a parsed scenario: its ``drive`` value, ``DEFAULT_KIND`` if absent."""
+    kind = data.get("drive", DEFAULT_KIND) if isinstance(data, dict) else DEFAULT_KIND
+    return get(kind)
+
+
+def for_setup(setup) -> Drive:
+    """The drive whose ``load`` made ``setup`` (``InputError`` if no registered drive owns it)."""
+    for kind in kinds():
+        drive = get(kind)
+        if drive.owns(setup):
+            return drive
+    raise InputError("setup", f"{type(setup).__name__} is not the setup of a registered drive")
+
+
+def is_setup(value) -> bool:
+    """True if ``value`` is the setup of a registered drive."""
+    try:
+        for_setup(value)
+    except InputError:
+        return False
+    return True
