@@ -122,6 +122,12 @@ def unregister(kind: str) -> None:
     _REGISTERED.pop(kind, None)
 
 
+def builtin_packages() -> list[str]:
+    """The package of each built-in drive (``acdrive.drives.<kind>``), without importing its
+    plug-in module: where its own built-in scenarios are found (``<package>/scenarios``)."""
+    return [module.rsplit(".", 1)[0] for module in BUILTIN.values()]
+
+
 def kinds() -> list[str]:
     """Every drive kind a scenario can name, built-in first."""
     return list(BUILTIN) + sorted(k for k in _REGISTERED if k not in BUILTIN)

@@ -23,13 +23,40 @@ def constant(value: float) -> Profile:
     return Profile.constant(float(value))
 
 
+def _builtin_folders() -> list:
+    """Where built-in scenarios live: this package's ``builtin/`` (the papers' scenarios) and
+    the ``scenarios/`` folder of each built-in drive's package (``drives/<kind>/scenarios``), so
+    a drive added as one folder brings its scenarios with it."""
+    from acdrive.drives._registry import builtin_packages
+
+    folders = [resources.files("acdrive.scenarios") / "builtin"]
+    for package in builtin_packages():
+        folder = resources.files(package) / "scenarios"
+        if folder.is_dir():
+            folders.append(folder)
+    return folders
+
+
+def _builtin_files() -> dict:
+    """Built-in scenario name -> its file; a name found twice is a packaging error."""
+    files = {}
+    for folder in _builtin_folders():
+        for path in folder.iterdir():
+            if not path.name.endswith(".toml"):
+                continue
+            name = path.name[:-5]
+            if name in files:
+                raise RuntimeError(f"built-in scenario {name!r} is in two folders")
+            files[name] = path
+    return files
+
+
 def builtin_names() -> list[str]:
-    folder = resources.files("acdrive.scenarios") / "builtin"
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+    return sorted(_builtin_files())
 
 
 def builtin_text(name: str) -> str:
-    return (resources.files("acdrive.scenarios") / "builtin" / f"{name}.toml").read_text()
+    return _builtin_files()[name].read_text()
 
 
 def read_scenario(source: str | Path) -> dict:
