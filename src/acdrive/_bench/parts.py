@@ -16,6 +16,7 @@ import numpy as np
 
 from acdrive._jit import jit
 from acdrive.core._parts import SampledPart
+from acdrive.core._profile import Profile
 from acdrive.core._signals import Layout, cplx, real, table
 from acdrive.core._tables import table_offset
 
@@ -51,5 +52,9 @@ class HeldSequence(SampledPart):
         if values is not None:
             values = np.asarray(values, dtype=complex)
             index = np.arange(values.size, dtype=float)
-            params = {"re": (index, values.real), "im": (index, values.imag), **params}
+            params = {
+                "re": Profile(index, values.real),
+                "im": Profile(index, values.imag),
+                **params,
+            }
         super().__init__(name, **params)

@@ -58,6 +58,7 @@ from acdrive.analysis._icad import icad_quantities
 from acdrive.analysis._plants import plant_from_params
 from acdrive.control._current import CurrentProgram, StationaryCurrentController
 from acdrive.control._lti import LTI, LTIMatrix
+from acdrive.core._profile import Profile
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._induction import IMParams
@@ -313,7 +314,7 @@ def measure_coupling(setup: CouplingSetup) -> CouplingResult:
     variants = []
     for w in setup.frequencies:
         r = _reference(setup, w, t_tab)
-        variants.append({"reference": {"re": (t_tab, r.real), "im": (t_tab, r.imag)}})
+        variants.append({"reference": {"re": Profile(t_tab, r.real), "im": Profile(t_tab, r.imag)}})
     m, c = parts["machine"], parts["current"]
     out_port = m.out.i_dq if setup.frame == "dq" else m.out.i_s
     log = [out_port, parts["reference"].out.i, c.out.v_ref]

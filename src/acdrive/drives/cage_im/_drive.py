@@ -104,6 +104,7 @@ from acdrive.control._foc import (
     SpeedPI,
 )
 from acdrive.control._speed import SpeedReference
+from acdrive.core._profile import Profile
 from acdrive.drives.cage_im._physics import bumpless_state
 from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import (
@@ -138,7 +139,7 @@ def _reference_tables(ref: CurrentReference, duration: float, T_s: float) -> dic
         t = np.insert(t, k, [ref.start, ref.start])
         first = ref.vector(np.array([ref.start]))[0]
         i = np.insert(i, k, [0.0, first])
-    return {"re": (t, i.real), "im": (t, i.imag)}
+    return {"re": Profile(t, i.real), "im": Profile(t, i.imag)}
 
 
 class IMDrive:
