@@ -18,6 +18,8 @@ def run(args) -> int:
             raise InputError("--show", f"must be one of {', '.join(builtin_names())}")
         print(builtin_text(args.show), end="")
         return 0
-    for name in builtin_names():
-        print(f"{name:<22} {read_scenario(name).get('description', '')}")
+    names = builtin_names()
+    width = max(map(len, names))
+    for name in names:
+        print(f"{name:<{width}}  {read_scenario(name).get('description', '')}")
     return 0
