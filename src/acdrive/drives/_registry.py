@@ -21,6 +21,7 @@ from acdrive.errors import InputError
 BUILTIN = {
     "dfim": "acdrive.drives.dfim._plugin",
     "cage-im": "acdrive.drives.cage_im._plugin",
+    "pm": "acdrive.drives.pm._plugin",
 }
 #: the drive of a scenario that names none (the scenarios written before ``drive`` existed)
 DEFAULT_KIND = "dfim"

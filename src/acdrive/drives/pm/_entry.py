@@ -1,0 +1,157 @@
+"""The PM drive's scenario kinds behind one set of entry functions (what a registry entry
+delegates to, one call each): the speed drive (``PMDriveSetup``: ``_build``, summary
+``_metrics``) and seed 001's current-step run (``CurrentStepSetup``: ``_icad_step``, its two runs
+and its comparison with ICAD's (10)).
+
+* ``build_scenario(setup)``: the system of parts of one run (``_build.Built``: system, initial
+  states, held outputs, logged ports);
+* ``runs(setup)``: how many simulations ``run_outcome`` makes;
+* ``run_scenario(setup)``: (result, summary) of one scenario;
+* ``run_outcome(setup, on_run)``: a ``PMOutcome`` (``results`` by label with their wall time,
+  ``summary``);
+* ``write(outcome, folder, figures, fmt)``: each result's table (``SystemResult.save``), a figure
+  of its signals, and ``summary.json``; returns the summary written;
+* ``headline(outcome, summary)``: the first line and the (label, text) rows a command prints,
+  every number read from the summary.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from acdrive.drives.pm import _build, _icad_step
+from acdrive.drives.pm._icad_step import CurrentStepSetup
+from acdrive.drives.pm._setup import PMDriveSetup
+from acdrive.errors import InputError
+
+#: labels of the results of one scenario, by kind
+SPEED_LABELS = ("run",)
+STEP_LABELS = ("step", "base")
+
+
+def _check(setup) -> None:
+    if not isinstance(setup, (PMDriveSetup, CurrentStepSetup)):
+        raise InputError("setup", "must be a PMDriveSetup or a CurrentStepSetup")
+
+
+def build_scenario(setup) -> _build.Built:
+    """The system of parts of either kind of setup (for a current-step setup: the run with the
+    step; ``run_outcome`` runs it together with the run without)."""
+    _check(setup)
+    if isinstance(setup, CurrentStepSetup):
+        return _icad_step.build(setup)
+    return _build.build(setup)
+
+
+def runs(setup) -> int:
+    """Simulations per scenario: 2 for a current step (with and without the step), else 1."""
+    _check(setup)
+    return len(STEP_LABELS if isinstance(setup, CurrentStepSetup) else SPEED_LABELS)
+
+
+@dataclass
+class PMOutcome:
+    """One scenario's results by label (``SystemResult``, each with ``wall_time``) and summary."""
+
+    setup: PMDriveSetup | CurrentStepSetup
+    results: dict
+    summary: dict
+
+
+def run_outcome(setup, on_run=None) -> PMOutcome:
+    """Simulate ``setup``; ``on_run(label)`` is called before (the runs of a current step are
+    one batch: one call names both)."""
+    _check(setup)
+    if isinstance(setup, CurrentStepSetup):
+        if on_run is not None:
+            on_run(" and ".join(STEP_LABELS))
+        out = _icad_step.run(setup)
+        return PMOutcome(setup, dict(zip(STEP_LABELS, out.runs, strict=True)), out.summary)
+    if on_run is not None:
+        on_run(SPEED_LABELS[0])
+    result, summary = _build.run(setup)
+    return PMOutcome(setup, {SPEED_LABELS[0]: result}, summary)
+
+
+def run_scenario(setup, compiled=None):
+    """(the result of the run, its summary): for a current-step setup, the run with the step
+    (``CurrentStepResult.runs[0]``) and the comparison's summary."""
+    _check(setup)
+    if isinstance(setup, CurrentStepSetup):
+        out = _icad_step.run(setup, compiled)
+        return out.runs[0], out.summary
+    return _build.run(setup, compiled)
+
+
+def write(outcome: PMOutcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
+    """Each result's table and figure (in ``folder/<label>/`` when there are several) and
+    ``summary.json``; returns the summary written."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for label, result in outcome.results.items():
+        where = folder / label if len(outcome.results) > 1 else folder
+        where.mkdir(parents=True, exist_ok=True)
+        result.save(where, fmt)
+        if figures:
+            fig = result.plot()
+            fig.savefig(where / "signals.png", dpi=100)
+            plt.close(fig)
+    summary = outcome.summary
+    (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    return summary
+
+
+def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
+    """What ``acdrive run`` prints: a first line and (label, text) rows from ``summary``."""
+    name = outcome.setup.name
+    if isinstance(outcome.setup, CurrentStepSetup):
+        return _step_headline(name, summary)
+    first = (
+        f"{name}: final speed {summary['speed_final_rad_s']:.5g} rad/s = "
+        f"{summary['speed_final_to_base_ratio']:.3g} x base speed "
+        f"({summary['base_speed_rad_s']:.5g} rad/s)"
+    )
+    current = (
+        f"{summary['current_peak_a']:.4g} A (limit {summary['current_limit_peak_a']:.4g} A, "
+        "phase peak)"
+    )
+    rows = [
+        ("speed error, final", f"{summary['speed_error_final_rad_s']:.3g} rad/s"),
+        ("current peak", current),
+        ("torque, final", f"{summary['torque_final_n_m']:.4g} N m"),
+        ("voltage command's margin, least", f"{summary['voltage_margin_min']:.3g}"),
+        (
+            "current controller at the link",
+            f"{summary['current_controller_limited_samples']} samples",
+        ),
+        ("references on the voltage limit", f"{summary['voltage_limited_samples']} samples"),
+    ]
+    return first, rows
+
+
+def _step_headline(name: str, summary: dict) -> tuple[str, list[tuple[str, str]]]:
+    verdict = "matches" if summary["coupling_matches_icad"] else "does NOT match"
+    first = f"{name}: the coupling r_d -> i_q measured from the step {verdict} ICAD's (10)"
+    icad = (
+        f"{summary['relative_error_max']:.3%} up to {_icad_step.ICAD_W_MAX:g} rad/s "
+        f"(allowed {_icad_step.ICAD_REL_TOL:.0%})"
+    )
+    delayed = (
+        f"{summary['relative_error_delayed_max']:.3%} (allowed {_icad_step.DELAYED_REL_TOL:.1%})"
+    )
+    rows = [
+        ("controller", summary["controller"]),
+        ("largest error vs (10)", icad),
+        ("vs (10) with the hold", delayed),
+    ]
+    for r in summary["rows"]:
+        text = f"measured {r['measured_db']:.2f} dB, (10) {r['icad_db']:.2f} dB"
+        rows.append((f"{r['frequency_rad_s']:g} rad/s", text))
+    return first, rows

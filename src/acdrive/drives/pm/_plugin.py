@@ -1,0 +1,75 @@
+"""The permanent-magnet synchronous motor drive as a registered drive kind (``acdrive.drives``):
+what the command line, batches and sweeps ask of it, each answered by ``_entry`` (one call each)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from acdrive.drives._registry import Drive
+from acdrive.drives.pm._icad_step import CurrentStepSetup
+from acdrive.drives.pm._setup import PMDriveSetup
+from acdrive.errors import InputError
+from acdrive.machines._pmsm import PMSGParams
+
+
+@dataclass(frozen=True)
+class _BatchRun:
+    """One run's system and its start, as a batch variant needs them."""
+
+    system: object
+    start: tuple
+
+    def initial(self) -> tuple[dict, dict]:
+        return self.start
+
+
+class PMDriveKind(Drive):
+    """Permanent-magnet synchronous machines: the field-oriented speed drive (MTPA, field
+    weakening) and the current-step run of a current subsystem against ICAD."""
+
+    kind = "pm"
+    setup_types = (PMDriveSetup, CurrentStepSetup)
+    default_machine = None
+
+    def load(self, data: dict):
+        from acdrive.drives.pm._schema import load
+
+        return load(data)
+
+    def runs(self, setup) -> int:
+        from acdrive.drives.pm._entry import runs
+
+        return runs(setup)
+
+    def run(self, setup, on_run=None):
+        from acdrive.drives.pm._entry import run_outcome
+
+        return run_outcome(setup, on_run)
+
+    def write(self, outcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
+        from acdrive.drives.pm._entry import write
+
+        return write(outcome, folder, figures=figures, fmt=fmt)
+
+    def headline(self, outcome, summary: dict):
+        from acdrive.drives.pm._entry import headline
+
+        return headline(outcome, summary)
+
+    def build(self, setup):
+        from acdrive.drives.pm._entry import build_scenario
+
+        if isinstance(setup, CurrentStepSetup):
+            raise InputError(
+                "kind", "a current-step scenario compares two runs: not a batch variant"
+            )
+        built = build_scenario(setup)
+        return _BatchRun(built.system, (built.initial, built.held))
+
+    def params_fields(self, machine) -> tuple[str, ...] | None:
+        from acdrive.drives.pm._schema import MACHINE_FIELDS
+
+        return MACHINE_FIELDS if isinstance(machine, PMSGParams) else None
+
+
+DRIVE = PMDriveKind()
