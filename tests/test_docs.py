@@ -46,6 +46,7 @@ def test_site_builds_without_warnings_and_runs_every_example(tmp_path):
     # each part's declarations table (generated from its layouts): e.g. the converter's input
     assert "v_ref" in api and "commanded voltage space vector" in api
     assert "plot_winding_thermal" in examples  # the gallery writes its own part
+    assert "plot_pm_field_weakening" in examples  # the PM drive, MTPA and field weakening
     index = (out / "index.html").read_text()
     assert "Getting started" in index and "Gallery" in index
 
