@@ -40,6 +40,13 @@ class MachinePart(ContinuousPart):
         return cls(name, **values, **extra)
 
 
+def electrical_fields(record) -> tuple[str, ...]:
+    """The names of a record's (class or instance) machine parameters, its part's declaration
+    in order, without the shaft's mechanics: what a scenario's machine parameter table holds."""
+    mechanics = {v.name for v in MECHANICS}
+    return tuple(v.name for v in record.DECLARED if v.name not in mechanics)
+
+
 def _rule_text(var: Var) -> str:
     return f", {RULES[var.rule]}" if var.rule else ""
 

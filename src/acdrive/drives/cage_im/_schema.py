@@ -101,6 +101,7 @@ from acdrive.errors import (
     require_safe_name,
 )
 from acdrive.machines._induction import IMParams
+from acdrive.machines._record import electrical_fields
 from acdrive.scenarios._files import Section as _Section
 from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
@@ -109,7 +110,7 @@ DRIVE = "cage-im"
 #: the built-in machine of a machine table without ``name`` or ``[machine.params]``
 DEFAULT_MACHINE = "delorenzo-im"
 #: the fields of the ``[machine.params]`` table
-PARAMS_FIELDS = ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p")
+PARAMS_FIELDS = electrical_fields(IMParams)
 #: relative tolerance of "the sample time divides the carrier period" (as plant._inverter)
 _N_TOLERANCE = 1e-9
 #: speeds (fractions of the run's top speed) at which the sampled current loop is checked

@@ -78,6 +78,7 @@ from acdrive.errors import (
 )
 from acdrive.machines._dfim import DFIMParams
 from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
+from acdrive.machines._record import electrical_fields
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
 from acdrive.scenarios._files import Section as _Section
@@ -91,7 +92,7 @@ KIND = "dfim"
 #: the built-in machine of a motor table without ``machine`` or ``[motor.params]``
 DEFAULT_MACHINE = "bodson-dfim"
 #: the fields of a motor's ``[motor.params]`` table
-PARAMS_FIELDS = ("R_s", "R_r", "L_s", "L_r", "M", "n_p", "J")
+PARAMS_FIELDS = (*electrical_fields(DFIMParams), "J")
 
 RAD_S_PER_RPM = math.pi / 30.0
 #: largest supply frequency [Hz]: the machine model (constant lumped inductances and

@@ -43,12 +43,13 @@ from acdrive.drives.pm._machines import BLY171D, IPMSM_2KW2
 from acdrive.drives.pm._setup import CONVERTERS, PMDriveSetup
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
+from acdrive.machines._record import electrical_fields
 from acdrive.scenarios._files import Section, parse_toml
 
 DRIVE = "pm"
 #: machines a scenario may name (``drives.pm._machines`` and seed 001's PMSG)
 MACHINES = {"bly171d": BLY171D, "ipmsm-2.2kw": IPMSM_2KW2, "pmsg-2mw": PMSG_2MW}
-MACHINE_FIELDS = ("R_s", "L_d", "L_q", "psi_m", "n_p", "J")
+MACHINE_FIELDS = (*electrical_fields(PMSGParams), "J")
 SCENARIO_DIR = Path(__file__).with_name("scenarios")
 #: the scenario kinds (top-level ``kind``): the speed drive and the current-step run
 KINDS = ("speed", "current-step")
