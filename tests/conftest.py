@@ -3,6 +3,7 @@ test run is reproducible and CI judges the change, not the draw; ``ACDRIVE_FUZZ_
 fresh examples for a fuzzing session on a developer's machine."""
 
 import os
+import signal
 
 from hypothesis import settings
 
@@ -14,3 +15,10 @@ settings.register_profile("ci", derandomize=True, deadline=None)
 os.environ.setdefault("ACDRIVE_COMPILE_NOTICE", "0")
 if not os.environ.get("ACDRIVE_FUZZ_RANDOM"):
     settings.load_profile("ci")
+
+# A suite started in the background by a non-interactive shell (`nohup pytest &`) inherits SIGINT
+# ignored, and so would every command a test starts: Python then installs no KeyboardInterrupt
+# handler and the tests that interrupt a run with SIGINT would see it run to its end. Restoring
+# Python's handler here makes the children start with SIGINT at its default again.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)

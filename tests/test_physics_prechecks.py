@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from acdrive.cli import main
+from acdrive.drives import for_setup
 from acdrive.drives._period import speed_loop_radius
 from acdrive.drives.cage_im._period import im_control_period_warnings
 from acdrive.drives.dfim._period import control_period_warnings, current_loop_radius
@@ -286,11 +287,24 @@ def test_the_converter_loss_enters_the_estimate():
     assert fastest_mode(lossy)[1] == "motor[0].converter_device_drop"
 
 
+#: the drives whose loaders choose the integration substeps and check the control period
+#: (this file's subject), with their control-period warnings
+PERIOD_CHECKED = {"dfim": control_period_warnings, "cage-im": im_control_period_warnings}
+
+
+def _period_checked_builtins():
+    for name in builtin_names():
+        setup = load_scenario(name)
+        kind = for_setup(setup).kind
+        if kind in PERIOD_CHECKED:
+            yield name, setup, PERIOD_CHECKED[kind]
+
+
 def test_the_builtins_keep_their_substeps():
     with warnings.catch_warnings():
         warnings.simplefilter("error", Notice)
-        for name in builtin_names():
-            assert load_scenario(name).substeps == 4
+        for name, setup, _ in _period_checked_builtins():
+            assert setup.substeps == 4, name
 
 
 # ---------------------------------------------------------------------------------------------
@@ -416,14 +430,8 @@ def test_a_coarse_but_stable_control_period_runs_with_the_warnings_in_the_summar
 
 
 def test_the_usual_control_period_warns_of_nothing():
-    for name in builtin_names():
-        setup = load_scenario(name)
-        warnings = (
-            control_period_warnings(setup)
-            if hasattr(setup, "motors")
-            else im_control_period_warnings(setup)
-        )
-        assert warnings == [], name
+    for name, setup, period_warnings in _period_checked_builtins():
+        assert period_warnings(setup) == [], name
 
 
 def test_a_pwm_period_longer_than_the_control_period_is_warned(tmp_path):

@@ -16,6 +16,7 @@ PACKAGES = (
     "acdrive.drives",
     "acdrive.drives.dfim",
     "acdrive.drives.cage_im",
+    "acdrive.drives.pm",
     "acdrive.scenarios",
     "acdrive.core",
     "acdrive.sweep",
