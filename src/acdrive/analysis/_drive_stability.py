@@ -304,6 +304,7 @@ def _motor_setup(model: DriveModel, point: OperatingPoint) -> MotorSetup:
             rotor_current_limit_pk=model.current_limit_pk,
             speed_filter_tau=model.speed_filter_tau,
             params=model.controller_params,
+            computation_delay_samples=model.delay_samples,
         ),
         speed_reference=constant(point.speed),
         load_torque=constant(point.load_torque),
@@ -590,9 +591,9 @@ class _Sampled(SampleMap):
       rotor coordinates rotated by n_p theta - theta_g): the plant outputs the sensors read at t_k
       depend on it through the supply impedance;
     * in current mode, ``controller0.ir_int``: the rotor current-loop integral (47);
-    * with one sample of computation delay, ``delay.v_r``: the controller's command of the
-      previous sample, waiting in the delay line between controller and converter (rotor
-      coordinates, likewise rotated).
+    * with one sample of computation delay, ``delay0.stored``: the controller's command of the
+      previous sample, waiting in the drive's ``ComputationDelay`` part between controller and
+      converter (rotor coordinates, likewise rotated).
 
     The discrete states outside z are those the loop sets on its first sample and then keeps
     (started flags, the synchroniser's closed relay and adjustments, the controller's mode and
@@ -602,8 +603,6 @@ class _Sampled(SampleMap):
     t_k, so that its estimate is w_e at every sample (the grid alone drives that estimator: its
     mode does not couple into the loop, and z leaves it out).
     """
-
-    DELAY = "delay.v_r"
 
     def __init__(self, model: DriveModel, point: OperatingPoint, drive: DFIMDrive | None = None):
         if model.speed_loop != "closed":
@@ -627,13 +626,15 @@ class _Sampled(SampleMap):
             "ir_int": self.coordinate(ctrl, "s", "ir_int"),
         }
         roles = list(c)[:-1] + (["ir_int"] if model.mode == "current" else [])
+        if "delay" in parts:  # the drive's ComputationDelay part (model.delay_samples = 1)
+            c["delay"] = self.coordinate(parts["delay"], "s", "stored", "rotor")
+            roles.append("delay")
         self.coordinates = tuple(c[r] for r in roles)
         self.n_p = dfim.values["n_p"]
         self.i_theta_g = self.slot(drive.grid, "x", "theta_g")
         self.i_theta = self.slot(dfim, "x", "theta")  # the angle of rotor coordinates
         self.i_shaft_theta = self.slot(shaft, "x", "theta")  # what the encoder reads
         self.i_tau = self.slot(ctrl, "s", "tau_com")
-        self.i_command = self.slot(ctrl, "y", "v_r")
         self.i_v_g_prev = self.slot(parts["frequency"], "s", "v_prev")
         # the loop's own start-up: one sample from the drive's initial state
         initial, held = drive.initial()
@@ -645,27 +646,7 @@ class _Sampled(SampleMap):
         # the first sample stored v_g(0), the grid voltage at theta_g = 0
         v_g_prev = get_complex(self.S0, self.i_v_g_prev) * np.exp(-1j * model.w_e * self.T)
         set_complex(self.S0, self.i_v_g_prev, v_g_prev)
-        self.waiting = self.command = 0j
         self.torque_command = 0.0
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        delay = (f"{self.DELAY}.re", f"{self.DELAY}.im") if self.model.delay_samples else ()
-        return super().names + delay
-
-    def load(self, z: np.ndarray) -> int:
-        """X, S, Y at t_k = 0 for the map state ``z`` (class docstring)."""
-        k = super().load(z)
-        if self.model.delay_samples:
-            self.waiting = complex(z[k], z[k + 1])
-            k += 2
-        return k
-
-    def between(self) -> None:
-        """With a computation delay the converter receives the previous sample's command."""
-        if self.model.delay_samples:
-            self.command = get_complex(self.Y, self.i_command)
-            set_complex(self.Y, self.i_command, self.waiting)
 
     def read(self) -> np.ndarray:
         """The map state at t_k + T_s, re-referenced to the frame of that instant."""
@@ -674,11 +655,7 @@ class _Sampled(SampleMap):
         self.back = np.exp(-1j * theta_g)  # stationary frame at t_k -> frame of the next sample
         self.rotor = np.exp(1j * (self.n_p * X[self.i_theta] - theta_g))  # rotor coordinates
         self.torque_command = self.S[self.i_tau]
-        out = super().read()
-        if self.model.delay_samples:
-            v_wait = self.command * self.rotor
-            out = np.append(out, [v_wait.real, v_wait.imag])
-        return out
+        return super().read()
 
     def rereference(self, c: Coordinate, value):
         if c.frame == "stationary":
@@ -700,18 +677,17 @@ class _Sampled(SampleMap):
         tau = cont.torque_command(cont_state)
         v_r = _voltage_law(cont.p, m.w_e, w, m.v_g, tau)
         values = {"psi_s": psi_s, "psi_r": psi_r, "w": w, "theta_prev": -w * self.T,
-                  "e_int": e_I, "w_est": w, "v_held": v_r, "ir_int": integral}  # fmt: skip
-        values = {self.c[role].name: v for role, v in values.items()}
-        return np.append(self.vector(values), [v_r.real, v_r.imag][: 2 * m.delay_samples])
+                  "e_int": e_I, "w_est": w, "v_held": v_r, "ir_int": integral,
+                  "delay": v_r}  # fmt: skip
+        return self.vector({self.c[role].name: v for role, v in values.items() if role in self.c})
 
     def scales(self) -> np.ndarray:
         m = self.model
         psi = m.v_g / m.w_e
         scale = {"psi_s": psi * (1 + 1j), "psi_r": psi * (1 + 1j), "w": 100.0,
                  "theta_prev": 100.0 * self.T, "e_int": 0.1, "w_est": 100.0,
-                 "v_held": 10.0 + 10j, "ir_int": 0.01 + 0.01j}  # fmt: skip
-        values = {self.c[role].name: v for role, v in scale.items()}
-        return np.append(self.vector(values), [10.0, 10.0][: 2 * m.delay_samples])
+                 "v_held": 10.0 + 10j, "ir_int": 0.01 + 0.01j, "delay": 10.0 + 10j}  # fmt: skip
+        return self.vector({self.c[role].name: v for role, v in scale.items() if role in self.c})
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1116,11 +1092,11 @@ def simulate_from_equilibrium(result: StabilityResult, perturbation: np.ndarray,
     equilibrium of ``result`` plus ``perturbation`` (a map-state vector); returns (t, shaft speed
     w at every sample).
 
-    ``result`` must come from ``linearize(..., kind="sampled")`` with no computation delay
-    (the compiled loop applies each command at once).
+    ``result`` must come from ``linearize(..., kind="sampled")``; with a computation delay the
+    drive runs with its ``ComputationDelay`` part, as the linearisation did.
     """
-    if result.kind != "sampled" or result.model.delay_samples:
-        raise InputError("result", "needs a sampled-data result without computation delay")
+    if result.kind != "sampled":
+        raise InputError("result", "needs a sampled-data result (kind='sampled')")
     smp = _Sampled(result.model, result.point)
     smp.load(result.state + perturbation)
     initial, held = smp.initial_and_held()
