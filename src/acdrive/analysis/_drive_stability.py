@@ -55,7 +55,6 @@ from acdrive.analysis._linearise import (
     set_complex,
     slot,
 )
-from acdrive.control import _dfim as ctl
 from acdrive.control._bodson import rotor_current_loop
 from acdrive.control._speed import SpeedPIGains, speed_pi
 from acdrive.drives.dfim._drive import DFIMDrive
@@ -92,7 +91,9 @@ Z_ZERO = 1e-9
 
 @dataclass(frozen=True)
 class DriveModel:
-    """The drive being linearised: machine, supply, controller mode, gains and bench effects.
+    """A parameter study's shorthand for a one-motor DFIM drive on Bodson's bench: it builds the
+    ``DriveSetup`` the linearisation takes (:func:`drive_setup`); the linearisation itself reads
+    only that setup (:class:`DriveView`). Varying one bench effect is then one field:
 
     machine: the true machine (its J and viscous friction B enter the mechanics (26));
     controller_params: the controller's estimates (default: the true values);
@@ -174,25 +175,6 @@ class DriveModel:
         J = self.design_inertia or self.machine.J
         return dataclasses.replace(SpeedPIGains.design(J, self.speed_bandwidth), K_F=self.K_F)
 
-    @property
-    def current_gains(self) -> tuple[float, float]:
-        """(K_P,C, K_I,C) of Bodson (49) from the controller's estimates."""
-        est = self.controller_params or self.machine
-        return ctl.current_loop_gains(est.sigma, est.L_r, self.R_T, self.current_bandwidth)
-
-    @property
-    def w_e(self) -> float:
-        return 2.0 * math.pi * self.supply_frequency_hz
-
-    @property
-    def v_g(self) -> float:
-        """Grid space-vector magnitude sqrt(3/2) V_pk (Bodson (8))."""
-        return SQRT_3_2 * self.supply_voltage_pk
-
-    @property
-    def i_max(self) -> float:
-        return SQRT_3_2 * self.current_limit_pk
-
 
 @dataclass(frozen=True)
 class OperatingPoint:
@@ -204,6 +186,100 @@ class OperatingPoint:
     @property
     def speed_rpm(self) -> float:
         return self.speed / RAD_S_PER_RPM
+
+
+class DriveView:
+    """What the linearisation reads of a DFIM ``DriveSetup``, computed from it (never a copy of
+    its fields): motor 0 of ``setup`` held at ``point`` (:func:`operating_setup`) and the speed
+    loop's state (``"closed"``, ``"open"``, ``"frozen"``, as :class:`DriveModel`'s).
+
+    ``setup`` is the drive the linearisation builds (``acdrive.drives.get("dfim").build``) and
+    compiles; the properties below are read from its motor, controller and supply.
+    """
+
+    def __init__(self, setup: DriveSetup, point: OperatingPoint, speed_loop: str = "closed"):
+        if speed_loop not in SPEED_LOOPS:
+            raise InputError("speed_loop", f"must be one of {', '.join(SPEED_LOOPS)}")
+        self.setup = operating_setup(setup, point)
+        self.point, self.speed_loop = point, speed_loop
+        self.motor = self.setup.motors[0]
+        self.controller = self.motor.controller
+
+    mode = property(lambda self: self.controller.mode)
+    machine = property(lambda self: self.motor.machine)
+    #: the controller's parameter estimates (None: the true machine's)
+    controller_params = property(lambda self: self.controller.params)
+    gains = property(lambda self: self.controller.gains)
+    R_T = property(lambda self: self.controller.R_T)
+    speed_filter_tau = property(lambda self: self.controller.speed_filter_tau)
+    supply_resistance = property(lambda self: self.setup.supply.resistance)
+    sample_time = property(lambda self: self.setup.sample_time)
+    substeps = property(lambda self: self.setup.substeps)
+
+    @property
+    def current_gains(self) -> tuple[float, float]:
+        """(K_P,C, K_I,C) of Bodson (49) from the controller's estimates."""
+        return self.controller.current_gains(self.machine)
+
+    @property
+    def w_e(self) -> float:
+        return 2.0 * math.pi * float(self.setup.supply.frequency_hz[1][0])
+
+    @property
+    def v_g(self) -> float:
+        """Grid space-vector magnitude sqrt(3/2) V_pk (Bodson (8))."""
+        return SQRT_3_2 * float(self.setup.supply.voltage_pk[1][0])
+
+    @property
+    def i_s_max(self) -> float:
+        return SQRT_3_2 * self.controller.stator_current_limit_pk
+
+    @property
+    def i_r_max(self) -> float:
+        return SQRT_3_2 * self.controller.rotor_current_limit_pk
+
+
+def operating_setup(setup: DriveSetup, point: OperatingPoint) -> DriveSetup:
+    """Motor 0 of ``setup`` alone on its supply, held at ``point``, as the linearisation sees it:
+    speed reference and initial speed at the operating speed, the load constant, the supply
+    constant at its values at t = 0 (balanced), the stator connected (no synchronisation), an
+    ideal encoder resolution (a quantiser has no derivative), no sensor fault, a constant DC
+    link, no forced relay. The encoder offset stays unless the setup synchronises: the
+    synchroniser then has identified it (Bodson IV-A) and the connected drive runs as without. Everything else (machine, controller, estimates,
+    converter, computation delay, sample time, substeps, integrator) is the setup's."""
+    motor = setup.motors[0]
+    supply = setup.supply
+    controller = dataclasses.replace(
+        motor.controller, sync=dataclasses.replace(motor.controller.sync, enabled=False)
+    )
+    motor = dataclasses.replace(
+        motor, controller=controller, speed_reference=constant(point.speed),
+        load_torque=constant(point.load_torque), initial_speed=point.speed,
+        encoder_counts_per_rev=0.0, current_sensor_fault_time=math.inf, dc_link_profile=None,
+        encoder_offset=0.0 if motor.controller.sync.enabled else motor.encoder_offset,
+        relay_forced_close_time=math.inf,
+    )  # fmt: skip
+    supply = dataclasses.replace(
+        supply, voltage_pk=constant(float(supply.voltage_pk[1][0])),
+        frequency_hz=constant(float(supply.frequency_hz[1][0])), phase_scales=None,
+    )  # fmt: skip
+    return dataclasses.replace(setup, motors=(motor,), supply=supply, duration=1.0,
+                               name="stability", compare_modes=(), log_every=1)  # fmt: skip
+
+
+def view_of(study, point: OperatingPoint, speed_loop: str | None = None) -> DriveView:
+    """The :class:`DriveView` of ``study`` (a DFIM ``DriveSetup``, or a :class:`DriveModel`, which
+    builds its setup with :func:`drive_setup`) at ``point``; ``speed_loop`` defaults to the
+    model's (closed for a setup)."""
+    if isinstance(study, DriveView):
+        return study
+    if isinstance(study, DriveModel):
+        return DriveView(drive_setup(study, point), point, speed_loop or study.speed_loop)
+    if isinstance(study, DriveSetup):
+        return DriveView(study, point, speed_loop or "closed")
+    raise InputError(
+        "setup", "must be a DFIM DriveSetup (acdrive.drives.DriveSetup) or a DriveModel"
+    )
 
 
 @dataclass(frozen=True)
@@ -220,7 +296,7 @@ class StabilityResult:
     describe it); state: the equilibrium state vector; state_names: its entries.
     """
 
-    model: DriveModel
+    model: object  # the DriveSetup or DriveModel linearised
     point: OperatingPoint
     kind: str
     eigenvalues: np.ndarray
@@ -232,6 +308,17 @@ class StabilityResult:
     state: np.ndarray = field(repr=False)
     state_names: tuple[str, ...] = field(repr=False)
     jacobian: np.ndarray = field(repr=False)
+    view: DriveView | None = field(default=None, repr=False)  # what was linearised
+
+    def to_control(self):
+        """The linearised closed drive as a python-control ``StateSpace`` (continuous, or
+        discrete with dt = T_s for ``sampled``): inputs ``w_ref`` [rad/s] and ``tau_L`` [N m],
+        outputs ``w`` [rad/s] and the currents ``i_s``, ``i_r`` [A] (``_re``/``_im``, supply
+        frame), states ``state_names`` (``.`` written ``_``, as python-control requires); its poles are ``eigenvalues`` (``z_eigenvalues``)
+        (``analysis._drive_control``)."""
+        from acdrive.analysis._drive_control import to_control
+
+        return to_control(self)
 
     @property
     def dominant(self) -> complex:
@@ -246,16 +333,19 @@ class StabilityResult:
 # ---------------------------------------------------------------------------------------------
 
 
-def speed_range(model: DriveModel) -> tuple[float, float]:
+def speed_range(study) -> tuple[float, float]:
     """(lowest, highest) speed [rad/s] the drive can hold (converter rotor-voltage limit,
     ``drives.dfim._setup.speed_range``)."""
-    return setup_speed_range(_motor_setup(model, OperatingPoint(0.0)), _supply(model))
+    view = view_of(study, OperatingPoint(0.0))
+    return setup_speed_range(view.motor, view.setup.supply)
 
 
-def check_point(model: DriveModel, point: OperatingPoint) -> None:
+def check_point(model, point: OperatingPoint) -> None:
     """Raise InputError unless ``point`` is finite, inside the speed range, with a load torque
-    (plus friction) inside the torque window of the controller (30)-(37)."""
+    (plus friction) inside the torque window of the controller (30)-(37); ``model``: a
+    ``DriveSetup``, a :class:`DriveModel` or their :class:`DriveView`."""
     w = require_finite("speed", point.speed)
+    model = view_of(model, OperatingPoint(w, require_finite("load_torque", point.load_torque)))
     tau_l = require_finite("load_torque", point.load_torque)
     low, high = speed_range(model)
     if not low <= w <= high:
@@ -272,9 +362,9 @@ def check_point(model: DriveModel, point: OperatingPoint) -> None:
         )
 
 
-def _torque_window(model: DriveModel, v_s: float) -> tuple[float, float]:
+def _torque_window(model: DriveView, v_s: float) -> tuple[float, float]:
     p_est = machine_vector(model.controller_params or model.machine)
-    lo, hi, _ = torque_window(p_est, model.w_e, v_s, model.i_max, model.i_max)
+    lo, hi, _ = torque_window(p_est, model.w_e, v_s, model.i_s_max, model.i_r_max)
     return lo, hi
 
 
@@ -333,10 +423,12 @@ def drive_setup(model: DriveModel, point: OperatingPoint, duration: float = 1.0)
     )
 
 
-def _drive(model: DriveModel, point: OperatingPoint) -> DFIMDrive:
-    """The parts-built drive of ``drive_setup(model, point)`` (one motor: parts ``dfim0``,
-    ``shaft0``, ..., ``controller0``, and ``grid``, ``bus``)."""
-    return DFIMDrive(drive_setup(model, point))
+def _drive(model: DriveView) -> DFIMDrive:
+    """The DFIM drive's own build of the view's setup (one motor: parts ``dfim0``, ``shaft0``,
+    ..., ``controller0``, and ``grid``, ``bus``), through the registry."""
+    from acdrive.drives import get
+
+    return get("dfim").build(model.setup)
 
 
 def _rotor_voltage_limit(drive: DFIMDrive) -> float:
@@ -353,8 +445,8 @@ class _Plant:
     coincide with it, and the supply-frame derivatives are the stationary ones minus j w_e x.
     """
 
-    def __init__(self, model: DriveModel, point: OperatingPoint):
-        self.drive = drive = _drive(model, point)
+    def __init__(self, model: DriveView):
+        self.drive = drive = _drive(model)
         system, parts = drive.system, drive.motors[0]
         self.parts, self.module = parts, drive.compile().module
         self.P, self.PO = system.pack_params()
@@ -446,9 +538,9 @@ class _Continuous:
     current-loop integrator in current mode.
     """
 
-    def __init__(self, model: DriveModel, point: OperatingPoint):
-        self.model, self.point = model, point
-        self.plant = _Plant(model, point)
+    def __init__(self, model: DriveView):
+        self.model, self.point = model, model.point
+        self.plant = _Plant(model)
         ctrl = self.plant.parts["controller"]
         # the SpeedController part's arrays: parameters (machine estimates, gains) and a state
         # for the current loop's integral; no voltage limit in the continuous law (see
@@ -470,6 +562,7 @@ class _Continuous:
             names += ["z.re", "z.im"]
         self.names = tuple(names)
         self.tau_hold = 0.0
+        self.w_ref = model.point.speed  # the speed reference (an input of ``to_control``)
 
     def unpack(self, x):
         s = dict(zip(self.names, x))
@@ -488,7 +581,7 @@ class _Continuous:
         _, _, _, e_I, w_f, _ = self.unpack(x)
         if self.model.speed_loop != "closed":
             return self.tau_hold
-        return speed_pi(self.K_P, self.K_I, self.K_F, e_I, self.point.speed, w_f, -np.inf,
+        return speed_pi(self.K_P, self.K_I, self.K_F, e_I, self.w_ref, w_f, -np.inf,
                         np.inf, 1.0)[0]  # fmt: skip
 
     def rhs(self, x) -> np.ndarray:
@@ -519,7 +612,7 @@ class _Continuous:
             "psi_r.re": dpsi_r.real,
             "psi_r.im": dpsi_r.imag,
             "w": dw,
-            "e_I": self.point.speed - w_f,
+            "e_I": self.w_ref - w_f,
             "w_f": (w - w_f) / m.speed_filter_tau if m.speed_filter_tau > 0 else 0.0,
             "z.re": dz.real,
             "z.im": dz.imag,
@@ -604,10 +697,11 @@ class _Sampled(SampleMap):
     mode does not couple into the loop, and z leaves it out).
     """
 
-    def __init__(self, model: DriveModel, point: OperatingPoint, drive: DFIMDrive | None = None):
+    def __init__(self, model: DriveView, drive: DFIMDrive | None = None):
         if model.speed_loop != "closed":
             raise InputError("speed_loop", "the sampled-data model needs the closed speed loop")
-        drive = drive or _drive(model, point)
+        point = model.point
+        drive = drive or _drive(model)
         super().__init__(drive.compile(), model.sample_time, model.substeps)
         self.model, self.point, self.drive = model, point, drive
         self.parts = parts = drive.motors[0]
@@ -695,8 +789,8 @@ class _Sampled(SampleMap):
 # ---------------------------------------------------------------------------------------------
 
 
-def _continuous_equilibrium(model: DriveModel, point: OperatingPoint):
-    cont = _Continuous(model, point)
+def _continuous_equilibrium(model: DriveView):
+    cont = _Continuous(model)
     x0 = cont.guess()
     if model.speed_loop == "closed":
         x = newton(cont.rhs, x0, cont.scales())
@@ -719,18 +813,29 @@ def _continuous_equilibrium(model: DriveModel, point: OperatingPoint):
 
 
 def linearize(
-    model: DriveModel, point: OperatingPoint, kind: str = "continuous"
-) -> StabilityResult:
-    """Linearise the closed loop of ``model`` at ``point`` and return its eigenvalues.
+    setup, point: OperatingPoint | None = None, kind: str = "continuous",
+    speed_loop: str | None = None,
+) -> StabilityResult:  # fmt: skip
+    """Linearise the closed loop of ``setup`` at ``point`` and return its eigenvalues.
 
+    ``setup``: a DFIM ``DriveSetup`` (``acdrive.drives.DriveSetup``; its motor 0 on its supply,
+    :func:`operating_setup`) or a :class:`DriveModel` (which builds one); ``point``: the
+    operating point (default: the setup's final speed reference and load torque);
     ``kind``: "continuous" (continuous-time law, Jacobian of the right-hand side) or "sampled"
-    (the simulator's sampled-data loop, Jacobian of the one-sample map; closed speed loop).
+    (the simulator's sampled-data loop, Jacobian of the one-sample map; closed speed loop);
+    ``speed_loop``: "closed" (default for a setup; a model's own otherwise), "open", "frozen".
     """
     if kind not in KINDS:
         raise InputError("kind", f"must be one of {', '.join(KINDS)}")
+    if point is None:
+        if not isinstance(setup, DriveSetup):
+            raise InputError("point", "is needed with a DriveModel")
+        m = setup.motors[0]
+        point = OperatingPoint(float(m.speed_reference[1][-1]), float(m.load_torque[1][-1]))
+    study, model = setup, view_of(setup, point, speed_loop)
     check_point(model, point)
     try:
-        cont, x = _continuous_equilibrium(model, point)
+        cont, x = _continuous_equilibrium(model)
     except (RuntimeError, np.linalg.LinAlgError):
         raise InputError(
             "load_torque", "no equilibrium: the drive cannot hold this load at this speed"
@@ -746,7 +851,7 @@ def linearize(
         z_eig, state, names, jac = np.array([], dtype=complex), x, cont.names, A
         stable = bool(np.all(s.real < 0.0))
     else:
-        smp = _Sampled(model, point, cont.plant.drive)
+        smp = _Sampled(model, cont.plant.drive)
         try:
             z0, F = fixed_point(smp, smp.guess(x, cont), smp.scales())
         except (RuntimeError, np.linalg.LinAlgError):
@@ -765,10 +870,10 @@ def linearize(
     v_max = _rotor_voltage_limit(cont.plant.drive)
     # the linearisation describes the unclipped controller: torque inside the window (30)-(37),
     # rotor current inside its limit (43), converter inside its voltage range
-    inside = lo < tau < hi and v_r < v_max and i_r <= model.i_max * (1.0 + 1e-9)
+    inside = lo < tau < hi and v_r < v_max and i_r <= model.i_r_max * (1.0 + 1e-9)
     s = s[np.lexsort((-s.imag, -s.real))]
     return StabilityResult(
-        model=model,
+        model=study,
         point=point,
         kind=kind,
         eigenvalues=s,
@@ -780,6 +885,7 @@ def linearize(
         state=state,
         state_names=names,
         jacobian=jac,
+        view=model,
     )
 
 
@@ -796,7 +902,7 @@ class StabilityMap:
     is then NaN and stable False); ``all_stable`` looks at the feasible points only.
     """
 
-    model: DriveModel
+    model: object  # the DriveSetup or DriveModel
     kind: str
     speeds_rpm: np.ndarray
     loads_nm: np.ndarray
@@ -809,19 +915,19 @@ class StabilityMap:
         return bool(np.all(self.stable[self.feasible]))
 
 
-def default_grid(model: DriveModel, n_speed: int = 13, n_load: int = 7, fraction: float = 0.9):
+def default_grid(model, n_speed: int = 13, n_load: int = 7, fraction: float = 0.9):
     """Speeds 0..2,700 rpm (the paper's experiments) and loads across ``fraction`` of the torque
     window (30)-(37) of the controller at the nominal supply."""
-    lo, hi = _torque_window(model, model.v_g)
+    view = view_of(model, OperatingPoint(0.0))
+    lo, hi = _torque_window(view, view.v_g)
     speeds = np.linspace(0.0, 2700.0, n_speed)
     loads = np.linspace(fraction * lo, fraction * hi, n_load)
     return speeds, loads
 
 
-def stability_map(
-    model: DriveModel, speeds_rpm, loads_nm, kind: str = "continuous"
-) -> StabilityMap:
-    """Linearise at every (speed, load) of the grid."""
+def stability_map(model, speeds_rpm, loads_nm, kind: str = "continuous") -> StabilityMap:
+    """Linearise ``model`` (a DFIM ``DriveSetup`` or a :class:`DriveModel`) at every
+    (speed, load) of the grid."""
     speeds_rpm = np.asarray(speeds_rpm, dtype=float)
     loads_nm = np.asarray(loads_nm, dtype=float)
     mrp = np.empty((speeds_rpm.size, loads_nm.size))
@@ -841,8 +947,22 @@ def stability_map(
     return StabilityMap(model, kind, speeds_rpm, loads_nm, mrp, stable, feasible)
 
 
+def with_speed_bandwidth(study, bandwidth: float):
+    """``study`` (a :class:`DriveModel` or a DFIM ``DriveSetup``) with the speed PI of motor 0
+    designed for a_D,VEL = ``bandwidth`` by (27) with the same design inertia and K_F (of a
+    setup: J = K_P^2 / (4 K_I), the inertia its gains were designed with)."""
+    if isinstance(study, DriveModel):
+        return dataclasses.replace(study, speed_bandwidth=bandwidth)
+    motor = study.motors[0]
+    g = motor.controller.gains
+    gains = dataclasses.replace(SpeedPIGains.design(g.K_P**2 / (4.0 * g.K_I), bandwidth), K_F=g.K_F)
+    controller = dataclasses.replace(motor.controller, gains=gains)
+    motor = dataclasses.replace(motor, controller=controller)
+    return dataclasses.replace(study, motors=(motor, *study.motors[1:]))
+
+
 def max_stable_bandwidth(
-    mode: str = "voltage",
+    mode="voltage",
     speeds_rpm=None,
     loads_nm=None,
     *,
@@ -859,15 +979,16 @@ def max_stable_bandwidth(
     monotonic in a_D,VEL: the voltage-command drive regains stability at no load in a window of
     higher bandwidths; this function reports the first loss.) Returns ``upper`` if no loss is
     found, 0.0 if the grid is unstable at ``lower``.
+
+    ``mode``: "voltage" or "current" (a :class:`DriveModel` of that mode and ``model_fields``),
+    or a DFIM ``DriveSetup`` whose speed PI is redesigned (:func:`with_speed_bandwidth`).
     """
-    base = DriveModel(mode=mode, **model_fields)
+    base = mode if isinstance(mode, DriveSetup) else DriveModel(mode=mode, **model_fields)
     if speeds_rpm is None or loads_nm is None:
         speeds_rpm, loads_nm = default_grid(base)
 
     def ok(a):
-        return stability_map(
-            dataclasses.replace(base, speed_bandwidth=a), speeds_rpm, loads_nm, kind
-        ).all_stable
+        return stability_map(with_speed_bandwidth(base, a), speeds_rpm, loads_nm, kind).all_stable
 
     if not ok(lower):
         return 0.0
@@ -1097,7 +1218,7 @@ def simulate_from_equilibrium(result: StabilityResult, perturbation: np.ndarray,
     """
     if result.kind != "sampled":
         raise InputError("result", "needs a sampled-data result (kind='sampled')")
-    smp = _Sampled(result.model, result.point)
+    smp = _Sampled(result.view)
     smp.load(result.state + perturbation)
     initial, held = smp.initial_and_held()
     w = smp.parts["shaft"].out.w
