@@ -42,7 +42,7 @@ def _currents(system, parts, Y) -> list[float]:
 
 
 def _continuous(result):
-    from acdrive.analysis._drive_stability import _continuous_equilibrium
+    from acdrive.analysis._drive_loops import _continuous_equilibrium
 
     cont, x0 = _continuous_equilibrium(result.view)
     plant = cont.plant
@@ -70,7 +70,7 @@ def _continuous(result):
 
 
 def _sampled(result):
-    from acdrive.analysis._drive_stability import _Sampled
+    from acdrive.analysis._drive_loops import _Sampled
 
     smp = _Sampled(result.view)
     system, parts = smp.system, smp.parts
