@@ -61,3 +61,21 @@ def test_the_load_slows_the_shaft_at_first_by_one_over_J():
     sys = linearize(model, POINT).to_control()
     CB = (sys.C @ sys.B)[0, 1]
     assert CB == pytest.approx(-1.0 / model.machine.J, rel=1e-6)
+
+
+def test_cli_linearises_a_scenario_as_it_is_set_up(capsys):
+    """``acdrive stability --scenario``: the scenario's own drive at its final reference and load,
+    the same numbers as ``linearize(setup)``; a cage-IM scenario is refused in one line."""
+    from acdrive.cli import main
+    from acdrive.scenarios._loader import load_scenario
+
+    assert main(["stability", "--scenario", "bodson-ramp", "--model", "sampled", "--json"]) == 0
+    import json
+
+    out = json.loads(capsys.readouterr().out)
+    r = linearize(load_scenario("bodson-ramp"), kind="sampled")
+    assert out["max_real_part"] == r.max_real_part and out["stable"] == r.stable
+    assert out["speed_rpm"] == pytest.approx(r.point.speed_rpm)
+    assert main(["stability", "--scenario", "im-locked-rotor"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scenario" in err
