@@ -26,6 +26,7 @@ computed, not copied from a run:
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import tomllib
@@ -35,7 +36,7 @@ import pytest
 
 from acdrive._frames import K_PEAK, complex_to_abc
 from acdrive._jit import STRICT_MATH
-from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive.analysis._drive_stability import OperatingPoint, linearize
 from acdrive.cli import main
 from acdrive.control._dfim import EVENT_NAMES
 from acdrive.drives.dfim._drive import DFIMDrive
@@ -50,6 +51,7 @@ from acdrive.plant._sources import (
     source_state_outputs,
     unbalanced_state_outputs,
 )
+from acdrive.scenarios._files import constant
 from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text
 
 ALPHA = np.exp(2j * np.pi / 3)
@@ -142,28 +144,15 @@ def assert_limits_hold_or_reported(out) -> None:
                 assert len(named) == (1 if above else 0)
 
 
-@functools.cache
-def _linearised(model: DriveModel, point: OperatingPoint):
-    return linearize(model, point, "sampled")
-
-
 def slowest_decay(setup, speed_rpm: float, load: float = 0.0, frequency_hz=None) -> float:
     """-max Re(s) [1/s] of motor 0's drive linearised at (speed, load), sampled-data model
-    (``analysis.drive_stability``) with the scenario's gains, converter loss and supply (at
-    ``frequency_hz`` if given): the decay rate of the slowest mode of the speed error. Over a
-    range of speeds, the smallest of them is the one to wait for (``slowest_over``)."""
-    m, supply = setup.motors[0], setup.supply
-    c, g = m.controller, m.controller.gains
-    a = 2.0 * g.K_I / g.K_P  # (27): K_P = 2 a J, K_I = a^2 J
-    model = DriveModel(
-        mode=c.mode, machine=m.machine, speed_bandwidth=a, design_inertia=g.K_P / (2.0 * a),
-        K_F=g.K_F, current_bandwidth=c.current_bandwidth, R_T=c.R_T,
-        supply_voltage_pk=float(supply.voltage_pk[1][0]),
-        supply_frequency_hz=frequency_hz or float(supply.frequency_hz[1][0]),
-        current_limit_pk=c.stator_current_limit_pk, sample_time=setup.sample_time,
-        substeps=setup.substeps, converter_loss=m.converter.fundamental_loss(m.dc_link_voltage),
-    )  # fmt: skip
-    result = _linearised(model, OperatingPoint(speed_rpm / RPM_PER_RAD_S, load))
+    (``analysis.drive_stability`` on the scenario's own setup: its gains, converter loss and
+    supply, at ``frequency_hz`` if given): the decay rate of the slowest mode of the speed error.
+    Over a range of speeds, the smallest of them is the one to wait for (``slowest_over``)."""
+    if frequency_hz is not None:
+        supply = dataclasses.replace(setup.supply, frequency_hz=constant(frequency_hz))
+        setup = dataclasses.replace(setup, supply=supply)
+    result = linearize(setup, OperatingPoint(speed_rpm / RPM_PER_RAD_S, load), "sampled")
     assert result.stable and result.within_limits
     return -result.max_real_part
 

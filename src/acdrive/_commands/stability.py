@@ -5,6 +5,9 @@ linearises the closed loop at one operating point and prints its eigenvalues;
 ``acdrive stability --map [--out DIR] [--json]`` maps the stable and unstable regions over
 speed x load for both modes at the given velocity bandwidth (default: the paper's 314 rad/s),
 draws them (PNG) and reports the largest velocity bandwidth each mode tolerates on that grid;
+``acdrive stability --scenario NAME [--speed-rpm S] [--load-nm T] [--model sampled]`` linearises
+a DFIM scenario's own drive (motor 0 on its supply; default point: its final speed reference and
+load), with every setting of the scenario;
 ``acdrive stability --bench [--json]`` evaluates the effects the paper's test bench may have had
 (voltage command) and how large each must be to remove the instability.
 Method and results: docs/stability.md.
@@ -58,9 +61,13 @@ def register(subparsers) -> None:
     task = p.add_mutually_exclusive_group()
     task.add_argument("--map", action="store_true", help="map speed x load for both modes")
     task.add_argument("--bench", action="store_true", help="test-bench candidates (voltage mode)")
+    p.add_argument(
+        "--scenario", default=None,
+        help="a DFIM scenario (built-in name or TOML path) to linearise as it is set up",
+    )  # fmt: skip
     p.add_argument("--mode", choices=("voltage", "current"), default="voltage")
     p.add_argument("--speed-rpm", type=float, default=None, help="shaft speed [rpm]")
-    p.add_argument("--load-nm", type=float, default=0.0, help="load torque [N m]")
+    p.add_argument("--load-nm", type=float, default=None, help="load torque [N m] (0)")
     p.add_argument("--bandwidth", type=float, default=PAPER_BANDWIDTH, help="a_D,VEL [rad/s] (314)")
     p.add_argument("--model", choices=("continuous", "sampled"), default="continuous")
     p.add_argument("--delay-samples", type=int, default=0, help="0 or 1 (sampled model)")
@@ -130,11 +137,13 @@ def run(args) -> int:
         linearize,
     )
 
+    if args.scenario is not None:
+        return _scenario(args)
     if args.speed_rpm is None:
-        raise InputError("--speed-rpm", "is required (or give --map)")
+        raise InputError("--speed-rpm", "is required (or give --map or --scenario)")
     model = _model(args, args.mode)
     speed = require_finite("--speed-rpm", args.speed_rpm) * RAD_S_PER_RPM
-    load = _flag("--load-nm", args.load_nm)
+    load = _flag("--load-nm", 0.0 if args.load_nm is None else args.load_nm)
     point = OperatingPoint(speed, load)
     try:
         check_point(model, point)
@@ -142,12 +151,48 @@ def run(args) -> int:
     except InputError as exc:
         name = {"speed": "--speed-rpm", "load_torque": "--load-nm"}.get(exc.field, exc.field)
         raise InputError(name, exc.rule) from None
+    return _print_point(args, r, args.mode, model.speed_bandwidth, args.speed_rpm)
+
+
+def _scenario(args) -> int:
+    """Linearise the scenario's own drive (``linearize(setup, point)``)."""
+    from acdrive.analysis._drive_stability import RAD_S_PER_RPM, OperatingPoint, linearize
+    from acdrive.drives import DriveSetup
+    from acdrive.scenarios._loader import load_scenario
+
+    if args.map or args.bench:
+        raise InputError("--scenario", "linearises one operating point: no --map or --bench")
+    setup = load_scenario(args.scenario)
+    if not isinstance(setup, DriveSetup):
+        raise InputError(
+            "--scenario", "must be a DFIM scenario (the linearised drive is the DFIM's)"
+        )
+    motor = setup.motors[0]
+    speed = float(motor.speed_reference[1][-1])
+    if args.speed_rpm is not None:
+        speed = require_finite("--speed-rpm", args.speed_rpm) * RAD_S_PER_RPM
+    load = (
+        float(motor.load_torque[1][-1])
+        if args.load_nm is None
+        else _flag("--load-nm", args.load_nm)
+    )
+    try:
+        r = linearize(setup, OperatingPoint(speed, load), args.model)
+    except InputError as exc:
+        name = {"speed": "--speed-rpm", "load_torque": "--load-nm"}.get(exc.field, exc.field)
+        raise InputError(name, exc.rule) from None
+    g = motor.controller.gains
+    return _print_point(args, r, motor.controller.mode, 2.0 * g.K_I / g.K_P, speed / RAD_S_PER_RPM)
+
+
+def _print_point(args, r, mode: str, bandwidth: float, speed_rpm: float) -> int:
+    """The result of one operating point, as JSON or aligned lines."""
     out = {
-        "mode": args.mode,
+        "mode": mode,
         "model": args.model,
-        "speed_rpm": args.speed_rpm,
-        "load_nm": load,
-        "bandwidth_rad_s": model.speed_bandwidth,
+        "speed_rpm": speed_rpm,
+        "load_nm": r.point.load_torque,
+        "bandwidth_rad_s": bandwidth,
         "max_real_part": r.max_real_part,
         "stable": r.stable,
         "dominant": [r.dominant.real, r.dominant.imag],

@@ -1,7 +1,8 @@
 """Pre-run checks of the cage induction motor drive's control period T_s.
 
 Its sampled current loop, with the inverter's carrier latch, is checked exactly by the scenario
-loader (``drives.cage_im._schema``, ``current_loop_radius``: refused when unstable), and the
+loader (``drives.cage_im._schema`` with the compiled loop's carrier-period map of
+``drives.cage_im._current_loop``: refused when unstable), and the
 sample time must divide the PWM period; the speed loop is checked here like the DFIM's
 (``drives._period.speed_loop_radius``), and both loops' a T_s are warned above the same limits.
 """

@@ -1,6 +1,6 @@
 """Physics helpers of the cage induction motor drive: the SVPWM modulation signals, the
-field-oriented steady voltage, the bumpless start of a stationary current controller and the
-spectral radius of the sampled current loop with the inverter's carrier latch."""
+field-oriented steady voltage and the bumpless start of a stationary current controller (the
+sampled current loop's pre-check is ``drives.cage_im._current_loop``)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from acdrive._frames import complex_to_abc
 from acdrive.control._current import (
     StationaryCurrentController,
 )
-from acdrive.machines._induction import IMParams, stator_current_ss
+from acdrive.machines._induction import IMParams
 
 
 def modulation_signals(v: np.ndarray, v_dc: np.ndarray) -> np.ndarray:
@@ -56,34 +56,3 @@ def bumpless_state(part: StationaryCurrentController, v: complex) -> dict:
     if np.linalg.norm(d.Cd @ x - target) > 1e-9 * max(1.0, abs(v)):
         x = np.zeros(n)
     return part.state_for(x)
-
-
-def current_loop_radius(plant: IMParams, w_mech: float, discrete, n_carrier: int) -> float:
-    """Spectral radius of the sampled current loop over one carrier period (linear, unsaturated):
-    the plant (1) at electrical speed n_p w held by a zero-order hold over each control sample,
-    the discretised controller ``discrete`` (2 x 2) running every sample, and its command latched
-    at the first sample of each carrier period of ``n_carrier`` samples (``CarrierLatch``, the
-    inverter). Below 1: the loop is stable at this speed."""
-    A, B, C, _ = stator_current_ss(plant, plant.n_p * w_mech)
-    T = discrete.T_s
-    n, m = A.shape[0], B.shape[1]
-    M = np.zeros((n + m, n + m))
-    M[:n, :n], M[:n, n:] = A * T, B * T
-    E = scipy.linalg.expm(M)
-    Ap, Bp = E[:n, :n], E[:n, n:]
-    Ac, Bc, Cc, Dc = discrete.Ad, discrete.Bd, discrete.Cd, discrete.Dd
-    nc = Ac.shape[0]
-    size = n + nc + 2
-    xp, xc, h = slice(0, n), slice(n, n + nc), slice(n + nc, size)
-    # e = -C x_p (zero reference)
-    hold = np.zeros((size, size))  # samples 1 .. N-1 of the carrier period
-    hold[xp, xp], hold[xp, h] = Ap, Bp
-    hold[xc, xp], hold[xc, xc] = -Bc @ C, Ac
-    hold[h, h] = np.eye(2)
-    latch = np.zeros((size, size))  # sample 0: the command is taken
-    v_row = np.hstack([-Dc @ C, Cc, np.zeros((2, 2))])  # v = C_c x_c + D_c e
-    latch[xp, :] = np.hstack([Ap, np.zeros((n, nc + 2))]) + Bp @ v_row
-    latch[xc, xp], latch[xc, xc] = -Bc @ C, Ac
-    latch[h, :] = v_row
-    period = np.linalg.matrix_power(hold, n_carrier - 1) @ latch
-    return float(np.max(np.abs(np.linalg.eigvals(period))))

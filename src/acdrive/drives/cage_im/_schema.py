@@ -50,9 +50,9 @@ Rules checked before the run, each naming its field:
   carrier period, and every edge is delayed by the dead time), and only with the switching model;
 - the controller's discretisation at the sample time (``control.discretise``: an unstable
   discretisation, a pre-warping frequency beyond the Nyquist frequency) and its anti-windup;
-- the sampled current loop (``drives.cage_im._physics.current_loop_radius``: plant (1) of the simulated
-  machine held over each sample, the discretised controller, the command latched for the carrier
-  period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
+- the sampled current loop (``drives.cage_im._current_loop.current_loop_radius``: the compiled
+  loop's own carrier-period map, plant (1) of the simulated machine, the discretised controller,
+  the command latched for the carrier period) must be stable at every speed of the run, else ``simulation.sample_time`` (if the loop
   is unstable without the latch) or ``inverter.pwm_frequency_hz`` (the latch's delay) is refused;
 - the sampled speed loop (``drives.cage_im._period.check_im_control_period``), as for the DFIM drive;
 - the size of the run (log memory, integration steps), as for the DFIM drive.
@@ -74,8 +74,8 @@ from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
 from acdrive.control._speed import require_feedforward_fraction
+from acdrive.drives.cage_im._current_loop import current_loop_radius
 from acdrive.drives.cage_im._period import check_im_control_period
-from acdrive.drives.cage_im._physics import current_loop_radius
 from acdrive.drives.cage_im._setup import (
     INVERTER_MODELS,
     MODES,
@@ -350,10 +350,10 @@ def _check_controller(setup: IMDriveSetup) -> None:
             ) from None
         for fraction in _CHECK_SPEEDS:
             w = float(fraction * top)
-            rho = current_loop_radius(run.plant, w, part.discrete, n)
+            rho = current_loop_radius(run.plant, w, part, n, setup.substeps)
             if rho < 1.0:
                 continue
-            alone = current_loop_radius(run.plant, w, part.discrete, 1)
+            alone = current_loop_radius(run.plant, w, part, 1, setup.substeps)
             hold = f"{n} samples (the {1.0 / run.inverter.f_pwm:g} s carrier period)"
             if alone >= 1.0:
                 raise InputError(

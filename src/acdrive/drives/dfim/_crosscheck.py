@@ -1,7 +1,7 @@
 """The linearised tolerated speed-loop bandwidth of a DFIM setup, for a sweep's ``[crosscheck]``
 (``acdrive.sweep._report``): the largest a_D,VEL at which the linearised sampled closed loop of
-motor 0 (``analysis._drive_stability.max_stable_bandwidth``) is stable at the setup's final
-speed reference and load, with its supply, current limit, sample time and converter loss."""
+motor 0 (``analysis._drive_stability.max_stable_bandwidth`` on the setup itself) is stable at the
+setup's final speed reference and load, with every other field of the setup as it is."""
 
 from __future__ import annotations
 
@@ -17,14 +17,7 @@ def linearised_tolerated_bandwidth(setup, lower: float, upper: float) -> dict:
     speed_rpm = float(m.speed_reference[1][-1]) * 30 / math.pi
     load = float(m.load_torque[1][-1])
     loss = float(m.converter.fundamental_loss(m.dc_link_voltage))
-    linear = max_stable_bandwidth(
-        m.controller.mode, [speed_rpm], [load], kind="sampled",
-        lower=lower, upper=upper, tol=1.0,
-        machine=m.machine, K_F=m.controller.gains.K_F,
-        supply_voltage_pk=float(setup.supply.voltage_pk[1][0]),
-        supply_frequency_hz=float(setup.supply.frequency_hz[1][0]),
-        current_limit_pk=m.controller.stator_current_limit_pk,
-        sample_time=setup.sample_time, substeps=setup.substeps, converter_loss=loss,
-    )  # fmt: skip
+    linear = max_stable_bandwidth(setup, [speed_rpm], [load], kind="sampled", lower=lower,
+                                  upper=upper, tol=1.0)  # fmt: skip
     return {"speed_rpm": speed_rpm, "load_nm": load, "converter_loss_v": loss,
             "linearised_tolerated": linear}  # fmt: skip

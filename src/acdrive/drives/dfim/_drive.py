@@ -12,7 +12,10 @@ Fault variants, each present only when the scenario asks for it (the other scena
 topology): a ``grid`` with per-phase EMF magnitudes (``UnbalancedSource``, e.g. a collapsed
 phase); a DC link ``dc`` whose voltage follows a profile, feeding a ``DCFedConverter`` (the
 controller's rotor-voltage limit and the converter loss stay at the nominal DC-link voltage); a
-relay ``forced`` closed at a given time whatever the synchroniser commands (``ForcedRelay``).
+relay ``forced`` closed at a given time whatever the synchroniser commands (``ForcedRelay``); a
+``delay`` of one sample between the controller's rotor-voltage command and the converter
+(``ComputationDelay``: the controller computes during the period and its command takes effect at
+the next sample instant).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._frames import complex_to_abc
 from acdrive.control import _bodson as bodson
+from acdrive.control._delay import ComputationDelay
 from acdrive.control._dfim import EVENT_NAMES, MODE_CURRENT, MODE_VOLTAGE
 from acdrive.control._speed import SpeedReference
 from acdrive.drives.dfim._result import LOG_NAMES, DriveResult
@@ -115,6 +119,8 @@ def _motor_parts(k: int, motor, setup) -> dict:
         parts["dc"] = DCSource(f"dc{k}", V=motor.dc_link_profile)
     if np.isfinite(motor.relay_forced_close_time):
         parts["forced"] = ForcedRelay(f"forced{k}", close_at=motor.relay_forced_close_time)
+    if c.computation_delay_samples:
+        parts["delay"] = ComputationDelay(f"delay{k}", unit="V", kind="complex")
     return parts
 
 
@@ -128,6 +134,10 @@ def _motor_wires(k: int, p: dict, grid, bus) -> list:
     if "forced" in p:
         extra.append((sync.out.closed, p["forced"].inp.command))
         closed = p["forced"].out.closed
+    command = ctrl.out.v_r  # what the converter applies: the command, or the delayed one
+    if "delay" in p:
+        extra.append((ctrl.out.v_r, p["delay"].inp.x))
+        command = p["delay"].out.x
     return extra + [
         *bus.wires_from(k, dfim),
         (bus.out.v, dfim.inp.v_s), (bus.out.v, relay.inp.v_bus),
@@ -146,7 +156,7 @@ def _motor_wires(k: int, p: dict, grid, bus) -> list:
         (p["reference"].out.w_ref, ctrl.inp.w_ref), (closed, ctrl.inp.closed),
         (sync.out.v_r, ctrl.inp.v_r_sync), (sync.out.adj, ctrl.inp.adj),
         (sync.out.m_adj, ctrl.inp.m_adj),
-        (ctrl.out.v_r, p["converter"].inp.v_ref),
+        (command, p["converter"].inp.v_ref),
     ]  # fmt: skip
 
 
@@ -201,6 +211,9 @@ class DFIMDrive:
             initial[parts["sync"].name] = {"v_r": v_r}
             initial[parts["controller"].name] = {"v_r": v_r}
             held[parts["converter"].name] = {"v": v_r}
+            if "delay" in parts:  # the steady command waits in the delay line
+                initial[parts["delay"].name] = {"stored": v_r}
+                held[parts["delay"].name] = {"x": v_r}
         return initial, held
 
     def log_ports(self) -> list:

@@ -27,7 +27,8 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   reactive_power_kp, reactive_power_ki | reactive_power_bandwidth, speed_bandwidth, design_inertia (J used in (27),
                   default: the machine's J), K_F, reactive_power,
                   stator_current_limit_pk, rotor_current_limit_pk, theta_adj, m_adj,
-                  speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk
+                  speed_filter_tau, frequency_filter_tau, min_stator_voltage_pk,
+                  computation_delay_samples (0 or 1: the command applied one sample later)
     [motor.controller.sync]  enabled, gain, tolerance_magnitude, tolerance_phase_deg, hold_time
 
 Physical pre-checks, made before any simulation (each an ``InputError`` naming the field):
@@ -174,6 +175,9 @@ def _controller(section: _Section, machine: DFIMParams) -> DFIMController:
         min_stator_voltage_pk=section.number("min_stator_voltage_pk", 1.0, require_positive),
         sync=_sync(_Section(section.get("sync", {}), section.field("sync"))),
         lossless_law=section.boolean("lossless_law", False),
+        computation_delay_samples=section.integer(
+            "computation_delay_samples", 0, minimum=0, maximum=1
+        ),
     )
     section.done()
     _check_gains(section, controller, machine, bandwidth, design_inertia)

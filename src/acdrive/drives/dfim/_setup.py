@@ -69,6 +69,9 @@ class DFIMController:
     sync: Synchroniser = field(default_factory=Synchroniser)
     lossless_law: bool = False  # R_s = 0 law (39) with case-2 limits (40)-(42)
     params: DFIMParams | None = None  # controller's parameter estimates (default: the true ones)
+    #: 0, or 1: the rotor-voltage command reaches the converter one sample later (the controller
+    #: computes during the period; a ``ComputationDelay`` part between controller and converter)
+    computation_delay_samples: int = 0
 
     def current_gains(self, machine: DFIMParams) -> tuple[float, float]:
         """(K_P,C, K_I,C) of (49) from the controller's parameter estimates."""
