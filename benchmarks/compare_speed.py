@@ -1,0 +1,88 @@
+"""Steps per CPU-second of the compiled drive loop on two source trees, measured in the same run:
+a refactor above the engine must not slow the loop.
+
+    python benchmarks/compare_speed.py BEFORE_SRC AFTER_SRC [scenario ...] [--rounds R] [--reps K]
+
+BEFORE_SRC and AFTER_SRC are ``src`` folders of two checkouts (e.g. a worktree of the previous
+main). For each scenario, R rounds alternate the two trees (A B A B ...), each round a fresh
+process that loads the scenario, loads or compiles its loop, runs it once to warm up and then K
+times, timing each run in process CPU time. Prints JSON: per scenario and tree the min / median
+/ max steps per CPU-second over all timed runs, and the ratio after / before of the medians.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+
+SCENARIOS = ("bodson-ramp", "bodson-two-motors", "im-foc-speed")
+
+WORKER = r"""
+import json, sys, time
+name, reps = sys.argv[1], int(sys.argv[2])
+from acdrive.scenarios import load_scenario
+try:
+    from acdrive.drives.dfim._drive import DFIMDrive
+    from acdrive.drives.cage_im._drive import IMDrive
+except ImportError:
+    from acdrive.sim._dfim_drive import DFIMDrive
+    from acdrive.sim._im_drive import IMDrive
+setup = load_scenario(name)
+if hasattr(setup, "motors"):
+    if setup.compare_modes:
+        setup = setup.with_mode(setup.compare_modes[0])
+    drive = DFIMDrive(setup)
+else:
+    drive = IMDrive(setup.runs()[0][1] if setup.runs() else setup)
+compiled = drive.compile()
+drive.run(compiled)
+times = []
+for _ in range(reps):
+    t0 = time.process_time()
+    drive.run(compiled)
+    times.append(time.process_time() - t0)
+print(json.dumps({"steps": round(setup.duration / setup.sample_time), "cpu_s": times}))
+"""
+
+
+def _measure(src: str, name: str, reps: int) -> tuple[int, list[float]]:
+    env = dict(os.environ, PYTHONPATH=src)
+    out = subprocess.run([sys.executable, "-c", WORKER, name, str(reps)], env=env, check=True,
+                         capture_output=True, text=True).stdout  # fmt: skip
+    data = json.loads(out.strip().splitlines()[-1])
+    return data["steps"], data["cpu_s"]
+
+
+def main(argv: list[str]) -> int:
+    rounds, reps = 4, 3
+    if "--rounds" in argv:
+        i = argv.index("--rounds")
+        rounds = int(argv[i + 1])
+        del argv[i : i + 2]
+    if "--reps" in argv:
+        i = argv.index("--reps")
+        reps = int(argv[i + 1])
+        del argv[i : i + 2]
+    before, after, *names = argv
+    report = {"rounds": rounds, "reps": reps, "scenarios": {}}
+    for name in names or SCENARIOS:
+        rates = {"before": [], "after": []}
+        for _ in range(rounds):
+            for side, src in (("before", before), ("after", after)):
+                steps, cpu = _measure(src, name, reps)
+                rates[side] += [steps / t for t in cpu]
+        entry = {
+            side: {"min": min(r), "median": statistics.median(r), "max": max(r)}
+            for side, r in rates.items()
+        }
+        entry["ratio_after_before_median"] = entry["after"]["median"] / entry["before"]["median"]
+        report["scenarios"][name] = entry
+    print(json.dumps(report, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
