@@ -112,7 +112,9 @@ class IMDriveResult(Result):
         return ("i_ref", "i_s", *speed, "tau_e")
 
     def _declare(self) -> dict[str, tuple[str, str]]:
-        return {f"im.{n}": (self.units[n], self.descriptions.get(n, n)) for n in self.signals}
+        return {
+            f"im.{n}": (self.units.get(n, ""), self.descriptions.get(n, n)) for n in self.signals
+        }
 
     def _values(self, key: str) -> np.ndarray:
         return self.signals[key.removeprefix("im.")]
