@@ -20,7 +20,7 @@ result  # noqa: B018 - a notebook shows the repr of the last expression
 
 # %%
 # Every signal of a part, with the unit of its declaration.
-print(result.parts, result.dfim1.units["w"], float(result.dfim1.w[-1]))
+print(result.parts, result.dfim1.units["w"], float(result.dfim1.w.max()))
 
 # %%
 # The result draws itself: speed, current magnitudes and torque of motor 2 (parts are named as
