@@ -117,7 +117,9 @@ def test_several_motors_name_their_columns_by_motor():
     assert names[0] == "t" and "w_m1" in names and "i_r_pk_m2" in names
     assert len(names) == 1 + 2 * (len(names) - 1) // 2 and len(set(names)) == len(names)
     assert all(
-        c.description.startswith("motor 2: ") for c in result.table_columns() if c.name.endswith("_m2")
+        c.description.startswith("motor 2: ")
+        for c in result.table_columns()
+        if c.name.endswith("_m2")
     )
 
 
