@@ -29,6 +29,6 @@ fig.tight_layout()
 
 # %%
 # The summary is computed from the logged signals; tracking is judged where it is expected.
-summary = result.summary()
+summary = result.summary
 for key in ("speed_rms_error_tracking_rpm", "peak_rotor_current_a", "peak_stator_current_a"):
     print(f"{key}: {summary[key]:.3f}")

@@ -2,8 +2,9 @@
 Using acdrive from a notebook
 =============================
 
-Results are plain Python objects: a one-line ``repr`` with the headline numbers, ``plot()``, a
-pandas frame of every logged signal (units and descriptions in ``frame.attrs``), the summary
+Results are plain Python objects: a one-line ``repr`` with the headline numbers, each part's
+signals as attributes (``result.dfim1.w``: motor 2 of this two-motor run; ``result.dfim.w`` in a
+single-motor run), ``plot()``, a pandas frame of every logged signal (units and descriptions in ``frame.attrs``), the summary
 dictionary that ``acdrive run`` writes as ``summary.json``, and ``save()`` to Parquet, CSV or
 MATLAB ``.mat`` with a ``columns.md`` beside the data.
 """
@@ -18,8 +19,14 @@ result = simulate(load_scenario("bodson-two-motors"))
 result  # noqa: B018 - a notebook shows the repr of the last expression
 
 # %%
-# The result draws itself (speed, currents, torque of one motor).
-fig = result.plot(motor=1)
+# Every signal of a part, with the unit of its declaration.
+print(result.parts, result.dfim1.units["w"], float(result.dfim1.w.max()))
+
+# %%
+# The result draws itself: speed, current magnitudes and torque of motor 2 (parts are named as
+# the machines, dfim0 and dfim1), one axis per unit on one time axis, each signal as the
+# min/max envelope of its time bins.
+fig = result.plot(["dfim1.w", "dfim1.w_ref", "dfim1.i_r_mag", "dfim1.i_s_mag", "dfim1.tau_e"])
 
 # %%
 # Pandas does the rest; the columns carry their units.

@@ -135,7 +135,7 @@ def test_locked_rotor_summary_is_the_logged_data_and_20_beats_the_pi(outcomes):
         # the reference is a balanced 1 A phase peak set: an RMS phase current of 1/sqrt(2) A
         ref = np.concatenate(complex_to_abc(result.signal("i_ref")[late]))
         assert math.sqrt(np.mean(ref**2)) == pytest.approx(1.0 / math.sqrt(2.0), rel=1e-12)
-        assert result.summary()["current_rms_reference_a"] == pytest.approx(1.0 / math.sqrt(2.0))
+        assert result.summary["current_rms_reference_a"] == pytest.approx(1.0 / math.sqrt(2.0))
         errors[label] = rms
         assert result.setup.current_control.controller == dict(setup.compare_controllers)[label]
         assert np.all(result.signal("w") == 0.0)  # locked rotor
@@ -216,7 +216,7 @@ def test_speed_step_reaches_the_reference_and_rejects_the_brake(outcomes):
     # (double root at -a), is a dip of tau_L / (e a J); the brake adds a little damping
     tau_l = s.mechanics.brake[1][-1] * w_ref
     a = math.sqrt(s.speed_pi.K_I / s.mechanics.J)
-    dip = result.summary()["load_changes"][0]["max_deviation_rad_s"]
+    dip = result.summary["load_changes"][0]["max_deviation_rad_s"]
     assert -dip == pytest.approx(tau_l / (math.e * a * s.mechanics.J), rel=0.1)
     # steady torque balance tau_e = load + brake + friction, against the logged shaft speed
     # (logged twice per carrier period, always at the same points of the PWM ripple: the mean

@@ -140,7 +140,7 @@ def test_a_reversed_im_shaft_is_a_loss_of_control_warning():
     assert [(d["what"], d["start_s"]) for d in im_disturbances(setup)] == [
         ("load torque 0 -> 2 N m", 0.3)
     ]
-    summary = r.summary()
+    summary = r.summary
     (d,) = summary["speed_outcome"]["disturbances"]
     # the data: w crosses 0 at 0.3 + 100 J / (2 - 0.83); reversed beyond 5 rpm a little later
     t_zero = 0.3 + 100.0 * 0.000711 / (2.0 - 0.83)

@@ -113,11 +113,13 @@ def test_csv_and_mat_read_back_with_the_same_columns(runs):
 def test_several_motors_name_their_columns_by_motor():
     t = np.arange(5) * 1e-3
     result = DriveResult("two", t, np.zeros((5, 2, N_LOG)), 1e-3, np.zeros(1))
-    names = [c.name for c in result.columns()]
+    names = [c.name for c in result.table_columns()]
     assert names[0] == "t" and "w_m1" in names and "i_r_pk_m2" in names
     assert len(names) == 1 + 2 * (len(names) - 1) // 2 and len(set(names)) == len(names)
     assert all(
-        c.description.startswith("motor 2: ") for c in result.columns() if c.name.endswith("_m2")
+        c.description.startswith("motor 2: ")
+        for c in result.table_columns()
+        if c.name.endswith("_m2")
     )
 
 
@@ -163,14 +165,14 @@ def test_duplicate_names_are_refused():
 def test_an_unrepresentable_name_is_one_line_exit_2_and_nothing_written(
     tmp_path, capsys, monkeypatch
 ):
-    original = DriveResult.columns
+    original = DriveResult.table_columns
 
-    def renamed(self):
-        columns = original(self)
+    def renamed(self, separator="."):
+        columns = original(self, separator)
         return [Column("rotor.i", c.values, c.unit, c.description) if c.name == "i_rx" else c
                 for c in columns]  # fmt: skip
 
-    monkeypatch.setattr(DriveResult, "columns", renamed)
+    monkeypatch.setattr(DriveResult, "table_columns", renamed)
     path = tmp_path / "short.toml"
     path.write_text(SCENARIO)
     out = tmp_path / "out"

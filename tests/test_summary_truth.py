@@ -80,7 +80,7 @@ def test_a_relay_that_never_closes_is_reported():
     assert any("never closed the relay" in w for w in summary["warnings"])
 
 
-# --- one source for every figure: headline, summary.json, result.summary() and batch rows -------
+# --- one source for every figure: headline, summary.json, result.summary and batch rows -------
 
 #: the figures a single run and a batch row both give, under the same names
 SHARED_FIGURES = (
@@ -180,12 +180,12 @@ def _figures_agree(step_time, ramp_s, target_rpm, load, bandwidth, mode, duratio
             assert main(["run", str(path), "--out", str(Path(tmp) / "out"), "--no-figures"]) == 0
         written = json.loads((Path(tmp) / "out" / "prop" / "summary.json").read_text())
     result = simulate(build_setup(data))
-    direct = result.summary()
+    direct = result.summary
     row = simulate_batch(data, [{}]).rows[0]
     assert row["status"] == "ok"
     headline = _headline_figures(out.getvalue())
     for key in SHARED_FIGURES:
-        # summary.json is result.summary() written out (same simulation, same function)
+        # summary.json is result.summary written out (same simulation, same function)
         assert written[key] == direct[key], key
         assert written["motors"][0][key] == direct[key], key
         scale = max(abs(target_rpm), 1.0) if key in SPEED_ERRORS else 1e-3
@@ -205,7 +205,7 @@ def _figures_agree(step_time, ramp_s, target_rpm, load, bandwidth, mode, duratio
 
 def test_every_output_gives_the_same_figures_for_random_valid_scenarios():
     """Random valid scenarios through `acdrive run` (headline and summary.json),
-    ``DriveResult.summary()`` and ``simulate_batch``: the same figures everywhere (tolerances:
+    ``DriveResult.summary`` and ``simulate_batch``: the same figures everywhere (tolerances:
     BATCH_REL, HEADLINE_ABS). Small runs, five examples, derandomised: under a minute once the
     two loops are compiled."""
     from hypothesis import given, settings

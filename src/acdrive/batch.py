@@ -116,6 +116,21 @@ class Reducer:
     unit: str = "rpm"
     suffix: str = ""
 
+    def column_units(self, signal_unit: str) -> dict[str, str]:
+        """Column -> unit of this reducer's metrics, given the unit of its signal: the signal's
+        unit when the value is not rescaled (``scale`` +-1), else the unit the column's name
+        declares (``acdrive.columns.unit_from_name``: ``_rpm``, ``_a``, ...); times in s, sample
+        counts and ratios dimensionless; a speed error's columns by their names."""
+        from acdrive.columns import unit_from_name
+
+        if self.kind == "speed_error":
+            return {k: unit_from_name(k.removesuffix(self.suffix)) for k in self.columns()}
+        value = signal_unit if abs(self.scale) == 1.0 else unit_from_name(self.name)
+        if self.kind == "exceed":
+            return {self.name: "", f"{self.name}_first_time": "s"}
+        extra = {"peak": {f"{self.name}_time": "s"}, "oscillation": {f"{self.name}_growth": ""}}
+        return {self.name: value, **extra.get(self.kind, {})}
+
     def columns(self) -> list[str]:
         if self.kind == "speed_error":
             state = np.ones(len(SPEED_ERROR_STATES))
@@ -458,18 +473,23 @@ class BatchResult:
     docstring; None for other drives or invalid variants), the reducers' metrics and
     ``events.<part>.<event>`` (samples on which the event was raised). ``traces[i]`` holds the
     ``SystemResult`` of variant i when ``log`` was asked for. ``wall_time`` is the compiled
-    loops' time; ``steps`` the control steps simulated (valid variants)."""
+    loops' time; ``steps`` the control steps simulated (valid variants). ``units``: column ->
+    unit ("" for flags, counts, ratios and text; ``Reducer.column_units``)."""
 
     rows: list[dict]
     traces: dict = field(default_factory=dict)
     wall_time: float = 0.0
     steps: int = 0
     groups: int = 0
+    units: dict = field(default_factory=dict)
 
     def to_dataframe(self):
+        """The rows as a pandas DataFrame; each column's unit in ``frame.attrs["units"]``."""
         import pandas as pd
 
-        return pd.DataFrame(self.rows)
+        frame = pd.DataFrame(self.rows)
+        frame.attrs["units"] = {c: self.units.get(c, "") for c in frame.columns}
+        return frame
 
 
 def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None = None,
@@ -557,7 +577,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             continue
         groups.setdefault(key, []).append(_Prepared(i, setup, system, initial, held, used, ports))
     wall, steps = 0.0, 0
-    traces = {}
+    traces, units = {}, {}
     for key, members in groups.items():
         _, PO, duration, sample_time, n_sub, every = key
         first = members[0]
@@ -584,6 +604,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
                 "status": "ok" if ok else f"diverged at t = {DONE[b] * sample_time:.6g} s",
             }
             for r, (part, offset) in m.reducers:
+                units.update(r.column_units(_port(m.system, r.signal, "signal").var.unit))
                 a = m.system.slots[part].s[0] + offset
                 width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES))
                 values = _reduce(r, S[b, a : a + width], ok)
@@ -610,7 +631,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
         if not row["valid"]:
             for name in metric_names:
                 row.setdefault(name, math.nan)
-    return BatchResult(rows=rows, traces=traces, wall_time=wall, steps=steps, groups=len(groups))
+    return BatchResult(rows=rows, traces=traces, wall_time=wall, steps=steps, groups=len(groups),
+                       units=units)  # fmt: skip
 
 
 def _verdict(setup, row: dict, finite: bool):

@@ -34,7 +34,15 @@ from typing import TYPE_CHECKING
 
 from acdrive.errors import InputError
 
-__all__ = ["DEFAULT_FORMAT", "FORMATS", "Column", "check_names", "read_units", "write_table"]
+__all__ = [
+    "DEFAULT_FORMAT",
+    "FORMATS",
+    "Column",
+    "check_names",
+    "read_units",
+    "unit_from_name",
+    "write_table",
+]
 
 if TYPE_CHECKING:  # numpy is imported where data is written: `acdrive run --help` stays light
     import numpy as np
@@ -57,6 +65,23 @@ _MATLAB_KEYWORDS = frozenset(
      "function", "global", "if", "otherwise", "parfor", "persistent", "return", "spmd", "switch",
      "try", "while")
 )  # fmt: skip
+
+
+#: the unit a metric's name ends with (summary.json keys and batch columns carry their unit in
+#: their name: ``peak_rotor_current_a``, ``speed_rms_error_tracking_rpm``), longest first
+UNIT_SUFFIXES = (
+    ("_rad_s2", "rad/s^2"), ("_rad_s", "rad/s"), ("_n_m", "N m"), ("_rpm", "rpm"), ("_rad", "rad"),
+    ("_var", "var"), ("_hz", "Hz"), ("_wb", "Wb"), ("_a", "A"), ("_v", "V"), ("_w", "W"),
+    ("_j", "J"), ("_s", "s"),
+)  # fmt: skip
+
+
+def unit_from_name(name: str) -> str:
+    """The unit a metric's name declares by its suffix (``UNIT_SUFFIXES``), "" if none."""
+    for suffix, unit in UNIT_SUFFIXES:
+        if name.endswith(suffix):
+            return unit
+    return ""
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,8 @@ __all__, __getattr__, __dir__ = namespace(
     {
         "System": "._system",
         "CompiledSystem": "._system",
-        "SystemResult": "._system",
+        "SystemResult": "._result",
+        "Result": "._result",
         "INTEGRATORS": "._system",
     },
 )

@@ -25,15 +25,15 @@ slow path uses those, as the linearisation will.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from acdrive._jit import STRICT_MATH
-from acdrive.columns import DEFAULT_FORMAT, Column, write_table
 from acdrive.core._parts import ContinuousPart, Modulator, Part, Port, SampledPart
 from acdrive.errors import InputError, SimulationDiverged, call_interruptible
 from acdrive.sim import _codegen as codegen
+from acdrive.sim._result import SystemResult
 
 STATUS_OK, STATUS_NONFINITE = 0, 1
 
@@ -607,123 +607,6 @@ class System:
 MAX_SUBSTEPS = 1000
 LOG_BUDGET_BYTES = 2 * 1024**3
 MAX_WORK = 1e9
-
-
-@dataclass
-class SystemResult:
-    """Logged signals of one run: ``data[i, j]`` is column j at time ``t[i]``."""
-
-    t: np.ndarray
-    data: np.ndarray
-    columns: list[str]
-    units: dict[str, str]
-    events: dict[str, dict[str, int]]  # part -> event name -> samples on which it was raised
-    event_log: np.ndarray
-    final_state: np.ndarray
-    wall_time: float = 0.0
-    steps: int = 0
-    extra: dict = field(default_factory=dict)
-    descriptions: dict[str, str] = field(default_factory=dict)
-
-    def signal(self, name) -> np.ndarray:
-        """A logged output by port or ``"part.output"``; complex outputs come back complex."""
-        key = name.path if isinstance(name, Port) else str(name)
-        if key in self.columns:
-            return self.data[:, self.columns.index(key)]
-        if f"{key}.re" in self.columns:
-            return (
-                self.data[:, self.columns.index(f"{key}.re")]
-                + 1j * self.data[:, self.columns.index(f"{key}.im")]
-            )
-        raise KeyError(f"{key} was not logged (logged: {', '.join(self.columns)})")
-
-    def table_columns(self, separator: str = ".") -> list[Column]:
-        """The result table: ``t`` then every logged column with its unit and the declaring
-        part's one-line description. Names are ``part.output`` (``.re`` / ``.im`` for the two
-        parts of a complex output) with ``separator`` between the pieces."""
-        out = [Column("t", self.t, "s", "time of the logged sample")]
-        for j, name in enumerate(self.columns):
-            out.append(Column(name.replace(".", separator), self.data[:, j],
-                              self.units.get(name, ""), self.descriptions.get(name, name)))  # fmt: skip
-        return out
-
-    def to_dataframe(self):
-        """pandas DataFrame with a ``t`` column; units in ``frame.attrs['units']``, one-line
-        descriptions in ``frame.attrs['descriptions']``."""
-        import pandas as pd
-
-        columns = self.table_columns()
-        frame = pd.DataFrame({c.name: c.values for c in columns})
-        frame.attrs["units"] = {c.name: c.unit for c in columns}
-        frame.attrs["descriptions"] = {c.name: c.description for c in columns}
-        return frame
-
-    def save(self, folder, fmt: str = DEFAULT_FORMAT) -> list:
-        """Write the table as ``fmt`` (parquet, csv or mat) with ``columns.md`` into ``folder``
-        (created if needed); return the paths written. MATLAB names cannot hold dots, so the
-        ``.mat`` file names its columns ``part_output[_re|_im]`` (listed in ``columns.md``)."""
-        from pathlib import Path
-
-        columns = self.table_columns("_" if fmt == "mat" else ".")
-        return write_table(Path(folder), columns, fmt, "System run: result columns")
-
-    def raised_events(self) -> dict[str, int]:
-        """``"part.event"`` -> samples on which it was raised, for the events raised at all."""
-        return {f"{part}.{name}": n for part, names in self.events.items()
-                for name, n in names.items() if n}  # fmt: skip
-
-    def __repr__(self) -> str:
-        """One line for a notebook or a log: samples, span, what was logged, events raised."""
-        span = f"{float(self.t[0]):g} to {float(self.t[-1]):g} s" if self.t.size else "empty"
-        events = self.raised_events()
-        raised = ", ".join(f"{k} {v}" for k, v in events.items()) if events else "none"
-        shown = ", ".join(self.columns[:4]) + (", ..." if len(self.columns) > 4 else "")
-        return (
-            f"<SystemResult: {self.steps} samples, logged {self.t.size} ({span}); "
-            f"{len(self.columns)} columns ({shown}); events raised: {raised}; "
-            f"wall time {self.wall_time:.3g} s>"
-        )
-
-    def plot(self, signals=None, axes=None):
-        """The logged ``signals`` (names or ports; default: every logged output) against time,
-        one stacked axis per unit (real and imaginary parts of a complex output on the same
-        axis), or on the ``axes`` given (one per unit, in order of first appearance); returns the
-        matplotlib Figure."""
-        import matplotlib.pyplot as plt
-
-        if signals is None:
-            names = list(dict.fromkeys(c.rsplit(".", 1)[0] if c.endswith((".re", ".im")) else c
-                                       for c in self.columns))  # fmt: skip
-        else:
-            names = [s.path if isinstance(s, Port) else str(s) for s in signals]
-        groups: dict[str, list[tuple[str, np.ndarray]]] = {}
-        for name in names:
-            trace = self.signal(name)  # an unlogged signal is named here, before any drawing
-            unit = self.units.get(name, self.units.get(f"{name}.re", ""))
-            groups.setdefault(unit, []).append((name, trace))
-        if axes is None:
-            fig, axes = plt.subplots(len(groups), 1, sharex=True, squeeze=False,
-                                     figsize=(8, 1.2 + 2.0 * len(groups)))  # fmt: skip
-            axes = axes[:, 0]
-        else:
-            axes = list(np.atleast_1d(axes))
-            if len(axes) != len(groups):
-                raise InputError(
-                    "axes", f"must be {len(groups)} axes (one per unit), got {len(axes)}"
-                )
-            fig = axes[0].figure
-        for ax, (unit, members) in zip(axes, groups.items(), strict=True):
-            for name, y in members:
-                if np.iscomplexobj(y):
-                    ax.plot(self.t, y.real, lw=0.8, label=f"{name} (re)")
-                    ax.plot(self.t, y.imag, lw=0.8, label=f"{name} (im)")
-                else:
-                    ax.plot(self.t, y, lw=0.8, label=name)
-            ax.set_ylabel(f"[{unit}]" if unit else "[-]")
-            ax.legend(loc="best", fontsize="small")
-        axes[-1].set_xlabel("time [s]")
-        fig.tight_layout()
-        return fig
 
 
 class CompiledSystem:

@@ -140,6 +140,7 @@ def run_chunk(payload: dict, c: int):
                 out.update({f"summary.{k}": math.nan for k in spec.summary})
         rows.append(out)
     table = pd.DataFrame(rows)
+    table.attrs["units"] = table_units(table.columns, result.units)
     for name in table.columns:
         if name == "stable":
             table[name] = table[name].astype("boolean")
@@ -161,7 +162,26 @@ def run_chunk(payload: dict, c: int):
             frame.insert(0, "variant_id", V.variant_id(i, v))
             parts.append(frame)
         traces = pd.concat(parts, ignore_index=True) if parts else None
+        if traces is not None:
+            trace_units = {"t": "s", **result.traces[next(iter(result.traces))].units}
+            traces.attrs["units"] = {c: trace_units.get(c, "") for c in traces.columns}
     return table, traces
+
+
+def table_units(columns, metric_units: dict) -> dict[str, str]:
+    """Column -> unit of a sweep table: the batch's metric units (``BatchResult.units``), and
+    for ``vary.<field>`` and ``summary.<key>`` the unit their name declares
+    (``acdrive.columns.unit_from_name``: scenario fields and summary keys end with their unit);
+    "" for identifiers, flags, counts and text."""
+    from acdrive.columns import unit_from_name
+
+    out = {}
+    for name in columns:
+        if name.startswith(("vary.", "summary.")):
+            out[name] = unit_from_name(name.rsplit(".", 1)[-1])
+        else:
+            out[name] = metric_units.get(name, "")
+    return out
 
 
 # --- sizes -----------------------------------------------------------------------------------
@@ -241,11 +261,24 @@ def check_size(spec: SweepSpec, folder: Path, n: int) -> dict:
 # --- files -----------------------------------------------------------------------------------
 
 
+#: Parquet schema metadata key of a sweep table's units (JSON: column -> unit)
+UNITS_KEY = b"acdrive.units"
+
+
 def write_atomic(frame, path: Path) -> None:
     """Write ``frame`` as Parquet at ``path``: a temporary file in the same folder, flushed to
-    disk, then renamed over ``path`` (complete or absent, whenever the process dies)."""
+    disk, then renamed over ``path`` (complete or absent, whenever the process dies). The units
+    of ``frame.attrs["units"]`` go into the schema metadata (``UNITS_KEY``) and each field's
+    metadata (``unit``), as ``acdrive.columns`` writes a run's table."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    frame.to_parquet(tmp, index=False)
+    units = {str(c): frame.attrs.get("units", {}).get(c, "") for c in frame.columns}
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    fields = [f.with_metadata({"unit": units[f.name]}) for f in table.schema]
+    meta = {**(table.schema.metadata or {}), UNITS_KEY: json.dumps(units)}
+    pq.write_table(table.cast(pa.schema(fields, metadata=meta)), tmp)
     with open(tmp, "rb") as handle:
         os.fsync(handle.fileno())
     os.replace(tmp, path)
@@ -432,9 +465,16 @@ def read_table(folder: Path):
     files = sorted((Path(folder) / "table").glob("chunk-*.parquet"))
     if not files:
         return pd.DataFrame()
+    import pyarrow.parquet as pq
+
     frames = [pd.read_parquet(f) for f in files]
+    units = {}
+    for f in files:
+        units.update(json.loads((pq.read_schema(f).metadata or {}).get(UNITS_KEY, b"{}")))
     table = pd.concat(frames, ignore_index=True)
-    return table.sort_values("variant", kind="stable").reset_index(drop=True)
+    table = table.sort_values("variant", kind="stable").reset_index(drop=True)
+    table.attrs["units"] = {c: units.get(c, "") for c in table.columns}
+    return table
 
 
 # --- backends --------------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 
 Data flow (as the DFIM drive, ``drives.dfim._drive``): scenario (TOML, ``drives.cage_im._schema``) ->
 ``IMDriveSetup`` (frozen dataclasses) -> ``IMDrive`` (parts and wires) -> ``sim.System``
--> compiled loop -> ``IMDriveResult`` (named signals with units, events, ``summary()``) ->
+-> compiled loop -> ``IMDriveResult`` (named signals with units, events, ``summary``) ->
 ``run_im_scenario`` (one run per compared current controller) -> ``drives.cage_im._outputs`` (data,
 figures, summary.json).
 

@@ -44,7 +44,7 @@ def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
         result = drive.run()
         result.label = label
         results[label] = result
-    summaries = {label: r.summary() for label, r in results.items()}
+    summaries = {label: r.summary for label, r in results.items()}
     first = next(iter(summaries.values()))
     summary = {
         "scenario": setup.name,

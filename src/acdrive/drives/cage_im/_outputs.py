@@ -457,7 +457,7 @@ def write_im_outcome(
         write_comparison_figures(outcome, folder)
     summary = dict(outcome.summary)
     summary.update(step_summary(outcome))
-    summary["units"] = {c.name: c.unit for c in outcome.main.columns()}
+    summary["units"] = {c.name: c.unit for c in outcome.main.table_columns()}
     # strict JSON: a non-finite figure is written as null
     (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
     return summary

@@ -25,6 +25,7 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.errors import SimulationDiverged
 from acdrive.plant._converter import max_voltage_magnitude
+from acdrive.sim._result import Result
 
 #: the last fraction of a run over which steady values are averaged
 STEADY_FRACTION = 0.1
@@ -37,11 +38,13 @@ def _steady_mask(t: np.ndarray) -> np.ndarray:
     return t >= t[-1] - span
 
 
-@dataclass
-class IMDriveResult:
-    """Logged signals of one run by name (``signals[name]``: complex for space vectors, in
-    acdrive's power-invariant scaling, Bodson (8)), their units, the named event totals and the
-    per-sample event flags; ``summary()`` computes the metrics of the module docstring."""
+@dataclass(eq=False, repr=False)
+class IMDriveResult(Result):
+    """The cage-IM drive's view of a run (``sim._result.Result``): its signals by name
+    (``signals[name]``: complex for space vectors, in acdrive's power-invariant scaling, Bodson
+    (8)), their units, the named event totals and the per-sample event flags; ``summary`` holds
+    the metrics of the module docstring. The drive is one part of the view, ``im``:
+    ``result.im.i_s`` is ``result.signal("i_s")``."""
 
     setup: IMDriveSetup
     label: str
@@ -93,54 +96,37 @@ class IMDriveResult:
             descriptions=descriptions,
         )
 
-    def signal(self, name: str) -> np.ndarray:
-        try:
-            return self.signals[name]
-        except KeyError:
-            raise KeyError(f"{name} was not logged (logged: {', '.join(self.signals)})") from None
+    @property
+    def title(self) -> str:
+        return f"{self.setup.name} [{self.label}]: result columns"
 
-    def __repr__(self) -> str:
-        """One line for a notebook or a log: what ran and its headline numbers (computed)."""
-        s = self.setup
-        duration = float(self.t[-1] + s.sample_time) if self.t.size else 0.0
-        head = (
-            f"<IMDriveResult {s.name!r} [{self.label}]: mode {s.mode}, {duration:g} s in "
-            f"{self.t.size} samples; current RMS error {self.current_rms_error():.3g} A"
-        )
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] + self.setup.sample_time) if self.t.size else 0.0
+
+    @property
+    def plot_signals(self) -> tuple[str, ...]:
+        """The current against its reference, the speed against its reference (FOC modes) and
+        the electrical torque."""
+        speed = () if self.setup.mode == "current" else ("w_ref", "w")
+        return ("i_ref", "i_s", *speed, "tau_e")
+
+    def _declare(self) -> dict[str, tuple[str, str]]:
+        return {
+            f"im.{n}": (self.units.get(n, ""), self.descriptions.get(n, n)) for n in self.signals
+        }
+
+    def _values(self, key: str) -> np.ndarray:
+        return self.signals[key.removeprefix("im.")]
+
+    def _headline(self) -> list[str]:
+        s, summary = self.setup, self.summary
+        out = [f"[{self.label}] mode {s.mode}",
+               f"current RMS error {summary['current_rms_error_a']:.3g} A"]  # fmt: skip
         if s.mode != "current":
             w = self.signal("w")
-            head += f", speed {float(np.min(w)):.1f} to {float(np.max(w)):.1f} rad/s"
-        return head + ">"
-
-    def plot(self, axes=None):
-        """Phase-a current against its reference (phase peak), the speed against its reference
-        (FOC modes) and the electrical torque against time; returns the matplotlib Figure."""
-        import matplotlib.pyplot as plt
-
-        rows = 2 if self.setup.mode == "current" else 3
-        if axes is None:
-            fig, axes = plt.subplots(rows, 1, sharex=True, figsize=(8, 2.2 * rows + 0.6))
-        else:
-            fig = axes[0].figure
-        ax = iter(axes)
-        a = next(ax)
-        a.plot(self.t, self.phase_peak("i_ref").real, "k--", lw=0.8, label="reference")
-        a.plot(self.t, self.phase_peak("i_s").real, lw=0.7, label="i_alpha")
-        a.set_ylabel("current [A, phase peak]")
-        a.legend(loc="best")
-        a.set_title(f"{self.setup.name} [{self.label}]")
-        if rows == 3:
-            a = next(ax)
-            a.plot(self.t, self.signal("w_ref"), "k--", lw=0.8, label="reference")
-            a.plot(self.t, self.signal("w"), lw=0.8, label="speed")
-            a.set_ylabel("speed [rad/s]")
-            a.legend(loc="best")
-        a = next(ax)
-        a.plot(self.t, self.signal("tau_e"), lw=0.7)
-        a.set_ylabel("torque [N m]")
-        a.set_xlabel("time [s]")
-        fig.tight_layout()
-        return fig
+            out.append(f"speed {float(np.min(w)):.1f} to {float(np.max(w)):.1f} rad/s")
+        return out
 
     def phase_peak(self, name: str) -> np.ndarray:
         """A space vector in the paper's amplitude-invariant alpha, beta scaling (peak phase
@@ -304,7 +290,7 @@ class IMDriveResult:
             "limit_v": limit / SQRT_3_2,
         }
 
-    def summary(self) -> dict:
+    def _compute_summary(self) -> dict:
         """The metrics of the module docstring for this run (units in the key names)."""
         s = self.setup
         i_s = np.abs(self.signal("i_s"))
@@ -339,7 +325,7 @@ class IMDriveResult:
         return out
 
     # -- export -----------------------------------------------------------------------------
-    def columns(self) -> list:
+    def table_columns(self, separator: str = ".") -> list:
         """The columns of the result files (``acdrive.columns.Column``: name, values, unit,
         description). A space vector gives ``<name>_alpha_sv`` and ``<name>_beta_sv``, or
         ``<name>_d_sv`` and ``<name>_q_sv`` in the IFOC's field frame (``FIELD_FRAME``): the
@@ -365,27 +351,6 @@ class IMDriveResult:
         ):
             out.append(Column(flag, self.flags[flag].astype(np.int8), "", f"1 where {what}"))
         return out
-
-    def to_dataframe(self):
-        """A pandas DataFrame of :meth:`columns`; units in ``frame.attrs["units"]``,
-        descriptions in ``frame.attrs["descriptions"]``."""
-        import pandas as pd
-
-        cols = self.columns()
-        frame = pd.DataFrame({c.name: c.values for c in cols})
-        frame.attrs["units"] = {c.name: c.unit for c in cols}
-        frame.attrs["descriptions"] = {c.name: c.description for c in cols}
-        return frame
-
-    def save(self, folder, fmt: str = "parquet") -> list:
-        """Write the data as ``fmt`` (``acdrive.columns.FORMATS``: parquet, csv or mat) and
-        ``columns.md`` into ``folder`` (created if needed); return the paths written."""
-        from pathlib import Path
-
-        from acdrive.columns import write_table
-
-        title = f"{self.setup.name} [{self.label}]: result columns"
-        return write_table(Path(folder), self.columns(), fmt, title)
 
 
 def ideal_ramp(t, t_step, w0, w_target, k_p, tau_max, J) -> np.ndarray:

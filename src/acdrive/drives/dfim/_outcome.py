@@ -195,7 +195,7 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
         if on_run is not None:
             on_run(mode)
         results[mode] = simulate(run_setup)
-    summaries = {mode: result.summary() for mode, result in results.items()}  # once each
+    summaries = {mode: result.summary for mode, result in results.items()}  # once each
     first_mode, first = next(iter(results.items()))
     summary = dict(summaries[first_mode])
     motor = setup.motors[0]

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8)
-from acdrive.columns import DEFAULT_FORMAT, Column, write_table
+from acdrive.columns import Column
 from acdrive.control._dfim import EVENT_NAMES
 from acdrive.sim._metrics import (
     OSCILLATION_BAND_HZ,
@@ -18,6 +17,7 @@ from acdrive.sim._metrics import (
     speed_oscillation,
     speed_tracking,
 )
+from acdrive.sim._result import Result
 
 #: the signals of a DFIM drive run, per motor and logged sample (``DriveResult.signals``)
 LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
@@ -62,15 +62,26 @@ FILE_COLUMNS = (
     ("i_r_q_sv", "i_r_q", 1.0, "A", f"measured rotor current, q: {_SV}"),
 )  # fmt: skip
 
+_MAG = "power-invariant space-vector magnitude (Bodson (8): divide by sqrt(3/2) for phase peak)"
+#: unit and description of each signal of ``LOG_NAMES`` (as simulated: magnitudes are
+#: power-invariant space-vector magnitudes; ``FILE_COLUMNS`` scales them to phase peak)
+SIGNALS = {log: (unit, text.replace(_PK, _MAG) if scale != 1.0 else text)
+           for _, log, scale, unit, text in FILE_COLUMNS}  # fmt: skip
 
-@dataclass
-class DriveResult:
-    """Signals of every motor at every logged sample.
+
+@dataclass(eq=False, repr=False)
+class DriveResult(Result):
+    """The DFIM drive's view of a run (``sim._result.Result``): every motor's signals at every
+    logged sample.
 
     ``signals[i, k, j]`` is signal ``LOG_NAMES[j]`` of motor k at time ``t[i]``: speeds in rad/s,
     torques in N m, voltage and current magnitudes as complex space-vector magnitudes (Bodson (8):
     divide by sqrt(3/2) for the peak phase value), rotor phase currents X and Y in A, and the
-    event-flag bits of ``acdrive.control._dfim``.
+    event-flag bits of ``acdrive.control._dfim``. Each motor is one part of the view, named as
+    its machine part in the system: ``dfim0``, ``dfim1``, ... (``result.dfim0.w``;
+    ``result.dfim.w`` when there is one motor); ``signal(name, k)`` reads motor k and a bare
+    name reads motor 0. The result files keep their layout (``FILE_COLUMNS``, ``_m1``, ``_m2``
+    suffixes counting motors from 1).
     """
 
     name: str
@@ -83,12 +94,29 @@ class DriveResult:
     #: scenario); None (a result built by hand): every sample
     tracking: tuple[TrackingRule, ...] | None = None
 
+    #: a bare signal name reads motor 0
+    _default_part = 0
+    plot_signals = ("w", "w_ref", "i_r_mag", "i_s_mag", "tau_com", "tau_e")
+
     @property
     def n_motors(self) -> int:
         return self.signals.shape[1]
 
-    def signal(self, name: str, motor: int = 0) -> np.ndarray:
-        return self.signals[:, motor, LOG_NAMES.index(name)]
+    @property
+    def title(self) -> str:
+        return f"{self.name}: result columns"
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] + self.sample_time) if self.t.size else 0.0
+
+    def _declare(self) -> dict[str, tuple[str, str]]:
+        return {f"dfim{k}.{name}": SIGNALS[name] for k in range(self.n_motors)
+                for name in LOG_NAMES}  # fmt: skip
+
+    def _values(self, key: str) -> np.ndarray:
+        part, name = key.split(".", 1)
+        return self.signals[:, int(part.removeprefix("dfim")), LOG_NAMES.index(name)]
 
     def speed_rpm(self, motor: int = 0) -> np.ndarray:
         return self.signal("w", motor) * RPM_PER_RAD_S
@@ -151,7 +179,7 @@ class DriveResult:
             }
         return out
 
-    def summary(self) -> dict:
+    def _compute_summary(self) -> dict:
         """Headline metrics (motor 0 at top level, every motor under ``motors``), each computed
         once in ``acdrive.sim._metrics`` with its window in its name: ``_whole_run_`` (every
         logged sample) or ``_tracking_`` (``speed_tracking``: the rule, the excluded windows and
@@ -181,10 +209,10 @@ class DriveResult:
             "wall_time_s": self.wall_time,
         }
 
-    def columns(self) -> list[Column]:
+    def table_columns(self, separator: str = ".") -> list[Column]:
         """The columns of the result files (``FILE_COLUMNS``; for several motors every signal
         once per motor, named ``<name>_m<k>`` for motor k = 1, 2, ...), with units and
-        descriptions."""
+        descriptions (the names hold no separator)."""
         out = [Column("t", self.t, "s", "time of the logged sample")]
         for k in range(self.n_motors):
             suffix = "" if self.n_motors == 1 else f"_m{k + 1}"
@@ -198,59 +226,11 @@ class DriveResult:
                 out.append(Column(name + suffix, values, unit, who + description))
         return out
 
-    def to_dataframe(self):
-        """A pandas DataFrame of :meth:`columns` (the result files' table); units in
-        ``frame.attrs["units"]``, descriptions in ``frame.attrs["descriptions"]``."""
-        import pandas as pd
-
-        columns = self.columns()
-        frame = pd.DataFrame({c.name: c.values for c in columns})
-        frame.attrs["units"] = {c.name: c.unit for c in columns}
-        frame.attrs["descriptions"] = {c.name: c.description for c in columns}
-        return frame
-
-    def save(self, folder: Path, fmt: str = DEFAULT_FORMAT) -> list[Path]:
-        """Write the data as ``fmt`` (``acdrive.columns.FORMATS``: parquet, csv or mat) and
-        ``columns.md`` into ``folder`` (created if needed); return the paths written."""
-        return write_table(Path(folder), self.columns(), fmt, f"{self.name}: result columns")
-
-    def __repr__(self) -> str:
-        """One line for a notebook or a log: what ran and its headline numbers (computed)."""
-        duration = float(self.t[-1] + self.sample_time) if self.t.size else 0.0
+    def _headline(self) -> list[str]:
+        """The speed range and the largest rotor current of the summary (phase peak)."""
         speed = self.speed_rpm(0)
-        peaks = [float(np.max(self.peak("i_r_mag", k))) for k in range(self.n_motors)]
-        motors = f"{self.n_motors} motor{'s' * (self.n_motors > 1)}"
-        return (
-            f"<DriveResult {self.name!r}: {motors}, {duration:g} s in {self.t.size} samples; "
-            f"speed {float(np.min(speed)):.0f} to {float(np.max(speed)):.0f} rpm, "
-            f"peak rotor current {max(peaks):.3g} A (phase peak)>"
-        )
-
-    def plot(self, motor: int = 0, axes=None):
-        """Speed against its reference, rotor and stator current magnitudes (phase peak) and the
-        torque (command and electrical) of ``motor`` against time, on three stacked axes (or on
-        the three ``axes`` given); returns the matplotlib Figure."""
-        import matplotlib.pyplot as plt
-
-        if axes is None:
-            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5))
-        else:
-            fig = axes[0].figure
-        ax_w, ax_i, ax_t = axes
-        ax_w.plot(self.t, self.reference_rpm(motor), "k--", lw=0.8, label="reference")
-        ax_w.plot(self.t, self.speed_rpm(motor), lw=0.8, label="speed")
-        ax_w.set_ylabel("speed [rpm]")
-        ax_w.legend(loc="best")
-        ax_i.plot(self.t, self.peak("i_r_mag", motor), lw=0.7, label="rotor |i_R|")
-        ax_i.plot(self.t, self.peak("i_s_mag", motor), lw=0.7, label="stator |i_S|")
-        ax_i.set_ylabel("current [A, phase peak]")
-        ax_i.legend(loc="best")
-        ax_t.plot(self.t, self.signal("tau_com", motor), lw=0.7, label="command")
-        ax_t.plot(self.t, self.signal("tau_e", motor), lw=0.7, label="electrical")
-        ax_t.set_ylabel("torque [N m]")
-        ax_t.set_xlabel("time [s]")
-        ax_t.legend(loc="best")
-        title = self.name if self.n_motors == 1 else f"{self.name}, motor {motor + 1}"
-        ax_w.set_title(title)
-        fig.tight_layout()
-        return fig
+        peak = max(m["peak_rotor_current_a"] for m in self.summary["motors"])
+        return [
+            f"speed {float(np.min(speed)):.0f} to {float(np.max(speed)):.0f} rpm",
+            f"peak rotor current {peak:.3g} A (phase peak)",
+        ]

@@ -150,8 +150,9 @@ def build(setup: PMDriveSetup) -> Built:
 
 
 def run(setup: PMDriveSetup, compiled=None):
-    """Simulate ``setup``: (the engine's ``SystemResult``, ``summary(setup, result)``).
-    ``compiled`` reuses a ``System.compile()`` of the same topology."""
+    """Simulate ``setup``: (the engine's ``SystemResult`` with ``summary(setup, result)``
+    attached as its ``summary``, that summary). ``compiled`` reuses a ``System.compile()`` of
+    the same topology."""
     from acdrive.drives.pm._metrics import summary
 
     built = build(setup)
@@ -165,4 +166,5 @@ def run(setup: PMDriveSetup, compiled=None):
         log=list(built.log.values()),
         log_every=setup.log_every,
     )
-    return result, summary(setup, result)
+    result.summary = summary(setup, result)
+    return result, result.summary
