@@ -70,8 +70,8 @@ def steps_per_second(engines: dict, setup) -> dict:
 
 
 def main() -> None:
-    from acdrive.scenarios import load_scenario
     from acdrive.drives import simulate
+    from acdrive.scenarios import load_scenario
 
     sys.path.insert(0, str(HERE))
     from previous_engine import simulate_previous_engine
