@@ -47,6 +47,7 @@ def _alone(overrides):
                             p.split(".")[1]) for p in LOGGED])  # fmt: skip
 
 
+@pytest.mark.slow
 def test_batch_without_reducers_equals_single_runs_bit_for_bit():
     variants = _variants()
     batch = simulate_batch(BASE, variants, reducers=[], log=LOGGED, log_every=1)
@@ -60,6 +61,7 @@ def test_batch_without_reducers_equals_single_runs_bit_for_bit():
     assert batch.traces[2].data[0, 0] == 20.0  # the initial-state override took effect
 
 
+@pytest.mark.slow
 def test_batch_with_reducers_equals_each_variant_alone():
     """With the reducers in the loop, a variant in a batch equals the same variant alone (the
     same compiled loop, one variant), metrics and states alike."""
@@ -77,6 +79,7 @@ def test_batch_with_reducers_equals_each_variant_alone():
             assert same, key
 
 
+@pytest.mark.slow
 def test_reducers_agree_with_the_logged_signals():
     rpm = 30 / math.pi
     reducers = [
@@ -149,6 +152,7 @@ def test_machine_parameter_override_expands_the_built_in_machine():
     assert setup.motors[0].machine.R_s == 0.99 and setup.motors[0].machine.L_s == 13.1e-3
 
 
+@pytest.mark.slow
 def test_cage_im_variants_equal_single_runs():
     from acdrive.drives.cage_im._drive import IMDrive
 
@@ -167,6 +171,7 @@ def test_cage_im_variants_equal_single_runs():
     assert np.array_equal(batch.traces[0].data, alone.data)
 
 
+@pytest.mark.slow
 def test_cage_im_speed_figures_are_the_single_runs():
     """A cage-IM speed loop: the batch row's speed error columns are the single run's summary
     figures of the same names (one kernel, ``sim._metrics``; the samples the run logs, here every

@@ -50,6 +50,7 @@ def gem_run():
     return states, seg, n
 
 
+@pytest.mark.slow
 def test_gem_matched_system_agrees_with_scipy(gem_run):
     """The DFIM + shaft assembled from parts, fed the held voltage sequences, follows the same
     equations written independently in numpy (rotor voltage held in rotor coordinates) and

@@ -133,6 +133,7 @@ def run(x):
 """
 
 
+@pytest.mark.slow
 def test_first_compile_notice_once_per_loop(tmp_path):
     """A generated loop without numba cache gives one notice; the next process loads it quietly;
     a new loop's notice quotes the compile time measured the first time."""

@@ -334,6 +334,7 @@ def test_an_unknown_option_is_still_an_option(capsys):
     assert "unrecognized arguments: -x" in _one_line(err)
 
 
+@pytest.mark.slow
 def test_tiny_sweep_speeds_round_to_zero(tmp_path, capsys):
     code, out, err = _main(
         capsys, "icad", "pmsg-2mw", "--sweep", "--speeds", "-1e-300", "1e-300", "3",

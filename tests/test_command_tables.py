@@ -47,6 +47,7 @@ def _run(capsys, argv):
     return capsys.readouterr().out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", COMMANDS, ids=lambda a: " ".join(a[:3]))
 def test_plain_output_is_an_aligned_table_with_units_and_the_json_values(argv, capsys, tmp_path):
     if "--sweep" in argv:

@@ -167,6 +167,7 @@ def test_an_unknown_drive_names_the_field_and_the_kinds():
         for_data({"drive": KIND})  # not registered outside the fixture
 
 
+@pytest.mark.slow
 def test_acdrive_run_runs_the_toy_drive(toy, tmp_path, capsys):
     _, path = toy
     out = tmp_path / "out"
@@ -197,6 +198,7 @@ def test_an_invalid_toy_scenario_is_one_line_naming_the_field(toy, tmp_path, cap
     assert capsys.readouterr().err.startswith("acdrive: error: circuit.R: must be")
 
 
+@pytest.mark.slow
 def test_a_batch_of_the_toy_drive_follows_the_phasor_formula(toy):
     _, path = toy
     resistances = [1.0, 2.0, 8.0]

@@ -520,6 +520,7 @@ def scenarios(draw) -> dict:
     }
 
 
+@pytest.mark.slow
 @settings(max_examples=80, deadline=None, derandomize=True, print_blob=True)
 @given(scenarios())
 def test_random_valid_scenarios_balance_energy_and_summarise_their_data(scenario):

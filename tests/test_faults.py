@@ -336,6 +336,7 @@ def _sequences(t, v, f):
     return a, b
 
 
+@pytest.mark.slow
 def test_phase_loss_leaves_two_thirds_positive_and_one_third_negative_sequence():
     """Fortescue with e_a = 0: positive (0 + 1 + 1)/3 = 2/3, negative (0 + alpha^2 + alpha)/3 =
     -1/3 of the healthy voltage; before and after, a balanced supply (no negative sequence)."""
@@ -576,6 +577,7 @@ def test_the_oscillation_after_closing_at_speed_comes_from_the_adjustments_found
 FORCED = "fault-forced-close"
 
 
+@pytest.mark.slow
 def test_forced_closing_closes_the_relay_at_its_time_unsynchronised():
     out = outcome(FORCED)
     setup, sync = out.setup, out.summary["synchronisation"]
@@ -628,6 +630,7 @@ def test_a_forced_closing_after_synchronisation_changes_nothing():
 DC = "fault-dc-link-drop"
 
 
+@pytest.mark.slow
 def test_the_applied_rotor_voltage_never_exceeds_the_dc_link():
     drive, res = system_run(DC)
     parts = drive.motors[0]

@@ -324,6 +324,7 @@ def test_saturated_speed_p_on_an_inertia():
     assert np.mean(w[after]) == pytest.approx(150.0 - tau_l / k_p, rel=1e-4)
 
 
+@pytest.mark.slow
 def test_position_p_pi_cascade_on_an_inertia():
     """P position loop -> speed PI -> ideal torque -> inertia. Unsaturated, the sampled loop
     follows the continuous cascade J s^2 theta = (K_P + K_I / s) (K_th (r - theta) - s theta)
@@ -399,6 +400,7 @@ class StationaryPI(SampledPart):
     step = stationary_pi_step
 
 
+@pytest.mark.slow
 def test_ifoc_speed_drive_step_and_load_rejection():
     """DeLorenzo machine on the paper's 310 V DC link, a stationary-frame current PI, IFOC with
     correct estimates, speed PI (defaults): magnetise for 0.4 s, a step to 150 rad/s (Fig. 13's

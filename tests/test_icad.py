@@ -301,6 +301,7 @@ def random_plant(rng, n=3, feedthrough=False):
     return Plant2x2(A, rng.normal(size=(n, 2)), rng.normal(size=(2, n)), D)
 
 
+@pytest.mark.slow
 def test_counts_agree_with_closed_loop_and_transmission_zeros():
     """Z = N + P for gamma (Z: RHP zeros of 1 - gamma) and for the channels (Z: MIMO poles)."""
     rng = np.random.default_rng(7)
@@ -446,6 +447,7 @@ def test_loop_margins_of_textbook_loops():
     assert lead.pm_deg == pytest.approx(150.0, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_resonant_controller_poles_on_the_axis_are_indented():
     """k = 360 + K_R s/(s^2 + w0^2) (poles at +-j w0): counts agree with the closed loop."""
     w0, K_R = 300.0, 5e4

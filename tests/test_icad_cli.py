@@ -27,6 +27,7 @@ def run_json(capsys, *argv):
     return code, json.loads(out)
 
 
+@pytest.mark.slow
 def test_single_speed_json_keys_and_values(capsys):
     code, report = run_json(capsys, "delorenzo-im", "--speed", "375")
     assert code == 0
@@ -67,6 +68,7 @@ def test_bad_input_exits_2(argv, capsys):
     assert err.startswith("acdrive: error:") and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_sweep_writes_figures(tmp_path, capsys):
     out = tmp_path / "figs"
     code, report = run_json(

@@ -169,6 +169,7 @@ def _margins_from_response(L, w):
     return w[k], pm, gm
 
 
+@pytest.mark.slow
 def test_check_controller_paper_20_against_python_control():
     specs = Specifications(n_speeds=3)
     k = LTI.paper_20()
@@ -220,6 +221,7 @@ def _assert_stable_minimum_phase(k: LTI):
     assert np.all(np.real(z) < 0)
 
 
+@pytest.mark.slow
 def test_proposed_controller_meets_what_it_claims():
     specs = Specifications(n_speeds=3)
     prop = propose_controller("delorenzo-im-13", None, specs)

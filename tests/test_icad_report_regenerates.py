@@ -8,11 +8,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from acdrive._report import icad_reproduction
 
 COMMITTED = Path(__file__).resolve().parents[1] / "docs" / "reproduction"
 
 
+@pytest.mark.slow
 def test_icad_report_regenerates_byte_for_byte(tmp_path):
     path = icad_reproduction.write_report(tmp_path)
     committed = (COMMITTED / "icad.md").read_bytes()

@@ -54,6 +54,7 @@ def test_perturbation_that_kills_sigma_raises():
         Perturbation(L_m=1.2).apply(DELORENZO_IM)  # L_m^2 > L_s L_r
 
 
+@pytest.mark.slow
 def test_perturbed_plant_keeps_conditions_i_to_iv():
     # Independent of the ICAD module: eigenvalues, gamma poles and real-axis crossings.
     p = PAPER_PERTURBATION.apply(DELORENZO_IM_13)

@@ -82,6 +82,7 @@ def test_the_builtins_are_listed_short_and_state_their_assumptions(capsys):
         assert 'drive = "cage-im"' in builtin_text(name)
 
 
+@pytest.mark.slow
 def test_no_run_returns_nan(outcomes):
     for outcome in outcomes.values():
         for result in outcome.results.values():
@@ -146,6 +147,7 @@ def test_locked_rotor_summary_is_the_logged_data_and_20_beats_the_pi(outcomes):
     assert errors["icad"] < errors["pi"] / 4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("controller", ["paper-20", "paper-pi"])
 def test_steady_tracking_error_is_the_icad_models_sensitivity(controller):
     """With the averaged inverter (ideal devices, 5 kHz latch) the steady RMS error of the
@@ -526,6 +528,7 @@ def test_bad_input_from_the_command_is_one_line_with_exit_code_2(case, tmp_path)
 # --- the command ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_run_writes_data_figures_and_a_strict_summary(tmp_path):
     out = subprocess.run(
         [sys.executable, "-m", "acdrive.cli", "run", "im-step-responses", "--out", str(tmp_path)],

@@ -34,6 +34,7 @@ def report(inputs, tmp_path_factory):
     return text, numbers, verdicts, fig_dir
 
 
+@pytest.mark.slow
 def test_report_prints_its_numbers_and_verdicts(report):
     text, n, v, fig_dir = report
     for key in (

@@ -254,6 +254,7 @@ def exact_rl_currents(inv, T_s, v_refs):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("t_d", "v_drop"), [(0.0, 0.0), (2e-6, 1.2)])
 @pytest.mark.parametrize("n_samples", [1, 10])
 def test_rl_load_is_integrated_over_the_exact_segments_with_fourth_order_rk4(rl_system, t_d,
@@ -279,6 +280,7 @@ def test_rl_load_is_integrated_over_the_exact_segments_with_fourth_order_rk4(rl_
     assert errors[-1] < 1e-10
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("t_d", [0.0, 2e-6])
 def test_the_sixth_order_method_converges_at_order_six_over_the_same_segments(t_d):
     """``System(method="rk6")``: Butcher's seven-stage method over the exact segments."""

@@ -238,6 +238,7 @@ def test_builtin_controllers_are_the_papers_and_the_icad_ones():
         builtin("nope")
 
 
+@pytest.mark.slow
 def test_fig17_family_gains_solve_the_crossover_of_20():
     """The stored K_P give c_i the crossover of (20) at w_r = 375 (sec. VII), as re-solved."""
     from acdrive._report.icad.pi_comparison import _pi_kp_for_crossover
@@ -298,6 +299,7 @@ def test_full_mimo_controller_couples_the_axes():
 # --- the sampled part in a System --------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_part_in_a_system_reproduces_the_difference_equation():
     """Open loop: reference and 'measured' current from tables (known signals), the diagonal
     controller (20) on alpha, the PI 360/9000 on beta; the logged command equals the state-space
@@ -384,6 +386,7 @@ def closed_loop(part, w_r, ref, N, T, v_dc=None):
     return out_i, out_x, out_v, out_e
 
 
+@pytest.mark.slow
 def test_closed_loop_with_the_cage_motor_matches_the_discrete_loop():
     """(20) on both axes drives the DeLorenzo IM (13) at w_r = 375 rad/s through the averaged
     converter (310 V): a 5 A step saturates the command for a few samples; the simulated

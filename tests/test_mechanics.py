@@ -71,6 +71,7 @@ def decay_time_constant(t, w, a, b):
     return -(t[b] - t[a]) / np.log(w[b] / w[a])
 
 
+@pytest.mark.slow
 def test_free_shaft_with_a_brake_decays_with_time_constant_J_over_B_plus_k():
     t, w = coast(Shaft("shaft", J=J, B=B, brake=K_BRAKE), 2.0)
     tau = J / (B + K_BRAKE)  # 0.645 s
@@ -101,6 +102,7 @@ def test_a_brake_applied_at_a_time():
 
 
 # --- the cage IM with viscous and Coulomb friction and the brake -----------------------------
+@pytest.mark.slow
 def test_cage_start_with_friction_and_brake_matches_radau():
     """Direct start of the 300 W motor against a load ramp, viscous and Coulomb friction and a
     brake ramped on (continuous profiles): the fast loop against Radau (rtol 1e-10) on the same

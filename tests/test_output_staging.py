@@ -123,6 +123,7 @@ def test_icad_default_folder_is_icad_machine(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # the unused staging folder is gone
 
 
+@pytest.mark.slow
 def test_icad_rerun_replaces_the_old_figures_whole(tmp_path):
     out = tmp_path / "out"
     figs = out / "figs"
@@ -277,6 +278,7 @@ def test_reproduce_into_a_new_folder(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["icad", "icad.md"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_interrupted_reproduce_keeps_the_old_report(tmp_path, signum, code):
     out = tmp_path / "out"
@@ -294,6 +296,7 @@ def test_interrupted_reproduce_keeps_the_old_report(tmp_path, signum, code):
     ]  # fmt: skip
 
 
+@pytest.mark.slow
 def test_a_writer_that_leaves_out_the_figures_keeps_the_old_report(tmp_path):
     out = tmp_path / "out"
     _old_reports(out)

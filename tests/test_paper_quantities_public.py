@@ -175,6 +175,7 @@ def test_matrix_13_its_parameters_and_gm_min():
     )
 
 
+@pytest.mark.slow
 def test_controller_20_results_of_sec_v_c_and_vii():
     w_r = 375.0
     a = analyse(plant_from_params(DELORENZO_IM_13, w_r), PAPER_20, PAPER_20)

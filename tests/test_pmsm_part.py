@@ -153,6 +153,7 @@ def reference_for(params, w_gen, t):
     return paper_phase_currents(params, w_gen, params.n_p * THETA0, pieces, t)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", MACHINES)
 def test_currents_match_radau_of_the_paper_equations(name):
     params, w_gen = MACHINES[name], 0.8 * W_RATED
@@ -223,6 +224,7 @@ SERVO = PMSGParams(R_s=0.8, L_d=4e-3, L_q=6e-3, psi_m=0.12, n_p=3)
 SERVO_SHAFT = {"J": 2e-4, "B": 1e-4, "tau_c": 2e-3, "brake": [[0.0, 0.0], [0.1, 0.0], [0.15, 5e-3]]}
 
 
+@pytest.mark.slow
 def test_rotor_aligns_with_a_dc_field_and_energy_balances():
     """A DC stator voltage v_s = V e^{j phi} drives i_s = v_s / R_s at rest; with the motoring
     torque of (8) the rotor's d axis settles on the current, n_p theta = phi (mod 2 pi) (with the

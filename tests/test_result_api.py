@@ -224,6 +224,7 @@ def system_result():
     return im, shaft, result
 
 
+@pytest.mark.slow
 def test_system_repr_counts_what_the_run_logged(system_result):
     _, _, result = system_result
     text = repr(result)

@@ -84,6 +84,7 @@ def test_existing_file_with_the_scenario_name_is_not_replaced(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["short"]
 
 
+@pytest.mark.slow
 def test_rerun_replaces_the_old_output_whole(tmp_path):
     out = tmp_path / "out"
     scenario = _scenario(tmp_path, "short")
@@ -108,6 +109,7 @@ def test_binary_and_utf16_scenarios_are_one_line_errors(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_interrupted_run_keeps_the_old_output_and_leaves_nothing_hidden(tmp_path, signum, code):
     out = tmp_path / "out"

@@ -99,6 +99,7 @@ def _data(text):
     return tomllib.loads(textwrap.dedent(text))
 
 
+@pytest.mark.slow
 def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
     spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
     out = tmp_path / "out"
@@ -132,6 +133,7 @@ def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
     pd.testing.assert_frame_equal(resumed, whole)
 
 
+@pytest.mark.slow
 def test_repeated_sigkills_at_random_moments_lose_and_duplicate_nothing(tmp_path):
     """SIGKILL at seeded random moments, run after run, then one run to the end: every variant is
     in the table exactly once, the table equals an uninterrupted run's, and no temporary file is
@@ -293,6 +295,7 @@ def test_oversized_sweep_is_refused_before_it_starts(tmp_path, capsys):
     assert "limits.max_table_mb" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_report_lists_invalid_and_unstable_variants_and_the_table_keeps_the_reason(tmp_path):
     text = """
     name = "mixed"
@@ -420,6 +423,7 @@ def test_an_interrupted_sweep_prints_the_command_that_resumes_it(tmp_path, capsy
     assert list(table["variant"]) == list(range(6)) and table["variant_id"].is_unique
 
 
+@pytest.mark.slow
 def test_sigterm_prints_the_exact_command_that_resumes(tmp_path):
     """SIGTERM after the first finished chunk (progress-based, as the SIGKILL test): exit 143,
     one line naming the command, and running that command completes the same table."""

@@ -154,6 +154,7 @@ values = [100.0, 300.0]
 """
 
 
+@pytest.mark.slow
 def test_a_real_grid_sweep_report_plots_every_metric_against_the_grid(tmp_path):
     """8 variants of the cheapest built-in scenario, 0.05 s each: the report's figures of each
     metric against load and bandwidth hold the table's values, and no table or label of the

@@ -182,6 +182,7 @@ def test_batch_equals_single_runs():
 
 
 # --- the DFIM, open loop ------------------------------------------------------------------------
+@pytest.mark.slow
 def test_dfim_shorted_rotor_inrush_settles_to_the_steady_state_of_bodson_19():
     p = BODSON_DFIM
     grid = ThreePhaseSource("grid", V_pk=11.1, f=60.0)

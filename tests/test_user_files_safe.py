@@ -250,6 +250,7 @@ def test_the_next_run_removes_the_staging_folder_of_a_sigkilled_run(tmp_path):
 # --- symbolic links: one rule ----------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_out_may_be_a_link_to_a_folder_for_run_and_sweep(tmp_path):
     real = tmp_path / "real"
     real.mkdir()
