@@ -398,7 +398,8 @@ def test_headline_counts_results_and_inputs_separately():
 
 
 def _fig16_numbers(**changes):
-    from acdrive._report import im_reproduction as R
+    from acdrive._report.im.settings import TOLERANCES
+    from acdrive._report.im.verdicts import fig16_steady_verdict
 
     n = {
         "fig16_speed_reference_rad_s": 376.0,
