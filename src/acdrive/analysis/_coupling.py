@@ -57,7 +57,8 @@ from acdrive.analysis._freqresp import evaluate_ss
 from acdrive.analysis._icad import icad_quantities
 from acdrive.analysis._plants import plant_from_params
 from acdrive.control._current import CurrentProgram, StationaryCurrentController
-from acdrive.control._lti import LTI, LTIMatrix
+from acdrive.control._lti import LTI
+from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
