@@ -10,21 +10,17 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from acdrive.analysis._freqresp import LTI, evaluate_ss, freqresp_ss
-from acdrive.analysis._icad import (
-    analyse,
-    controller_for,
+from acdrive.analysis._icad import analyse, controller_for, imc_pi, worst
+from acdrive.analysis._icad_closed_forms import (
     gm_min,
-    icad_quantities,
-    icad_response,
     im_msf_at_rotor_speed,
     im_msf_closed_form,
     im_msf_magnitude_at_rotor_speed,
     im_msf_positive_crossing,
-    imc_pi,
     pmsg_msf,
-    structure_conditions,
-    worst,
 )
+from acdrive.analysis._icad_conditions import structure_conditions
+from acdrive.analysis._icad_frequency import icad_quantities, icad_response
 from acdrive.analysis._plants import Plant2x2, plant_for, plant_from_params, plants_for
 from acdrive.errors import InputError
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._icad import analyse, gm_min
+from acdrive.analysis._icad import analyse
+from acdrive.analysis._icad_closed_forms import gm_min
 from acdrive.analysis._plants import plant_from_params
 from acdrive.analysis._robustness import (
     NOMINAL,

@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from acdrive._report import im_reproduction as rep
+from acdrive._report.im.numbers import coupling_setups
+from acdrive._report.im.settings import TOLERANCES
 from acdrive._report.markdown import fmt
 from acdrive.analysis._coupling import measure_coupling
 
@@ -20,7 +22,7 @@ def inputs():
     frequencies each, a shorter settling time)."""
     outcomes = rep.run_experiments()
     couplings = {}
-    for key, setup in rep.coupling_setups().items():
+    for key, setup in coupling_setups().items():
         short = dataclasses.replace(setup, frequencies=(375.0, 1000.0), settle=0.3, window=0.05)
         couplings[key] = measure_coupling(short)
     return outcomes, couplings
@@ -68,14 +70,14 @@ def test_report_prints_its_numbers_and_verdicts(report):
 def test_a_tolerance_change_flips_a_verdict(report):
     _, n, v, _ = report
     assert v["fig11_tracking"].holds
-    tight = {**rep.TOLERANCES, "tracking_rel": 0.5 * n["fig11_rms_error_icad_rel"]}
+    tight = {**TOLERANCES, "tracking_rel": 0.5 * n["fig11_rms_error_icad_rel"]}
     flipped = rep.compute_verdicts(n, tight)
     assert not flipped["fig11_tracking"].holds
     assert "not low" in str(flipped["fig11_tracking"])
     assert v["coupling_im"].holds
-    tight = {**rep.TOLERANCES, "coupling_rel": 0.5 * n["coupling_im_max_rel_error"]}
+    tight = {**TOLERANCES, "coupling_rel": 0.5 * n["coupling_im_max_rel_error"]}
     assert not rep.compute_verdicts(n, tight)["coupling_im"].holds
-    tight = {**rep.TOLERANCES, "better_ratio": 1.5 * n["fig16_ramp_error_pi_rad_s"]
+    tight = {**TOLERANCES, "better_ratio": 1.5 * n["fig16_ramp_error_pi_rad_s"]
              / n["fig16_ramp_error_icad_rad_s"]}  # fmt: skip
     assert not rep.compute_verdicts(n, tight)["fig16_closer"].holds
 
@@ -133,7 +135,7 @@ def test_fig16_steady_state_is_judged_on_settled_speeds(inputs, report):
     is recomputed here from the logged speed), and the verdict reads the summary's errors."""
     outcomes, _ = inputs
     _, n, v, _ = report
-    tol = rep.TOLERANCES["settled_speed_abs"]
+    tol = TOLERANCES["settled_speed_abs"]
     for label, result in outcomes["fig16"].results.items():
         t, w = result.t, result.signal("w")
         window = t >= t[-1] - max(0.1 * (t[-1] - t[0]), 0.05)  # the summary's: last 10 %

@@ -20,6 +20,7 @@ from acdrive.control._current import (
     StationaryCurrentController,
     current_controller_step,
 )
+from acdrive.control._discretise import discretise, tustin_constant
 from acdrive.control._lti import (
     BUILTIN,
     FIG17_K_I,
@@ -30,11 +31,9 @@ from acdrive.control._lti import (
     PAPER_20,
     PAPER_PI,
     PI_OF_22,
-    LTIMatrix,
     builtin,
-    discretise,
-    tustin_constant,
 )
+from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.core import Profile
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
@@ -554,7 +553,7 @@ def test_invalid_input_names_the_field():
 def test_the_serial_modal_sum_has_its_own_cache_entry_and_the_same_result():
     """The threaded and the single-model modal sums are compiled from one loop; each must cache
     under its own name (numba's cache key ignores ``parallel``), and both give the same sums."""
-    from acdrive.control._lti import _modal_sum, _modal_sum_one
+    from acdrive.control._ss_frequency import _modal_sum, _modal_sum_one
 
     assert _modal_sum_one.targetoptions.get("parallel") is None
     assert _modal_sum.targetoptions.get("parallel") is True

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive._report import im_reproduction as report
+from acdrive._report.im import settings as report
 from acdrive.analysis._coupling import CouplingSetup, icad_coupling, measure_coupling, pmsg_pi
 from acdrive.control._lti import LTI
 from acdrive.drives.pm import _icad_step as st

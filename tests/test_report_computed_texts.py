@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from acdrive._report import icad_targets as targets
-from acdrive._report import im_reproduction as rep
 from acdrive._report import verdicts as V
 from acdrive._report.icad.rounding import matrix_entries, rounding_reach, rounding_rows
 from acdrive._report.icad.ugalde_im import c_of_80_row
+from acdrive._report.im import settings as im_settings
+from acdrive._report.im import verdicts as im_verdicts
 from acdrive.control._lti import PAPER_20
 from acdrive.drives.cage_im._outputs import delayed_linear_step_response, linear_step_response
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W
@@ -104,11 +105,11 @@ def test_c_of_80_reading_is_computed_from_the_printed_rows(monkeypatch):
 
 
 def test_overshoot_order_flips_at_its_stated_tolerance():
-    tol = rep.TOLERANCES["overshoot_order_abs"]
-    yes = rep.overshoot_order(0.30, 0.30 - 2 * tol, tol, "A more", "A not more")
-    no = rep.overshoot_order(0.30, 0.30 - 0.5 * tol, tol, "A more", "A not more")
+    tol = im_settings.TOLERANCES["overshoot_order_abs"]
+    yes = im_verdicts.overshoot_order(0.30, 0.30 - 2 * tol, tol, "A more", "A not more")
+    no = im_verdicts.overshoot_order(0.30, 0.30 - 0.5 * tol, tol, "A more", "A not more")
     assert yes.holds and not no.holds
-    assert f"at least {rep._pct(tol)}" in yes.text and "A not more" in no.text
+    assert f"at least {im_settings.pct(tol)}" in yes.text and "A not more" in no.text
 
 
 def _numbers(sim, lin, delayed):
@@ -124,17 +125,17 @@ NAMES = {"icad": "(20)", "inner_pi": "inner PI", "high_ki_pi": "high PI"}
 
 
 def test_hold_explanation_only_where_the_delay_model_closes_the_gap():
-    t = rep.TOLERANCES
+    t = im_settings.TOLERANCES
     sim = {"icad": 0.22, "inner_pi": 0.09, "high_ki_pi": 0.45}
     lin = {"icad": 0.21, "inner_pi": 0.09, "high_ki_pi": 0.32}
-    closes = rep.hold_explanation(n=_numbers(sim, lin, dict(sim)), t=t, names=NAMES)
+    closes = im_verdicts.hold_explanation(n=_numbers(sim, lin, dict(sim)), t=t, names=NAMES)
     assert "accounts for the difference" in closes and "open" not in closes
-    fails = rep.hold_explanation(
+    fails = im_verdicts.hold_explanation(
         _numbers(sim, lin, {"icad": 0.31, "inner_pi": 0.10, "high_ki_pi": 0.55}), t, NAMES
     )
     assert "cause of the gap is open" in fails and "accounts for" not in fails
     assert "moves (20) beyond the tolerance" in fails
-    none = rep.hold_explanation(_numbers(sim, sim, sim), t, NAMES)
+    none = im_verdicts.hold_explanation(_numbers(sim, sim, sim), t, NAMES)
     assert "no gap to explain" in none
 
 

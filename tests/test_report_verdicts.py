@@ -10,9 +10,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from acdrive._report import bodson_reproduction as B
 from acdrive._report import converter_effect as C
 from acdrive._report import verdicts as V
+from acdrive._report.bodson import verdicts as B
 from acdrive._report.icad.delorenzo import gm_min_note
 from acdrive._report.icad.design_models import MODEL_GAIN_TOL_DB, design_model_verdict
 from acdrive._report.icad.pi_comparison import pi_family_trend
@@ -398,7 +398,8 @@ def test_headline_counts_results_and_inputs_separately():
 
 
 def _fig16_numbers(**changes):
-    from acdrive._report import im_reproduction as R
+    from acdrive._report.im.settings import TOLERANCES
+    from acdrive._report.im.verdicts import fig16_steady_verdict
 
     n = {
         "fig16_speed_reference_rad_s": 376.0,
@@ -412,7 +413,7 @@ def _fig16_numbers(**changes):
         "fig16_steady_window_s": 0.16,
     }
     n.update(changes)
-    return R.fig16_steady_verdict(n, R.TOLERANCES), R.TOLERANCES
+    return fig16_steady_verdict(n, TOLERANCES), TOLERANCES
 
 
 def test_fig16_a_small_settled_pi_error_is_not_the_papers_large_one():

@@ -3,7 +3,7 @@ frequencies.
 
 "Full ICAD" is gamma, both channels c_i, both h_i, k_i g_ii, gamma h_j, S_i, T_i and the
 coupling (10), batched over the (speed, frequency) grid from state-space data
-(``analysis._icad.icad_response_arrays``). The optional peer is python-control's
+(``analysis._icad_frequency.icad_response_arrays``). The optional peer is python-control's
 ``frequency_response`` computing only the plant G(jw) of the same grid (one call per speed), timed
 in the same run when python-control is importable.
 """
@@ -32,7 +32,7 @@ def best_of(fn, repeat: int) -> float:
 def run_icad(repeat: int = 7, peer: bool = True) -> dict:
     """Best-of-``repeat`` wall time of the full ICAD [ms], the plant build, and the peer's."""
     from acdrive.analysis._freqresp import LTI
-    from acdrive.analysis._icad import icad_response_arrays, stack_plants
+    from acdrive.analysis._icad_frequency import icad_response_arrays, stack_plants
     from acdrive.analysis._plants import plants_for
 
     speeds = np.linspace(0.0, 375.0, N_SPEEDS)

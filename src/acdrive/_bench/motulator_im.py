@@ -179,7 +179,7 @@ MATCHED = {
 def current_controller_lti():
     """motulator's complex PI (error path) with its integrator at the fixed frequency W0, as a
     2 x 2 real stationary-frame LTI: dx/dt = j W0 x + e, v = k_p e + (k_i + j W0 k_t) x."""
-    from acdrive.control._lti import LTIMatrix
+    from acdrive.control._lti_matrix import LTIMatrix
 
     A = [[0.0, -W0], [W0, 0.0]]
     C = [[K_IC, -W0 * K_T], [W0 * K_T, K_IC]]

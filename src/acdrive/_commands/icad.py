@@ -147,7 +147,8 @@ def _num(x) -> float | None:
 
 def single_report(machine: str, speed: float, controller: str, analysis) -> dict:
     """The JSON-ready report of one analysis (field names documented in docs/icad.md)."""
-    from acdrive.analysis._icad import gm_min, im_msf_magnitude_at_rotor_speed, worst
+    from acdrive.analysis._icad import worst
+    from acdrive.analysis._icad_closed_forms import gm_min, im_msf_magnitude_at_rotor_speed
     from acdrive.analysis._plants import machine_params
     from acdrive.machines._induction import IMParams
 
@@ -228,7 +229,8 @@ def _sweep(args, params, name, k) -> int:
 
     from acdrive._output import strict_json
     from acdrive._report.icad_figures import write_sweep_figures
-    from acdrive.analysis._icad import analyse, icad_response, summarize
+    from acdrive.analysis._icad import analyse, summarize
+    from acdrive.analysis._icad_frequency import icad_response
     from acdrive.analysis._plants import plant_for
 
     if args.speeds is not None:

@@ -1,7 +1,7 @@
 """Figures of an ICAD sweep: Nyquist families, Bode families, pole maps and coupling.
 
-Every function takes the typed results of ``acdrive.analysis._icad`` and draws on a matplotlib
-axis (Agg backend); ``write_sweep_figures`` writes the whole set as PNG files.
+Every function takes the typed results of the ICAD analysis (``acdrive.analysis``) and draws on
+a matplotlib axis (Agg backend); ``write_sweep_figures`` writes the whole set as PNG files.
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from acdrive.analysis._icad import ICADAnalysis, ICADResponse
+from acdrive.analysis._icad import ICADAnalysis
+from acdrive.analysis._icad_frequency import ICADResponse
 
 
 def _colors(n: int):

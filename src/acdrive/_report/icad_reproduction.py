@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from acdrive._report import im_reproduction
 from acdrive._report.icad.controller_20 import section_controller_20
 from acdrive._report.icad.delorenzo import section_delorenzo_model
 from acdrive._report.icad.design_helpers import section_design_helpers
@@ -38,22 +37,21 @@ from acdrive._report.icad.perturbed import section_perturbed
 from acdrive._report.icad.pi_comparison import section_pi_comparison
 from acdrive._report.icad.pmsg import section_pmsg
 from acdrive._report.icad.ugalde_im import section_ugalde_im
+from acdrive._report.im.settings import EXPERIMENTS as IM_EXPERIMENTS
 from acdrive._report.markdown import Section, render_section
 from acdrive.analysis._freqresp import LTI
 
 
 def not_reproduced() -> str:
     """What this report leaves out, and where the time-domain half of seed 002 is instead: the
-    experiments run by ``acdrive reproduce im`` (``_report.im_reproduction.EXPERIMENTS``)."""
-    figures = ", ".join(
-        key.removeprefix("fig").replace("_", "/") for key in im_reproduction.EXPERIMENTS
-    )
+    experiments run by ``acdrive reproduce im`` (``_report.im.settings.EXPERIMENTS``)."""
+    figures = ", ".join(key.removeprefix("fig").replace("_", "/") for key in IM_EXPERIMENTS)
     return (
         "## Not reproduced here\n\n"
         f"- The time-domain half of seed 002 (Figs. {figures}: experiments and the VSI "
         "simulation) is not part of this frequency-domain report: `acdrive reproduce im` runs "
         "each as a built-in scenario and compares it in `im-current-control.md` "
-        f"({', '.join(f'`{name}`' for name in im_reproduction.EXPERIMENTS.values())}).\n"
+        f"({', '.join(f'`{name}`' for name in IM_EXPERIMENTS.values())}).\n"
         "- Table I of seed 002 is an image absent from the text; only the values quoted in the "
         "text are compared.\n"
         "- The ranges of w_gen / w_r of seed 001 Figs. 4, 6-8 are not printed; 0 ... rated speed "

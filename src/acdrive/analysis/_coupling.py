@@ -6,9 +6,9 @@ output i to the reference of the other channel j,
 
     y_i / r_j = S_i (g_ij / g_jj) h_j,   S_i = 1 / (1 + c_i)                         (10)
 
-(``analysis._icad``; Fig. 8 draws |y_1 / r_2| over w_r). This module measures the same quantity on
-the sampled, nonlinear drive simulator (``sim._system``): the machine part held at w_r by a
-dynamometer (``plant.PrescribedSpeed``), the current controller as a sampled part
+(``analysis._icad_frequency``; Fig. 8 draws |y_1 / r_2| over w_r). This module measures the same
+quantity on the sampled, nonlinear drive simulator (``sim._system``): the machine part held at
+w_r by a dynamometer (``plant.PrescribedSpeed``), the current controller as a sampled part
 (``control.StationaryCurrentController``, Tustin at ``sample_time``), its command latched
 once per carrier period (``plant.CarrierLatch``, N = ``hold_samples`` control samples)
 and applied as an ideal voltage; a sinusoidal reference r_1 = A cos(W t) on channel 1, r_2 = 0;
@@ -54,10 +54,11 @@ import scipy.linalg
 
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.analysis._freqresp import evaluate_ss
-from acdrive.analysis._icad import icad_quantities
+from acdrive.analysis._icad_frequency import icad_quantities
 from acdrive.analysis._plants import plant_from_params
 from acdrive.control._current import CurrentProgram, StationaryCurrentController
-from acdrive.control._lti import LTI, LTIMatrix
+from acdrive.control._lti import LTI
+from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
@@ -119,10 +120,10 @@ def _plant_response(params, w_e: float, w: np.ndarray, delay: float) -> np.ndarr
 
 
 def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarray:
-    """y_2 / r_1 of (10) (``analysis._icad.icad_quantities``) at the frequencies ``w`` [rad/s] for
-    the plant of ``params`` at electrical speed ``w_e`` with k on both channels, k multiplied by
-    e^{-j w delay} (module docstring; in the dq frame the plant also takes the rotation of
-    ``_plant_response``)."""
+    """y_2 / r_1 of (10) (``analysis._icad_frequency.icad_quantities``) at the frequencies ``w``
+    [rad/s] for the plant of ``params`` at electrical speed ``w_e`` with k on both channels, k
+    multiplied by e^{-j w delay} (module docstring; in the dq frame the plant also takes the
+    rotation of ``_plant_response``)."""
     w = np.asarray(w, dtype=float)
     G = _plant_response(params, w_e, w, delay)
     kv = k.freqresp(w) * np.exp(-1j * w * delay)

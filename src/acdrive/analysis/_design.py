@@ -35,7 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import analyse, default_grid, icad_quantities, stack_plants
+from acdrive.analysis._icad import analyse, default_grid
+from acdrive.analysis._icad_frequency import icad_quantities, stack_plants
 from acdrive.analysis._plants import Plant2x2, as_plant, plant_for, plant_from_params
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines._dfim import DFIMParams

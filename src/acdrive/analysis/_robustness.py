@@ -21,7 +21,8 @@ import numpy as np
 
 from acdrive.analysis._design import loop_gain_margin_db, plant_family
 from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._icad import analyse, default_grid, gm_min, im_msf_magnitude_at_rotor_speed
+from acdrive.analysis._icad import analyse, default_grid
+from acdrive.analysis._icad_closed_forms import gm_min, im_msf_magnitude_at_rotor_speed
 from acdrive.analysis._plants import plant_from_params
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._induction import IMParams

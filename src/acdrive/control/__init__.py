@@ -8,9 +8,9 @@ __all__, __getattr__, __dir__ = namespace(
     __name__,
     {
         "LTI": "._lti",
-        "LTIMatrix": "._lti",
-        "DiscreteLTI": "._lti",
-        "discretise": "._lti",
+        "LTIMatrix": "._lti_matrix",
+        "DiscreteLTI": "._discretise",
+        "discretise": "._discretise",
         "builtin": "._lti",
         "as_lti": "._lti",
         "PAPER_20": "._lti",

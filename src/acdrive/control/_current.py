@@ -57,7 +57,9 @@ import numpy as np
 
 from acdrive._frames import beyond_limit
 from acdrive._jit import jit
-from acdrive.control._lti import LTI, DiscreteLTI, LTIMatrix, discretise
+from acdrive.control._discretise import DiscreteLTI, discretise
+from acdrive.control._lti import LTI
+from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.control._open_loop import complex_program_step
 from acdrive.core._describe import layout_text
 from acdrive.core._parts import SampledPart

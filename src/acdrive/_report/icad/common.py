@@ -19,7 +19,7 @@ from acdrive._report import icad_targets as targets
 from acdrive._report import verdicts
 from acdrive._report.verdicts import ROUNDOFF_FLOOR, Verdict, below_floor
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import icad_quantities
+from acdrive.analysis._icad_frequency import icad_quantities
 
 #: Speeds of the seed-002 families [rad/s, electrical] (0 ... w_r,max = 375).
 SPEEDS_002 = np.array([0.0, 75.0, 150.0, 225.0, 300.0, 375.0])

@@ -33,7 +33,8 @@ from acdrive._report.icad_figures import bode_family, coupling_family, nyquist_f
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
 from acdrive._report.verdicts import at_least, at_most, within_abs
 from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._icad import analyse, icad_response
+from acdrive.analysis._icad import analyse
+from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, IMParams
 

@@ -37,12 +37,12 @@ from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
 from acdrive._report.verdicts import at_most, relative_difference, within_abs
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import (
+from acdrive.analysis._icad_closed_forms import (
     gm_min,
-    icad_response,
     im_msf_at_rotor_speed,
     im_msf_magnitude_at_rotor_speed,
 )
+from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13
 

@@ -22,7 +22,7 @@ from acdrive._report.icad.common import ROOT_REL_TOL, error_within
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
 from acdrive._report.verdicts import Verdict, within_abs
 from acdrive.analysis._design_models import compare_design_models
-from acdrive.analysis._icad import invariant_zeros
+from acdrive.analysis._icad_roots import invariant_zeros
 from acdrive.machines._induction import DELORENZO_IM_13
 
 #: A design model misses model A where its gain or phase error exceeds these (sec. V-A).

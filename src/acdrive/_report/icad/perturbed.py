@@ -33,7 +33,9 @@ from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, db, fmt, save_figure
 from acdrive._report.verdicts import at_least, within_abs
 from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._icad import analyse, gm_min, icad_response
+from acdrive.analysis._icad import analyse
+from acdrive.analysis._icad_closed_forms import gm_min
+from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.analysis._robustness import (
     NOMINAL,

@@ -34,7 +34,9 @@ from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, fmt, save_figure
 from acdrive._report.verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import icad_response, pmsg_msf, structure_conditions
+from acdrive.analysis._icad_closed_forms import pmsg_msf
+from acdrive.analysis._icad_conditions import structure_conditions
+from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._pmsm import PMSG_2MW
 

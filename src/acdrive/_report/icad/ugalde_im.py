@@ -40,12 +40,9 @@ from acdrive._report.icad_figures import nyquist_family
 from acdrive._report.markdown import Row, Section, fmt, save_figure
 from acdrive._report.verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad import (
-    icad_response,
-    im_dgamma_re_im,
-    im_msf_closed_form,
-    structure_conditions,
-)
+from acdrive.analysis._icad_closed_forms import im_dgamma_re_im, im_msf_closed_form
+from acdrive.analysis._icad_conditions import structure_conditions
+from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._induction import UGALDE_IM_300W, IMParams, stator_current_ss
 

@@ -35,8 +35,8 @@ integrators), bounds the error of (S) (``tail``). (S) is exact for piecewise-lin
 error of that interpolation is of order (w T_s)^2 / 24.
 
 **The prediction.** ``analysis._coupling.icad_coupling``: (10), y_2 / r_1 = S_2 (g_21 / g_11)
-h_1 (Ugalde-Loo (6), the form of ``analysis._icad``) with the continuous k, and the same with the
-hold's mean delay T_s / 2 (k e^{-j w T_s / 2} and the plant turned by w_e T_s / 2,
+h_1 (Ugalde-Loo (6), the form of ``analysis._icad_frequency``) with the continuous k, and the
+same with the hold's mean delay T_s / 2 (k e^{-j w T_s / 2} and the plant turned by w_e T_s / 2,
 ``analysis._coupling._plant_response``); ``analysis._coupling.closed_loop`` gives the direct
 channel (1, 1). The verdict: every frequency's relative complex difference from (10) within
 ``ICAD_REL_TOL`` up to ``ICAD_W_MAX`` (the delay-free (10) differs from the sampled loop by about
