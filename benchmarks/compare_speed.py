@@ -7,7 +7,9 @@ BEFORE_SRC and AFTER_SRC are ``src`` folders of two checkouts (e.g. a worktree o
 main). For each scenario, R rounds alternate the two trees (A B A B ...), each round a fresh
 process that loads the scenario, loads or compiles its loop, runs it once to warm up and then K
 times, timing each run in process CPU time. Prints JSON: per scenario and tree the min / median
-/ max steps per CPU-second over all timed runs, and the ratio after / before of the medians.
+/ max steps per CPU-second over all timed runs, and the ratio after / before of the medians,
+for the compiled loop alone (``loop``: the time inside the compiled system's ``run``) and for the
+whole drive run with its result (``run``).
 """
 
 from __future__ import annotations
@@ -38,22 +40,45 @@ if hasattr(setup, "motors"):
 else:
     drive = IMDrive(setup.runs()[0][1] if setup.runs() else setup)
 compiled = drive.compile()
+loop = []
+run_loop = compiled.run
+
+
+def timed_loop(*args, **kwargs):
+    t0 = time.process_time()
+    out = run_loop(*args, **kwargs)
+    loop.append(time.process_time() - t0)
+    return out
+
+
+compiled.run = timed_loop
 drive.run(compiled)
-times = []
+times, loop[:] = [], []
 for _ in range(reps):
     t0 = time.process_time()
     drive.run(compiled)
     times.append(time.process_time() - t0)
-print(json.dumps({"steps": round(setup.duration / setup.sample_time), "cpu_s": times}))
+steps = round(setup.duration / setup.sample_time)
+print(json.dumps({"steps": steps, "cpu_s": times, "loop_cpu_s": loop}))
 """
 
 
-def _measure(src: str, name: str, reps: int) -> tuple[int, list[float]]:
+def _measure(src: str, name: str, reps: int) -> tuple[int, list[float], list[float]]:
     env = dict(os.environ, PYTHONPATH=src)
     out = subprocess.run([sys.executable, "-c", WORKER, name, str(reps)], env=env, check=True,
                          capture_output=True, text=True).stdout  # fmt: skip
     data = json.loads(out.strip().splitlines()[-1])
-    return data["steps"], data["cpu_s"]
+    return data["steps"], data["cpu_s"], data["loop_cpu_s"]
+
+
+def _stats(rates: dict) -> dict:
+    """min / median / max per tree and the ratio after / before of the medians."""
+    out = {
+        side: {"min": min(r), "median": statistics.median(r), "max": max(r)}
+        for side, r in rates.items()
+    }
+    out["ratio_after_before_median"] = out["after"]["median"] / out["before"]["median"]
+    return out
 
 
 def main(argv: list[str]) -> int:
@@ -70,15 +95,13 @@ def main(argv: list[str]) -> int:
     report = {"rounds": rounds, "reps": reps, "scenarios": {}}
     for name in names or SCENARIOS:
         rates = {"before": [], "after": []}
+        loop_rates = {"before": [], "after": []}
         for _ in range(rounds):
             for side, src in (("before", before), ("after", after)):
-                steps, cpu = _measure(src, name, reps)
+                steps, cpu, loop = _measure(src, name, reps)
                 rates[side] += [steps / t for t in cpu]
-        entry = {
-            side: {"min": min(r), "median": statistics.median(r), "max": max(r)}
-            for side, r in rates.items()
-        }
-        entry["ratio_after_before_median"] = entry["after"]["median"] / entry["before"]["median"]
+                loop_rates[side] += [steps / t for t in loop]
+        entry = {"run": _stats(rates), "loop": _stats(loop_rates)}
         report["scenarios"][name] = entry
     print(json.dumps(report, indent=2))
     return 0
