@@ -99,15 +99,13 @@ def _data(text):
     return tomllib.loads(textwrap.dedent(text))
 
 
-@pytest.mark.slow
-def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
-    spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
-    out = tmp_path / "out"
-    env = {k: v for k, v in os.environ.items()}
+def _sweep_until_first_chunk(spec_path, out, text: bool = False):
+    """Start ``acdrive sweep`` of ``spec_path`` into ``out`` in a process and return it, with the
+    table folder, once the first chunk is written (or the process ended, or 240 s passed)."""
     proc = subprocess.Popen(
         [sys.executable, "-m", "acdrive.cli", "sweep", str(spec_path), "--out", str(out),
          "--quiet", "--no-report"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=text,
     )  # fmt: skip
     table_dir = out / "tiny" / "table"
     deadline = time.monotonic() + 240
@@ -115,6 +113,14 @@ def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
         if table_dir.is_dir() and any(table_dir.glob("chunk-*.parquet")):
             break
         time.sleep(0.005)
+    return proc, table_dir
+
+
+@pytest.mark.slow
+def test_resume_after_sigkill_loses_and_duplicates_nothing(tmp_path):
+    spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
+    out = tmp_path / "out"
+    proc, table_dir = _sweep_until_first_chunk(spec_path, out)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     done_at_kill = len(list(table_dir.glob("chunk-*.parquet")))
@@ -431,17 +437,7 @@ def test_sigterm_prints_the_exact_command_that_resumes(tmp_path):
 
     spec_path = _tiny(tmp_path, chunk=1, duration=1.5, loads="[0.0, 0.02, 0.04, 0.06, 0.08]")
     out = tmp_path / "out"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "acdrive.cli", "sweep", str(spec_path), "--out", str(out),
-         "--quiet", "--no-report"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    table_dir = out / "tiny" / "table"
-    deadline = time.monotonic() + 240
-    while time.monotonic() < deadline and proc.poll() is None:
-        if table_dir.is_dir() and any(table_dir.glob("chunk-*.parquet")):
-            break
-        time.sleep(0.005)
+    proc, table_dir = _sweep_until_first_chunk(spec_path, out, text=True)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 143, err

@@ -166,5 +166,5 @@ def run(setup: PMDriveSetup, compiled=None):
         log=list(built.log.values()),
         log_every=setup.log_every,
     )
-    result.summary = summary(setup, result)
+    result.summary = summary(setup, result, built.log)
     return result, result.summary

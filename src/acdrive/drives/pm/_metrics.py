@@ -24,11 +24,14 @@ from acdrive.drives.pm._setup import PMDriveSetup
 FINAL_FRACTION = 0.1
 
 
-def signals(setup: PMDriveSetup, result) -> dict:
-    """The logged signals of ``result`` by the names of ``build(setup).log``."""
-    from acdrive.drives.pm._build import build
+def signals(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
+    """The logged signals of ``result`` by the names of ``log`` (name -> port), the run's
+    ``build(setup).log``; rebuilt from ``setup`` only when the caller does not hold it."""
+    if log is None:
+        from acdrive.drives.pm._build import build
 
-    return {name: result.signal(port) for name, port in build(setup).log.items()}
+        log = build(setup).log
+    return {name: result.signal(port) for name, port in log.items()}
 
 
 def final_window(t: np.ndarray) -> np.ndarray:
@@ -36,9 +39,10 @@ def final_window(t: np.ndarray) -> np.ndarray:
     return t >= t[-1] - FINAL_FRACTION * (t[-1] - t[0])
 
 
-def summary(setup: PMDriveSetup, result) -> dict:
-    """Speed tracking, currents, torque and the voltage-limit margin (module docstring)."""
-    s = signals(setup, result)
+def summary(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
+    """Speed tracking, currents, torque and the voltage-limit margin (module docstring); ``log``
+    as for ``signals``."""
+    s = signals(setup, result, log)
     t = result.t
     final = final_window(t)
     error = s["w_ref"] - s["w"]
