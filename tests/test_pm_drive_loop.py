@@ -167,19 +167,22 @@ def interior():
     return setup, result, summary, signals(setup, result)
 
 
-def test_interior_mtpa_angle_is_the_closed_form_optimum(interior):
-    setup, result, _, s = interior
-    settled = window(result.t, 0.25, 0.3)
-    i_dq = np.mean(s["i_dq"][settled])
+def _assert_mtpa(setup, i_dq: complex) -> None:
+    """The settled current ``i_dq`` sits at the closed-form MTPA angle (1e-3 rad), and no
+    current angle of its magnitude gives more torque (brute force over the quarter plane)."""
     m = setup.machine
     psi_f = d.magnet_flux(m.psi_m)
     beta = math.atan2(-i_dq.real, i_dq.imag)
     assert beta == pytest.approx(d.mtpa_angle(psi_f, m.L_d, m.L_q, abs(i_dq)), abs=1e-3)
-    # and no current angle gives more torque with this current
     angles = np.linspace(0.0, math.pi / 2, 100001)
     best = np.max(d.torque(m.n_p, psi_f, m.L_d, m.L_q, -abs(i_dq) * np.sin(angles),
                            abs(i_dq) * np.cos(angles)))  # fmt: skip
     assert torque_of(setup, i_dq) == pytest.approx(best, rel=1e-5)
+
+
+def test_interior_mtpa_angle_is_the_closed_form_optimum(interior):
+    setup, result, _, s = interior
+    _assert_mtpa(setup, np.mean(s["i_dq"][window(result.t, 0.25, 0.3)]))
 
 
 def test_interior_field_weakening_holds_the_voltage_limit(interior):
@@ -302,16 +305,8 @@ def test_speed_drive_voltage_limit_acts_only_at_the_speed_step(speed_drive):
 def test_speed_drive_mtpa_angle_is_the_closed_form_optimum(speed_drive):
     setup, result, _, s = speed_drive
     i_dq = np.mean(s["i_dq"][window(result.t, 0.55, 0.6)])
-    m = setup.machine
-    psi_f = d.magnet_flux(m.psi_m)
     assert i_dq.real < 0.0  # the reluctance torque is used
-    beta = math.atan2(-i_dq.real, i_dq.imag)
-    assert beta == pytest.approx(d.mtpa_angle(psi_f, m.L_d, m.L_q, abs(i_dq)), abs=1e-3)
-    # no current angle of this magnitude gives more torque (brute force over the quarter plane)
-    angles = np.linspace(0.0, math.pi / 2, 100001)
-    best = np.max(d.torque(m.n_p, psi_f, m.L_d, m.L_q, -abs(i_dq) * np.sin(angles),
-                           abs(i_dq) * np.cos(angles)))  # fmt: skip
-    assert torque_of(setup, i_dq) == pytest.approx(best, rel=1e-5)
+    _assert_mtpa(setup, i_dq)
 
 
 def test_speed_drive_torque_formula_carries_the_load(speed_drive):
