@@ -28,7 +28,7 @@ from acdrive.drives.dfim._setup import RK4_STEP_LIMIT, ConverterLosses, fastest_
 from acdrive.errors import InputError, Notice
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text, load_scenario
-from acdrive.sim._system import MAX_SUBSTEPS
+from acdrive.sim._compiled import MAX_SUBSTEPS
 
 V_DC = 30.0  # the built-ins' DC link
 #: the largest phase loss V_dc t_d f_sw + V_drop whose fundamental the 30 V link can supply

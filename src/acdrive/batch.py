@@ -63,6 +63,7 @@ from acdrive._reducer_parts import (
     band_coefficients,
 )
 from acdrive.errors import InputError
+from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._metrics import (
     LATE_WINDOW_S,
     OSCILLATION_BAND_HZ,
@@ -70,7 +71,7 @@ from acdrive.sim._metrics import (
     TrackingRule,
     speed_error_figures,
 )
-from acdrive.sim._system import STATUS_OK, System
+from acdrive.sim._system import System
 
 __all__ = [
     "BatchResult",

@@ -60,9 +60,9 @@ def radau_segments(rhs, x0, t, counts, dt, inputs, rtol=1e-10, atol=1e-12, jac=N
 
 
 def rk6_tableau_extended():
-    """Butcher's sixth-order tableau of ``acdrive.sim._system`` (RK6_*), its rational coefficients
+    """Butcher's sixth-order tableau of ``acdrive.sim._integrators`` (RK6_*), its rational coefficients
     recovered exactly and rounded to extended precision."""
-    from acdrive.sim._system import RK6_A, RK6_B, RK6_C
+    from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 
     def ld(x: float):
         f = Fraction(x).limit_denominator(1000)

@@ -1,5 +1,5 @@
 """Generic linearisation: central-difference Jacobians, Newton's method, and the one-sample map of
-a compiled system (``acdrive.sim._system``) with its fixed point and Jacobian.
+a compiled system (``acdrive.sim._compiled``) with its fixed point and Jacobian.
 
 The one-sample map is the compiled loop's own sample, run from Python piece by piece in the
 loop's order (``project``, ``plant_outputs``, every ``sample_<i>``, ``modulate``, ``integrate``; the

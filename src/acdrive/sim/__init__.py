@@ -7,9 +7,9 @@ __all__, __getattr__, __dir__ = namespace(
     __name__,
     {
         "System": "._system",
-        "CompiledSystem": "._system",
+        "CompiledSystem": "._compiled",
         "SystemResult": "._result",
         "Result": "._result",
-        "INTEGRATORS": "._system",
+        "INTEGRATORS": "._integrators",
     },
 )

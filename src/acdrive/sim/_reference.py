@@ -23,7 +23,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from acdrive.errors import InputError, SimulationDiverged
-from acdrive.sim._system import CompiledSystem, SystemResult
+from acdrive.sim._compiled import CompiledSystem
+from acdrive.sim._result import SystemResult
 
 
 def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: float,

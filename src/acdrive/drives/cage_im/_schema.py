@@ -104,7 +104,8 @@ from acdrive.machines._induction import IMParams
 from acdrive.machines._record import electrical_fields
 from acdrive.scenarios._files import Section as _Section
 from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
-from acdrive.sim._system import INTEGRATORS, LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
+from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
+from acdrive.sim._integrators import INTEGRATORS
 
 DRIVE = "cage-im"
 #: the built-in machine of a machine table without ``name`` or ``[machine.params]``

@@ -37,7 +37,8 @@ from acdrive.plant._mechanics import Shaft
 from acdrive.plant._network import ForcedRelay, StatorRelay, SupplyBus
 from acdrive.plant._sensors import CurrentSensors, Encoder
 from acdrive.plant._sources import DCSource, ThreePhaseSource, UnbalancedSource
-from acdrive.sim._system import CompiledSystem, System
+from acdrive.sim._compiled import CompiledSystem
+from acdrive.sim._system import System
 
 #: the converter's event and the parts whose events make up the flags column of a DriveResult
 _EVENT_ALIASES = {"saturated": "converter_saturation"}

@@ -84,7 +84,7 @@ from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
 from acdrive.scenarios._files import Section as _Section
 from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
-from acdrive.sim._system import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
+from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 __all__ = ["KIND", "build_dfim_setup", "choose_substeps", "fastest_mode"]
 
