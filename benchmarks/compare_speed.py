@@ -10,6 +10,14 @@ times, timing each run in process CPU time. Prints JSON: per scenario and tree t
 / max steps per CPU-second over all timed runs, and the ratio after / before of the medians,
 for the compiled loop alone (``loop``: the time inside the compiled system's ``run``) and for the
 whole drive run with its result (``run``).
+
+    python benchmarks/compare_speed.py BEFORE_SRC AFTER_SRC [scenario ...] --machine-code
+
+compares instead the machine code of the compiled loop (numba's assembly of ``run``, with symbol
+names, labels, comments and assembler directives removed) of the two trees: identical
+instructions run at the same speed, so a difference the timing shows between them is code
+placement and machine noise, not the change (two checkouts of one source were measured 7 %
+apart). Prints JSON: per scenario the instruction count and the number of differing lines.
 """
 
 from __future__ import annotations
@@ -63,6 +71,56 @@ print(json.dumps({"steps": steps, "cpu_s": times, "loop_cpu_s": loop}))
 """
 
 
+MACHINE_CODE_WORKER = (
+    WORKER.split("compiled = drive.compile()")[0]
+    + r"""
+import re
+compiled = drive.compile()
+drive.run(compiled)
+run = compiled.module.run
+asm = run.inspect_asm(run.signatures[0])
+DIRECTIVE = re.compile(r"^\s*\.(file|loc|ident|section|size|type|globl|weak|p2align|text|cfi_\w+)\b")
+lines = []
+for line in asm.splitlines():
+    line = re.sub(r"acdrive_system_[0-9a-f]+", "SYS", line)
+    line = re.sub(r"_ZN[0-9A-Za-z_$]+", "SYM", line)
+    line = re.sub(r"\.L[A-Za-z0-9_.$]+", "LABEL", line)
+    line = line.split("#")[0].rstrip()
+    if line and not DIRECTIVE.match(line):
+        lines.append(line)
+print(json.dumps({"instructions": lines}))
+"""
+)
+
+
+def _machine_code(src: str, name: str) -> list[str]:
+    """The normalised assembly lines of the compiled loop ``run`` of scenario ``name`` in the
+    tree ``src``, compiled in a fresh numba cache so both trees compile alike."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, PYTHONPATH=src, NUMBA_CACHE_DIR=cache, ACDRIVE_COMPILE_NOTICE="0")
+        out = subprocess.run([sys.executable, "-c", MACHINE_CODE_WORKER, name, "0"], env=env,
+                             check=True, capture_output=True, text=True).stdout  # fmt: skip
+    return json.loads(out.strip().splitlines()[-1])["instructions"]
+
+
+def compare_machine_code(before: str, after: str, names) -> dict:
+    """Per scenario: instruction lines of each tree and how many differ (difflib)."""
+    import difflib
+
+    report = {}
+    for name in names:
+        a, b = _machine_code(before, name), _machine_code(after, name)
+        changed = sum(
+            1 for line in difflib.unified_diff(a, b, lineterm="", n=0)
+            if line[:1] in "+-" and not line.startswith(("+++", "---"))
+        )  # fmt: skip
+        report[name] = {"lines_before": len(a), "lines_after": len(b), "differing_lines": changed,
+                        "identical": a == b}  # fmt: skip
+    return report
+
+
 def _measure(src: str, name: str, reps: int) -> tuple[int, list[float], list[float]]:
     env = dict(os.environ, PYTHONPATH=src)
     out = subprocess.run([sys.executable, "-c", WORKER, name, str(reps)], env=env, check=True,
@@ -91,7 +149,13 @@ def main(argv: list[str]) -> int:
         i = argv.index("--reps")
         reps = int(argv[i + 1])
         del argv[i : i + 2]
+    machine_code = "--machine-code" in argv
+    if machine_code:
+        argv.remove("--machine-code")
     before, after, *names = argv
+    if machine_code:
+        print(json.dumps(compare_machine_code(before, after, names or SCENARIOS), indent=2))
+        return 0
     report = {"rounds": rounds, "reps": reps, "scenarios": {}}
     for name in names or SCENARIOS:
         rates = {"before": [], "after": []}
