@@ -4,17 +4,12 @@ the held-input right-hand side the slow path and the linearisation use."""
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from acdrive.errors import InputError, SimulationDiverged, call_interruptible
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._result import SystemResult
-
-if TYPE_CHECKING:
-    from acdrive.sim._system import System
-
 
 #: Size bounds of one run (also applied by the scenario loader): substeps per segment, memory
 #: for the logs, and RK4 steps (samples x substeps x variants; about 2 us each: half an hour).
@@ -26,7 +21,8 @@ MAX_WORK = 1e9
 class CompiledSystem:
     """A system with its compiled loop: run once or over a batch of variants."""
 
-    def __init__(self, system: System, module):
+    def __init__(self, system, module):
+        """``system``: the ``sim.System`` whose generated loop ``module`` is."""
         self.system = system
         self.module = module
 
