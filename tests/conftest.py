@@ -13,6 +13,9 @@ settings.register_profile("ci", derandomize=True, deadline=None)
 # on what a test checks; tests that count stderr lines would see it only on a cold cache (CI).
 # It is switched off here and tested on its own (test_cli_habits, which switches it back on).
 os.environ.setdefault("ACDRIVE_COMPILE_NOTICE", "0")
+# Nor does the suite start background compiles (sim._tier): a test's processes end with the test;
+# the tests of the background compile switch it on for their own processes.
+os.environ.setdefault("ACDRIVE_BACKGROUND_COMPILE", "0")
 if not os.environ.get("ACDRIVE_FUZZ_RANDOM"):
     settings.load_profile("ci")
 

@@ -123,49 +123,6 @@ def test_progress_bar_only_on_a_terminal(monkeypatch):
     assert "job" in terminal.getvalue() and "step one" in terminal.getvalue()
 
 
-GENERATED = """
-from numba import njit
-
-
-@njit(cache=True)
-def run(x):
-    return x + {offset}
-"""
-
-
-@pytest.mark.slow
-def test_first_compile_notice_once_per_loop(tmp_path):
-    """A generated loop without numba cache gives one notice; the next process loads it quietly;
-    a new loop's notice quotes the compile time measured the first time."""
-    code = """
-        import sys, warnings
-        from acdrive.errors import Notice
-        from acdrive.sim import _codegen as codegen
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            module = codegen.load_module({source!r})
-            module.run(1.0)
-        seconds = codegen.record_compile_times()
-        notes = [str(w.message) for w in caught if issubclass(w.category, Notice)]
-        print(repr((notes, seconds)))
-    """
-    env = {
-        **__import__("os").environ,
-        "NUMBA_CACHE_DIR": str(tmp_path),
-        "ACDRIVE_COMPILE_NOTICE": "1",
-    }
-    results = []
-    for offset in (1, 1, 2):
-        out = _python(code.format(source=GENERATED.format(offset=offset)), env=env)
-        assert out.returncode == 0, out.stderr
-        results.append(eval(out.stdout.strip().splitlines()[-1]))
-    (first, compiled), (again, loaded), (other, _) = results
-    assert len(first) == 1 and first[0].startswith("compiling the simulation loop for this drive")
-    assert "later runs load it" in first[0] and compiled > 0.0
-    assert again == [] and loaded == 0.0
-    assert len(other) == 1 and f"about {compiled:.2g} s as the last time" in other[0]
-
-
 # --- the headline's tracking windows -------------------------------------------------------
 
 

@@ -1,13 +1,23 @@
 """A system with its compiled loop: one run or a batch of variants, the size bounds of a run, and
-the held-input right-hand side the slow path and the linearisation use."""
+the held-input right-hand side the slow path and the linearisation use.
+
+The loop is one of two tiers (``sim._tier``): the specialised loop of this topology or the
+generic loop that runs any topology from tables. ``System.compile()`` compiles or loads the
+chosen loop at once; the seconds that took are reported by the next run's result
+(``compile_time``, ``tier``, ``compiled_now``) apart from its simulation time (``wall_time``).
+"""
 
 from __future__ import annotations
 
 import time
 
+import numba
 import numpy as np
 
 from acdrive.errors import InputError, SimulationDiverged, call_interruptible
+from acdrive.sim import _codegen as codegen
+from acdrive.sim import _kernels as kernels
+from acdrive.sim import _tier
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._result import SystemResult
 
@@ -19,12 +29,122 @@ MAX_WORK = 1e9
 
 
 class CompiledSystem:
-    """A system with its compiled loop: run once or over a batch of variants."""
+    """A system with its compiled loop: run once or over a batch of variants.
 
-    def __init__(self, system, module):
-        """``system``: the ``sim.System`` whose generated loop ``module`` is."""
+    ``tier`` is the loop that runs it (``"specialised"`` or ``"generic"``, ``sim._tier``);
+    ``compile_time`` the seconds spent compiling or loading it that no run has reported yet
+    (``compiled_now``: whether that was a compile rather than a load from the cache).
+    """
+
+    def __init__(self, system):
+        """``system``: the ``sim.System`` to compile (``System.compile()`` calls this)."""
         self.system = system
-        self.module = module
+        self.source = system.source()
+        self._module = None
+        self._tables = None
+        self._background = None
+        self.tier = ""
+        self.compile_time = 0.0
+        self.compiled_now = False
+        self._choose()
+
+    @property
+    def module(self):
+        """The specialised loop's generated module (its functions compile on their first call,
+        or load from the cache)."""
+        if self._module is None:
+            self._module = codegen.load_module(self.source)
+        return self._module
+
+    # --- the tier ---------------------------------------------------------------------------
+    def _spent(self, seconds: float, compiled: bool) -> None:
+        self.compile_time += seconds
+        self.compiled_now = self.compiled_now or compiled
+
+    def _choose(self) -> None:
+        """Compile or load the loop ``sim._tier`` describes for this system now."""
+        asked = _tier.chosen()
+        if asked == "specialised":
+            self._specialise("ACDRIVE_LOOP_TIER=specialised")
+            return
+        if asked == "auto" and codegen.is_cached(self.module.run):
+            self._specialise(None)  # a load
+            return
+        missing = _tier.kinds_without_kernels(self.system) if asked == "auto" else []
+        if missing:
+            from acdrive.sim import _generic
+
+            names = ", ".join(sorted({kind.__name__ for kind, _ in missing}))
+            why = "; ".join(sorted({reason for _, reason in missing}))
+            self._specialise(
+                f"the generic loop cannot run it: no compiled kernels for the part kind(s) "
+                f"{names} ({why}); they compile in the background for the next new topology"
+            )
+            self._background = _tier.start_background(
+                kinds=[kind for kind, _ in missing], generic=not codegen.is_cached(_generic.run)
+            )
+            return
+        self._generalise()
+
+    def _specialise(self, why: str | None) -> None:
+        """Compile (notice: ``why``) or load the specialised loop's ``run`` now."""
+        run = self.module.run
+        if why is not None and not codegen.is_cached(run):
+            codegen.notice(_tier.describe_compile(self.system, why))
+        seconds, compiled = codegen.compile_for(run, _tier.RUN_ARGS)
+        if compiled:
+            codegen.record_time("specialised", len(self.system.parts), seconds)
+        self._spent(seconds, compiled)
+        self.tier = "specialised"
+
+    def _generalise(self) -> None:
+        """Load (or compile) the part kinds' kernels and the generic loop; build the tables."""
+        from acdrive.sim import _generic, _tables
+
+        start = time.perf_counter()
+        addresses, kernel_seconds = {}, 0.0
+        for kind in _tier.kinds_of(self.system):
+            found, seconds = kernels.addresses(kind)
+            addresses.update(found)
+            kernel_seconds += seconds
+        if not codegen.is_cached(_generic.run):
+            measured = codegen.expected_time("generic", 1)
+            about = f" (about {measured:.2g} s as measured on this machine)" if measured else ""
+            codegen.notice(
+                f"compiling the generic simulation loop once for this installation{about}: "
+                "afterwards a new topology of compiled part kinds runs without a compile"
+            )
+        seconds, compiled = codegen.compile_for(_generic.run, _tier.GENERIC_RUN_ARGS)
+        if compiled:
+            codegen.record_time("generic", 1, seconds)
+        self._tables = _tables.tables(self.system, addresses)
+        self._spent(time.perf_counter() - start, compiled or kernel_seconds > 0.0)
+        self.tier = "generic"
+
+    def _loop_for(self, n_steps: int, substeps: int):
+        """The run function and its extra arguments for a run of ``n_steps`` samples: the
+        generic loop gives way to the specialised one once that is cached (a background compile
+        finished) or when compiling it pays for this run."""
+        if self.tier == "generic" and _tier.chosen() == "auto":
+            if codegen.is_cached(self.module.run):
+                self._specialise(None)
+            elif _tier.pays_to_specialise(self.system, n_steps, substeps):
+                expected = _tier.expected_generic_run(self.system, n_steps, substeps)
+                self._specialise(
+                    f"this run would take about {expected:.2g} s in the generic loop, longer "
+                    "than the compile"
+                )
+        if self.tier == "generic":
+            from acdrive.sim import _generic
+
+            return _generic.run, self._tables
+        return self.module.run, ()
+
+    def _reported(self) -> tuple[float, bool]:
+        """(compile or load seconds, compiled) not yet reported, now handed to a result."""
+        out = (self.compile_time, self.compiled_now)
+        self.compile_time, self.compiled_now = 0.0, False
+        return out
 
     def _log_setup(self, log, n_steps, log_every):
         if isinstance(log_every, bool) or not isinstance(log_every, int) or log_every < 1:
@@ -96,10 +216,18 @@ class CompiledSystem:
         ELOG = np.zeros((rows, n_ev), dtype=np.int64)
         ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
+        loop, tables = self._loop_for(n_steps, substeps)
         start = time.perf_counter()
-        done, status = self.module.run(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps,
-                                       n_steps, log_every, idx, LOG, ELOG, ECOUNT)  # fmt: skip
+        done, status = loop(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
+                            log_every, idx, LOG, ELOG, ECOUNT, *tables)  # fmt: skip
         wall = time.perf_counter() - start
+        if self.tier == "generic":
+            _tier.record_generic_run(self.system, n_steps, substeps, wall)
+            if self._background is None:  # the specialised loop, for the runs after this one
+                self._background = (
+                    _tier.start_background(specialised_source=self.source, size=len(sys_.parts))
+                    or False
+                )
         if status != STATUS_OK:
             bad = [
                 name
@@ -111,9 +239,11 @@ class CompiledSystem:
                 f"state {', '.join(bad[:3]) or '?'} not finite; use a shorter sample_time or more "
                 "substeps",
             )
-        return self._result(
+        result = self._result(
             t0, sample_time, log_every, rows, columns, LOG, ELOG, ECOUNT, X, wall, n_steps
         )
+        result.compile_time, result.compiled_now = self._reported()
+        return result
 
     def _state_columns(self):
         out = []
@@ -144,6 +274,7 @@ class CompiledSystem:
             final_state=X.copy(),
             wall_time=wall,
             steps=n_steps,
+            tier=self.tier,
         )
 
     def run_batch(self, variants, duration, sample_time, substeps=4, initial=None, log=None,
@@ -185,6 +316,7 @@ class CompiledSystem:
             P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows
         )
         results = []
+        spent, compiled = self._reported()
         for b in range(B):
             r = self._result(
                 t0,
@@ -199,6 +331,8 @@ class CompiledSystem:
                 wall / B,
                 n_steps,
             )
+            if b == 0:  # the batch's compile or load time, once
+                r.compile_time, r.compiled_now = spent, compiled
             r.extra["status"] = (
                 "ok"
                 if STATUS[b] == STATUS_OK
@@ -251,10 +385,16 @@ class CompiledSystem:
         DONE = np.zeros(B, dtype=np.int64)
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
+        args = (X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps, log_every,
+                idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+        if self.tier != "specialised":
+            self._specialise("batches run the specialised loop")
+        seconds, compiled = codegen.compile_for(
+            self.module.run_batch, tuple(numba.typeof(a) for a in args)
+        )
+        self._spent(seconds, compiled)
         start = time.perf_counter()
-        call_interruptible(self.module.run_batch, X, P, PO, S, Y, U, float(t0),
-                           float(sample_time), substeps, n_steps, log_every, idx, LOG, ELOG,
-                           ECOUNT, DONE, STATUS)  # fmt: skip
+        call_interruptible(self.module.run_batch, *args)
         return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
 
     # --- pieces for the slow path and the linearisation -------------------------------------

@@ -14,10 +14,10 @@ from acdrive.sim._integrators import INTEGRATORS, RK6_A, RK6_B, RK6_C
 STATUS_OK, STATUS_NONFINITE = 0, 1
 
 
-def input_copies(system, part: Part, only=None, skip=()) -> list[str]:
-    """Generated statements copying ``part``'s inputs (those in ``only``, if given, and not in
-    ``skip``) from the outputs wired to them."""
-    lines = []
+def copy_pairs(system, part: Part, only=None, skip=()) -> list[tuple[int, int]]:
+    """(slot in U, slot in Y) of every value copied into ``part``'s inputs (those in ``only``, if
+    given, and not in ``skip``) from the outputs wired to them, in declaration order."""
+    pairs = []
     base = system.slots[part.name].u[0]
     for v in part.INPUTS:
         if (only is not None and v.name not in only) or v.name in skip:
@@ -25,9 +25,13 @@ def input_copies(system, part: Part, only=None, skip=()) -> list[str]:
         src = system.source_of[(part.name, v.name)]
         d = base + part.INPUTS.slot(v.name)
         s = system.output_slot(src)
-        for i in range(v.width):
-            lines.append(f"U[{d + i}] = Y[{s + i}]")
-    return lines
+        pairs += [(d + i, s + i) for i in range(v.width)]
+    return pairs
+
+
+def input_copies(system, part: Part, only=None, skip=()) -> list[str]:
+    """Generated statements copying ``part``'s inputs (``copy_pairs``)."""
+    return [f"U[{d}] = Y[{s}]" for d, s in copy_pairs(system, part, only, skip)]
 
 
 def step_body(method: str) -> list[str]:

@@ -36,6 +36,7 @@ import numpy as np
 from acdrive.columns import DEFAULT_FORMAT, Column, write_table
 from acdrive.core._parts import Port
 from acdrive.errors import InputError
+from acdrive.sim._timing import simulated_in
 
 __all__ = ["PLOT_BINS", "PartView", "Result", "SystemResult", "envelope"]
 
@@ -338,6 +339,12 @@ class SystemResult(Result):
     steps: int = 0
     extra: dict = field(default_factory=dict)
     descriptions: dict[str, str] = field(default_factory=dict)
+    #: seconds spent compiling or loading the loop before this run (not in ``wall_time``)
+    compile_time: float = 0.0
+    #: the loop that ran (``sim._tier``): "specialised" or "generic"
+    tier: str = ""
+    #: whether ``compile_time`` was a compile (else a load from the cache)
+    compiled_now: bool = False
 
     @property
     def title(self) -> str:
@@ -379,4 +386,4 @@ class SystemResult(Result):
         events = self.raised_events()
         raised = ", ".join(f"{k} {v}" for k, v in events.items()) if events else "none"
         return [*super()._headline(), f"events raised: {raised}",
-                f"{self.steps} steps in {self.wall_time:.3g} s wall time"]  # fmt: skip
+                f"{self.steps} steps {simulated_in([self])}"]  # fmt: skip

@@ -30,7 +30,6 @@ import numpy as np
 
 from acdrive.core._parts import ContinuousPart, Modulator, Part, Port, SampledPart
 from acdrive.errors import InputError
-from acdrive.sim import _codegen as codegen
 from acdrive.sim._compiled import CompiledSystem
 from acdrive.sim._integrators import INTEGRATORS
 from acdrive.sim._loop_source import loop_source
@@ -179,7 +178,9 @@ class System:
         return loop_source(self)
 
     def compile(self) -> CompiledSystem:
-        return CompiledSystem(self, codegen.load_module(self.source()))
+        """The compiled system, its loop compiled or loaded now (``sim._tier`` chooses the
+        specialised or the generic loop; the seconds it took are reported by the first run)."""
+        return CompiledSystem(self)
 
     # --- arrays -----------------------------------------------------------------------------
     def part(self, name: str) -> Part:

@@ -3,6 +3,8 @@ each computed from the summary the run wrote (``drives.cage_im._outputs``)."""
 
 from __future__ import annotations
 
+from acdrive.sim._timing import simulated_in
+
 
 def _rows(summary: dict, setup) -> list[tuple[str, str]]:
     """Headline rows from the numbers of the summary (nothing here is a fixed verdict)."""
@@ -120,11 +122,11 @@ def headline(outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
     """(first line, rows) of ``acdrive run``'s headline of a cage-IM ``outcome`` whose written
     summary is ``summary``."""
     setup = outcome.setup
-    wall = sum(r.wall_time for r in outcome.results.values())
+    timing = simulated_in(outcome.results.values())
     n = len(outcome.results)
     inv = setup.inverter
     first = (
-        f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s "
+        f"scenario {setup.name}: {setup.duration:g} s {timing} "
         f"({n} run{'s' * (n > 1)}, mode {setup.mode}, {inv.model} inverter at "
         f"{inv.f_pwm:g} Hz, sampling {1.0 / setup.sample_time:g} Hz)"
     )

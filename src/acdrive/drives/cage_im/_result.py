@@ -26,6 +26,7 @@ from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.errors import SimulationDiverged
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.sim._result import Result
+from acdrive.sim._timing import run_timing
 
 #: the last fraction of a run over which steady values are averaged
 STEADY_FRACTION = 0.1
@@ -55,6 +56,10 @@ class IMDriveResult(Result):
     flags: dict[str, np.ndarray]
     wall_time: float = 0.0
     steps: int = 0
+    #: the loop's compile or load before the run (``acdrive.sim._timing``), apart from wall_time
+    compile_time: float = 0.0
+    compiled_now: bool = False
+    tier: str = ""
     #: one-line description of each signal (the logged port's declaration)
     descriptions: dict[str, str] = field(default_factory=dict)
 
@@ -93,6 +98,9 @@ class IMDriveResult(Result):
             flags=drive.event_flags(raw),
             wall_time=raw.wall_time,
             steps=raw.steps,
+            compile_time=raw.compile_time,
+            compiled_now=raw.compiled_now,
+            tier=raw.tier,
             descriptions=descriptions,
         )
 
@@ -321,7 +329,7 @@ class IMDriveResult(Result):
         if check is not None:
             out["voltage_check"] = check
         out["duration_s"] = float(self.t[-1] + s.sample_time * s.log_every)
-        out["wall_time_s"] = self.wall_time
+        out.update(run_timing([self]))
         return out
 
     # -- export -----------------------------------------------------------------------------

@@ -303,6 +303,9 @@ class DFIMDrive:
             sample_time=self.setup.sample_time,
             final_state=result.final_state,
             wall_time=result.wall_time,
+            compile_time=result.compile_time,
+            compiled_now=result.compiled_now,
+            tier=result.tier,
             tracking=tuple(tracking_rule(self.setup, k) for k in range(n)),
         )
 

@@ -6,6 +6,7 @@ their limits, the relay's closing, events."""
 from __future__ import annotations
 
 from acdrive.drives.dfim._outcome import MODE_SUFFIX
+from acdrive.sim._timing import simulated_in
 
 
 def tracking_row(tracking: dict) -> str:
@@ -41,9 +42,9 @@ def headline(outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
     """(first line, rows) of ``acdrive run``'s headline of a DFIM ``outcome`` whose written
     summary is ``summary``."""
     setup = outcome.setup
-    wall = sum(r.wall_time for r in outcome.results.values())
+    timing = simulated_in(outcome.results.values())
     n = len(setup.motors)
-    first = f"scenario {setup.name}: {setup.duration:g} s simulated in {wall:.2f} s ({n} motor{'s' * (n > 1)})"
+    first = f"scenario {setup.name}: {setup.duration:g} s {timing} ({n} motor{'s' * (n > 1)})"
     rotor_limit = max(m.controller.rotor_current_limit_pk for m in setup.motors)
     stator_limit = max(m.controller.stator_current_limit_pk for m in setup.motors)
     if len(outcome.results) > 1:

@@ -18,6 +18,7 @@ from acdrive.sim._metrics import (
     speed_tracking,
 )
 from acdrive.sim._result import Result
+from acdrive.sim._timing import run_timing
 
 #: the signals of a DFIM drive run, per motor and logged sample (``DriveResult.signals``)
 LOG_NAMES = ("w", "w_ref", "tau_com", "tau_e", "v_s_mag", "v_r_mag", "i_s_mag", "i_r_mag", "i_rx",
@@ -90,6 +91,10 @@ class DriveResult(Result):
     sample_time: float
     final_state: np.ndarray
     wall_time: float = 0.0
+    #: the loop's compile or load before the run (``acdrive.sim._timing``), apart from wall_time
+    compile_time: float = 0.0
+    compiled_now: bool = False
+    tier: str = ""
     #: per motor, where the speed is expected to track (``drives.dfim._tracking.tracking_rule`` of the
     #: scenario); None (a result built by hand): every sample
     tracking: tuple[TrackingRule, ...] | None = None
@@ -206,7 +211,7 @@ class DriveResult(Result):
             **per_motor[0],
             "motors": per_motor,
             "duration_s": float(self.t[-1] + self.sample_time),
-            "wall_time_s": self.wall_time,
+            **run_timing([self]),
         }
 
     def table_columns(self, separator: str = ".") -> list[Column]:

@@ -25,6 +25,7 @@ from acdrive.drives.pm import _build, _icad_step
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._setup import PMDriveSetup
 from acdrive.errors import InputError
+from acdrive.sim._timing import run_timing, simulated_in
 
 #: labels of the results of one scenario, by kind
 SPEED_LABELS = ("run",)
@@ -68,11 +69,12 @@ def run_outcome(setup, on_run=None) -> PMOutcome:
         if on_run is not None:
             on_run(" and ".join(STEP_LABELS))
         out = _icad_step.run(setup)
-        return PMOutcome(setup, dict(zip(STEP_LABELS, out.runs, strict=True)), out.summary)
+        results = dict(zip(STEP_LABELS, out.runs, strict=True))
+        return PMOutcome(setup, results, {**out.summary, **run_timing(results.values())})
     if on_run is not None:
         on_run(SPEED_LABELS[0])
     result, summary = _build.run(setup)
-    return PMOutcome(setup, {SPEED_LABELS[0]: result}, summary)
+    return PMOutcome(setup, {SPEED_LABELS[0]: result}, {**summary, **run_timing([result])})
 
 
 def run_scenario(setup, compiled=None):
@@ -111,8 +113,13 @@ def write(outcome: PMOutcome, folder, figures: bool = True, fmt: str = "parquet"
 def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
     """What ``acdrive run`` prints: a first line and (label, text) rows from ``summary``."""
     name = outcome.setup.name
+    timing = (
+        "simulation",
+        f"{outcome.setup.duration:g} s {simulated_in(outcome.results.values())}",
+    )
     if isinstance(outcome.setup, CurrentStepSetup):
-        return _step_headline(name, summary)
+        first, rows = _step_headline(name, summary)
+        return first, [*rows, timing]
     first = (
         f"{name}: final speed {summary['speed_final_rad_s']:.5g} rad/s = "
         f"{summary['speed_final_to_base_ratio']:.3g} x base speed "
@@ -132,6 +139,7 @@ def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, st
             f"{summary['current_controller_limited_samples']} samples",
         ),
         ("references on the voltage limit", f"{summary['voltage_limited_samples']} samples"),
+        timing,
     ]
     return first, rows
 
