@@ -42,11 +42,13 @@ RUN_ARGS = (_F1, _F1, _I1, _F1, _F1, _F1, types.float64, types.float64, types.in
 #: the generic loop's ``run`` takes the topology's tables after them (``sim._tables``)
 GENERIC_RUN_ARGS = (*RUN_ARGS, *([_I2] * 8), _I1)
 
-#: seconds per (sample x substep x part) of the generic loop when none was measured here yet
-#: (measured: bodson-ramp, 2-core machine, sim._tier docstring of docs/design.md)
-_GENERIC_RATE_DEFAULT = 2.0e-8
-#: seconds of compile per part of the specialised loop when none was measured here yet
-_COMPILE_PER_PART_DEFAULT = 1.2
+#: seconds per (sample x substep x part) of the generic loop when none was measured here yet:
+#: thread CPU of its run, 1.1e-7 (bodson-ramp), 1.2e-7 (im-foc-speed), 1.4e-7 (a 4-part IM), on
+#: the 2-core machine (``benchmarks/compile_profile.py``, docs/design.md)
+_GENERIC_RATE_DEFAULT = 1.2e-7
+#: seconds of compile per part of the specialised loop when none was measured here yet: thread
+#: CPU 0.9 (bodson-ramp, 13 parts), 1.6 (im-foc-speed, 10), 1.9 (a 4-part IM); more under load
+_COMPILE_PER_PART_DEFAULT = 1.5
 
 
 def chosen() -> str:
