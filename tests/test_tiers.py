@@ -231,7 +231,8 @@ def test_a_kind_without_compiled_kernels_falls_back_to_the_specialised_compile_a
     fast, slow = user.Decay("fast", a=20.0), user.Decay("slow", a=5.0)
     compiled = System([fast, slow], []).compile()
     assert compiled.tier == "generic"
-    result = compiled.run(**_RUN, log=[fast.out.y, slow.out.y])
+    with pytest.warns(Notice, match="a new topology: running the generic loop, no compile"):
+        result = compiled.run(**_RUN, log=[fast.out.y, slow.out.y])
     assert result.tier == "generic"
     assert not compiled.module.run.overloads and not codegen.is_cached(compiled.module.run)
     _assert_decays(result, 20.0, 5.0)
@@ -292,6 +293,14 @@ def test_a_damaged_cache_file_is_rebuilt_with_one_line(tmp_path):
     third, stderr = _run_decay(tmp_path, name, ACDRIVE_LOOP_TIER="specialised")
     assert _notice_lines(stderr, "was damaged") == 1
     assert third["y"] == first["y"] and module.read_text() == text
+    # a data file of the loop's machine code damaged (its index reads well)
+    data = [p for p in cache.rglob("*.nbc") if "acdrive_system" in p.name]
+    assert data
+    for path in data:
+        path.write_bytes(path.read_bytes()[:64])
+    again, stderr = _run_decay(tmp_path, name, ACDRIVE_LOOP_TIER="specialised")
+    assert _notice_lines(stderr, "could not be read") == 1
+    assert again["compiled"] and again["y"] == first["y"]
     # and then a plain load
     fourth, stderr = _run_decay(tmp_path, name, ACDRIVE_LOOP_TIER="specialised")
     assert not fourth["compiled"] and "Notice" not in stderr and fourth["y"] == first["y"]

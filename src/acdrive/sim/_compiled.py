@@ -140,6 +140,22 @@ class CompiledSystem:
             return _generic.run, self._tables
         return self.module.run, ()
 
+    def _announce_generic(self, n_steps: int, substeps: int) -> None:
+        """The first generic run of this system: say so, with its expected time, and start the
+        specialised loop's compile in the background for the runs after (``sim._tier``)."""
+        expected = _tier.expected_generic_run(self.system, n_steps, substeps)
+        later = ("the specialised loop compiles in the background for the runs after"
+                 if _tier.background_enabled() else "ACDRIVE_BACKGROUND_COMPILE=0: the "
+                 "specialised loop is not compiled in the background")  # fmt: skip
+        codegen.notice(
+            f"a new topology: running the generic loop, no compile (its part kinds' kernels are "
+            f"compiled on this machine), about {expected:.2g} s for this run; {later}"
+        )
+        self._background = (
+            _tier.start_background(specialised_source=self.source, size=len(self.system.parts))
+            or False
+        )
+
     def _reported(self) -> tuple[float, bool]:
         """(compile or load seconds, compiled) not yet reported, now handed to a result."""
         out = (self.compile_time, self.compiled_now)
@@ -217,17 +233,14 @@ class CompiledSystem:
         ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
         loop, tables = self._loop_for(n_steps, substeps)
+        if self.tier == "generic" and self._background is None:
+            self._announce_generic(n_steps, substeps)
         start = time.perf_counter()
         done, status = loop(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
                             log_every, idx, LOG, ELOG, ECOUNT, *tables)  # fmt: skip
         wall = time.perf_counter() - start
         if self.tier == "generic":
             _tier.record_generic_run(self.system, n_steps, substeps, wall)
-            if self._background is None:  # the specialised loop, for the runs after this one
-                self._background = (
-                    _tier.start_background(specialised_source=self.source, size=len(sys_.parts))
-                    or False
-                )
         if status != STATUS_OK:
             bad = [
                 name
