@@ -18,14 +18,14 @@ from acdrive.analysis._drive_stability import (
     stability_map,
 )
 from acdrive.cli import main
-from acdrive.drives.dfim._setup import simulate
+from acdrive.drives.dfim import simulate
 from acdrive.errors import InputError
-from acdrive.machines._dfim import (
+from acdrive.machines import (
     BODSON_DFIM,
     electrical_poles,
     shifted_delta_z_coefficients,
 )
-from acdrive.scenarios._loader import build_setup
+from acdrive.scenarios import build_setup
 
 W_E = 2 * math.pi * 60.0
 

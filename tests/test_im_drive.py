@@ -21,16 +21,13 @@ import pytest
 from scipy.signal import lsim, lti
 
 from acdrive._frames import complex_to_abc
-from acdrive.analysis._plants import plant_from_params
+from acdrive.analysis import plant_from_params
 from acdrive.cli import main
 from acdrive.core import Profile
-from acdrive.drives.cage_im._drive import IMDrive
-from acdrive.drives.cage_im._outcome import run_im_scenario
+from acdrive.drives.cage_im import IMDrive, IMDriveResult, IMDriveSetup, run_im_scenario
 from acdrive.drives.cage_im._outputs import closed_loop_reference_ss, linear_step_response
 from acdrive.drives.cage_im._physics import foc_voltage, modulation_signals
-from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._schema import build_im_setup
-from acdrive.drives.cage_im._setup import IMDriveSetup
 from acdrive.errors import InputError, SimulationDiverged
 from acdrive.scenarios._loader import builtin_names, builtin_text, load_scenario
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from acdrive.core import Profile
+from acdrive.drives.cage_im import IMDriveResult
 from acdrive.drives.cage_im._outcome import run_im_scenario, warnings_of
 from acdrive.drives.cage_im._recovery import im_disturbances
-from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import IMDriveSetup, Mechanics, SpeedPISetup
 from acdrive.scenarios import load_scenario
 from acdrive.scenarios._files import constant
