@@ -15,70 +15,9 @@ whole drive run with its result (``run``).
 from __future__ import annotations
 
 import json
-import os
-import statistics
-import subprocess
 import sys
 
-SCENARIOS = ("bodson-ramp", "bodson-two-motors", "im-foc-speed")
-
-WORKER = r"""
-import json, sys, time
-name, reps = sys.argv[1], int(sys.argv[2])
-from acdrive.scenarios import load_scenario
-try:
-    from acdrive.drives.dfim._drive import DFIMDrive
-    from acdrive.drives.cage_im._drive import IMDrive
-except ImportError:
-    from acdrive.sim._dfim_drive import DFIMDrive
-    from acdrive.sim._im_drive import IMDrive
-setup = load_scenario(name)
-if hasattr(setup, "motors"):
-    if setup.compare_modes:
-        setup = setup.with_mode(setup.compare_modes[0])
-    drive = DFIMDrive(setup)
-else:
-    drive = IMDrive(setup.runs()[0][1] if setup.runs() else setup)
-compiled = drive.compile()
-loop = []
-run_loop = compiled.run
-
-
-def timed_loop(*args, **kwargs):
-    t0 = time.process_time()
-    out = run_loop(*args, **kwargs)
-    loop.append(time.process_time() - t0)
-    return out
-
-
-compiled.run = timed_loop
-drive.run(compiled)
-times, loop[:] = [], []
-for _ in range(reps):
-    t0 = time.process_time()
-    drive.run(compiled)
-    times.append(time.process_time() - t0)
-steps = round(setup.duration / setup.sample_time)
-print(json.dumps({"steps": steps, "cpu_s": times, "loop_cpu_s": loop}))
-"""
-
-
-def _measure(src: str, name: str, reps: int) -> tuple[int, list[float], list[float]]:
-    env = dict(os.environ, PYTHONPATH=src)
-    out = subprocess.run([sys.executable, "-c", WORKER, name, str(reps)], env=env, check=True,
-                         capture_output=True, text=True).stdout  # fmt: skip
-    data = json.loads(out.strip().splitlines()[-1])
-    return data["steps"], data["cpu_s"], data["loop_cpu_s"]
-
-
-def _stats(rates: dict) -> dict:
-    """min / median / max per tree and the ratio after / before of the medians."""
-    out = {
-        side: {"min": min(r), "median": statistics.median(r), "max": max(r)}
-        for side, r in rates.items()
-    }
-    out["ratio_after_before_median"] = out["after"]["median"] / out["before"]["median"]
-    return out
+from acdrive._bench.loop_speed import SCENARIOS, compare_trees
 
 
 def main(argv: list[str]) -> int:
@@ -92,17 +31,7 @@ def main(argv: list[str]) -> int:
         reps = int(argv[i + 1])
         del argv[i : i + 2]
     before, after, *names = argv
-    report = {"rounds": rounds, "reps": reps, "scenarios": {}}
-    for name in names or SCENARIOS:
-        rates = {"before": [], "after": []}
-        loop_rates = {"before": [], "after": []}
-        for _ in range(rounds):
-            for side, src in (("before", before), ("after", after)):
-                steps, cpu, loop = _measure(src, name, reps)
-                rates[side] += [steps / t for t in cpu]
-                loop_rates[side] += [steps / t for t in loop]
-        entry = {"run": _stats(rates), "loop": _stats(loop_rates)}
-        report["scenarios"][name] = entry
+    report = compare_trees(before, after, names or SCENARIOS, rounds, reps)
     print(json.dumps(report, indent=2))
     return 0
 
