@@ -70,9 +70,14 @@ def verdicts(time_ratio_median, speedup_median) -> dict:
 def summarise_race(windows: list[dict], cores: int) -> dict:
     """Per side the spread of its whole-process CPU time; per round acdrive's time over
     motulator's for each cache state, their spread, and the speedups (the inverse ratios)."""
+    ran = {w["side"] for w in windows}
     pairs = {
-        "empty_cache": ("acdrive_empty_cache", "motulator"),
-        "warm_cache": ("acdrive_warm_cache", "motulator"),
+        key: pair
+        for key, pair in (
+            ("empty_cache", ("acdrive_empty_cache", "motulator")),
+            ("warm_cache", ("acdrive_warm_cache", "motulator")),
+        )
+        if set(pair) <= ran
     }
     s = summarise_windows(windows, pairs, cores)
     out: dict = {
