@@ -407,3 +407,20 @@ def test_motulators_first_result_process_runs_the_matched_case():
     got = children.run_child(first_result.motulator_command(peer, 0.05), clean_env())
     steps = json.loads(got["stdout_last"])["steps"]
     assert abs(steps - round(0.05 / T_S)) <= 1
+
+
+def test_the_table_prints_the_race_with_its_spread_and_every_target(monkeypatch):
+    from acdrive._bench.suite import summarise, table
+
+    fake = FakeProcesses(empty_s=[10.0, 12.0, 9.0, 15.0], motulator_s=[6.0, 6.0, 5.0, 6.0],
+                         warm_s=[1.2, 1.0, 1.5])  # fmt: skip
+    monkeypatch.setattr(first_result, "run_child", fake)
+    race = first_result.run_race({"available": True, "python": "p"}, 3, 1.5, clock=_quiet_clock())
+    report = {"cases": {"first_result": race}, "quick": False}
+    report["host"] = {"load_average_at_start": 1, "load_average_at_end": 2, "cpus": 2}
+    summarise(report)
+    text = table(report)
+    assert "acdrive empty cache: 2.00 (1.80-2.50) x motulator's time" in text
+    assert "first_result_warm_speedup: 5 x (at least 10): NO" in text
+    for name in targets.TARGETS:
+        assert f"  {name}: " in text

@@ -392,6 +392,7 @@ def table(report: dict) -> str:
                 f"  speed difference to motulator: RMS {diff['rms_rpm']:.3g} rpm, largest "
                 f"{diff['max_abs_rpm']:.3g} rpm over {diff['from_s']:g}-{diff['to_s']:g} s"
             )
+    lines += race_lines(report["cases"].get("first_result"))
     if report.get("icad_ms") is not None:
         lines.append(f"icad: {report['icad_ms']:.1f} ms (full ICAD, 100 x 2,000)")
     lines.append(
@@ -407,6 +408,26 @@ def table(report: dict) -> str:
     if report["warnings"]:
         lines.append(f"  rule: {report['load_rule']}")
     return "\n".join(lines)
+
+
+def race_lines(race: dict | None) -> list[str]:
+    """The first-result race: each side's whole-process CPU time and the ratios, median
+    (min-max) over the rounds."""
+    if not race or "cpu_s" not in race:
+        return [] if not race else [f"first-result race not measured: {race['not_measured']}"]
+
+    def span(s: dict, spec: str) -> str:
+        return f"{_fmt(s['median'], spec)} ({_fmt(s['min'], spec)}-{_fmt(s['max'], spec)})"
+
+    times = ", ".join(f"{k} {span(v, '.2f')}" for k, v in race["cpu_s"].items())
+    lines = [f"first result, whole process from a clean start, CPU s: {times}"]
+    for key, label in (("empty_cache", "empty cache"), ("warm_cache", "warm cache")):
+        r, s = race["time_ratio"].get(key), race["speedup"].get(key)
+        if r:
+            lines.append(
+                f"  acdrive {label}: {span(r, '.2f')} x motulator's time, speedup {span(s, '.2f')}"
+            )
+    return lines
 
 
 def targets_table(section: dict) -> list[str]:
