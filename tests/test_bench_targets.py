@@ -424,3 +424,35 @@ def test_the_table_prints_the_race_with_its_spread_and_every_target(monkeypatch)
     assert "first_result_warm_speedup: 5 x (at least 10): NO" in text
     for name in targets.TARGETS:
         assert f"  {name}: " in text
+
+
+def test_batch_speed_alternates_single_lane_and_lockstep(monkeypatch):
+    """With a lockstep option the two batches alternate per round (after a warm-up of each on
+    2 variants), the option is passed False / True, and each round gives lockstep over
+    single-lane in steps per CPU second."""
+    import acdrive.batch
+    from acdrive.batch import BatchResult
+
+    t = {"cpu": 0.0, "wall": 0.0}
+    calls = []
+
+    def fake_batch(base, variants, *, lanes=False):
+        calls.append((len(variants), lanes))
+        cost = len(variants) * (0.001 if lanes else 0.004)  # 4x cheaper per step in lockstep
+        t["cpu"] += cost
+        t["wall"] += cost / 2  # both cores busy
+        rows = [{"status": "ok"} for _ in variants]
+        return BatchResult(rows=rows, steps=1000 * len(variants))
+
+    monkeypatch.setattr(acdrive.batch, "simulate_batch", fake_batch)
+    clock = Clock(cpu=lambda: t["cpu"], wall=lambda: t["wall"], busy=lambda: None,
+                  load=lambda: None, cores=2)  # fmt: skip
+    r = targets.batch_speed(10, 2, clock=clock)
+    assert calls == [(2, False), (2, True)] + [(10, False), (10, True)] * 2
+    assert r["lockstep_option"] == "lanes"
+    assert r["single_lane"]["steps_per_cpu_s"]["median"] == pytest.approx(250_000.0)
+    assert r["lockstep"]["steps_per_s"]["median"] == pytest.approx(2_000_000.0)
+    assert r["lockstep_vs_single_lane_per_cpu_s"]["per_round"] == pytest.approx([4.0, 4.0])
+    section = targets.targets_section({"batch": r}, {})
+    assert section["simd_batch_vs_single_lane"]["met"] is True  # 4 >= 3
+    assert section["simd_batch_steps_per_s"]["met"] is False  # 2 M < 6 M

@@ -29,11 +29,10 @@ import os
 import shutil
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from acdrive._bench.children import ChildFailed, can_time_children, child_env, run_child
-from acdrive._bench.windows import spread
+from acdrive._bench.windows import Clock, spread
 
 #: the scenario of the whole-command and batch targets
 SCENARIO = "bodson-ramp"
@@ -252,26 +251,28 @@ def batch_variants(n: int, seed: int = 1) -> list[dict]:
     ]  # fmt: skip
 
 
-def time_batch(simulate_batch, variants, **options) -> dict:
+def time_batch(simulate_batch, variants, clock: Clock, **options) -> dict:
     """One batch run: control steps, wall and process CPU time (all threads), both rates."""
-    c0, w0 = time.process_time(), time.perf_counter()
+    c0, w0 = clock.cpu(), clock.wall()
     result = simulate_batch(SCENARIO, variants, **options)
-    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+    cpu, wall = clock.cpu() - c0, clock.wall() - w0
     return {
         "steps": result.steps,
         "wall_s": wall,
         "cpu_s": cpu,
-        "steps_per_s": result.steps / wall,
-        "steps_per_cpu_s": result.steps / cpu,
+        "steps_per_s": result.steps / wall if wall > 0.0 else None,
+        "steps_per_cpu_s": result.steps / cpu if cpu > 0.0 else None,
         "all_ok": all(r.get("status") == "ok" for r in result.rows),
     }
 
 
-def batch_speed(n_variants: int, rounds: int, log=None) -> dict:
+def batch_speed(n_variants: int, rounds: int, log=None, clock: Clock | None = None) -> dict:
     """The single-lane batch and, if the batch has a lockstep option, the lockstep one, each
-    warmed up on 2 variants, then alternated for ``rounds`` rounds over ``n_variants``."""
+    warmed up on 2 variants, then alternated for ``rounds`` rounds over ``n_variants``; the
+    lockstep one's steps per CPU second over the single-lane one's in each round."""
     from acdrive.batch import simulate_batch
 
+    clock = clock or Clock()
     say = log or (lambda _m: None)
     option = lockstep_option(simulate_batch)
     modes = {"single_lane": {}}
@@ -285,7 +286,7 @@ def batch_speed(n_variants: int, rounds: int, log=None) -> dict:
     for r in range(rounds):
         for name, opts in modes.items():
             say(f"batch, round {r + 1}/{rounds}: {n_variants} variants, {name}")
-            got[name].append(time_batch(simulate_batch, vs, **opts))
+            got[name].append(time_batch(simulate_batch, vs, clock, **opts))
     out = {"scenario": SCENARIO, "variants": n_variants, "rounds": rounds, "cpus": os.cpu_count()}
     out["lockstep_option"] = option
     for name, runs in got.items():
@@ -298,6 +299,7 @@ def batch_speed(n_variants: int, rounds: int, log=None) -> dict:
         ratios = [
             lock["steps_per_cpu_s"] / single["steps_per_cpu_s"]
             for lock, single in zip(got["lockstep"], got["single_lane"], strict=True)
+            if lock["steps_per_cpu_s"] and single["steps_per_cpu_s"]
         ]
         out["lockstep_vs_single_lane_per_cpu_s"] = {"per_round": ratios, **spread(ratios)}
     return out
