@@ -456,3 +456,21 @@ def test_batch_speed_alternates_single_lane_and_lockstep(monkeypatch):
     section = targets.targets_section({"batch": r}, {})
     assert section["simd_batch_vs_single_lane"]["met"] is True  # 4 >= 3
     assert section["simd_batch_steps_per_s"]["met"] is False  # 2 M < 6 M
+
+
+@pytest.mark.slow
+def test_the_compile_free_topology_is_the_same_drive():
+    """The compile-free target's new topology (the IFOC reading the shaft angle instead of the
+    ideal encoder's sample of it) runs the same drive: the same speed and current over the speed
+    step, bit for bit (the ideal encoder passes the angle on unchanged)."""
+    from acdrive._bench.motulator_im import SUBSTEPS, T_S, log_ports, matched_acdrive_system
+
+    runs = []
+    for encoder in (True, False):
+        system, parts = matched_acdrive_system("averaged", encoder=encoder)
+        assert ("encoder" in parts) is encoder
+        raw = system.compile().run(0.25, T_S, substeps=SUBSTEPS, log=log_ports(parts))
+        runs.append((raw.signal(parts["shaft"].out.w), raw.signal(parts["im"].out.i_s)))
+    (w_a, i_a), (w_b, i_b) = runs
+    assert np.max(w_a) > 10.0  # the speed step at 0.2 s is inside the run
+    assert np.array_equal(w_a, w_b) and np.array_equal(i_a, i_b)
