@@ -57,9 +57,15 @@ def envelope(t: np.ndarray, y: np.ndarray, bins: int = PLOT_BINS) -> tuple[np.nd
     if y.size <= 2 * bins:
         return t, y
     edges = np.linspace(0, y.size, bins + 1).astype(np.int64)
-    starts = edges[:-1]
-    i_min = np.array([s + int(np.argmin(y[s:e])) for s, e in zip(starts, edges[1:], strict=True)])
-    i_max = np.array([s + int(np.argmax(y[s:e])) for s, e in zip(starts, edges[1:], strict=True)])
+    starts, ends = edges[:-1], edges[1:]
+    # all bins at once: row k holds bin k, padded after its end with a value that is never its
+    # first minimum (+inf) or first maximum (-inf); argmin / argmax take the first occurrence,
+    # as on the bin alone (a NaN, too, is found where it is first)
+    index = starts[:, None] + np.arange(int((ends - starts).max()))[None, :]
+    inside = index < ends[:, None]
+    values = y[np.minimum(index, y.size - 1)]
+    i_min = starts + np.argmin(np.where(inside, values, np.inf), axis=1)
+    i_max = starts + np.argmax(np.where(inside, values, -np.inf), axis=1)
     pairs = np.sort(np.stack([i_min, i_max], axis=1), axis=1).ravel()
     return t[pairs], y[pairs]
 
