@@ -122,21 +122,22 @@ def warm_runs(scenario: str, runs: int, out: Path, baseline: str | None = None) 
     """N interleaved runs with and without figures, after one untimed run of each; with
     ``baseline`` (the ``src`` folder of another acdrive checkout, put first on PYTHONPATH) the
     same runs of that code interleaved with them (this, baseline, this, baseline, ...)."""
-    with_figures = [ACDRIVE, "run", scenario, "--out", str(out)]
-    without = [*with_figures, "--no-figures"]
-    sides = {"this": None}
+    arguments = {"with": ["run", scenario, "--out", str(out)]}
+    arguments["without"] = [*arguments["with"], "--no-figures"]
+    sides = {"this": ([ACDRIVE], None)}
     if baseline is not None:
         path = os.pathsep.join(p for p in (baseline, os.environ.get("PYTHONPATH")) if p)
-        sides["baseline"] = dict(os.environ, PYTHONPATH=path)
-    kinds = {"with": with_figures, "without": without}
-    for env in sides.values():
-        for cmd in kinds.values():
-            timed(cmd, env=env)  # fills the compile cache if it is empty; not counted
-    times = {(side, kind): [] for side in sides for kind in kinds}
+        # the baseline's own entry point: the console script of this checkout may not exist there
+        entry = [sys.executable, "-c", "import sys; from acdrive.cli import main; sys.exit(main())"]
+        sides["baseline"] = (entry, dict(os.environ, PYTHONPATH=path))
+    for entry, env in sides.values():
+        for args in arguments.values():
+            timed([*entry, *args], env=env)  # fills the compile cache if empty; not counted
+    times = {(side, kind): [] for side in sides for kind in arguments}
     for _ in range(runs):
-        for kind, cmd in kinds.items():
-            for side, env in sides.items():
-                times[side, kind].append(timed(cmd, env=env)["cpu_s"])
+        for kind, args in arguments.items():
+            for side, (entry, env) in sides.items():
+                times[side, kind].append(timed([*entry, *args], env=env)["cpu_s"])
     out = {
         "warm_run_with_figures_cpu_s": verdict(
             "warm_run_with_figures_cpu_s", times["this", "with"]
