@@ -22,6 +22,7 @@ children included once they are waited for):
   interpreter (``python -c pass``), ``import numpy``, ``import numba``, ``import numba`` and
   one call of a function numba loads from its on-disk cache (the first such load initialises
   numba's CPU target: its lowering registries, which import ``scipy.linalg`` to find BLAS),
+  the same ending as acdrive's console script ends (``gc.freeze``, ``acdrive.cli.command``),
   ``import pyarrow.parquet`` and matplotlib's ``Figure`` with the Agg canvas.
 
 Every target has its measured value (the median of its runs, with min and max) and ``met``,
@@ -174,6 +175,12 @@ def floors(runs: int, scratch: Path) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=str(scratch / "numba-cache"))
     commands = {name: [sys.executable, *args] for name, args in FLOORS.items()}
     commands["import_numba_and_load_one_cached_function"] = [sys.executable, str(module)]
+    # the same with the exit acdrive's console script takes (acdrive.cli.command: gc.freeze)
+    commands["import_numba_and_load_one_cached_function_frozen_exit"] = [
+        sys.executable,
+        "-c",
+        f"import sys, gc; sys.path.insert(0, {str(scratch)!r}); import numba_cached; gc.freeze()",
+    ]
     timed(commands["import_numba_and_load_one_cached_function"], env=env)  # compiles it once
     out = {}
     for name, cmd in commands.items():
