@@ -14,7 +14,7 @@ children included once they are waited for):
   ``--baseline SRC`` the same runs of another checkout (``SRC`` first on PYTHONPATH; it keeps a
   compile cache of its own, keyed by its sources) are interleaved with them: before and after
   measured under the same load.
-* **cold**: the first ``acdrive run SCENARIO --no-figures`` after an empty cache
+* **cold**: the first ``acdrive run SCENARIO`` (with its figures) after an empty cache
   (``XDG_CACHE_HOME`` a fresh temporary folder, ``NUMBA_CACHE_DIR`` unset), M times; target
   6 s wall on an idle machine. Its CPU time is given too: on a loaded machine the wall time
   grows with the load, the CPU time much less.
@@ -159,7 +159,7 @@ def cold_runs(scenario: str, runs: int, out: Path) -> dict:
     for _ in range(runs):
         with tempfile.TemporaryDirectory(prefix="acdrive-cold-cache-") as cache:
             env["XDG_CACHE_HOME"] = cache
-            t = timed([ACDRIVE, "run", scenario, "--no-figures", "--out", str(out)], env=env)
+            t = timed([ACDRIVE, "run", scenario, "--out", str(out)], env=env)
         wall.append(t["wall_s"])
         cpu.append(t["cpu_s"])
     return {
