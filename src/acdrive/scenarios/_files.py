@@ -15,7 +15,6 @@ from pathlib import Path
 
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
-from acdrive.machines import _registry as registry
 
 
 def constant(value: float) -> Profile:
@@ -199,6 +198,10 @@ def machine_from(
             return kind(**values)
         except InputError as exc:
             raise InputError(params.field(exc.field), exc.rule) from None
+    # the machines (and numba, which their kernels need) are imported only here, when a
+    # scenario is built: listing or reading scenarios does not pay for them
+    from acdrive.machines import _registry as registry
+
     name = section.text("machine", default, choices=registry.names(kind))
     return registry.MACHINES[name]
 

@@ -88,21 +88,14 @@ def run_scenario(setup, compiled=None):
 def write(outcome: PMOutcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
     """Each result's table and figure (in ``folder/<label>/`` when there are several) and
     ``summary.json``; returns the summary written."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for label, result in outcome.results.items():
         where = folder / label if len(outcome.results) > 1 else folder
         where.mkdir(parents=True, exist_ok=True)
         result.save(where, fmt)
-        if figures:
-            fig = result.plot()
-            fig.savefig(where / "signals.png", dpi=100)
-            plt.close(fig)
+        if figures:  # matplotlib only here, on the Agg canvas without pyplot
+            result.plot(pyplot=False).savefig(where / "signals.png", dpi=100)
     summary = outcome.summary
     (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return summary
