@@ -819,7 +819,7 @@ def test_an_overflowing_design_names_the_machine_parameter_that_caused_it(
 def test_a_run_shorter_than_the_default_sample_time_names_the_duration_with_its_numbers(
     scenario, sample_time
 ):
-    """Both drives' loaders share ``scenarios._files.simulation_span``: the message carries the
+    """Both drives' loaders share ``acdrive._toml.simulation_span``: the message carries the
     default sample time and the duration given (the duration was once printed as a template)."""
     from acdrive.errors import InputError
     from acdrive.scenarios import build_setup, read_scenario

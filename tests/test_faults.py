@@ -36,6 +36,7 @@ import pytest
 
 from acdrive._frames import K_PEAK, complex_to_abc
 from acdrive._jit import STRICT_MATH
+from acdrive._toml import constant
 from acdrive.analysis import OperatingPoint, linearize
 from acdrive.cli import main
 from acdrive.control._dfim import EVENT_NAMES
@@ -51,7 +52,6 @@ from acdrive.plant._sources import (
     source_state_outputs,
     unbalanced_state_outputs,
 )
-from acdrive.scenarios._files import constant
 from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text
 
 ALPHA = np.exp(2j * np.pi / 3)

@@ -102,7 +102,9 @@ def test_no_run_returns_nan(outcomes):
             return values
 
     with pytest.raises(SimulationDiverged, match=r"logged signal i_s is not finite"):
-        IMDriveResult.from_system(drive, Raw)
+        ports = drive.log_ports()
+        events, flags = drive.event_counts(Raw), drive.event_flags(Raw)
+        IMDriveResult.from_system(drive.setup, Raw, ports, events, flags)
 
 
 # --- locked rotor (Fig. 11) -----------------------------------------------------------------
