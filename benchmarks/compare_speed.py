@@ -13,130 +13,17 @@ whole drive run with its result (``run``).
 
     python benchmarks/compare_speed.py BEFORE_SRC AFTER_SRC [scenario ...] --machine-code
 
-compares instead the machine code of the compiled loop (numba's assembly of ``run``, with symbol
-names, labels, comments and assembler directives removed) of the two trees: identical
-instructions run at the same speed, so a difference the timing shows between them is code
-placement and machine noise, not the change (two checkouts of one source were measured 7 %
-apart). Prints JSON: per scenario the instruction count and the number of differing lines.
+compares instead the machine code of the compiled loop of the two trees
+(``acdrive._bench.loop_speed.compare_machine_code``): per scenario the instruction count and the
+number of differing lines.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import statistics
-import subprocess
 import sys
 
-SCENARIOS = ("bodson-ramp", "bodson-two-motors", "im-foc-speed")
-
-WORKER = r"""
-import json, sys, time
-name, reps = sys.argv[1], int(sys.argv[2])
-from acdrive.scenarios import load_scenario
-try:
-    from acdrive.drives.dfim._drive import DFIMDrive
-    from acdrive.drives.cage_im._drive import IMDrive
-except ImportError:
-    from acdrive.sim._dfim_drive import DFIMDrive
-    from acdrive.sim._im_drive import IMDrive
-setup = load_scenario(name)
-if hasattr(setup, "motors"):
-    if setup.compare_modes:
-        setup = setup.with_mode(setup.compare_modes[0])
-    drive = DFIMDrive(setup)
-else:
-    drive = IMDrive(setup.runs()[0][1] if setup.runs() else setup)
-compiled = drive.compile()
-loop = []
-run_loop = compiled.run
-
-
-def timed_loop(*args, **kwargs):
-    t0 = time.process_time()
-    out = run_loop(*args, **kwargs)
-    loop.append(time.process_time() - t0)
-    return out
-
-
-compiled.run = timed_loop
-drive.run(compiled)
-times, loop[:] = [], []
-for _ in range(reps):
-    t0 = time.process_time()
-    drive.run(compiled)
-    times.append(time.process_time() - t0)
-steps = round(setup.duration / setup.sample_time)
-print(json.dumps({"steps": steps, "cpu_s": times, "loop_cpu_s": loop}))
-"""
-
-
-MACHINE_CODE_WORKER = (
-    WORKER.split("compiled = drive.compile()")[0]
-    + r"""
-import re
-compiled = drive.compile()
-drive.run(compiled)
-run = compiled.module.run
-asm = run.inspect_asm(run.signatures[0])
-DIRECTIVE = re.compile(r"^\s*\.(file|loc|ident|section|size|type|globl|weak|p2align|text|cfi_\w+)\b")
-lines = []
-for line in asm.splitlines():
-    line = re.sub(r"acdrive_system_[0-9a-f]+", "SYS", line)
-    line = re.sub(r"_ZN[0-9A-Za-z_$]+", "SYM", line)
-    line = re.sub(r"\.L[A-Za-z0-9_.$]+", "LABEL", line)
-    line = line.split("#")[0].rstrip()
-    if line and not DIRECTIVE.match(line):
-        lines.append(line)
-print(json.dumps({"instructions": lines}))
-"""
-)
-
-
-def _machine_code(src: str, name: str) -> list[str]:
-    """The normalised assembly lines of the compiled loop ``run`` of scenario ``name`` in the
-    tree ``src``, compiled in a fresh numba cache so both trees compile alike."""
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, PYTHONPATH=src, NUMBA_CACHE_DIR=cache, ACDRIVE_COMPILE_NOTICE="0")
-        out = subprocess.run([sys.executable, "-c", MACHINE_CODE_WORKER, name, "0"], env=env,
-                             check=True, capture_output=True, text=True).stdout  # fmt: skip
-    return json.loads(out.strip().splitlines()[-1])["instructions"]
-
-
-def compare_machine_code(before: str, after: str, names) -> dict:
-    """Per scenario: instruction lines of each tree and how many differ (difflib)."""
-    import difflib
-
-    report = {}
-    for name in names:
-        a, b = _machine_code(before, name), _machine_code(after, name)
-        changed = sum(
-            1 for line in difflib.unified_diff(a, b, lineterm="", n=0)
-            if line[:1] in "+-" and not line.startswith(("+++", "---"))
-        )  # fmt: skip
-        report[name] = {"lines_before": len(a), "lines_after": len(b), "differing_lines": changed,
-                        "identical": a == b}  # fmt: skip
-    return report
-
-
-def _measure(src: str, name: str, reps: int) -> tuple[int, list[float], list[float]]:
-    env = dict(os.environ, PYTHONPATH=src)
-    out = subprocess.run([sys.executable, "-c", WORKER, name, str(reps)], env=env, check=True,
-                         capture_output=True, text=True).stdout  # fmt: skip
-    data = json.loads(out.strip().splitlines()[-1])
-    return data["steps"], data["cpu_s"], data["loop_cpu_s"]
-
-
-def _stats(rates: dict) -> dict:
-    """min / median / max per tree and the ratio after / before of the medians."""
-    out = {
-        side: {"min": min(r), "median": statistics.median(r), "max": max(r)}
-        for side, r in rates.items()
-    }
-    out["ratio_after_before_median"] = out["after"]["median"] / out["before"]["median"]
-    return out
+from acdrive._bench.loop_speed import SCENARIOS, compare_machine_code, compare_trees
 
 
 def main(argv: list[str]) -> int:
@@ -156,17 +43,7 @@ def main(argv: list[str]) -> int:
     if machine_code:
         print(json.dumps(compare_machine_code(before, after, names or SCENARIOS), indent=2))
         return 0
-    report = {"rounds": rounds, "reps": reps, "scenarios": {}}
-    for name in names or SCENARIOS:
-        rates = {"before": [], "after": []}
-        loop_rates = {"before": [], "after": []}
-        for _ in range(rounds):
-            for side, src in (("before", before), ("after", after)):
-                steps, cpu, loop = _measure(src, name, reps)
-                rates[side] += [steps / t for t in cpu]
-                loop_rates[side] += [steps / t for t in loop]
-        entry = {"run": _stats(rates), "loop": _stats(loop_rates)}
-        report["scenarios"][name] = entry
+    report = compare_trees(before, after, names or SCENARIOS, rounds, reps)
     print(json.dumps(report, indent=2))
     return 0
 

@@ -15,8 +15,8 @@ from acdrive.batch import (
     prepare_variant,
     simulate_batch,
 )
-from acdrive.drives.dfim._drive import DFIMDrive
-from acdrive.scenarios._loader import read_scenario
+from acdrive.drives.dfim import DFIMDrive
+from acdrive.scenarios import read_scenario
 
 BASE = "bodson-ramp"
 SHORT = {"simulation.duration": 0.12}
@@ -154,7 +154,7 @@ def test_machine_parameter_override_expands_the_built_in_machine():
 
 @pytest.mark.slow
 def test_cage_im_variants_equal_single_runs():
-    from acdrive.drives.cage_im._drive import IMDrive
+    from acdrive.drives.cage_im import IMDrive
 
     variants = [
         {"simulation.duration": 0.01, "machine.J": 0.0015},
@@ -176,7 +176,7 @@ def test_cage_im_speed_figures_are_the_single_runs():
     """A cage-IM speed loop: the batch row's speed error columns are the single run's summary
     figures of the same names (one kernel, ``sim._metrics``; the samples the run logs, here every
     fifth): equal to the last bits of the compiled loop (rel 1e-9)."""
-    from acdrive.drives.cage_im._outcome import run_im_scenario
+    from acdrive.drives.cage_im import run_im_scenario
 
     variant = {"simulation.duration": 0.1}
     row = simulate_batch("im-foc-speed", [variant]).rows[0]

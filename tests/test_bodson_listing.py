@@ -26,8 +26,7 @@ from acdrive._report.speed_overshoot import (
     step_setup,
 )
 from acdrive.control import SpeedPIGains
-from acdrive.machines import BODSON_DFIM
-from acdrive.machines._dfim import machine_vector, torque_limits_case1
+from acdrive.machines import BODSON_DFIM, machine_vector, torque_limits_case1
 
 W_E = 2 * math.pi * 60
 V_S = K_PEAK * 11.1

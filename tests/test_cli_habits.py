@@ -127,7 +127,7 @@ def test_progress_bar_only_on_a_terminal(monkeypatch):
 
 
 def _ramp_and_stop():
-    from acdrive.scenarios._loader import load_scenario
+    from acdrive.scenarios import load_scenario
 
     return load_scenario("bodson-ramp")  # 0 -> 2700 rpm ramp, abrupt stop at 11 s
 
@@ -147,7 +147,7 @@ def _result(setup, t, w, relay=None):
 def test_tracking_windows_follow_the_reference_step_torque_limit_and_bandwidth():
     from acdrive._frames import K_PEAK
     from acdrive.drives.dfim._outcome import tracking_windows
-    from acdrive.machines._dfim import machine_vector, torque_limits_case1
+    from acdrive.machines import machine_vector, torque_limits_case1
     from acdrive.sim._metrics import SETTLE_TIME_CONSTANTS, SLEW_MARGIN
 
     setup = _ramp_and_stop()

@@ -678,15 +678,15 @@ def _refused_run(tmp_path, capsys, path, field) -> str:
 
 def test_a_utf8_byte_order_mark_is_accepted_in_scenarios_and_sweeps(tmp_path):
     """Windows editors write a UTF-8 BOM; the file means the same with or without it."""
-    from acdrive.scenarios._loader import load_scenario
-    from acdrive.sweep._spec import load_sweep
+    from acdrive.scenarios import load_scenario
+    from acdrive.sweep import load_sweep
 
     text = to_toml(_base())
     plain, marked = tmp_path / "plain.toml", tmp_path / "marked.toml"
     plain.write_text(text, encoding="utf-8")
     marked.write_text(text, encoding="utf-8-sig")
     assert marked.read_bytes().startswith(b"\xef\xbb\xbf")
-    from acdrive.scenarios._files import read_scenario
+    from acdrive.scenarios import read_scenario
 
     assert read_scenario(marked) == read_scenario(plain) == tomllib.loads(text)
     assert load_scenario(marked).name == "fuzz"
@@ -714,7 +714,7 @@ def test_a_mode_compared_with_itself_is_refused(tmp_path, capsys):
 
 @pytest.mark.parametrize("K_F", [2.0, -0.1, 1.0000001])
 def test_a_feedforward_fraction_outside_0_to_1_is_refused(tmp_path, capsys, K_F):
-    from acdrive.control._speed import SpeedPIGains
+    from acdrive.control import SpeedPIGains
     from acdrive.errors import InputError
 
     data = _base()
@@ -729,7 +729,7 @@ def test_a_feedforward_fraction_outside_0_to_1_is_refused(tmp_path, capsys, K_F)
 
 @pytest.mark.parametrize("K_F", [0.0, 2.0 / 3.0, 1.0])
 def test_the_feedforward_fractions_of_the_range_are_accepted(K_F):
-    from acdrive.scenarios._loader import build_setup
+    from acdrive.scenarios import build_setup
 
     data = _base()
     data["motor"][0]["controller"]["K_F"] = K_F
@@ -752,7 +752,7 @@ def test_a_supply_above_a_kilohertz_is_refused(tmp_path, capsys, supply, field):
 
 def test_more_motors_than_the_bound_are_refused_before_compiling(tmp_path, capsys):
     from acdrive.drives.dfim._schema import MAX_MOTORS
-    from acdrive.scenarios._loader import build_setup
+    from acdrive.scenarios import build_setup
 
     data = _base()
     data["motor"] = [dict(data["motor"][0]) for _ in range(MAX_MOTORS)]
@@ -819,7 +819,7 @@ def test_an_overflowing_design_names_the_machine_parameter_that_caused_it(
 def test_a_run_shorter_than_the_default_sample_time_names_the_duration_with_its_numbers(
     scenario, sample_time
 ):
-    """Both drives' loaders share ``scenarios._files.simulation_span``: the message carries the
+    """Both drives' loaders share ``acdrive._toml.simulation_span``: the message carries the
     default sample time and the duration given (the duration was once printed as a template)."""
     from acdrive.errors import InputError
     from acdrive.scenarios import build_setup, read_scenario

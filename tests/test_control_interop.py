@@ -9,12 +9,8 @@ import pytest
 
 control = pytest.importorskip("control")
 
-from acdrive.analysis._icad import analyse
-from acdrive.analysis._icad_frequency import icad_response
-from acdrive.analysis._plants import plant_for
-from acdrive.control._discretise import discretise
-from acdrive.control._lti import FIG18_PI, LTI, PAPER_20, as_lti
-from acdrive.control._lti_matrix import LTIMatrix
+from acdrive.analysis import analyse, icad_response, plant_for
+from acdrive.control import FIG18_PI, LTI, PAPER_20, LTIMatrix, as_lti, discretise
 from acdrive.errors import InputError
 
 W = np.logspace(0, 4, 60)

@@ -18,10 +18,9 @@ from acdrive.analysis._coupling import (
     pmsg_pi,
     stationary_equivalent,
 )
-from acdrive.control._lti import LTI, PAPER_20
+from acdrive.control import LTI, PAPER_20
 from acdrive.errors import InputError
-from acdrive.machines._induction import DELORENZO_IM
-from acdrive.machines._pmsm import PMSG_2MW
+from acdrive.machines import DELORENZO_IM, PMSG_2MW
 
 #: simulated coupling against (10) at frequencies well below the 50 kHz sampling rate
 #: (<= 1000 rad/s, 1/300 of 2 pi 50 kHz): relative complex difference

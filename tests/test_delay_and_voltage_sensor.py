@@ -5,13 +5,11 @@ through it applies each command one period later."""
 import numpy as np
 import pytest
 
-from acdrive.control._delay import ComputationDelay
-from acdrive.control._open_loop import ComplexProgram
+from acdrive.control import ComplexProgram, ComputationDelay
 from acdrive.core import Profile
 from acdrive.errors import InputError
-from acdrive.plant._converter import AveragedConverter
-from acdrive.plant._sensors import VoltageSensor
-from acdrive.sim._system import System
+from acdrive.plant import AveragedConverter, VoltageSensor
+from acdrive.sim import System
 
 T_S = 1e-3
 

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from acdrive.errors import InputError
-from acdrive.machines._dfim import (
+from acdrive.machines import (
     BODSON_DFIM,
     DFIMParams,
     delta_z_coefficients,

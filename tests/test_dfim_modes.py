@@ -6,12 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.drives.dfim._drive import DFIMDrive
-from acdrive.drives.dfim._outcome import run_scenario
-from acdrive.drives.dfim._setup import simulate
+from acdrive.drives.dfim import DFIMDrive, run_scenario, simulate
 from acdrive.errors import InputError
 from acdrive.machines._dfim import BODSON_DFIM, L_R, L_S, M_SR, machine_vector
-from acdrive.scenarios._loader import build_setup
+from acdrive.scenarios import build_setup
 
 PAPER_PARAMS = {"R_s": 0.66, "R_r": 0.94, "L_s": 13.1e-3, "L_r": 9.8e-3, "M": 9.7e-3, "n_p": 2}
 
@@ -23,7 +21,7 @@ def motor(**extra):
 
 
 def test_current_loop_gains_match_paper_table():
-    from acdrive.control._dfim import current_loop_gains
+    from acdrive.control import current_loop_gains
 
     K_PC, K_IC = current_loop_gains(BODSON_DFIM.sigma, BODSON_DFIM.L_r, 1.0, 3142.0)
     assert round(K_PC, 2) == 8.22 and round(K_IC) == 3142
@@ -149,7 +147,7 @@ def test_reactive_power_loop_removes_model_error():
         setup = build_setup(data)
         import dataclasses
 
-        from acdrive.machines._dfim import DFIMParams
+        from acdrive.machines import DFIMParams
 
         m = setup.motors[0]
         m = dataclasses.replace(
@@ -215,7 +213,7 @@ def test_motors_on_a_shared_supply_interact_through_the_bus():
 
 
 def test_varying_supply_limits_follow_measured_voltage():
-    from acdrive.machines._dfim import torque_window
+    from acdrive.machines import torque_window
 
     data = {
         "simulation": {"duration": 1.2},
@@ -251,7 +249,7 @@ def test_unworkable_settings_are_rejected(controller, field):
 def test_lossless_law_39_tracks_with_reactive_power_and_case2_limits():
     """The R_s = 0 law (39) on the real machine: the integral action removes the R_s error, and the
     torque command respects the case-2 window (40)-(42) at the commanded Q."""
-    from acdrive.machines._dfim import torque_limit_case2
+    from acdrive.machines import torque_limit_case2
 
     Q = 15.0
     data = {

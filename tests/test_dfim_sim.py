@@ -8,10 +8,9 @@ import pytest
 
 from acdrive.control._speed import speed_pi
 from acdrive.core import Profile
-from acdrive.drives.dfim._drive import DFIMDrive, simulate_slow
-from acdrive.drives.dfim._setup import simulate
+from acdrive.drives.dfim import DFIMDrive, simulate, simulate_slow
 from acdrive.machines._dfim import N_P, rotor_voltage_for, stator_current_command, torque_window
-from acdrive.scenarios._loader import build_setup, load_scenario
+from acdrive.scenarios import build_setup, load_scenario
 
 
 def short_ramp(duration=0.1, **overrides):
@@ -46,7 +45,7 @@ class PlainPythonController:
     outputs, read and written through that part's declarations."""
 
     def __init__(self, params, gains, i_max, T_s, w_e):
-        from acdrive.machines._dfim import machine_vector
+        from acdrive.machines import machine_vector
 
         self.p, self.g, self.i_max, self.T_s, self.w_e = (
             machine_vector(params),
@@ -58,7 +57,7 @@ class PlainPythonController:
         self.e_int, self.theta_prev, self.w, self.started = 0.0, None, 0.0, False
 
     def step(self, t, T_s, u, p, s, y):
-        from acdrive.control._bodson import SpeedController
+        from acdrive.control import SpeedController
 
         inputs = SpeedController.INPUTS.unpack(u)
         theta_meas, v_s, w_ref = inputs["theta"], inputs["v_s"], inputs["w_ref"]

@@ -13,19 +13,18 @@ from acdrive.analysis._drive_stability import (
     DriveModel,
     OperatingPoint,
     linearize,
-    max_stable_bandwidth,
     simulate_from_equilibrium,
-    stability_map,
 )
+from acdrive.analysis._drive_studies import max_stable_bandwidth, stability_map
 from acdrive.cli import main
-from acdrive.drives.dfim._setup import simulate
+from acdrive.drives.dfim import simulate
 from acdrive.errors import InputError
-from acdrive.machines._dfim import (
+from acdrive.machines import (
     BODSON_DFIM,
     electrical_poles,
     shifted_delta_z_coefficients,
 )
-from acdrive.scenarios._loader import build_setup
+from acdrive.scenarios import build_setup
 
 W_E = 2 * math.pi * 60.0
 
@@ -264,7 +263,7 @@ def test_cli_map_writes_figure_and_bandwidths(tmp_path, capsys):
 def test_stabilising_threshold_is_a_stability_boundary():
     """The smallest true inertia that stabilises the zero-load line: stable there, unstable
     0.05 J below; the same for an extra rotor resistance unknown to the controller."""
-    from acdrive.analysis._drive_stability import stabilising_thresholds
+    from acdrive.analysis._drive_studies import stabilising_thresholds
 
     speeds = np.linspace(0.0, 2700.0, 4)
     th = {t.name: t for t in stabilising_thresholds(n_speed=4, n_load=3)}

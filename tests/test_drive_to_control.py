@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.analysis._drive_stability import DriveModel, OperatingPoint, linearize
+from acdrive.analysis import DriveModel, OperatingPoint, linearize
 from acdrive.drives import get
 
 POINT = OperatingPoint(900 * math.pi / 30, 0.05)
@@ -67,7 +67,7 @@ def test_cli_linearises_a_scenario_as_it_is_set_up(capsys):
     """``acdrive stability --scenario``: the scenario's own drive at its final reference and load,
     the same numbers as ``linearize(setup)``; a cage-IM scenario is refused in one line."""
     from acdrive.cli import main
-    from acdrive.scenarios._loader import load_scenario
+    from acdrive.scenarios import load_scenario
 
     assert main(["stability", "--scenario", "bodson-ramp", "--model", "sampled", "--json"]) == 0
     import json

@@ -101,14 +101,13 @@ from hypothesis import strategies as st
 
 from acdrive._frames import K_PEAK, abc_to_complex, complex_to_abc
 from acdrive.control._dfim import EVENT_NAMES
-from acdrive.drives.dfim._drive import DFIMDrive
-from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim import DFIMDrive, run_scenario
 from acdrive.errors import Notice
 from acdrive.machines._dfim import BODSON_DFIM, currents_from_fluxes, electromagnetic_torque
 from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import load_torque
-from acdrive.scenarios._loader import build_setup
+from acdrive.scenarios import build_setup
 
 RPM = math.pi / 30.0  # rad/s per rpm
 #: safety factor on the expected trapezoid error (w_max T_s)^2 / (12 sigma) (module docstring)

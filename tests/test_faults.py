@@ -36,14 +36,15 @@ import pytest
 
 from acdrive._frames import K_PEAK, complex_to_abc
 from acdrive._jit import STRICT_MATH
-from acdrive.analysis._drive_stability import OperatingPoint, linearize
+from acdrive._toml import constant
+from acdrive.analysis import OperatingPoint, linearize
 from acdrive.cli import main
 from acdrive.control._dfim import EVENT_NAMES
-from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim import DFIMDrive
 from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM, run_scenario
 from acdrive.drives.dfim._result import LOG_NAMES, RPM_PER_RAD_S
 from acdrive.errors import InputError
-from acdrive.machines._dfim import BODSON_DFIM
+from acdrive.machines import BODSON_DFIM
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._sources import (
     ThreePhaseSource,
@@ -51,7 +52,6 @@ from acdrive.plant._sources import (
     source_state_outputs,
     unbalanced_state_outputs,
 )
-from acdrive.scenarios._files import constant
 from acdrive.scenarios._loader import build_setup, builtin_names, builtin_text
 
 ALPHA = np.exp(2j * np.pi / 3)

@@ -19,10 +19,10 @@ sensor fallback, a varying supply).
 import numpy as np
 import pytest
 
-from acdrive.analysis._drive_stability import OperatingPoint, linearize
-from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.analysis import OperatingPoint, linearize
+from acdrive.drives.dfim import run_scenario
 from acdrive.errors import InputError
-from acdrive.scenarios._loader import load_scenario
+from acdrive.scenarios import load_scenario
 
 SCENARIOS = ("bodson-ramp", "bodson-ramp-ideal", "bodson-step", "bodson-mixed-steps")
 

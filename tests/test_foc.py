@@ -11,7 +11,7 @@ import pytest
 from scipy.signal import lsim, lti
 
 from acdrive._jit import jit
-from acdrive.control._bodson import SpeedEstimator
+from acdrive.control import SpeedEstimator, SpeedReference
 from acdrive.control._foc import (
     CURRENT_LIMIT,
     IFOC_OUTPUTS,
@@ -31,16 +31,12 @@ from acdrive.control._foc import (
     saturated_p_step,
     speed_pi_step,
 )
-from acdrive.control._speed import SpeedReference
-from acdrive.core._parts import SampledPart
-from acdrive.core._signals import Layout, cplx, real
+from acdrive.core import Layout, SampledPart, cplx, real
 from acdrive.errors import InputError
+from acdrive.machines import DELORENZO_IM, IMParams
 from acdrive.machines._cage_part import CageInductionMachine, cage_rhs, cage_state_outputs
-from acdrive.machines._induction import DELORENZO_IM, IMParams
-from acdrive.plant._converter import AveragedConverter
-from acdrive.plant._mechanics import Shaft
-from acdrive.plant._sensors import Encoder
-from acdrive.sim._system import System
+from acdrive.plant import AveragedConverter, Encoder, Shaft
+from acdrive.sim import System
 
 T_S = 2e-4  # 5 kHz: the paper's PWM frequency (section VI)
 OUT = {v.name: IFOC_OUTPUTS.slot(v.name) for v in IFOC_OUTPUTS}

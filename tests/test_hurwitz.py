@@ -8,7 +8,7 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis._hurwitz import complex_hurwitz, is_hurwitz, routh_hurwitz
+from acdrive.analysis import complex_hurwitz, is_hurwitz, routh_hurwitz
 from acdrive.errors import InputError
 
 MARGIN = 1e-6  # reject polynomials with a root this close to the imaginary axis

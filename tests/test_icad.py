@@ -9,22 +9,32 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis._freqresp import LTI, evaluate_ss, freqresp_ss
-from acdrive.analysis._icad import analyse, controller_for, imc_pi, worst
-from acdrive.analysis._icad_closed_forms import (
+from acdrive.analysis import (
+    Plant2x2,
     gm_min,
+    icad_quantities,
+    icad_response,
     im_msf_at_rotor_speed,
     im_msf_closed_form,
     im_msf_magnitude_at_rotor_speed,
     im_msf_positive_crossing,
+    plant_for,
+    plant_from_params,
+    plants_for,
     pmsg_msf,
+    structure_conditions,
 )
-from acdrive.analysis._icad_conditions import structure_conditions
-from acdrive.analysis._icad_frequency import icad_quantities, icad_response
-from acdrive.analysis._plants import Plant2x2, plant_for, plant_from_params, plants_for
+from acdrive.analysis._freqresp import LTI, evaluate_ss, freqresp_ss
+from acdrive.analysis._icad import analyse, controller_for, imc_pi, worst
 from acdrive.errors import InputError
-from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams
-from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
+from acdrive.machines import (
+    DELORENZO_IM,
+    DELORENZO_IM_13,
+    PMSG_2MW,
+    UGALDE_IM_300W,
+    IMParams,
+    PMSGParams,
+)
 
 control = pytest.importorskip("control")
 

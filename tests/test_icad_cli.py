@@ -5,11 +5,10 @@ import math
 
 import pytest
 
+from acdrive.analysis import gm_min, plant_for
 from acdrive.analysis._icad import analyse, controller_for
-from acdrive.analysis._icad_closed_forms import gm_min
-from acdrive.analysis._plants import plant_for
 from acdrive.cli import main
-from acdrive.machines._induction import DELORENZO_IM
+from acdrive.machines import DELORENZO_IM
 
 KEYS = {
     "conditions",

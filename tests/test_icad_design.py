@@ -13,17 +13,17 @@ import scipy.signal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis._design import (
+from acdrive.analysis import (
     PAPER_SPECS,
     Specifications,
     check_controller,
+    plant_from_params,
     propose_controller,
 )
 from acdrive.analysis._design_models import compare_design_models, design_models, ideal_other_loop
 from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._plants import plant_from_params
 from acdrive.errors import InputError
-from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, IMParams
+from acdrive.machines import DELORENZO_IM, DELORENZO_IM_13, IMParams
 
 control = pytest.importorskip("control")
 

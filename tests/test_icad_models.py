@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from acdrive.analysis._freqresp import evaluate_ss
+from acdrive.analysis import evaluate_ss
 from acdrive.analysis._plants import (
     MACHINES,
     Plant2x2,
@@ -18,11 +18,12 @@ from acdrive.analysis._plants import (
     plants_for,
 )
 from acdrive.errors import InputError
-from acdrive.machines._dfim import BODSON_DFIM, DFIMParams
-from acdrive.machines._induction import (
+from acdrive.machines import (
+    BODSON_DFIM,
     DELORENZO_IM,
     DELORENZO_IM_13,
     UGALDE_IM_300W,
+    DFIMParams,
     IMParams,
     params_from_stationary_matrix,
     stator_current_ss,

@@ -8,20 +8,20 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.analysis._freqresp import LTI
-from acdrive.analysis._icad import analyse
-from acdrive.analysis._icad_closed_forms import gm_min
-from acdrive.analysis._plants import plant_from_params
-from acdrive.analysis._robustness import (
+from acdrive.analysis import (
     NOMINAL,
     PAPER_PERTURBATION,
     Perturbation,
+    analyse,
+    gm_min,
     perturbation_sweep,
+    plant_from_params,
     random_perturbations,
     speed_sweep,
 )
+from acdrive.analysis._freqresp import LTI
 from acdrive.errors import InputError
-from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13
+from acdrive.machines import DELORENZO_IM, DELORENZO_IM_13
 
 SPEEDS = np.array([0.0, 187.5, 375.0])
 

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from acdrive.control._current import StationaryCurrentController
+from acdrive.control import StationaryCurrentController
 from acdrive.drives.cage_im._current_loop import CarrierPeriodMap, current_loop_radius
-from acdrive.machines._induction import stator_current_ss
-from acdrive.scenarios._loader import load_scenario
+from acdrive.machines import stator_current_ss
+from acdrive.scenarios import load_scenario
 
 
 def hand_built_radius(plant, w_mech: float, discrete, n_carrier: int) -> float:

@@ -21,16 +21,13 @@ import pytest
 from scipy.signal import lsim, lti
 
 from acdrive._frames import complex_to_abc
-from acdrive.analysis._plants import plant_from_params
+from acdrive.analysis import plant_from_params
 from acdrive.cli import main
 from acdrive.core import Profile
-from acdrive.drives.cage_im._drive import IMDrive
-from acdrive.drives.cage_im._outcome import run_im_scenario
+from acdrive.drives.cage_im import IMDrive, IMDriveResult, IMDriveSetup, run_im_scenario
 from acdrive.drives.cage_im._outputs import closed_loop_reference_ss, linear_step_response
 from acdrive.drives.cage_im._physics import foc_voltage, modulation_signals
-from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._schema import build_im_setup
-from acdrive.drives.cage_im._setup import IMDriveSetup
 from acdrive.errors import InputError, SimulationDiverged
 from acdrive.scenarios._loader import builtin_names, builtin_text, load_scenario
 
@@ -105,7 +102,9 @@ def test_no_run_returns_nan(outcomes):
             return values
 
     with pytest.raises(SimulationDiverged, match=r"logged signal i_s is not finite"):
-        IMDriveResult.from_system(drive, Raw)
+        ports = drive.log_ports()
+        events, flags = drive.event_counts(Raw), drive.event_flags(Raw)
+        IMDriveResult.from_system(drive.setup, Raw, ports, events, flags)
 
 
 # --- locked rotor (Fig. 11) -----------------------------------------------------------------

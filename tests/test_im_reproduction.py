@@ -13,7 +13,7 @@ from acdrive._report import im_reproduction as rep
 from acdrive._report.im.numbers import coupling_setups
 from acdrive._report.im.settings import TOLERANCES
 from acdrive._report.markdown import fmt
-from acdrive.analysis._coupling import measure_coupling
+from acdrive.analysis import measure_coupling
 
 
 @pytest.fixture(scope="module")

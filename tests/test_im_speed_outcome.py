@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
+from acdrive._toml import constant
 from acdrive.core import Profile
+from acdrive.drives.cage_im import IMDriveResult
 from acdrive.drives.cage_im._outcome import run_im_scenario, warnings_of
 from acdrive.drives.cage_im._recovery import im_disturbances
-from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import IMDriveSetup, Mechanics, SpeedPISetup
 from acdrive.scenarios import load_scenario
-from acdrive.scenarios._files import constant
 from acdrive.sim._metrics import RPM_PER_RAD_S, SETTLE_TIME_CONSTANTS, SLEW_MARGIN
 from acdrive.sim._recovery import (
     HOLD_S,

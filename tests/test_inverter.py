@@ -13,12 +13,12 @@ import pytest
 from rl_load import RLLoad
 
 from acdrive import _frames as frames
-from acdrive.control._open_loop import VoltageProgram
+from acdrive.control import VoltageProgram
 from acdrive.errors import InputError
+from acdrive.plant import DCSource
 from acdrive.plant._converter import AVERAGED_OUTPUTS, AveragedConverter, averaged_segments
 from acdrive.plant._inverter import INPUTS, OUTPUTS, Inverter, inverter_segments
-from acdrive.plant._sources import DCSource
-from acdrive.sim._system import System
+from acdrive.sim import System
 
 V_DC = 310.0
 F_PWM = 5000.0

@@ -10,9 +10,10 @@ import pytest
 import scipy.linalg
 import scipy.signal
 
+from acdrive.analysis import plant_from_params
 from acdrive.analysis._freqresp import LTI as ANALYSIS_LTI
 from acdrive.analysis._icad import analyse, controller_for
-from acdrive.analysis._plants import plant_from_params
+from acdrive.control import LTIMatrix
 from acdrive.control._current import (
     EVENT_PERIOD_MISMATCH,
     EVENT_SATURATED,
@@ -33,14 +34,12 @@ from acdrive.control._lti import (
     PI_OF_22,
     builtin,
 )
-from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.core import Profile
 from acdrive.errors import InputError
-from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.machines._induction import DELORENZO_IM_13
+from acdrive.machines import DELORENZO_IM_13, CageInductionMachine
+from acdrive.plant import PrescribedSpeed
 from acdrive.plant._converter import AveragedConverter, max_voltage_magnitude
-from acdrive.plant._mechanics import PrescribedSpeed
-from acdrive.sim._system import System
+from acdrive.sim import System
 
 #: The paper's DC source (sec. VI): 310 V, so |v| <= 310 / sqrt(2) V (linear SVPWM).
 V_DC = 310.0

@@ -8,16 +8,13 @@ so its shaft coasts freely: J dw/dt = -(B + k_b) w, w = w(0) exp(-(B + k_b) t / 
 import numpy as np
 import pytest
 
-from acdrive.control._open_loop import VoltageProgram
+from acdrive.control import VoltageProgram
 from acdrive.errors import InputError
+from acdrive.machines import UGALDE_IM_300W, CageInductionMachine, IMParams, PermanentMagnetMachine
 from acdrive.machines import _registry as registry
-from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.machines._induction import UGALDE_IM_300W, IMParams
-from acdrive.machines._pmsm_part import PermanentMagnetMachine
-from acdrive.plant._converter import AveragedConverter
-from acdrive.plant._mechanics import Shaft
+from acdrive.plant import AveragedConverter, Shaft
+from acdrive.sim import System
 from acdrive.sim._reference import simulate_reference
-from acdrive.sim._system import System
 
 
 def cage_drive(machine, shaft, V_pk=100.0, f=50.0, V_dc=310.0):

@@ -473,7 +473,7 @@ def test_the_im_current_loop_bandwidth_is_that_of_its_closed_loop_and_warned_whe
     latched loop) give a_C T_s > 1 and a warning, the paper's 20 us none."""
     from acdrive.drives.cage_im._period import im_current_bandwidth
     from acdrive.drives.cage_im._schema import build_im_setup
-    from acdrive.machines._induction import stator_current_ss
+    from acdrive.machines import stator_current_ss
 
     data = tomllib.loads(builtin_text("im-locked-rotor"))
     paper = build_im_setup(data)

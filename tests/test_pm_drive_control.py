@@ -13,8 +13,8 @@ import math
 import numpy as np
 import pytest
 
+from acdrive.drives.pm import PMSpeedPI, PMTorqueReference, RotorFrameCurrentController
 from acdrive.drives.pm import _design as d
-from acdrive.drives.pm._control import PMSpeedPI, PMTorqueReference, RotorFrameCurrentController
 from acdrive.errors import InputError
 
 MACHINE = {"R_s": 0.2, "L_d": 1.2e-3, "L_q": 3.0e-3, "psi_m": 0.08, "n_p": 4}

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from acdrive._report.im import settings as report
-from acdrive.analysis._coupling import CouplingSetup, icad_coupling, measure_coupling, pmsg_pi
-from acdrive.control._lti import LTI
+from acdrive.analysis import CouplingSetup, icad_coupling, measure_coupling, pmsg_pi
+from acdrive.control import LTI
 from acdrive.drives.pm import _icad_step as st
-from acdrive.drives.pm._entry import run_scenario
+from acdrive.drives.pm import run_scenario
 from acdrive.drives.pm._schema import SCENARIO_DIR, builtin, load
 from acdrive.errors import InputError
-from acdrive.machines._pmsm import PMSG_2MW
+from acdrive.machines import PMSG_2MW
 
 NAME = "pm-pmsg-2mw-icad-coupling"
 

@@ -32,9 +32,9 @@ import numpy as np
 import pytest
 
 from acdrive._frames import K_PEAK
+from acdrive.core import table_at
 from acdrive.core._signals import pack_table
-from acdrive.core._tables import table_at
-from acdrive.drives.pm import PMDriveSetup, run, signals
+from acdrive.drives.pm import PMDriveSetup, builtin, run, signals
 from acdrive.drives.pm import _design as d
 from acdrive.drives.pm._machines import (
     BLY171D,
@@ -46,8 +46,7 @@ from acdrive.drives.pm._machines import (
     IPMSM_2KW2_T_NOM,
     IPMSM_2KW2_V_DC,
 )
-from acdrive.drives.pm._schema import builtin
-from acdrive.machines._pmsm import PMSGParams
+from acdrive.machines import PMSGParams
 
 #: interior machine with test values (see the module docstring)
 SALIENT = PMSGParams(R_s=0.1, L_d=1.5e-3, L_q=3.5e-3, psi_m=0.08, n_p=4, J=0.01)

@@ -6,7 +6,7 @@ import tomllib
 
 import pytest
 
-from acdrive.drives.pm._machines import BLY171D
+from acdrive.drives.pm import BLY171D
 from acdrive.drives.pm._schema import SCENARIO_DIR, builtin, builtin_names, load
 from acdrive.errors import InputError
 

@@ -2,10 +2,9 @@
 
 import pytest
 
-from acdrive.drives.pm import PMDriveSetup, build
-from acdrive.drives.pm._machines import BLY171D
+from acdrive.drives.pm import BLY171D, PMDriveSetup, build
 from acdrive.errors import InputError
-from acdrive.machines._pmsm import PMSGParams
+from acdrive.machines import PMSGParams
 
 GOOD = {
     "machine": BLY171D,

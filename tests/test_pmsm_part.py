@@ -15,12 +15,12 @@ import pytest
 from scipy.integrate import simpson, solve_ivp
 
 from acdrive._frames import K_PEAK, complex_to_abc
-from acdrive.control._open_loop import ComplexProgram
+from acdrive.control import ComplexProgram
 from acdrive.errors import InputError
+from acdrive.machines import PermanentMagnetMachine
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams, dq_current_ss
-from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._mechanics import PrescribedSpeed, Shaft, brake_torque, load_torque
-from acdrive.sim._system import System
+from acdrive.sim import System
 
 #: generator speed of PMSG_2MW at its rated 50 Hz (n_P = 2) [rad/s]
 W_RATED = 2.0 * math.pi * 50.0 / PMSG_2MW.n_p

@@ -10,9 +10,8 @@ import re
 import numpy as np
 import pytest
 
-from acdrive.core import Profile
+from acdrive.core import Profile, table_at
 from acdrive.core._signals import pack_table
-from acdrive.core._tables import table_at
 from acdrive.errors import InputError
 from acdrive.plant import Shaft, ThreePhaseSource
 from acdrive.scenarios import builtin_names, load_scenario

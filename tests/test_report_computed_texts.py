@@ -14,9 +14,9 @@ from acdrive._report.icad.rounding import matrix_entries, rounding_reach, roundi
 from acdrive._report.icad.ugalde_im import c_of_80_row
 from acdrive._report.im import settings as im_settings
 from acdrive._report.im import verdicts as im_verdicts
-from acdrive.control._lti import PAPER_20
+from acdrive.control import PAPER_20
 from acdrive.drives.cage_im._outputs import delayed_linear_step_response, linear_step_response
-from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W
+from acdrive.machines import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W
 
 # --- round-off printed as a bound ---------------------------------------------------------------
 

@@ -142,9 +142,9 @@ def test_currents_figure_draws_the_given_limits_and_the_true_peak():
 
 
 def test_a_scenario_limit_reaches_the_currents_figure(tmp_path, monkeypatch):
-    from acdrive.drives.dfim._outcome import run_scenario
+    from acdrive.drives.dfim import run_scenario
     from acdrive.drives.dfim._outputs import write_outcome
-    from acdrive.scenarios._loader import load_scenario
+    from acdrive.scenarios import load_scenario
 
     path = tmp_path / "limits.toml"
     path.write_text("""

@@ -295,9 +295,9 @@ def test_measure_averages_the_steady_part_only():
 
 
 def test_summary_json_states_the_side_effect_only_with_a_bench_converter(tmp_path):
-    from acdrive.drives.dfim._outcome import run_scenario
+    from acdrive.drives.dfim import run_scenario
     from acdrive.drives.dfim._outputs import write_outcome
-    from acdrive.scenarios._loader import load_scenario
+    from acdrive.scenarios import load_scenario
 
     text = """
 name = "short"

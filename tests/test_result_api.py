@@ -12,11 +12,11 @@ import pytest
 matplotlib.use("Agg")
 
 from acdrive._frames import K_PEAK
-from acdrive.drives.cage_im._drive import IMDrive
+from acdrive.drives.cage_im import IMDrive
+from acdrive.drives.dfim import simulate
 from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, SIGNALS, DriveResult
-from acdrive.drives.dfim._setup import simulate
-from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.scenarios._loader import load_scenario
+from acdrive.machines import CageInductionMachine
+from acdrive.scenarios import load_scenario
 from acdrive.sim._result import envelope
 
 
@@ -151,9 +151,7 @@ def test_summary_is_attached_and_computed_once(dfim_result, im_result):
 def test_pm_run_per_part_access_and_summary():
     """The PM drive returns the engine's result with its summary attached; every logged port
     is reached as ``result.<part>.<output>`` with the same array as ``signal(port)``."""
-    from acdrive.drives.pm import run
-    from acdrive.drives.pm._build import build
-    from acdrive.drives.pm._schema import builtin
+    from acdrive.drives.pm import build, builtin, run
 
     setup = dataclasses.replace(builtin("pm-bly171d-speed"), duration=0.01)
     result, summary = run(setup)
@@ -207,12 +205,10 @@ def test_plot_draws_the_envelope(dfim_result):
 
 @pytest.fixture(scope="module")
 def system_result():
-    from acdrive.control._open_loop import VoltageProgram
-    from acdrive.machines._cage_part import CageInductionMachine
-    from acdrive.machines._induction import UGALDE_IM_300W
-    from acdrive.plant._converter import AveragedConverter
-    from acdrive.plant._mechanics import PrescribedSpeed
-    from acdrive.sim._system import System
+    from acdrive.control import VoltageProgram
+    from acdrive.machines import UGALDE_IM_300W, CageInductionMachine
+    from acdrive.plant import AveragedConverter, PrescribedSpeed
+    from acdrive.sim import System
 
     im = CageInductionMachine.from_params("im", UGALDE_IM_300W)
     shaft = PrescribedSpeed("shaft", w=0.0)

@@ -6,9 +6,9 @@ RMS above the threshold to the end of the tracked stretch and a period that repe
 import numpy as np
 import pytest
 
-from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim import run_scenario
 from acdrive.drives.dfim._recovery import disturbances
-from acdrive.scenarios._loader import build_setup, load_scenario, read_scenario
+from acdrive.scenarios import build_setup, load_scenario, read_scenario
 from acdrive.sim._metrics import (
     OSCILLATION_FINDING_RPM,
     PERIOD_CORRELATION_MIN,

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.drives.dfim._outcome import run_scenario
+from acdrive.drives.dfim import run_scenario
 from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, RPM_PER_RAD_S, SQRT_3_2, DriveResult
-from acdrive.scenarios._loader import build_setup
+from acdrive.scenarios import build_setup
 from acdrive.sim._metrics import TrackingRule
 
 
@@ -168,7 +168,7 @@ def _figures_agree(step_time, ramp_s, target_rpm, load, bandwidth, mode, duratio
 
     from acdrive.batch import simulate_batch
     from acdrive.cli import main
-    from acdrive.drives.dfim._setup import simulate
+    from acdrive.drives.dfim import simulate
 
     data = _valid_scenario(step_time, ramp_s, target_rpm, load, bandwidth, mode, duration,
                            log_every)  # fmt: skip

@@ -17,7 +17,7 @@ import pytest
 
 from acdrive.cli import main
 from acdrive.sweep import _variants as V
-from acdrive.sweep._engine import read_table, run_sweep
+from acdrive.sweep import read_table, run_sweep
 from acdrive.sweep._spec import build_spec, load_sweep
 
 TINY = """
@@ -345,7 +345,7 @@ def test_builtin_bandwidth_sweep_is_valid_and_cross_checked():
 
 
 def test_list_names_every_builtin_sweep_with_its_size(capsys):
-    from acdrive.sweep._spec import builtin_sweeps
+    from acdrive.sweep import builtin_sweeps
 
     assert main(["sweep", "--list"]) == 0
     lines = capsys.readouterr().out.splitlines()

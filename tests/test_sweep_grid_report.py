@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from acdrive.sweep._engine import read_table, run_sweep
+from acdrive.sweep import read_table, run_sweep
 from acdrive.sweep._grid_figures import draw, grid_labels, grid_plot
 from acdrive.sweep._spec import build_spec, load_sweep
 from acdrive.sweep._variants import count, grid_values, variant

@@ -6,19 +6,21 @@ import math
 import numpy as np
 import pytest
 
-from acdrive.control._open_loop import ComplexProgram, VoltageProgram
-from acdrive.core._signals import Layout, Var, real
+from acdrive.control import ComplexProgram, VoltageProgram
+from acdrive.core import Layout, Var, real
 from acdrive.errors import InputError
-from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.machines._dfim import BODSON_DFIM, machine_vector, steady_state_currents
-from acdrive.machines._dfim_part import DoublyFedMachine
-from acdrive.machines._induction import DELORENZO_IM, UGALDE_IM_300W
-from acdrive.plant._converter import AveragedConverter
-from acdrive.plant._mechanics import PrescribedSpeed, Shaft
-from acdrive.plant._network import RelayCommand
-from acdrive.plant._sources import ThreePhaseSource
+from acdrive.machines import (
+    BODSON_DFIM,
+    DELORENZO_IM,
+    UGALDE_IM_300W,
+    CageInductionMachine,
+    DoublyFedMachine,
+    machine_vector,
+    steady_state_currents,
+)
+from acdrive.plant import AveragedConverter, PrescribedSpeed, RelayCommand, Shaft, ThreePhaseSource
+from acdrive.sim import System
 from acdrive.sim._reference import simulate_reference
-from acdrive.sim._system import System
 
 SQRT_3_2 = math.sqrt(1.5)
 
@@ -75,7 +77,7 @@ def test_parameters_are_validated_with_the_part_name():
 def test_table_parameters_obey_their_declared_rule_at_construction():
     """A rule declared with a table parameter holds for every value of its profile, checked when
     the part is built (issue 19: ThreePhaseSource(V_pk=-11.1) raised nothing)."""
-    from acdrive.plant._sources import DCSource, UnbalancedSource
+    from acdrive.plant import DCSource, UnbalancedSource
 
     with pytest.raises(InputError, match=r"^grid.V_pk: must be >= 0, got -11.1$"):
         ThreePhaseSource("grid", V_pk=-11.1)

@@ -11,9 +11,9 @@ import pytest
 
 from acdrive.batch import Reducer, simulate_batch
 from acdrive.columns import unit_from_name
-from acdrive.plant._mechanics import Shaft
+from acdrive.plant import Shaft
+from acdrive.sweep import load_sweep
 from acdrive.sweep._engine import UNITS_KEY, read_table, run_sweep
-from acdrive.sweep._spec import load_sweep
 
 SHORT = {"simulation.duration": 0.05}
 

@@ -192,5 +192,32 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signal.SIGTERM, previous_term)
 
 
+#: Collector thresholds of the ``acdrive`` process (CPython's default is (700, 10, 10)): a
+#: warm ``acdrive run`` imports numba, scipy, pyarrow and matplotlib: 120,000 objects tracked
+#: by the collector (180,000 with figures), and at the default it traverses them again and
+#: again while they are made. A young
+#: generation of 50,000 allocations still collects every cycle, with far fewer passes.
+COMMAND_GC_THRESHOLDS = (50_000, 20, 20)
+
+
+def command() -> int:
+    """The ``acdrive`` console script: :func:`main` with the collector tuned for a short process.
+
+    While it runs, the collector's thresholds are ``COMMAND_GC_THRESHOLDS``; when it returns,
+    every object is frozen out of the collector (``gc.freeze``), so that the interpreter's
+    shutdown, which collects once more, does not traverse them again (atexit handlers and the
+    flushing of open files run as before). Measured on a warm ``acdrive run bodson-ramp``
+    (2-core machine, loaded): the freeze saves about 0.25 CPU-s without figures and 0.35 with
+    them (a module with one cached numba function alone exits in 0.67 CPU-s instead of 0.88),
+    the thresholds about 0.05-0.15 more. ``main`` called from Python (a test, a notebook)
+    leaves the collector alone."""
+    import gc
+
+    gc.set_threshold(*COMMAND_GC_THRESHOLDS)
+    code = main()
+    gc.freeze()
+    return code
+
+
 if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())
+    raise SystemExit(command())

@@ -269,12 +269,14 @@ def run_case(
     log=None,
     timing: dict | None = None,
     clock: Clock | None = None,
+    reference_cache=None,
 ) -> dict:
     """acdrive and GEM (if ``peer`` is available) timed in ``rounds`` rounds of interleaved
     CPU-time windows (``windows.time_sides``: acdrive, GEM's ``physical_system.simulate``, GEM's
     ``env.step``), the ratios and their spread; both simulators' integration errors against
     references of their own equations (if ``reference``). ``timing``: ``solo_window_cpu_s`` and
-    ``min_calibration_cpu_s``."""
+    ``min_calibration_cpu_s``; ``reference_cache``: the folder of cached references
+    (``_bench.refcache``, None: computed every time)."""
     say = log or (lambda _m: None)
     clock = clock or Clock()
     timing = {"solo_window_cpu_s": 1.0, "min_calibration_cpu_s": 0.1, **(timing or {})}
@@ -359,7 +361,8 @@ def run_case(
             out["ratio_env_step"] = env_ratio["ratio"]
             out["ratio_env_step_spread"] = ratio_spread(env_ratio)
         out["gym-electric-motor"] = gem
-        _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say)
+        _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say,
+                  reference_cache)  # fmt: skip
     finally:
         if proc is not None:
             proc.close()
@@ -367,7 +370,8 @@ def run_case(
     return out
 
 
-def _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say):
+def _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended_substeps, say,
+              cache=None):  # fmt: skip
     """Both simulators' errors against references of their own equations (``run_case``)."""
     if reference:
         a_states = acdrive_states(raw, system, p)
@@ -380,7 +384,13 @@ def _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended
         }
         say("acdrive gem_dfim: accuracy against the references")
         a_err = accuracy(
-            a_states, seg, n, DFIMEquations("rotor"), extended_substeps=extended_substeps
+            a_states,
+            seg,
+            n,
+            DFIMEquations("rotor"),
+            extended_substeps=extended_substeps,
+            cache=cache,
+            log=say,
         )
         out["acdrive"]["error"] = a_err
         out["acdrive"]["error_summary"] = short_errors(a_err)
@@ -406,9 +416,13 @@ def _accuracy(out, reference, raw, system, p, n, v_s, v_r, gem, record, extended
                 n,
                 DFIMEquations("stator_at_step_start"),
                 extended_substeps=extended_substeps,
+                cache=cache,
+                log=say,
             )
             gem["error"] = g_err
             gem["error_summary"] = short_errors(g_err)
-            g_phys = accuracy(g_states, seg, n, DFIMEquations("rotor"), extended_substeps=0)
+            g_phys = accuracy(
+                g_states, seg, n, DFIMEquations("rotor"), extended_substeps=0, cache=cache, log=say
+            )
             gem["error_vs_rotor_frame_reference"] = short_errors(g_phys)
             out["error_verdicts"] = error_verdicts(a_err, g_err)

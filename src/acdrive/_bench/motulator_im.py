@@ -35,9 +35,9 @@ import time
 
 import numpy as np
 
-from acdrive._bench.reference import accuracy, error_verdicts, short_errors
-from acdrive._bench.venvs import PeerFailed, PeerProcess
-from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
+# The suite's machinery (references: scipy; peers; timing) is imported where the case runs, so
+# that the first-result race's child process (``_bench.first_result``), which builds this case
+# from these definitions, imports what acdrive's own run needs and nothing more.
 
 #: integration of the matched cases: one step of the sixth-order method per held segment
 INTEGRATOR = "rk6"
@@ -201,12 +201,15 @@ def build_foc_drive(
     load,
     integrator="rk4",
     converter="pwm",
+    encoder=True,
 ):
     """dc -> converter -> cage machine -> shaft; encoder; speed reference -> speed PI (ideal
     speed sample) -> IFOC -> stationary current controller -> converter. ``converter``: "pwm"
     (``plant.Inverter`` at ``f_pwm``, fed from a ``DCSource``) or "averaged"
     (``plant.AveragedConverter`` with the fixed DC-link voltage ``v_dc``; ``f_pwm``
-    unused). Returns (System, parts by role)."""
+    unused). ``encoder=False``: the IFOC reads the shaft angle directly (the same part kinds
+    less one, another topology: ``_bench.targets``' compile-free first result). Returns
+    (System, parts by role)."""
     from acdrive.control._current import StationaryCurrentController
     from acdrive.control._foc import IndirectFOC, SpeedPI
     from acdrive.control._speed import SpeedReference
@@ -238,6 +241,8 @@ def build_foc_drive(
             "current", controller, T_s, method, prewarp, v_max=v_dc / math.sqrt(2.0)
         ),
     }
+    if not encoder:
+        del p["encoder"]
     if converter == "pwm":
         p["dc"] = DCSource("dc", V=v_dc)
         p["inverter"] = Inverter("inverter", f_pwm=f_pwm)
@@ -246,14 +251,15 @@ def build_foc_drive(
     im, shaft, pi, ifoc_, cc, inv = (
         p[k] for k in ("im", "shaft", "speed_pi", "ifoc", "current", "inverter")
     )
+    angle = p["encoder"].out.theta if encoder else shaft.out.theta
     wires = [
         (shaft.out.w, im.inp.w),
         (im.out.tau_e, shaft.inp.tau_e),
-        (shaft.out.theta, p["encoder"].inp.theta),
+        *([(shaft.out.theta, p["encoder"].inp.theta)] if encoder else []),
         (p["ref"].out.w_ref, pi.inp.w_ref),
         (shaft.out.w, pi.inp.w),
         (pi.out.tau_ref, ifoc_.inp.tau_ref),
-        (p["encoder"].out.theta, ifoc_.inp.theta),
+        (angle, ifoc_.inp.theta),
         (ifoc_.out.i_s_ref, cc.inp.i_ref),
         (im.out.i_s, cc.inp.i_meas),
         (cc.out.v_ref, inv.inp.v_ref),
@@ -264,8 +270,11 @@ def build_foc_drive(
     return System(list(p.values()), wires, method=integrator), p
 
 
-def matched_acdrive_system(converter: str = "pwm", integrator: str = INTEGRATOR):
-    """acdrive's side of the matched case (module docstring, ``MATCHED``)."""
+def matched_acdrive_system(
+    converter: str = "pwm", integrator: str = INTEGRATOR, encoder: bool = True
+):
+    """acdrive's side of the matched case (module docstring, ``MATCHED``); ``encoder=False``
+    the same drive with the IFOC reading the shaft angle (``build_foc_drive``)."""
     return build_foc_drive(
         machine=MACHINE,
         J=J,
@@ -281,6 +290,7 @@ def matched_acdrive_system(converter: str = "pwm", integrator: str = INTEGRATOR)
         load=[[0.0, 0.0], [T_LOAD, 0.0], [T_LOAD + LOAD_RAMP, NOM_TAU]],
         integrator=integrator,
         converter=converter,
+        encoder=encoder,
     )
 
 
@@ -563,13 +573,20 @@ def run_case(
     extended_substeps: int = 4,
     log=None,
     timing: dict | None = None,
-    clock: Clock | None = None,
+    clock=None,
+    reference_cache=None,
 ) -> dict:
     """The matched case with ``converter``: acdrive and motulator (if ``peer`` is available:
     ``venvs.ensure_venv``'s answer) timed in ``rounds`` rounds of interleaved CPU-time windows
     (``windows.time_sides``), the ratio and its spread, motulator's recorded run and the
     speed-trajectory difference between the two, and both simulators' errors (if
-    ``reference``). ``timing``: ``solo_window_cpu_s`` and ``min_calibration_cpu_s``."""
+    ``reference``). ``timing``: ``solo_window_cpu_s`` and ``min_calibration_cpu_s``; ``clock``: a
+    ``windows.Clock``; ``reference_cache``: the folder of cached references (``_bench.refcache``,
+    None: computed every time)."""
+    from acdrive._bench.reference import accuracy, error_verdicts, short_errors
+    from acdrive._bench.venvs import PeerFailed, PeerProcess
+    from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
+
     say = log or (lambda _m: None)
     clock = clock or Clock()
     timing = {"solo_window_cpu_s": 1.0, "min_calibration_cpu_s": 0.1, **(timing or {})}
@@ -643,14 +660,26 @@ def run_case(
             say(f"acdrive {converter}: accuracy against the references")
             a_seg = acdrive_segments(primary["_raw"], ports, primary["_modulator"])
             a_err = accuracy(
-                a_states, a_seg, a_seg["t"].size, model, extended_substeps=extended_substeps
+                a_states,
+                a_seg,
+                a_seg["t"].size,
+                model,
+                extended_substeps=extended_substeps,
+                cache=reference_cache,
+                log=say,
             )
             out["acdrive"]["error"] = a_err
             out["acdrive"]["error_summary"] = short_errors(a_err)
             if m_states is not None:
                 say(f"motulator {converter}: accuracy against the references")
                 m_err = accuracy(
-                    m_states, m_seg, m_seg["t"].size, model, extended_substeps=extended_substeps
+                    m_states,
+                    m_seg,
+                    m_seg["t"].size,
+                    model,
+                    extended_substeps=extended_substeps,
+                    cache=reference_cache,
+                    log=say,
                 )
                 mot["error"] = m_err
                 mot["error_summary"] = short_errors(m_err)

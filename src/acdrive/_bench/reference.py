@@ -134,7 +134,17 @@ def errors(sim_states: np.ndarray, ref_states: np.ndarray) -> dict:
 KEYS = ("current_rel_peak", "speed_abs_rad_s")
 
 
-def accuracy(states, seg, n, model, rtol=1e-10, tight_rtol=None, extended_substeps=4) -> dict:
+def accuracy(
+    states,
+    seg,
+    n,
+    model,
+    rtol=1e-10,
+    tight_rtol=None,
+    extended_substeps=4,
+    cache=None,
+    log=None,
+) -> dict:
     """Errors of ``states`` (rows at the first n sampling instants and the end of sample n - 1)
     against references of ``model``'s equations driven by ``seg`` from ``states[0]``:
 
@@ -145,32 +155,96 @@ def accuracy(states, seg, n, model, rtol=1e-10, tight_rtol=None, extended_subste
 
     ``reference_resolution`` is the Radau reference's difference from the tightest one computed:
     errors below it cannot be told apart by the Radau reference. ``model`` has ``rhs``, ``jac``
-    (or None), ``rhs_ld`` and ``inputs(seg, ld)`` returning the segment-input function."""
-    import time
-
+    (or None), ``rhs_ld`` and ``inputs(seg, ld)`` returning the segment-input function.
+    ``cache``: a folder of ``_bench.refcache`` entries; the reference trajectories are read from
+    it when every input is unchanged (``reference_inputs_key``), else computed and stored
+    (``cached_from_disk`` says which); ``log`` receives its one-line notices."""
     seg_n = int(np.sum(seg["counts"][:n]))
     t, counts, dt = seg["t"][:n], seg["counts"][:n], seg["dt"][:seg_n]
     sim = states[: n + 1]
     x0 = states[0]
-    start = time.perf_counter()
-    ref = radau_segments(
-        model.rhs, x0, t, counts, dt, model.inputs(seg, False), rtol, rtol * 1e-2, model.jac
-    )
+    name = reference_inputs_key(x0, seg, n, model, rtol, tight_rtol, extended_substeps)
+
+    def compute():
+        return reference_trajectories(x0, t, counts, dt, seg, model, rtol, tight_rtol,
+                                      extended_substeps)  # fmt: skip
+
+    from acdrive._bench.refcache import cached
+
+    refs, hit = cached(cache, name, compute, log or (lambda _m: None))
     out = {
         "reference": {
             "method": "Radau",
             "rtol": rtol,
             "atol": rtol * 1e-2,
-            "wall_s": time.perf_counter() - start,
-            **errors(sim, ref),
+            "wall_s": float(refs["radau_wall_s"]),
+            **errors(sim, refs["radau"]),
         },
         "segments": seg_n,
         "max_segments_per_sample": int(counts.max()),
+        "reference_inputs_key": name,
+        "cached_from_disk": hit,
     }
     tightest = None
     if tight_rtol:
+        out["tight_reference"] = {
+            "method": "Radau",
+            "rtol": tight_rtol,
+            "atol": tight_rtol * 1e-2,
+            "wall_s": float(refs["tight_wall_s"]),
+            **errors(sim, refs["tight"]),
+        }
+        tightest = refs["tight"]
+    if extended_substeps:
+        out["extended_reference"] = {
+            "method": "sixth-order Runge-Kutta in np.longdouble",
+            "substeps_per_segment": extended_substeps,
+            "wall_s": float(refs["extended_wall_s"]),
+            **errors(sim, refs["extended"]),
+        }
+        out["extended_resolution"] = errors(refs["extended_half"], refs["extended"])
+        tightest = refs["extended"]
+    if tightest is not None:
+        out["reference_resolution"] = errors(refs["radau"], tightest)
+    return out
+
+
+def reference_inputs_key(x0, seg, n, model, rtol, tight_rtol, extended_substeps) -> str:
+    """The cache key of a reference (``_bench.refcache``): the initial state, every array of the
+    segment sequence and the compared samples, the settings, the model's equations and
+    parameters (``refcache.model_identity``) and this module's source."""
+    import inspect
+    import sys
+
+    from acdrive._bench import refcache
+
+    return refcache.key(
+        x0=np.asarray(x0, dtype=float),
+        segments={k: np.asarray(v) for k, v in seg.items()},
+        samples=int(n),
+        rtol=rtol,
+        tight_rtol=tight_rtol,
+        extended_substeps=extended_substeps,
+        model=refcache.model_identity(model),
+        reference_code=inspect.getsource(sys.modules[__name__]),
+    )
+
+
+def reference_trajectories(x0, t, counts, dt, seg, model, rtol, tight_rtol, extended_substeps):
+    """The reference runs of ``accuracy`` as arrays (states at the sampling instants) with the
+    wall time each took: ``radau``, ``tight`` (if ``tight_rtol``), ``extended`` and
+    ``extended_half`` (if ``extended_substeps``)."""
+    import time
+
+    out = {}
+    start = time.perf_counter()
+    out["radau"] = radau_segments(
+        model.rhs, x0, t, counts, dt, model.inputs(seg, False), rtol, rtol * 1e-2, model.jac
+    )
+    out["radau_wall_s"] = np.array(time.perf_counter() - start)
+    if tight_rtol:
         start = time.perf_counter()
-        tight = radau_segments(
+        out["tight"] = radau_segments(
             model.rhs,
             x0,
             t,
@@ -181,32 +255,17 @@ def accuracy(states, seg, n, model, rtol=1e-10, tight_rtol=None, extended_subste
             tight_rtol * 1e-2,
             model.jac,
         )
-        out["tight_reference"] = {
-            "method": "Radau",
-            "rtol": tight_rtol,
-            "atol": tight_rtol * 1e-2,
-            "wall_s": time.perf_counter() - start,
-            **errors(sim, tight),
-        }
-        tightest = tight
+        out["tight_wall_s"] = np.array(time.perf_counter() - start)
     if extended_substeps:
         start = time.perf_counter()
         inputs_ld = model.inputs(seg, True)
-        ext = extended_rk6_segments(model.rhs_ld, x0, t, counts, dt, inputs_ld, extended_substeps)
-        wall = time.perf_counter() - start
-        half = extended_rk6_segments(
+        out["extended"] = extended_rk6_segments(
+            model.rhs_ld, x0, t, counts, dt, inputs_ld, extended_substeps
+        )
+        out["extended_wall_s"] = np.array(time.perf_counter() - start)
+        out["extended_half"] = extended_rk6_segments(
             model.rhs_ld, x0, t, counts, dt, inputs_ld, max(extended_substeps // 2, 1)
         )
-        out["extended_reference"] = {
-            "method": "sixth-order Runge-Kutta in np.longdouble",
-            "substeps_per_segment": extended_substeps,
-            "wall_s": wall,
-            **errors(sim, ext),
-        }
-        out["extended_resolution"] = errors(half, ext)
-        tightest = ext
-    if tightest is not None:
-        out["reference_resolution"] = errors(ref, tightest)
     return out
 
 

@@ -7,7 +7,16 @@ Cases (``CASES``; ``--only`` picks some):
 * ``motulator_pwm``: the same drive with switching PWM -> ``ratio_vs_motulator_pwm``;
 * ``gem_dfim``: the open-loop DFIM against gym-electric-motor 3.0.3 (``_bench.gem_dfim``) ->
   ``ratio_vs_gem``;
-* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``.
+* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``;
+* ``first_result``: the first-result race against motulator, whole processes from a clean start,
+  acdrive with an empty and with a warm cache (``_bench.first_result``);
+* ``command``, ``compile_free``, ``batch``, ``loop_speed``: the other measurements behind issue
+  21's targets (``_bench.targets``; ``loop_speed`` needs ``--baseline-src``).
+
+The ``targets`` section has one entry per issue-21 target, each with its measured value, the
+target, unit and the computed ``met`` flag, or ``"not measured"`` and why (``targets.TARGETS``).
+The accuracy references are cached on disk by a hash of their inputs (``_bench.refcache``), so a
+re-run recomputes only what changed.
 
 Each ratio is acdrive's control steps per CPU second over the peer's, both measured in this run
 on this machine, the peer in its own virtualenv (``_bench.venvs``), in interleaved windows of
@@ -16,7 +25,8 @@ every window, ``warnings`` where it was high); each simulator's error is taken
 against references of the same equations (``_bench.reference``), so that speed is never bought
 with error. The verdicts (``target_checks``) are computed from those numbers: ``None`` where a
 number is missing (a peer that could not be installed, ``--no-reference``), and ``targets_met``
-is true only if every check is true.
+is true only if every check is true and every issue-21 target of ``targets`` is met (one not
+measured is not met).
 """
 
 from __future__ import annotations
@@ -31,9 +41,20 @@ from pathlib import Path
 from acdrive._bench.common import load_average, package_version
 from acdrive._bench.windows import LOAD_RULE
 
-CASES = ("motulator_averaged", "motulator_pwm", "gem_dfim", "icad")
+CASES = (
+    "motulator_averaged",
+    "motulator_pwm",
+    "gem_dfim",
+    "icad",
+    "first_result",
+    "command",
+    "compile_free",
+    "batch",
+    "loop_speed",
+)
 
-#: the issue's targets (the pwm one is the matched pwm case's earlier target)
+#: the ratio cases' targets (the pwm one is the matched pwm case's earlier target); issue 21's
+#: speed targets are ``targets.TARGETS``
 TARGETS = {
     "ratio_vs_motulator_min": 1000.0,
     "ratio_vs_motulator_pwm_min": 300.0,
@@ -47,6 +68,8 @@ TARGETS = {
 #: model times and timing: the full run and ``--quick`` (short model times, for a smoke test).
 #: ``rounds``: interleaved windows per side (``_bench.windows``); ``solo_window_cpu_s``: the
 #: window length without a peer; ``min_calibration_cpu_s``: the shortest calibration window.
+#: ``race_*``: the first-result race (its model time is the matched case's 1.5 s in both);
+#: ``command_rounds``, ``batch_*``, ``loop_*``: the other issue-21 measurements (``_bench.targets``).
 FULL = {
     "im_s": 1.5,
     "gem_s": 1.0,
@@ -55,6 +78,13 @@ FULL = {
     "min_calibration_cpu_s": 0.1,
     "icad_repeat": 7,
     "extended_substeps": 4,
+    "race_rounds": 3,
+    "race_model_s": 1.5,
+    "command_rounds": 3,
+    "batch_variants": 1000,
+    "batch_rounds": 2,
+    "loop_rounds": 4,
+    "loop_reps": 3,
 }
 QUICK = {
     "im_s": 0.3,
@@ -64,19 +94,30 @@ QUICK = {
     "min_calibration_cpu_s": 0.05,
     "icad_repeat": 3,
     "extended_substeps": 4,
+    "race_rounds": 2,
+    "race_model_s": 1.5,
+    "command_rounds": 2,
+    "batch_variants": 50,
+    "batch_rounds": 1,
+    "loop_rounds": 2,
+    "loop_reps": 2,
 }
 
 
 @dataclass
 class Options:
     """What to run: ``quick`` (short model times), ``peers`` (make/use the peers' venvs),
-    ``reference`` (accuracy references), ``only`` (case names), ``peers_dir`` (venv cache)."""
+    ``reference`` (accuracy references), ``reference_cache`` (read and write them on disk,
+    ``_bench.refcache``), ``only`` (case names), ``peers_dir`` (venv cache), ``baseline_src``
+    (the ``src`` folder of the tree ``loop_speed`` compares against)."""
 
     quick: bool = False
     peers: bool = True
     reference: bool = True
+    reference_cache: bool = True
     only: tuple[str, ...] = CASES
     peers_dir: Path | None = None
+    baseline_src: Path | None = None
     log: object = field(default=None, repr=False)
 
 
@@ -128,7 +169,12 @@ def run_suite(options: Options) -> dict:
     }
     only = [c for c in CASES if c in options.only]
     ref = options.reference
-    if any(c.startswith("motulator") for c in only):
+    from acdrive._bench.refcache import cache_dir
+
+    ref_cache = cache_dir() if options.reference_cache else None
+    report["reference_cache"] = None if ref_cache is None else str(ref_cache)
+    report["not_run"] = {}
+    if any(c.startswith("motulator") or c == "first_result" for c in only):
         report["peers"]["motulator"] = _peer(venvs.MOTULATOR, options, say)
     if "gem_dfim" in only:
         report["peers"]["gym-electric-motor"] = _peer(venvs.GEM, options, say)
@@ -147,6 +193,7 @@ def run_suite(options: Options) -> dict:
                 settings["extended_substeps"],
                 say,
                 timing=_timing(settings),
+                reference_cache=ref_cache,
             )
         elif name == "gem_dfim":
             from acdrive._bench.gem_dfim import run_case
@@ -159,15 +206,54 @@ def run_suite(options: Options) -> dict:
                 settings["extended_substeps"],
                 say,
                 timing=_timing(settings),
+                reference_cache=ref_cache,
             )
         elif name == "icad":
             from acdrive._bench.icad import run_icad
 
             report["cases"][name] = run_icad(settings["icad_repeat"])
+        else:
+            _run_target_case(name, report, settings, options, say)
     report["host"]["load_average_at_end"] = load_average()
     summarise(report)
     say("done")
     return report
+
+
+def _run_target_case(name: str, report: dict, settings: dict, options: Options, say) -> None:
+    """One of issue 21's measurements (``_bench.first_result``, ``_bench.targets``) into
+    ``report["cases"]``, or its reason into ``report["not_run"]``."""
+    from acdrive._bench import targets
+
+    if name == "first_result":
+        from acdrive._bench.first_result import run_race
+
+        peer = report["peers"]["motulator"]
+        got = run_race(peer, settings["race_rounds"], settings["race_model_s"], say)
+    elif name == "command":
+        got = targets.whole_command(settings["command_rounds"], say)
+    elif name == "compile_free":
+        got = targets.compile_free_first_result(settings["race_model_s"], say)
+    elif name == "batch":
+        got = targets.batch_speed(settings["batch_variants"], settings["batch_rounds"], say)
+    elif options.baseline_src is None:  # loop_speed
+        report["not_run"][name] = (
+            "needs --baseline-src DIR, the src folder of the tree to compare against (e.g. a "
+            "worktree of main)"
+        )
+        return
+    else:
+        from acdrive._bench.loop_speed import compare_trees, this_tree_src
+
+        got = compare_trees(
+            str(options.baseline_src),
+            this_tree_src(),
+            ("bodson-ramp", "im-foc-speed"),
+            settings["loop_rounds"],
+            settings["loop_reps"],
+            say,
+        )
+    report["cases"][name] = got
 
 
 def _timing(settings: dict) -> dict:
@@ -189,6 +275,8 @@ def summarise(report: dict) -> None:
     """The headline keys and the verdicts, computed from the cases' numbers: per case the
     ratio (median over the interleaved rounds) and its spread, both sides' steps per CPU second,
     their errors, the speed-trajectory difference against motulator, and the load warnings."""
+    from acdrive._bench import targets
+
     cases = report["cases"]
     report["acdrive_steps_per_cpu_s"] = {}
     report["peer_steps_per_cpu_s"] = {}
@@ -217,16 +305,27 @@ def summarise(report: dict) -> None:
                 _peer_of(case): peer.get("error_summary"),
                 "verdicts": c.get("error_verdicts"),
             }
+    race = cases.get("first_result", {})
+    if race.get("warning"):
+        report["load_warnings"]["first_result"] = race["warning"]
     if "gem_dfim" in cases:
         report["ratio_vs_gem_env_step"] = cases["gem_dfim"].get("ratio_env_step")
     report["icad_ms"] = cases["icad"]["icad_ms"] if "icad" in cases else None
     report["load_rule"] = LOAD_RULE
     report["warnings"] = [f"{k}: {v}" for k, v in report["load_warnings"].items()]
-    report["targets"] = TARGETS
+    report["ratio_targets"] = TARGETS
     report["target_checks"] = target_checks(report)
     checks = report["target_checks"]
-    report["targets_met"] = bool(checks) and all(v is True for v in checks.values())
-    report["targets_unmeasured"] = [k for k, v in checks.items() if v is None]
+    section = targets.targets_section(cases, report.get("not_run", {}))
+    report["targets"] = section
+    report["targets_summary"] = targets.summary(section)
+    report["warnings"] += [f"first_result: {w}" for w in race.get("warnings", [])]
+    # every check and every issue-21 target met; one not measured is not met
+    verdicts = [*checks.values(), *(e["met"] for e in section.values())]
+    report["targets_met"] = all(v is True for v in verdicts)
+    report["targets_unmeasured"] = [k for k, v in checks.items() if v is None] + report[
+        "targets_summary"
+    ]["not_measured"]
 
 
 def _at_least(value, bound):
@@ -294,6 +393,7 @@ def table(report: dict) -> str:
                 f"  speed difference to motulator: RMS {diff['rms_rpm']:.3g} rpm, largest "
                 f"{diff['max_abs_rpm']:.3g} rpm over {diff['from_s']:g}-{diff['to_s']:g} s"
             )
+    lines += race_lines(report["cases"].get("first_result"))
     if report.get("icad_ms") is not None:
         lines.append(f"icad: {report['icad_ms']:.1f} ms (full ICAD, 100 x 2,000)")
     lines.append(
@@ -302,12 +402,50 @@ def table(report: dict) -> str:
     )
     for k, v in report["target_checks"].items():
         lines.append(f"  {k}: {'-' if v is None else ('yes' if v else 'NO')}")
+    lines += targets_table(report.get("targets", {}))
     lines.append(f"targets met: {'yes' if report['targets_met'] else 'no'}")
     for w in report["warnings"]:
         lines.append(f"WARNING {w}")
     if report["warnings"]:
         lines.append(f"  rule: {report['load_rule']}")
     return "\n".join(lines)
+
+
+def race_lines(race: dict | None) -> list[str]:
+    """The first-result race: each side's whole-process CPU time and the ratios, median
+    (min-max) over the rounds."""
+    if not race or "cpu_s" not in race:
+        return [] if not race else [f"first-result race not measured: {race['not_measured']}"]
+
+    def span(s: dict, spec: str) -> str:
+        return f"{_fmt(s['median'], spec)} ({_fmt(s['min'], spec)}-{_fmt(s['max'], spec)})"
+
+    times = ", ".join(f"{k} {span(v, '.2f')}" for k, v in race["cpu_s"].items())
+    lines = [f"first result, whole process from a clean start, CPU s: {times}"]
+    for key, label in (("empty_cache", "empty cache"), ("warm_cache", "warm cache")):
+        r, s = race["time_ratio"].get(key), race["speedup"].get(key)
+        if r:
+            lines.append(
+                f"  acdrive {label}: {span(r, '.2f')} x motulator's time, speedup {span(s, '.2f')}"
+            )
+    return lines
+
+
+def targets_table(section: dict) -> list[str]:
+    """Issue 21's targets, one line each: value, comparison, target, unit, met (or why not
+    measured)."""
+    if not section:
+        return []
+    lines = ["issue 21 targets (value, target, met):"]
+    for name, e in section.items():
+        if e["met"] is None:
+            lines.append(f"  {name}: not measured ({e['not measured']})")
+            continue
+        lines.append(
+            f"  {name}: {e['value']:.4g} {e['unit']} ({e['comparison']} {e['target']:g}): "
+            f"{'yes' if e['met'] else 'NO'}"
+        )
+    return lines
 
 
 def _decisive_current(summary) -> str:

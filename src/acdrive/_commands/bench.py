@@ -3,7 +3,17 @@ gym-electric-motor 3.0.3, measured in one run on this machine, plus the ICAD tim
 
 from __future__ import annotations
 
-CASE_NAMES = ("motulator_averaged", "motulator_pwm", "gem_dfim", "icad")
+CASE_NAMES = (
+    "motulator_averaged",
+    "motulator_pwm",
+    "gem_dfim",
+    "icad",
+    "first_result",
+    "command",
+    "compile_free",
+    "batch",
+    "loop_speed",
+)
 
 
 def register(subparsers):
@@ -17,6 +27,18 @@ def register(subparsers):
     p.add_argument("--quick", action="store_true", help="short model times (a smoke test)")
     p.add_argument("--no-peers", action="store_true", help="measure acdrive only")
     p.add_argument("--no-reference", action="store_true", help="skip the accuracy references")
+    p.add_argument(
+        "--no-reference-cache",
+        action="store_true",
+        help="compute the accuracy references afresh, without reading or writing the on-disk "
+        "cache ($XDG_CACHE_HOME/acdrive/bench-references)",
+    )
+    p.add_argument(
+        "--baseline-src",
+        metavar="DIR",
+        help="src folder of the tree the loop_speed case compares the loop's steps/s against "
+        "(e.g. a worktree of main)",
+    )
     p.add_argument("--only", nargs="+", metavar="NAME", help=f"cases: {', '.join(CASE_NAMES)}")
     p.add_argument(
         "--peers-dir",
@@ -53,12 +75,22 @@ def run(args) -> int:
         sys.stderr.write(message + "\n")
         sys.stderr.flush()
 
+    baseline = None
+    if args.baseline_src is not None:
+        baseline = Path(args.baseline_src).expanduser().resolve()
+        if not (baseline / "acdrive" / "__init__.py").is_file():
+            raise InputError(
+                "--baseline-src", f"must be a src folder holding acdrive/, got {baseline}"
+            )
+
     options = Options(
         quick=args.quick,
         peers=not args.no_peers,
         reference=not args.no_reference,
+        reference_cache=not args.no_reference_cache,
         only=only,
         peers_dir=peers_dir,
+        baseline_src=baseline,
         log=log,
     )
     report = run_suite(options)

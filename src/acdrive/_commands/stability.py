@@ -257,7 +257,7 @@ def _map_report(args, models, bar) -> tuple[dict, dict]:
     """(report per mode, StabilityMap per mode) of ``acdrive stability --map``."""
     import numpy as np
 
-    from acdrive.analysis._drive_stability import default_grid, max_stable_bandwidth, stability_map
+    from acdrive.analysis._drive_studies import default_grid, max_stable_bandwidth, stability_map
 
     n_speed, n_load = args.grid
     maps, report = {}, {}
@@ -297,7 +297,7 @@ def _map_report(args, models, bar) -> tuple[dict, dict]:
 
 
 def _bench(args) -> int:
-    from acdrive.analysis._drive_stability import (
+    from acdrive.analysis._drive_studies import (
         bench_candidates,
         evaluate_candidate,
         stabilising_thresholds,

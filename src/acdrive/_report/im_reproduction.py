@@ -59,7 +59,8 @@ def render(sections: list[Section], v: dict[str, Verdict], fig_rel: str) -> str:
         (
             "Every experiment runs as a built-in scenario (`acdrive run <name>` reruns one) and "
             "every verdict is computed from the numbers against the tolerance printed beside it "
-            "(`TOLERANCES` in the module). The paper's figures are experiments on a bench whose "
+            "(`TOLERANCES` in src/acdrive/_report/im/settings.py). The paper's figures are "
+            "experiments on a bench whose "
             "inertia, friction, loads, flux and converter details it does not print: those are "
             "assumed (each scenario's note), so the figures are compared by what they show, not "
             "point by point. Currents are phase-peak amperes (the paper's alpha-beta scaling)."

@@ -53,6 +53,7 @@ import numpy as np
 import scipy.linalg
 
 from acdrive._frames import K_PEAK as SQRT_3_2
+from acdrive._toml import constant
 from acdrive.analysis._freqresp import evaluate_ss
 from acdrive.analysis._icad_frequency import icad_quantities
 from acdrive.analysis._plants import plant_from_params
@@ -68,7 +69,6 @@ from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._inverter import CarrierLatch
 from acdrive.plant._mechanics import PrescribedSpeed
-from acdrive.scenarios._files import constant
 from acdrive.sim._system import System
 
 #: The paper's DC link [V] (sec. VI): the linear SVPWM range v_dc / sqrt(2) (space vector) within

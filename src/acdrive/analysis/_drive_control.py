@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from acdrive.analysis._drive_loops import _continuous_equilibrium, _Sampled
 from acdrive.analysis._linearise import get_complex, jacobian, slot
 
 INPUTS = ("w_ref", "tau_L")
@@ -42,8 +43,6 @@ def _currents(system, parts, Y) -> list[float]:
 
 
 def _continuous(result):
-    from acdrive.analysis._drive_loops import _continuous_equilibrium
-
     cont, x0 = _continuous_equilibrium(result.view)
     plant = cont.plant
     system, parts = plant.drive.system, plant.parts
@@ -70,8 +69,6 @@ def _continuous(result):
 
 
 def _sampled(result):
-    from acdrive.analysis._drive_loops import _Sampled
-
     smp = _Sampled(result.view)
     system, parts = smp.system, smp.parts
     pack = _packer(system, parts)

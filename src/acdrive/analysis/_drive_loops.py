@@ -6,16 +6,15 @@ both on the DFIM drive's own build of the setup (``acdrive.drives.get("dfim").bu
   (``_Plant``), in the frame that turns with the supply;
 * ``_Sampled``: one sample of the compiled drive as a ``SampleMap``, re-referenced every sample.
 
-Each reads the drive through a ``DriveView`` (``analysis._drive_stability``): the setup's motor 0
+Each reads the drive through a ``DriveView`` (``analysis._drive_view``): the setup's motor 0
 held at its operating point.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from acdrive.analysis._drive_view import DriveView
 from acdrive.analysis._linearise import (
     Coordinate,
     SampleMap,
@@ -35,9 +34,6 @@ from acdrive.machines._dfim import (
     rotor_voltage_for,
     stator_current_command,
 )
-
-if TYPE_CHECKING:
-    from acdrive.analysis._drive_stability import DriveView
 
 
 def _drive(model: DriveView) -> DFIMDrive:

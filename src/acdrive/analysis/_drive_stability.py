@@ -32,9 +32,10 @@ and its compiled loop; they are kept clearly apart:
                 eigenvalues z are reported also as s = ln(z) / T_s for comparison with the
                 continuous model.
 
-The loops themselves are in ``analysis._drive_loops``, the studies over many linearisations (maps,
-tolerated bandwidth, bench candidates) in ``analysis._drive_studies`` (importable from here too),
-the ``StateSpace`` of a result in ``analysis._drive_control``.
+What the linearisation reads of the setup is ``analysis._drive_view``, the loops themselves are in
+``analysis._drive_loops``, the studies over many linearisations (maps, tolerated bandwidth, bench
+candidates) in ``analysis._drive_studies``, the ``StateSpace`` of a result in
+``analysis._drive_control``.
 
 Units: SI (speeds in rad/s unless the name ends in ``_rpm``); complex space vectors in the
 power-invariant scaling of Bodson (1)-(8).
@@ -49,7 +50,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): space-vector magnitude per peak
+from acdrive.analysis import _drive_control
 from acdrive.analysis._drive_loops import _continuous_equilibrium, _Sampled
+from acdrive.analysis._drive_view import (
+    RAD_S_PER_RPM,
+    SPEED_LOOPS,
+    DriveView,
+    OperatingPoint,
+)
 from acdrive.analysis._linearise import (
     fixed_point,
     jacobian,
@@ -76,25 +84,8 @@ from acdrive.machines._dfim import (
 )
 from acdrive.plant._converter import max_voltage_magnitude
 
-#: the studies over many linearisations, defined in ``analysis._drive_studies`` and importable
-#: from here as well (module ``__getattr__`` below: that module imports this one)
-_STUDIES = ("StabilityMap", "default_grid", "stability_map", "with_speed_bandwidth",
-            "max_stable_bandwidth", "BENCH_LOSS", "Candidate", "CandidateResult",
-            "bench_candidates", "evaluate_candidate", "Threshold", "stabilising_thresholds")  # fmt: skip
-
-
-def __getattr__(name: str):
-    if name in _STUDIES:
-        from acdrive.analysis import _drive_studies
-
-        return getattr(_drive_studies, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-RAD_S_PER_RPM = math.pi / 30.0
 MODES = ("voltage", "current")
 KINDS = ("continuous", "sampled")
-SPEED_LOOPS = ("closed", "open", "frozen")
 #: |z| below this is a structural zero of the sampled map (a state overwritten every sample)
 Z_ZERO = 1e-9
 
@@ -186,97 +177,6 @@ class DriveModel:
         return dataclasses.replace(SpeedPIGains.design(J, self.speed_bandwidth), K_F=self.K_F)
 
 
-@dataclass(frozen=True)
-class OperatingPoint:
-    """Shaft speed [rad/s] and load torque [N m] (the non-inertial load of (26), friction apart)."""
-
-    speed: float
-    load_torque: float = 0.0
-
-    @property
-    def speed_rpm(self) -> float:
-        return self.speed / RAD_S_PER_RPM
-
-
-class DriveView:
-    """What the linearisation reads of a DFIM ``DriveSetup``, computed from it (never a copy of
-    its fields): motor 0 of ``setup`` held at ``point`` (:func:`operating_setup`) and the speed
-    loop's state (``"closed"``, ``"open"``, ``"frozen"``, as :class:`DriveModel`'s).
-
-    ``setup`` is the drive the linearisation builds (``acdrive.drives.get("dfim").build``) and
-    compiles; the properties below are read from its motor, controller and supply.
-    """
-
-    def __init__(self, setup: DriveSetup, point: OperatingPoint, speed_loop: str = "closed"):
-        if speed_loop not in SPEED_LOOPS:
-            raise InputError("speed_loop", f"must be one of {', '.join(SPEED_LOOPS)}")
-        self.setup = operating_setup(setup, point)
-        self.point, self.speed_loop = point, speed_loop
-        self.motor = self.setup.motors[0]
-        self.controller = self.motor.controller
-
-    mode = property(lambda self: self.controller.mode)
-    machine = property(lambda self: self.motor.machine)
-    #: the controller's parameter estimates (None: the true machine's)
-    controller_params = property(lambda self: self.controller.params)
-    gains = property(lambda self: self.controller.gains)
-    R_T = property(lambda self: self.controller.R_T)
-    speed_filter_tau = property(lambda self: self.controller.speed_filter_tau)
-    supply_resistance = property(lambda self: self.setup.supply.resistance)
-    sample_time = property(lambda self: self.setup.sample_time)
-    substeps = property(lambda self: self.setup.substeps)
-
-    @property
-    def current_gains(self) -> tuple[float, float]:
-        """(K_P,C, K_I,C) of Bodson (49) from the controller's estimates."""
-        return self.controller.current_gains(self.machine)
-
-    @property
-    def w_e(self) -> float:
-        return 2.0 * math.pi * float(self.setup.supply.frequency_hz[1][0])
-
-    @property
-    def v_g(self) -> float:
-        """Grid space-vector magnitude sqrt(3/2) V_pk (Bodson (8))."""
-        return SQRT_3_2 * float(self.setup.supply.voltage_pk[1][0])
-
-    @property
-    def i_s_max(self) -> float:
-        return SQRT_3_2 * self.controller.stator_current_limit_pk
-
-    @property
-    def i_r_max(self) -> float:
-        return SQRT_3_2 * self.controller.rotor_current_limit_pk
-
-
-def operating_setup(setup: DriveSetup, point: OperatingPoint) -> DriveSetup:
-    """Motor 0 of ``setup`` alone on its supply, held at ``point``, as the linearisation sees it:
-    speed reference and initial speed at the operating speed, the load constant, the supply
-    constant at its values at t = 0 (balanced), the stator connected (no synchronisation), an
-    ideal encoder resolution (a quantiser has no derivative), no sensor fault, a constant DC
-    link, no forced relay. The encoder offset stays unless the setup synchronises: the
-    synchroniser then has identified it (Bodson IV-A) and the connected drive runs as without. Everything else (machine, controller, estimates,
-    converter, computation delay, sample time, substeps, integrator) is the setup's."""
-    motor = setup.motors[0]
-    supply = setup.supply
-    controller = dataclasses.replace(
-        motor.controller, sync=dataclasses.replace(motor.controller.sync, enabled=False)
-    )
-    motor = dataclasses.replace(
-        motor, controller=controller, speed_reference=constant(point.speed),
-        load_torque=constant(point.load_torque), initial_speed=point.speed,
-        encoder_counts_per_rev=0.0, current_sensor_fault_time=math.inf, dc_link_profile=None,
-        encoder_offset=0.0 if motor.controller.sync.enabled else motor.encoder_offset,
-        relay_forced_close_time=math.inf,
-    )  # fmt: skip
-    supply = dataclasses.replace(
-        supply, voltage_pk=constant(float(supply.voltage_pk[1][0])),
-        frequency_hz=constant(float(supply.frequency_hz[1][0])), phase_scales=None,
-    )  # fmt: skip
-    return dataclasses.replace(setup, motors=(motor,), supply=supply, duration=1.0,
-                               name="stability", compare_modes=(), log_every=1)  # fmt: skip
-
-
 def view_of(study, point: OperatingPoint, speed_loop: str | None = None) -> DriveView:
     """The :class:`DriveView` of ``study`` (a DFIM ``DriveSetup``, or a :class:`DriveModel`, which
     builds its setup with :func:`drive_setup`) at ``point``; ``speed_loop`` defaults to the
@@ -326,9 +226,7 @@ class StabilityResult:
         outputs ``w`` [rad/s] and the currents ``i_s``, ``i_r`` [A] (``_re``/``_im``, supply
         frame), states ``state_names`` (``.`` written ``_``, as python-control requires); its poles are ``eigenvalues`` (``z_eigenvalues``)
         (``analysis._drive_control``)."""
-        from acdrive.analysis._drive_control import to_control
-
-        return to_control(self)
+        return _drive_control.to_control(self)
 
     @property
     def dominant(self) -> complex:

@@ -11,14 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.analysis._drive_stability import (
-    RAD_S_PER_RPM,
-    DriveModel,
-    OperatingPoint,
-    _torque_window,
-    linearize,
-    view_of,
-)
+from acdrive.analysis._drive_stability import DriveModel, _torque_window, linearize, view_of
+from acdrive.analysis._drive_view import RAD_S_PER_RPM, OperatingPoint
 from acdrive.control._speed import SpeedPIGains
 from acdrive.drives.dfim._setup import ConverterLosses, DriveSetup
 from acdrive.errors import InputError

@@ -7,6 +7,8 @@ below is warned about (it no longer behaves as its continuous design).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: a T_s above which a sampled speed loop of design root a is warned about (a_D,VEL for the DFIM)
@@ -35,3 +37,27 @@ def speed_loop_radius(K_P: float, K_I: float, J: float, T_s: float, filter_tau: 
     if K_I == 0.0:  # a P loop: the integral state acts on nothing and is left out
         A = np.delete(np.delete(A, 2, axis=0), 2, axis=1)
     return float(np.max(np.abs(np.linalg.eigvals(A))))
+
+
+def current_loop_radius(
+    L: float, R: float, K_P: float, K_I: float, T_s: float, hold_samples: int = 1
+) -> float:
+    """Spectral radius of a sampled PI current loop on a first-order plant (one axis; the rotor
+    current loop of Bodson (45)-(50) with L = sigma L_r, R = R_T; one rotor-frame axis of the PM
+    drive): L di/dt = v - R i with v held (i_k+1 = phi i_k + gamma v_k, phi = exp(-R T_s / L),
+    gamma = (1 - phi) / R), the PI v = -K_P i + K_I I with I_k+1 = I_k - T_s i_k every sample
+    (reference zero), and the command v computed at the first of every ``hold_samples`` samples
+    and held over them (a converter that takes its command once per carrier period). The map
+    over one hold is the product of the samples' maps; below 1 the loop is stable."""
+    rate = R / L
+    phi = math.exp(-rate * T_s)
+    gamma = (1.0 - phi) / R if rate * T_s > 1e-12 else T_s / L
+    if K_I == 0.0 and hold_samples == 1:  # no integral action: the integrator acts on nothing
+        return abs(phi - gamma * K_P)
+    # state (i, I, v): the command is taken at the start of the hold, then held
+    take = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-K_P, K_I, 0.0]])
+    sample = np.array([[phi, 0.0, gamma], [-T_s, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    period = np.linalg.matrix_power(sample, int(hold_samples)) @ take
+    if K_I == 0.0:  # the integral state then acts on nothing: leave it out
+        period = np.delete(np.delete(period, 1, axis=0), 1, axis=1)
+    return float(np.max(np.abs(np.linalg.eigvals(period))))

@@ -58,9 +58,15 @@ def envelope(t: np.ndarray, y: np.ndarray, bins: int = PLOT_BINS) -> tuple[np.nd
     if y.size <= 2 * bins:
         return t, y
     edges = np.linspace(0, y.size, bins + 1).astype(np.int64)
-    starts = edges[:-1]
-    i_min = np.array([s + int(np.argmin(y[s:e])) for s, e in zip(starts, edges[1:], strict=True)])
-    i_max = np.array([s + int(np.argmax(y[s:e])) for s, e in zip(starts, edges[1:], strict=True)])
+    starts, ends = edges[:-1], edges[1:]
+    # all bins at once: row k holds bin k, padded after its end with a value that is never its
+    # first minimum (+inf) or first maximum (-inf); argmin / argmax take the first occurrence,
+    # as on the bin alone (a NaN, too, is found where it is first)
+    index = starts[:, None] + np.arange(int((ends - starts).max()))[None, :]
+    inside = index < ends[:, None]
+    values = y[np.minimum(index, y.size - 1)]
+    i_min = starts + np.argmin(np.where(inside, values, np.inf), axis=1)
+    i_max = starts + np.argmax(np.where(inside, values, -np.inf), axis=1)
     pairs = np.sort(np.stack([i_min, i_max], axis=1), axis=1).ravel()
     return t[pairs], y[pairs]
 
@@ -271,14 +277,14 @@ class Result:
         columns = self.table_columns("_" if fmt == "mat" else ".")
         return write_table(Path(folder), columns, fmt, self.title)
 
-    def plot(self, signals=None, axes=None, bins: int = PLOT_BINS):
+    def plot(self, signals=None, axes=None, bins: int = PLOT_BINS, pyplot: bool = True):
         """The ``signals`` (keys, bare names or ports; default ``plot_signals``, else every
         signal) against time on one shared time axis: one stacked axis per unit (real and
         imaginary parts of a complex signal on the same axis), or on the ``axes`` given (one
         per unit, in order of first appearance). A signal longer than ``2 bins`` samples is
-        drawn as its min/max envelope per time bin (``envelope``). Returns the Figure."""
-        import matplotlib.pyplot as plt
-
+        drawn as its min/max envelope per time bin (``envelope``). Returns the Figure: a
+        ``pyplot`` figure (shown in a notebook), or with ``pyplot=False`` one on the Agg canvas
+        that pyplot does not know (``_report.plotting.new_figure``: for writing a file)."""
         if signals is None:
             signals = self.plot_signals or list(self._declared())
         groups: dict[str, list[tuple[str, np.ndarray]]] = {}
@@ -286,8 +292,12 @@ class Result:
             key = self._key(name)  # an unlogged signal is named here, before any drawing
             groups.setdefault(self._declared()[key][0], []).append((key, self._values(key)))
         if axes is None:
-            fig, axes = plt.subplots(len(groups), 1, sharex=True, squeeze=False,
-                                     figsize=(8, 1.2 + 2.0 * len(groups)))  # fmt: skip
+            if pyplot:
+                from matplotlib.pyplot import subplots
+            else:
+                from acdrive._report.plotting import new_figure as subplots
+            fig, axes = subplots(nrows=len(groups), ncols=1, sharex=True, squeeze=False,
+                                 figsize=(8, 1.2 + 2.0 * len(groups)))  # fmt: skip
             axes = axes[:, 0]
         else:
             axes = list(np.atleast_1d(axes))

@@ -67,8 +67,8 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from acdrive._toml import Section
 from acdrive.errors import InputError, require_safe_name
-from acdrive.scenarios._files import Section
 
 METHODS = ("grid", "random")
 DEFAULT_CHUNK = 50
@@ -82,7 +82,7 @@ def builtin_sweeps() -> list[str]:
 
 
 class _Table(Section):
-    """One TOML table under validation (``scenarios._files.Section``: every key read is recorded,
+    """One TOML table under validation (``acdrive._toml.Section``: every key read is recorded,
     unknown keys refused), with the sweep file's own rules for numbers, integers and text."""
 
     def __init__(self, data, path: str):
@@ -222,7 +222,7 @@ def read_sweep_text(source: str) -> tuple[str, Path | None]:
 
 def load_sweep(source: str) -> SweepSpec:
     """Read and validate a sweep file (or built-in sweep name)."""
-    from acdrive.scenarios._files import parse_toml
+    from acdrive._toml import parse_toml
 
     text, folder = read_sweep_text(str(source))
     return build_spec(parse_toml(text, str(source), "sweep"), folder)

@@ -5,6 +5,7 @@ it, see ``acdrive._bench.venvs``), never with acdrive on the path:
 
     python motulator_im.py --converter {averaged,pwm} [--seconds 1.5] [--out run.npz]
     python motulator_im.py --serve
+    python motulator_im.py --first-result [--converter averaged] [--seconds 1.5]
 
 The case is motulator's example ``examples/drive/current_vector/plot_2kw_im_sat_cvc.py``
 (2.2 kW, 400 V, 50 Hz, 2 pole pairs, J = 0.015 kg m^2, 540 V DC link, default sampling period
@@ -34,7 +35,10 @@ Two kinds of run of the same case: timed windows (``window``: ``--repeats`` runs
 and one that records (``save_record``), at every sampling instant, the model state and the
 switching sequence that ``Drive.modulate`` hands to the simulation loop (interval lengths and
 switching states, or duty ratios with the averaged converter), which ``--out`` saves for the
-suite's accuracy reference (``acdrive._bench.motulator_im``). Alone, the script prints one JSON
+suite's accuracy reference (``acdrive._bench.motulator_im``). ``--first-result`` is the
+first-result race's process (``acdrive._bench.first_result``): build the case, simulate it once,
+keep the result in memory and print its control steps, nothing timed or recorded (the suite takes
+this whole process's CPU time). Alone, the script prints one JSON
 line; with ``--serve`` it answers the suite's commands (``about``, ``window``, ``record``; see
 ``_serve.py``), so that the suite interleaves its windows with acdrive's.
 """
@@ -187,7 +191,14 @@ def main() -> None:
     parser.add_argument("--converter", choices=("averaged", "pwm"), default="pwm")
     parser.add_argument("--seconds", type=float, default=DURATION, help="model time [s]")
     parser.add_argument("--repeats", type=int, default=1, help="timed runs (one window)")
+    parser.add_argument(
+        "--first-result", action="store_true", help="build, simulate once, print the steps"
+    )
     args = parser.parse_args()
+    if args.first_result:
+        sim = build(args.converter == "pwm")
+        print(json.dumps({"steps": simulate(sim, args.seconds)}))
+        return
     if args.serve:
         serve({"about": about, "window": window, "record": save_record})
         return

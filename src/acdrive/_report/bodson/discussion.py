@@ -21,8 +21,8 @@ from acdrive._report.converter_effect import (
 )
 from acdrive._report.spread import SUBWINDOWS, peak_spread, round_to_spread
 from acdrive._report.verdicts import at_least
-from acdrive.analysis._drive_stability import (
-    DriveModel,
+from acdrive.analysis._drive_stability import DriveModel
+from acdrive.analysis._drive_studies import (
     default_grid,
     max_stable_bandwidth,
     stabilising_thresholds,

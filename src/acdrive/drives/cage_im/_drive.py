@@ -291,7 +291,8 @@ class IMDrive:
             )
         except SimulationDiverged as exc:
             raise SimulationDiverged(exc.time, divergence_hint(s), s.name) from None
-        return IMDriveResult.from_system(self, raw)
+        events, flags = self.event_counts(raw), self.event_flags(raw)
+        return IMDriveResult.from_system(s, raw, ports, events, flags)
 
     def event_counts(self, raw) -> dict[str, int]:
         """Named event totals (samples) of a ``SystemResult`` (module docstring)."""

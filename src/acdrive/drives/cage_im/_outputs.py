@@ -19,8 +19,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-import scipy.linalg
-import scipy.signal
 
 from acdrive._output import strict_json
 from acdrive._report.markdown import save_figure
@@ -41,6 +39,8 @@ def _save(fig, path: Path) -> Path:
 def closed_loop_reference_ss(plant, k):
     """(A, B, C) of r -> (i_alpha, i_beta) for the plant ``plant`` (``analysis.Plant2x2``,
     D = 0) with the diagonal controller diag(k, k) on e = r - y (Amezquita-Brooks (5)-(6))."""
+    import scipy.linalg  # here, not at the top: a run whose summary has no step comparison
+
     A, B, C = plant.A, plant.B, plant.C
     Ak, Bk, Ck = (scipy.linalg.block_diag(M, M) for M in (k.A, k.B, k.C))
     Dk = float(k.D[0, 0]) * np.eye(2)
@@ -54,6 +54,8 @@ def linear_step_response(params, w_mech: float, k, t: np.ndarray) -> np.ndarray:
     """(i_alpha, i_beta) per unit step of r_1 at t = 0 over ``t`` (continuous, no sampling):
     the stator-current plant (1) at electrical speed n_p w (``analysis._plants``) in closed loop
     with diag(k, k)."""
+    import scipy.signal  # (0.3 CPU-s) only for the scenarios that compare step responses
+
     plant = plant_from_params(params, params.n_p * w_mech)
     A, B, C = closed_loop_reference_ss(plant, k)
     system = scipy.signal.StateSpace(A, B[:, :1], C, np.zeros((2, 1)))
@@ -69,6 +71,8 @@ def delayed_linear_step_response(
     ``analysis._coupling.hold_delay``): plant and controller discretised with a zero-order hold
     at dt = delay / ``substeps`` (exact for inputs constant over dt), the command delayed by
     ``substeps`` steps, the outputs interpolated onto ``t``."""
+    import scipy.linalg
+
     plant = plant_from_params(params, params.n_p * w_mech)
     dt = delay / substeps if delay > 0 else float(np.min(np.diff(t))) / 10.0
     lag = substeps if delay > 0 else 0

@@ -4,8 +4,12 @@ the windows and rules of each figure)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import math
+from dataclasses import dataclass, field
 
+import numpy as np
+
+from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.drives.cage_im._physics import foc_voltage, modulation_signals
 from acdrive.drives.cage_im._setup import (
     FIELD_FRAME,
@@ -13,16 +17,6 @@ from acdrive.drives.cage_im._setup import (
     divergence_hint,
     profile_changes,
 )
-
-if TYPE_CHECKING:
-    from acdrive.drives.cage_im._drive import IMDrive
-
-import math
-from dataclasses import dataclass, field
-
-import numpy as np
-
-from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.errors import SimulationDiverged
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.sim._result import Result
@@ -64,10 +58,22 @@ class IMDriveResult(Result):
     descriptions: dict[str, str] = field(default_factory=dict)
 
     @classmethod
-    def from_system(cls, drive: IMDrive, raw, label: str | None = None) -> IMDriveResult:
-        s = drive.setup
+    def from_system(
+        cls,
+        setup: IMDriveSetup,
+        raw,
+        ports: dict,
+        events: dict[str, int],
+        flags: dict[str, np.ndarray],
+        label: str | None = None,
+    ) -> IMDriveResult:
+        """The view of ``raw`` (the ``sim.SystemResult`` of ``setup``'s system) that logged
+        ``ports`` (signal name -> port, ``IMDrive.log_ports``), with the drive's named event
+        totals and per-sample flags (``IMDrive.event_counts`` and ``event_flags``); a logged
+        signal that is not finite raises ``SimulationDiverged``."""
+        s = setup
         signals, units, descriptions = {}, {}, {}
-        for name, port in drive.log_ports().items():
+        for name, port in ports.items():
             signals[name] = raw.signal(port)
             units[name] = port.var.unit
             descriptions[name] = f"{port.var.doc} ({port.path})"
@@ -94,8 +100,8 @@ class IMDriveResult(Result):
             t=raw.t,
             signals=signals,
             units=units,
-            events=drive.event_counts(raw),
-            flags=drive.event_flags(raw),
+            events=events,
+            flags=flags,
             wall_time=raw.wall_time,
             steps=raw.steps,
             compile_time=raw.compile_time,

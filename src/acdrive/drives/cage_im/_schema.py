@@ -1,7 +1,7 @@
 """Scenario files of cage induction motor drives (``drive = "cage-im"``) -> ``IMDriveSetup``.
 
 ``scenarios.load_scenario`` hands a file that says ``drive = "cage-im"`` to
-:func:`build_im_setup`. Every field is checked on load with ``scenarios._files.Section``;
+:func:`build_im_setup`. Every field is checked on load with ``acdrive._toml.Section``;
 a bad one raises ``InputError("<path.to.field>", "<rule>")``, which the command prints as one line
 (exit code 2) before any simulation or output. Schema (all tables optional except [reference];
 units in the key names where not SI; defaults in brackets):
@@ -70,6 +70,8 @@ import math
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
+from acdrive._toml import Section as _Section
+from acdrive._toml import log_every_of, machine_from, simulation_span
 from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
@@ -102,8 +104,6 @@ from acdrive.errors import (
 )
 from acdrive.machines._induction import IMParams
 from acdrive.machines._record import electrical_fields
-from acdrive.scenarios._files import Section as _Section
-from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 from acdrive.sim._integrators import INTEGRATORS
 

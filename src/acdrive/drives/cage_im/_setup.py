@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
+from acdrive._toml import constant
 from acdrive.control._foc import (
     CURRENT_LIMIT,
     J_ESTIMATE,
@@ -24,11 +25,11 @@ from acdrive.control._foc import (
 )
 from acdrive.control._lti import builtin
 from acdrive.control._speed import SpeedPIGains
+from acdrive.core._profile import Profile
 from acdrive.errors import InputError
 from acdrive.machines._induction import DELORENZO_IM, IMParams
 from acdrive.plant._inverter import carrier_samples
 from acdrive.plant._mechanics import W_COULOMB
-from acdrive.scenarios._files import Profile, constant
 
 MODES = ("current", "speed-p", "speed-pi", "position")
 INVERTER_MODELS = ("averaged", "switching")

@@ -1,6 +1,6 @@
 """The linearised tolerated speed-loop bandwidth of a DFIM setup, for a sweep's ``[crosscheck]``
 (``acdrive.sweep._report``): the largest a_D,VEL at which the linearised sampled closed loop of
-motor 0 (``analysis._drive_stability.max_stable_bandwidth`` on the setup itself) is stable at the
+motor 0 (``analysis._drive_studies.max_stable_bandwidth`` on the setup itself) is stable at the
 setup's final speed reference and load, with every other field of the setup as it is."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import math
 def linearised_tolerated_bandwidth(setup, lower: float, upper: float) -> dict:
     """``speed_rpm``, ``load_nm``, ``converter_loss_v`` (the operating point) and
     ``linearised_tolerated`` [rad/s] searched in [``lower``, ``upper``] to 1 rad/s."""
-    from acdrive.analysis._drive_stability import max_stable_bandwidth
+    from acdrive.analysis._drive_studies import max_stable_bandwidth
 
     m = setup.motors[0]
     speed_rpm = float(m.speed_reference[1][-1]) * 30 / math.pi

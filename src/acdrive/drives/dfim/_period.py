@@ -17,7 +17,7 @@ before the run (``InputError``, exit 2), a period that is merely long for a loop
   the upper end of the usual 0.15-0.5 range of Astrom and Wittenmark) is warned.
 * **Rotor current loop** (current command, Bodson (45)-(50)): after the decoupling (46) the
   PI (47) with gains (49) sees sigma L_r di/dt = v - R_T i, held over each sample;
-  :func:`current_loop_radius` >= 1 is refused. The design is the first-order loop
+  ``drives._period.current_loop_radius`` >= 1 is refused. The design is the first-order loop
   a_D,CUR / (s + a_D,CUR) (50); the sampled loop's pole 1 - a_D,CUR T_s (R_T = 0) turns negative
   (the current rings at half the sample rate) above a_D,CUR T_s = 1, which is warned.
 * **PWM period**: the averaged converter applies each command for one whole sample; a converter
@@ -31,13 +31,12 @@ unstable in its reduced sampled form will not be stabilised by the rest.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from acdrive.drives._period import (
     CURRENT_BANDWIDTH_T_S_WARN,
     SPEED_BANDWIDTH_T_S_WARN,
+    current_loop_radius,
     speed_loop_radius,
 )
 from acdrive.drives.dfim._setup import IMPLAUSIBLE_FACTOR, DriveSetup, MotorSetup
@@ -48,21 +47,6 @@ from acdrive.errors import InputError
 SUPPLY_SAMPLES_WARN = 20
 #: the sample time of the built-in DFIM scenarios [s]: a refused loop with a longer T_s names it
 USUAL_SAMPLE_TIME = 200e-6
-
-
-def current_loop_radius(
-    sigma_L_r: float, R_T: float, K_PC: float, K_IC: float, T_s: float
-) -> float:
-    """Spectral radius of the sampled rotor current loop (module docstring): sigma L_r di/dt =
-    v - R_T i held over each sample (i_k+1 = phi i_k + gamma v_k, phi = exp(-R_T T_s / (sigma
-    L_r))), v_k = -K_PC i_k + K_IC I_k, I_k+1 = I_k - T_s i_k (reference zero)."""
-    rate = R_T / sigma_L_r
-    phi = math.exp(-rate * T_s)
-    gamma = (1.0 - phi) / R_T if rate * T_s > 1e-12 else T_s / sigma_L_r
-    if K_IC == 0.0:  # (49) with R_T = 0: no integral action, the integrator acts on nothing
-        return abs(phi - gamma * K_PC)
-    A = np.array([[phi - gamma * K_PC, gamma * K_IC], [-T_s, 1.0]])
-    return float(np.max(np.abs(np.linalg.eigvals(A))))
 
 
 def _modes(setup: DriveSetup) -> set[str]:

@@ -55,6 +55,8 @@ import warnings
 
 import numpy as np
 
+from acdrive._toml import Section as _Section
+from acdrive._toml import log_every_of, machine_from, simulation_span
 from acdrive.control._speed import SpeedPIGains, require_feedforward_fraction
 from acdrive.drives.dfim._period import check_control_period
 from acdrive.drives.dfim._result import N_LOG
@@ -82,8 +84,6 @@ from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
 from acdrive.machines._record import electrical_fields
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
-from acdrive.scenarios._files import Section as _Section
-from acdrive.scenarios._files import log_every_of, machine_from, simulation_span
 from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 __all__ = ["KIND", "build_dfim_setup", "choose_substeps", "fastest_mode"]

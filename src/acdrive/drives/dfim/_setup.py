@@ -13,13 +13,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
+from acdrive._toml import constant
 from acdrive.control import _dfim as ctl
 from acdrive.control._speed import SpeedPIGains
+from acdrive.core._profile import Profile
 from acdrive.drives.dfim._result import DriveResult
 from acdrive.errors import InputError
 from acdrive.machines._dfim import DFIMParams
 from acdrive.plant._converter import max_voltage_magnitude
-from acdrive.scenarios._files import Profile, constant
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The PM speed drive as a system of parts: ``build(setup)`` and ``run(setup)``.
+"""The PM speed drive as a system of parts: ``build(setup)`` (``_entry.run`` simulates it).
 
 Parts (plant and sensors are acdrive's existing parts; the controller is ``drives.pm._control``):
 
@@ -147,24 +147,3 @@ def build(setup: PMDriveSetup) -> Built:
         "tau_e": machine.out.tau_e,
     }
     return Built(system, {}, {}, log)
-
-
-def run(setup: PMDriveSetup, compiled=None):
-    """Simulate ``setup``: (the engine's ``SystemResult`` with ``summary(setup, result)``
-    attached as its ``summary``, that summary). ``compiled`` reuses a ``System.compile()`` of
-    the same topology."""
-    from acdrive.drives.pm._metrics import summary
-
-    built = build(setup)
-    compiled = compiled or built.system.compile()
-    result = compiled.run(
-        setup.duration,
-        setup.sample_time,
-        substeps=setup.substeps,
-        initial=built.initial,
-        held=built.held,
-        log=list(built.log.values()),
-        log_every=setup.log_every,
-    )
-    result.summary = summary(setup, result, built.log)
-    return result, result.summary

@@ -5,6 +5,7 @@ and its comparison with ICAD's (10)).
 
 * ``build_scenario(setup)``: the system of parts of one run (``_build.Built``: system, initial
   states, held outputs, logged ports);
+* ``run(setup, compiled)``: simulate a speed-drive setup and summarise it (``_metrics``);
 * ``runs(setup)``: how many simulations ``run_outcome`` makes;
 * ``run_scenario(setup)``: (result, summary) of one scenario;
 * ``run_outcome(setup, on_run)``: a ``PMOutcome`` (``results`` by label with their wall time,
@@ -21,7 +22,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from acdrive.drives.pm import _build, _icad_step
+from acdrive.drives.pm import _build, _icad_step, _metrics
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._setup import PMDriveSetup
 from acdrive.errors import InputError
@@ -44,6 +45,25 @@ def build_scenario(setup) -> _build.Built:
     if isinstance(setup, CurrentStepSetup):
         return _icad_step.build(setup)
     return _build.build(setup)
+
+
+def run(setup: PMDriveSetup, compiled=None):
+    """Simulate ``setup``: (the engine's ``SystemResult`` with ``summary(setup, result)``
+    attached as its ``summary``, that summary). ``compiled`` reuses a ``System.compile()`` of
+    the same topology."""
+    built = _build.build(setup)
+    compiled = compiled or built.system.compile()
+    result = compiled.run(
+        setup.duration,
+        setup.sample_time,
+        substeps=setup.substeps,
+        initial=built.initial,
+        held=built.held,
+        log=list(built.log.values()),
+        log_every=setup.log_every,
+    )
+    result.summary = _metrics.summary(setup, result, built.log)
+    return result, result.summary
 
 
 def runs(setup) -> int:
@@ -73,7 +93,7 @@ def run_outcome(setup, on_run=None) -> PMOutcome:
         return PMOutcome(setup, results, {**out.summary, **run_timing(results.values())})
     if on_run is not None:
         on_run(SPEED_LABELS[0])
-    result, summary = _build.run(setup)
+    result, summary = run(setup)
     return PMOutcome(setup, {SPEED_LABELS[0]: result}, {**summary, **run_timing([result])})
 
 
@@ -84,27 +104,20 @@ def run_scenario(setup, compiled=None):
     if isinstance(setup, CurrentStepSetup):
         out = _icad_step.run(setup, compiled)
         return out.runs[0], out.summary
-    return _build.run(setup, compiled)
+    return run(setup, compiled)
 
 
 def write(outcome: PMOutcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
     """Each result's table and figure (in ``folder/<label>/`` when there are several) and
     ``summary.json``; returns the summary written."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for label, result in outcome.results.items():
         where = folder / label if len(outcome.results) > 1 else folder
         where.mkdir(parents=True, exist_ok=True)
         result.save(where, fmt)
-        if figures:
-            fig = result.plot()
-            fig.savefig(where / "signals.png", dpi=100)
-            plt.close(fig)
+        if figures:  # matplotlib only here, on the Agg canvas without pyplot
+            result.plot(pyplot=False).savefig(where / "signals.png", dpi=100)
     summary = outcome.summary
     (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return summary

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive._frames import K_PEAK
+from acdrive._toml import constant
 from acdrive.analysis._coupling import closed_loop, hold_delay, icad_coupling, pmsg_pi
 from acdrive.control._current import CurrentProgram
 from acdrive.control._lti import LTI
@@ -64,7 +65,6 @@ from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSGParams
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._mechanics import PrescribedSpeed
-from acdrive.scenarios._files import constant
 from acdrive.sim._system import System
 
 #: the relative complex difference allowed between the measured coupling and (10), at the

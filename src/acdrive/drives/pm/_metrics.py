@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._frames import K_PEAK
+from acdrive.drives.pm._build import build
 from acdrive.drives.pm._setup import PMDriveSetup
 
 #: the final window: the last 10 % of the run
@@ -28,8 +29,6 @@ def signals(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
     """The logged signals of ``result`` by the names of ``log`` (name -> port), the run's
     ``build(setup).log``; rebuilt from ``setup`` only when the caller does not hold it."""
     if log is None:
-        from acdrive.drives.pm._build import build
-
         log = build(setup).log
     return {name: result.signal(port) for name, port in log.items()}
 

@@ -66,6 +66,13 @@ class PMDriveKind(Drive):
         built = build_scenario(setup)
         return _BatchRun(built.system, (built.initial, built.held))
 
+    def reducers(self, setup) -> list:
+        from acdrive.drives.pm._reducers import pm_reducers
+
+        if isinstance(setup, CurrentStepSetup):
+            return []  # not a batch variant (``build``)
+        return pm_reducers(setup)
+
     def params_fields(self, machine) -> tuple[str, ...] | None:
         from acdrive.drives.pm._schema import MACHINE_FIELDS
 

@@ -1,6 +1,6 @@
 """Scenario tables of the PM speed drive (``drive = "pm"``) -> ``PMDriveSetup``.
 
-Every field is read through ``scenarios._files.Section``: an unknown key, a wrong type or a
+Every field is read through ``acdrive._toml.Section``: an unknown key, a wrong type or a
 broken rule raises ``InputError("<table>.<key>", "<rule>")`` (one line, before any work). Schema
 (defaults in brackets; units in the key names where not SI):
 
@@ -38,13 +38,13 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from acdrive._toml import Section, parse_toml
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._machines import BLY171D, IPMSM_2KW2
 from acdrive.drives.pm._setup import CONVERTERS, PMDriveSetup
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
 from acdrive.machines._record import electrical_fields
-from acdrive.scenarios._files import Section, parse_toml
 
 DRIVE = "pm"
 #: machines a scenario may name (``drives.pm._machines`` and seed 001's PMSG)

@@ -1,7 +1,7 @@
 """The setup of one PM speed-drive run: machine, converter, controller design, profiles, run.
 
 Every field is checked on construction (``InputError`` naming the field and the rule), before any
-part is built. Currents are given as phase PEAK amperes (what a datasheet gives); the parts work
+part is built, and so is the current loop against the control period (``drives.pm._period``). Currents are given as phase PEAK amperes (what a datasheet gives); the parts work
 with space vectors, |i| = sqrt(3/2) I_pk (``acdrive._frames.K_PEAK``).
 """
 
@@ -17,6 +17,7 @@ from acdrive.drives.pm._design import (
     mtpa_torque,
     require_salient_or_round,
 )
+from acdrive.drives.pm._period import check_current_period
 from acdrive.errors import InputError, require_between, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSGParams
 
@@ -107,6 +108,7 @@ class PMDriveSetup:
                 "voltage_margin", "voltage_margin V_dc / sqrt(2) must exceed R_s times the "
                 f"current limit (the resistive drop at full current, {est.R_s * self.i_max:g} V)"
             )  # fmt: skip
+        check_current_period(self)
 
     @property
     def controller_machine(self) -> PMSGParams:

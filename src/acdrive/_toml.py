@@ -1,0 +1,182 @@
+"""The validated reading of the TOML tables users write (scenario and sweep files).
+
+``parse_toml`` reads a document; ``Section`` wraps one of its tables: every field read through it
+is checked (type, finiteness, the rule given) and named by its path in an ``InputError``;
+``done()`` reports keys nobody read. ``machine_from``, ``simulation_span`` and ``log_every_of``
+read the tables every drive's scenario has. The drives' loaders (``drives.<kind>._schema``) and
+the sweep files build on it; it sits below both, so a drive imports nothing of
+``acdrive.scenarios`` (which finds the drives through their registry).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import tomllib
+
+from acdrive.core._profile import Profile
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+
+
+def constant(value: float) -> Profile:
+    """The profile of a constant ``value``."""
+    return Profile.constant(float(value))
+
+
+#: a UTF-8 byte-order mark, as Windows editors write at the start of a file
+BOM = "\ufeff"
+
+
+def parse_toml(text: str, origin: str, field: str) -> dict:
+    """The TOML document ``text`` (read from ``origin``), or an ``InputError`` on ``field``.
+
+    A leading UTF-8 byte-order mark is dropped (TOML requires UTF-8, and a BOM carries nothing
+    else). A document nested so deeply that the parser runs out of stack (thousands of ``[``) is
+    refused as invalid TOML for acdrive, not left to crash the command."""
+    text = text.removeprefix(BOM)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(field, f"{origin} is not valid TOML ({exc})") from None
+    except RecursionError:
+        raise InputError(
+            field, f"{origin} nests arrays or tables too deeply to be read (a scenario or sweep "
+            "needs a few levels)"
+        ) from None  # fmt: skip
+
+
+class Section:
+    """A TOML table being validated: tracks the keys read so unknown keys can be reported."""
+
+    def __init__(self, data, path: str):
+        if not isinstance(data, dict):
+            raise InputError(path, "must be a table")
+        self.data, self.path, self.used = data, path, set()
+
+    def field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def get(self, key, default=None):
+        self.used.add(key)
+        return self.data.get(key, default)
+
+    def has(self, key) -> bool:
+        return key in self.data
+
+    def number(self, key, default, rule=require_finite):
+        value = self.get(key, default)
+        return rule(self.field(key), value)
+
+    def integer(self, key, default, minimum=1, maximum=None):
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise InputError(self.field(key), f"must be an integer >= {minimum}")
+        if maximum is not None and value > maximum:
+            raise InputError(self.field(key), f"must be an integer <= {maximum}, got {value}")
+        return value
+
+    def boolean(self, key, default):
+        value = self.get(key, default)
+        if not isinstance(value, bool):
+            raise InputError(self.field(key), "must be true or false")
+        return value
+
+    def text(self, key, default=None, choices=None):
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            raise InputError(self.field(key), "must be a string")
+        if choices is not None and value not in choices:
+            raise InputError(self.field(key), f"must be one of {', '.join(choices)}")
+        return value
+
+    def profile(self, key, scale=1.0, rule=require_finite):
+        """A list of [t, value] pairs with non-decreasing t >= 0, as a ``core.Profile``."""
+        value = self.get(key)
+        name = self.field(key)
+        if not isinstance(value, list) or not value:
+            raise InputError(name, "must be a non-empty list of [time_s, value] pairs")
+        times, values = [], []
+        for i, pair in enumerate(value):
+            if not isinstance(pair, list) or len(pair) != 2:
+                raise InputError(f"{name}[{i}]", "must be a [time_s, value] pair")
+            times.append(require_nonnegative(f"{name}[{i}][0]", pair[0]))
+            values.append(rule(f"{name}[{i}][1]", pair[1]) * scale)
+        if any(b < a for a, b in itertools.pairwise(times)):
+            raise InputError(name, "times must be non-decreasing")
+        return Profile(times, values)
+
+    def constant_or_profile(self, key, default, scale=1.0, rule=require_finite):
+        if self.has(key) and self.has(f"{key}_profile"):
+            raise InputError(self.field(key), f"give either {key} or {key}_profile, not both")
+        if self.has(f"{key}_profile"):
+            return self.profile(f"{key}_profile", scale, rule)
+        return constant(self.number(key, default, rule) * scale)
+
+    def done(self):
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise InputError(self.field(unknown[0]), "unknown key")
+
+
+def machine_from(
+    section: Section,
+    kind: type,
+    fields: tuple[str, ...],
+    default: str,
+    params_label: str = "[params]",
+):
+    """The machine of ``section``: a built-in name (``machine``, of parameter class ``kind``) or
+    the table ``params`` holding ``fields``, validated by ``kind`` itself; not both."""
+    if section.has("machine") and section.has("params"):
+        raise InputError(
+            section.field("machine"), f"give either machine or {params_label}, not both"
+        )
+    if section.has("params"):
+        params = Section(section.get("params"), section.field("params"))
+        values = {k: params.get(k) for k in fields}
+        params.done()
+        missing = [k for k, v in values.items() if v is None]
+        if missing:
+            raise InputError(params.field(missing[0]), "is required")
+        try:
+            return kind(**values)
+        except InputError as exc:
+            raise InputError(params.field(exc.field), exc.rule) from None
+    # the machines (and numba, which their kernels need) are imported only here, when a
+    # scenario is built: listing or reading scenarios does not pay for them
+    from acdrive.machines import _registry as registry
+
+    name = section.text("machine", default, choices=registry.names(kind))
+    return registry.MACHINES[name]
+
+
+def simulation_span(sim: Section, duration: float, sample_time: float) -> tuple[float, float]:
+    """(duration, sample time) [s] of a ``[simulation]`` table (defaults ``duration`` and
+    ``sample_time``), both > 0 and the run at least one sample long (a run shorter than the
+    default sample time blames the duration, one shorter than a given sample time the latter)."""
+    default_sample_time = sample_time
+    duration = sim.number("duration", duration, require_positive)
+    sample_time = sim.number("sample_time", default_sample_time, require_positive)
+    if sample_time > duration:
+        if not sim.has("sample_time"):  # the default sample time: the duration is at fault
+            raise InputError(
+                sim.field("duration"),
+                f"must be at least one sample, {sim.field('sample_time')} = {sample_time:g} s "
+                f"(the default), got {duration:g} s",
+            )
+        raise InputError(sim.field("sample_time"), f"must not exceed {sim.field('duration')}")
+    return duration, sample_time
+
+
+def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
+    """``log_every`` of a ``[simulation]`` table: a positive integer at most the number of
+    control steps of the run (default 1)."""
+    log_every = sim.integer("log_every", 1)
+    steps = duration / sample_time  # a float: may be astronomically large
+    if math.isfinite(steps) and log_every > round(steps):
+        raise InputError(
+            sim.field("log_every"),
+            f"must not exceed the number of control steps of the run ({round(steps)} = "
+            f"{sim.field('duration')} / {sim.field('sample_time')})",
+        )
+    return log_every
