@@ -207,7 +207,7 @@ def test_a_kind_without_compiled_kernels_falls_back_to_the_specialised_compile_a
 ):
     from acdrive.errors import Notice
     from acdrive.sim import _codegen as codegen
-    from acdrive.sim import _kernels as kernels
+    from acdrive.sim import _tier
 
     user = _user_kind(tmp_path)
     monkeypatch.setenv("ACDRIVE_LOOP_TIER", "auto")
@@ -227,7 +227,7 @@ def test_a_kind_without_compiled_kernels_falls_back_to_the_specialised_compile_a
 
     # once the kind's kernels are compiled (what the background compile does), a topology never
     # seen before runs in the generic loop without compiling a loop of its own
-    kernels.addresses(user.Decay)
+    _tier.compile_generic_tier(System([one], []))
     fast, slow = user.Decay("fast", a=20.0), user.Decay("slow", a=5.0)
     compiled = System([fast, slow], []).compile()
     assert compiled.tier == "generic"

@@ -117,6 +117,20 @@ def describe_compile(system, why: str) -> str:
             f"runs load it): {why}")  # fmt: skip
 
 
+def compile_generic_tier(system) -> float:
+    """Compile now, in this process, what the generic loop needs to run ``system`` (its part
+    kinds' kernels and the generic loop itself, each loaded instead if cached): what the
+    background compile does after a fallback, for a caller that must not leave a process
+    behind (a benchmark). Returns the seconds spent compiling."""
+    from acdrive.sim import _generic
+
+    total = 0.0
+    for kind in kinds_of(system):
+        total += kernels.addresses(kind)[1]
+    seconds, compiled = codegen.compile_for(_generic.run, GENERIC_RUN_ARGS)
+    return total + (seconds if compiled else 0.0)
+
+
 def background_enabled() -> bool:
     return os.environ.get("ACDRIVE_BACKGROUND_COMPILE", "1") != "0"
 
