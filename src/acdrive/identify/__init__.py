@@ -21,7 +21,7 @@ __all__, __getattr__, __dir__ = namespace(
         "sampled_admittance": "._circuit",
         "StandstillPlan": "._experiment",
         "CurrentSensor": "._experiment",
-        "TestLog": "._experiment",
+        "StandstillLog": "._experiment",
         "dc_test": "._experiment",
         "injection_test": "._experiment",
         "read_log": "._log",

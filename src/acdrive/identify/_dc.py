@@ -14,7 +14,8 @@ separate them. One level alone gives V_k / I_k = R_s + U / I_k: R_s biased by U 
 
 **Estimator.** Plateaus are the runs of equal command in the log; each must hold at least
 ``MIN_PLATEAU_ROWS`` rows, and only its last ``SETTLED_FRACTION`` is used, where the two halves
-must agree within ``SETTLED_SIGMAS`` standard errors (else the level was not held long enough).
+must agree within ``SETTLED_SIGMAS`` standard errors of their difference or ``SETTLED_FLOOR`` of
+the current, whichever is larger (else the level was not held long enough).
 The mean current of plateau k, I_k, has the standard error s_k / sqrt(n_k) of its n_k samples'
 spread s_k (white sensor noise). The fit is ``least_squares`` of (I_k - (V_k - U) / R_s) / se_k,
 the error sitting in the measured current; the covariance (J^T J)^-1 is scaled by the residual
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.identify._experiment import TestLog
+from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
     Estimate,
@@ -43,6 +44,7 @@ from acdrive.identify._fit import (
 MIN_PLATEAU_ROWS = 40
 SETTLED_FRACTION = 0.25
 SETTLED_SIGMAS = 4.0
+SETTLED_FLOOR = 1e-4
 #: a z-quantile for the DC intervals: the noise variance is known from thousands of samples
 Z_95 = 1.959963984540054
 
@@ -71,7 +73,7 @@ class DCStepFit:
     dof: int
 
 
-def plateaus(log: TestLog) -> list[Plateau]:
+def plateaus(log: StandstillLog) -> list[Plateau]:
     """The settled plateaus of ``log`` (module docstring); an InputError names the rule broken."""
     where = f"{log.source}: column 'v_a'"
     edges = np.flatnonzero(np.diff(log.v_a) != 0.0) + 1
@@ -92,7 +94,9 @@ def plateaus(log: TestLog) -> list[Plateau]:
         stderr = spread / np.sqrt(window.size)
         first, second = np.array_split(window, 2)
         drift = abs(float(np.mean(second) - np.mean(first)))
-        if drift > SETTLED_SIGMAS * 2.0 * max(stderr, 1e-12):  # the halves' difference: 2 se
+        # the halves' means differ with standard error 2 se; a drift below SETTLED_FLOOR of the
+        # current is no error worth a refusal (a noise-free log has se = 0)
+        if drift > max(SETTLED_SIGMAS * 2.0 * stderr, SETTLED_FLOOR * abs(mean)):
             raise InputError(
                 where,
                 f"the current of the level {voltage:g} V has not settled in its last "
@@ -120,7 +124,7 @@ def _solve(V, I, se, start):
     return fit
 
 
-def fit_dc_steps(log: TestLog, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> DCStepFit:
+def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> DCStepFit:
     """R_s and the inverter voltage error U from a DC-step log (module docstring)."""
     found = plateaus(log)
     V = np.array([p.voltage for p in found])

@@ -51,7 +51,7 @@ LOG_COLUMNS = {
 
 
 @dataclass(frozen=True)
-class TestLog:
+class StandstillLog:
     """One logged test: equal-length arrays ``time`` [s], ``v_a`` [V], ``i_a`` [A]; ``source``
     names where it came from (a file or a simulated test) for messages."""
 
@@ -155,7 +155,7 @@ def _bench():
 
 
 def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
-             source: str) -> TestLog:  # fmt: skip
+             source: str) -> StandstillLog:  # fmt: skip
     """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on the cage IM
     ``machine`` (an ``IMParams``) and return the log with the sensor's reading (seeded)."""
     from acdrive.machines._cage_part import CageInductionMachine
@@ -178,16 +178,16 @@ def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
     v_a = result.signal(inverter.out.v_lim).real / K_PEAK
     i_a = result.signal(motor.out.i_s).real / K_PEAK
     rng = np.random.default_rng(seed)
-    return TestLog(result.t.copy(), v_a, measured_current(i_a, plan.sensor, rng), source)
+    return StandstillLog(result.t.copy(), v_a, measured_current(i_a, plan.sensor, rng), source)
 
 
-def dc_test(machine, plan: StandstillPlan, seed: int = 0) -> TestLog:
+def dc_test(machine, plan: StandstillPlan, seed: int = 0) -> StandstillLog:
     """The DC-step test of ``plan`` on ``machine`` (module docstring)."""
     return run_test(machine, plan, lambda t: dc_steps(plan, t), plan.dc_duration(), seed,
                     "simulated DC-step test")  # fmt: skip
 
 
-def injection_test(machine, plan: StandstillPlan, seed: int = 1) -> TestLog:
+def injection_test(machine, plan: StandstillPlan, seed: int = 1) -> StandstillLog:
     """The multisine injection test of ``plan`` on ``machine`` (module docstring)."""
     if any(not isinstance(k, int) or k < 1 for k in plan.tones):
         raise InputError("tones", "must be integer multiples >= 1 of the base frequency")

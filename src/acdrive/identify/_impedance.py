@@ -47,7 +47,7 @@ from acdrive.identify._circuit import (
     sampled_admittance,
     standstill_impedance,
 )
-from acdrive.identify._experiment import TestLog
+from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
     Estimate,
@@ -106,7 +106,7 @@ class ImpedanceFit:
         return standstill_impedance(self.params, 2.0 * math.pi * self.spectrum.frequency)
 
 
-def spectrum(log: TestLog, base_frequency: float, settle: float,
+def spectrum(log: StandstillLog, base_frequency: float, settle: float,
              voltage_error: float | None = None) -> Spectrum:  # fmt: skip
     """The window and tones of ``log`` (module docstring)."""
     require_positive("base_frequency", base_frequency)
@@ -180,7 +180,7 @@ def _solve(spec: Spectrum, theta0):
                          gtol=1e-12, max_nfev=2000)  # fmt: skip
 
 
-def fit_impedance(log: TestLog, base_frequency: float, settle: float,
+def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                   voltage_error: float | None = None, seed: int = 0,
                   bootstrap: int = BOOTSTRAP_COUNT, check: bool = True) -> ImpedanceFit:  # fmt: skip
     """The inverse-Gamma parameters of an injection log with their intervals (module docstring).

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.identify._experiment import LOG_COLUMNS, TestLog
+from acdrive.identify._experiment import LOG_COLUMNS, StandstillLog
 
 #: the fewest rows a log may have
 MIN_ROWS = 16
@@ -42,8 +42,8 @@ def _name_and_unit(header: str, metadata_unit: str | None, field: str) -> tuple[
     )
 
 
-def check_columns(columns: dict[str, tuple[str, np.ndarray]], field: str) -> TestLog:
-    """A ``TestLog`` from header name -> (unit, values), every rule of the module docstring."""
+def check_columns(columns: dict[str, tuple[str, np.ndarray]], field: str) -> StandstillLog:
+    """A ``StandstillLog`` from header name -> (unit, values), every rule of the module docstring."""
     for name, (unit, _) in columns.items():
         if name not in LOG_COLUMNS:
             raise InputError(f"{field}: column '{name}'",
@@ -83,10 +83,10 @@ def check_columns(columns: dict[str, tuple[str, np.ndarray]], field: str) -> Tes
             f"samples must be uniformly spaced (step {median:.6g} s; a step deviates by "
             f"{worst:.2g} of it, at most {UNIFORM_RTOL:g} allowed)",
         )
-    return TestLog(time, values["v_a"], values["i_a"], field)
+    return StandstillLog(time, values["v_a"], values["i_a"], field)
 
 
-def read_log(path, field: str = "TEST_FILE") -> TestLog:
+def read_log(path, field: str = "TEST_FILE") -> StandstillLog:
     """The log in ``path`` (``.csv`` or ``.parquet``), checked (module docstring)."""
     path = Path(path)
     if path.suffix not in FORMATS:
@@ -123,7 +123,7 @@ def read_log(path, field: str = "TEST_FILE") -> TestLog:
     return check_columns(columns, field)
 
 
-def write_log(log: TestLog, path) -> Path:
+def write_log(log: StandstillLog, path) -> Path:
     """Write ``log`` as CSV or Parquet (by the suffix of ``path``) with unit-carrying headers;
     times and values in full precision (``repr``), so reading it back gives the same numbers."""
     path = Path(path)

@@ -19,7 +19,7 @@ import numpy as np
 
 from acdrive.identify._circuit import LEAKAGE_SPLITS, InverseGamma, t_circuit
 from acdrive.identify._dc import DCStepFit, fit_dc_steps
-from acdrive.identify._experiment import TestLog
+from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
     Estimate,
@@ -64,8 +64,8 @@ def _t_values(values, n_p: int, split: str) -> np.ndarray:
     return np.array([getattr(machine, name) for name, _, _ in T_FIELDS])
 
 
-def identify_standstill(injection: TestLog, base_frequency: float, settle: float,
-                        dc: TestLog | None = None, n_p: int = 1, split: str = "equal",
+def identify_standstill(injection: StandstillLog, base_frequency: float, settle: float,
+                        dc: StandstillLog | None = None, n_p: int = 1, split: str = "equal",
                         seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> StandstillIdentification:  # fmt: skip
     """Identify a cage IM from its standstill logs (module docstring)."""
     t_circuit(InverseGamma(1.0, 1.0, 1.0, 1.0), n_p, split)  # the split and n_p, checked first
