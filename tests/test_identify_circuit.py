@@ -9,8 +9,13 @@ import pytest
 from scipy.signal import cont2discrete
 
 from acdrive.errors import InputError
-from acdrive.identify import InverseGamma, inverse_gamma, sampled_admittance, standstill_impedance
-from acdrive.identify import t_circuit
+from acdrive.identify import (
+    InverseGamma,
+    inverse_gamma,
+    sampled_admittance,
+    standstill_impedance,
+    t_circuit,
+)
 from acdrive.machines import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, stator_current_ss
 
 MACHINES = [DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W]
@@ -60,7 +65,7 @@ def test_any_assumed_split_gives_back_the_same_terminal_behaviour(machine, split
 @pytest.mark.parametrize("hold", [2e-4, 1e-3])
 def test_the_sampled_admittance_is_the_zoh_discretised_machine_model(machine, hold):
     A, B, C, D = stator_current_ss(machine, 0.0)
-    Ad, Bd, Cd, Dd, _ = cont2discrete((A, B, C, D), hold, method="zoh")
+    Ad, Bd, Cd, _, _ = cont2discrete((A, B, C, D), hold, method="zoh")
     w = W[W * hold < math.pi]
     z = np.exp(1j * w * hold)
     expected = np.array([(Cd @ np.linalg.solve(zk * np.eye(4) - Ad, Bd))[0, 0] for zk in z])

@@ -10,8 +10,13 @@ import pytest
 from scipy.linalg import expm
 
 from acdrive.errors import InputError
-from acdrive.identify import StandstillLog, fit_dc_steps, fit_impedance, inverse_gamma
-from acdrive.identify import standstill_impedance
+from acdrive.identify import (
+    StandstillLog,
+    fit_dc_steps,
+    fit_impedance,
+    inverse_gamma,
+    standstill_impedance,
+)
 from acdrive.machines import DELORENZO_IM, UGALDE_IM_300W
 
 HOLD = 2e-4  # a 5 kHz carrier, one sample per period

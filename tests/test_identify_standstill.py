@@ -8,8 +8,15 @@ import dataclasses
 
 import pytest
 
-from acdrive.identify import CurrentSensor, StandstillPlan, dc_test, identify_standstill, injection_test
-from acdrive.identify import fit_impedance, inverse_gamma
+from acdrive.identify import (
+    CurrentSensor,
+    StandstillPlan,
+    dc_test,
+    fit_impedance,
+    identify_standstill,
+    injection_test,
+    inverse_gamma,
+)
 from acdrive.machines import DELORENZO_IM, UGALDE_IM_300W
 
 pytestmark = pytest.mark.slow

@@ -14,14 +14,22 @@ import sys
 
 LOG_SUFFIXES = (".csv", ".parquet")
 #: the intervals printed beside each value
-INTERVAL_HEADER = ("quantity", "value", "unit", "95% CI (Jacobian)", "95% CI (bootstrap)", "meaning")
+INTERVAL_HEADER = (
+    "quantity",
+    "value",
+    "unit",
+    "95% CI (Jacobian)",
+    "95% CI (bootstrap)",
+    "meaning",
+)
 
 
 def register(subparsers):
     from acdrive.identify._circuit import LEAKAGE_SPLITS
 
     p = subparsers.add_parser(
-        "identify", help="cage IM parameters from standstill tests (DC steps, multisine), with CIs"
+        "identify",
+        help="cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
     )
     p.add_argument("source", metavar="TEST_FILE_OR_SCENARIO",
                    help="injection log (.csv / .parquet) or a built-in cage IM to simulate")  # fmt: skip

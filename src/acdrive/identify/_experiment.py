@@ -106,7 +106,9 @@ def multisine(plan: StandstillPlan, t: np.ndarray) -> np.ndarray:
     v = np.zeros_like(t)
     for k, multiple in enumerate(plan.tones, start=1):
         phase = -math.pi * k * (k - 1) / count
-        v += plan.tone_amplitude * np.cos(2.0 * math.pi * multiple * plan.base_frequency * t + phase)
+        v += plan.tone_amplitude * np.cos(
+            2.0 * math.pi * multiple * plan.base_frequency * t + phase
+        )
     return v
 
 
@@ -163,7 +165,7 @@ def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
     require_positive("duration", duration)
     compiled, parts = _bench()
     T = plan.sample_time
-    n = int(round(duration / T))
+    n = round(duration / T)
     t = np.arange(n + 1) * T
     command = K_PEAK * voltage(t)
     variants = [

@@ -134,8 +134,8 @@ def write_log(log: StandstillLog, path) -> Path:
     if path.suffix == ".csv":
         with open(path, "w", encoding="utf-8") as handle:
             handle.write(",".join(headers) + "\n")
-            for row in zip(*data, strict=True):
-                handle.write(",".join(repr(float(x)) for x in row) + "\n")
+            handle.writelines(",".join(repr(float(x)) for x in row) + "\n"
+                              for row in zip(*data, strict=True))  # fmt: skip
     else:
         import pyarrow as pa
         import pyarrow.parquet as pq

@@ -92,13 +92,20 @@ def identifiability(result: StandstillIdentification) -> list[str]:
     spec = result.impedance.spectrum
     corner = result.params.rotor_corner / (2.0 * np.pi)
     lines = [
-        f"identified: R_s, L_sigma, R_R, L_M (the inverse-Gamma circuit) from "
-        f"{spec.frequency.size} tones, {spec.frequency[0]:g} to {spec.frequency[-1]:g} Hz, "
-        f"bracketing the rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz",
-        "not identifiable at standstill: the split of the leakage between stator and rotor "
-        f"(hence L_m, L_r, R_r separately); the T-circuit assumes {LEAKAGE_SPLITS[result.split]}",
-        f"not identified: the pole pairs n_p = {result.n_p} (given), the inertia and friction "
-        "(no motion)",
+        (
+            f"identified: R_s, L_sigma, R_R, L_M (the inverse-Gamma circuit) from "
+            f"{spec.frequency.size} tones, {spec.frequency[0]:g} to {spec.frequency[-1]:g} Hz, "
+            f"bracketing the rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz"
+        ),
+        (
+            "not identifiable at standstill: the split of the leakage between stator and rotor "
+            "(hence L_m, L_r, R_r separately); the T-circuit assumes "
+            f"{LEAKAGE_SPLITS[result.split]}"
+        ),
+        (
+            f"not identified: the pole pairs n_p = {result.n_p} (given), the inertia and "
+            "friction (no motion)"
+        ),
     ]
     if result.dc is None:
         lines.append("no DC-step log: the inverter's voltage error was neither measured nor "
