@@ -136,3 +136,13 @@ def test_a_dc_level_that_has_not_settled_or_a_single_level_is_refused():
     v = np.full(t.size, 12.0)
     with pytest.raises(InputError, match=r"needs at least two different nonzero levels"):
         fit_dc_steps(StandstillLog(t, v, sampled_response(DELORENZO_IM, v), "dc"))
+
+
+def test_a_current_that_is_absent_or_reversed_is_refused_before_the_fit():
+    log = injection_log(DELORENZO_IM, seed=2)
+    reversed_sign = StandstillLog(log.time, log.v_a, -log.i_a, "log")
+    with pytest.raises(InputError, match=r"^log: column 'i_a': the winding would deliver power"):
+        fit_impedance(reversed_sign, 1.0, 2.0)
+    nothing = StandstillLog(log.time, log.v_a, np.zeros(log.time.size), "log")
+    with pytest.raises(InputError, match=r"^log: column 'i_a': carries no current"):
+        fit_impedance(nothing, 1.0, 2.0)

@@ -25,6 +25,10 @@ weight is one for white current noise. 95 % intervals: Jacobian covariance scale
 variance with Student's t over 2K - 4 degrees of freedom, and a bootstrap redrawing the K complex
 residuals (inflated by sqrt(2K / (2K - 4)) for the fitted degrees of freedom) (``identify._fit``).
 
+**Plausibility**, checked before the fit: every tone carries current, and the winding absorbs
+power at every tone (Re(V conj(I)) > 0: a reversed current sign or another phase's current is
+refused, naming ``i_a``).
+
 **Identifiability**, checked on the fit, each an ``InputError`` naming the parameter and the rule:
 at least ``MIN_TONES`` tones; at least ``SAMPLES_PER_TONE`` samples per period of the highest
 tone; the tones must bracket the fitted rotor corner R_R / (2 pi L_M) (all tones far below it
@@ -141,6 +145,18 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
     if frequency[-1] * hold * SAMPLES_PER_TONE > 1.0 + 1e-12:
         raise InputError(where, f"sampling at {1 / hold:g} Hz is too coarse for the tone at "
                          f"{frequency[-1]:g} Hz: at least {SAMPLES_PER_TONE} samples per period")  # fmt: skip
+    current = I[excited]
+    if np.any(current == 0.0):
+        raise InputError(f"{log.source}: column 'i_a'", "carries no current at the injected "
+                         "tones (is the motor connected and the current the phase-a one?)")  # fmt: skip
+    # twice the mean power at each tone, the sampled current advanced by the half hold period
+    # the zero-order hold delays it (identify._circuit.sampled_admittance, far below 1 / T)
+    power = (V[excited] * np.conj(current * np.exp(1j * np.pi * frequency * hold))).real
+    if np.any(power <= 0.0):
+        bad = frequency[int(np.argmax(power <= 0.0))]
+        raise InputError(f"{log.source}: column 'i_a'", f"the winding would deliver power at "
+                         f"{bad:g} Hz (Re(V conj(I)) <= 0; a passive winding absorbs it): the "
+                         "current's sign is reversed or it is not phase a's")  # fmt: skip
     return Spectrum(frequency, V[excited], I[excited], hold, periods)
 
 
@@ -191,8 +207,13 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     m, n = 2 * spec.frequency.size, len(NAMES)
     dof = m - n
     rms = float(np.sqrt(2.0 * fit.cost / m))
-    if not fit.success or not np.all(np.isfinite(fit.x)):
-        raise FitNotConverged("impedance", fit.message, rms, "A (rms of the tones' current error)")
+    if not fit.success or not np.all(np.isfinite(fit.x)) or fit.cost >= _FAR:
+        reached = (
+            rms if fit.cost < _FAR else float(np.sqrt(np.mean(_residual(_start(spec), spec) ** 2)))
+        )
+        raise FitNotConverged(
+            "impedance", fit.message, reached, "A (rms of the tones' current error)"
+        )
     values = np.exp(fit.x)
     s2 = 2.0 * fit.cost / dof
     cov_theta = covariance(fit.jac, s2)
