@@ -88,12 +88,12 @@ def _logs(args, plan):
     machine = MACHINES[args.source]
     import dataclasses
 
-    try:
-        plan = dataclasses.replace(plan, t_d=require_nonnegative("--dead-time-s", args.dead_time_s),
-                                   v_drop=require_nonnegative("--device-drop-v", args.device_drop_v),
-                                   base_frequency=base, settle=settle)  # fmt: skip
-        from acdrive.plant._inverter import Inverter
+    t_d = require_nonnegative("--dead-time-s", args.dead_time_s)
+    v_drop = require_nonnegative("--device-drop-v", args.device_drop_v)
+    plan = dataclasses.replace(plan, t_d=t_d, v_drop=v_drop, base_frequency=base, settle=settle)
+    from acdrive.plant._inverter import Inverter
 
+    try:
         Inverter("inverter", f_pwm=plan.f_pwm, t_d=plan.t_d)
     except InputError as exc:
         raise InputError("--dead-time-s", exc.rule) from None
