@@ -189,11 +189,16 @@ def _start(spec: Spectrum) -> np.ndarray:
     return np.log([R_s, L_sigma, R_R, L_M])
 
 
-def _solve(spec: Spectrum, theta0):
+def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12):
     from scipy.optimize import least_squares
 
-    return least_squares(_residual, theta0, args=(spec,), method="lm", xtol=1e-12, ftol=1e-12,
-                         gtol=1e-12, max_nfev=2000)  # fmt: skip
+    return least_squares(_residual, theta0, args=(spec,), method="lm", xtol=tolerance,
+                         ftol=tolerance, gtol=tolerance, max_nfev=2000)  # fmt: skip
+
+
+#: tolerance of the bootstrap's refits, which start at the estimate: their percentiles need a
+#: few digits, not the estimate's full precision
+BOOTSTRAP_TOLERANCE = 1e-8
 
 
 def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
@@ -227,7 +232,7 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     for b in range(bootstrap):
         redrawn = model + rng.choice(residual, residual.size)
         resampled = Spectrum(spec.frequency, spec.voltage, redrawn, spec.hold, spec.periods)
-        refit = _solve(resampled, fit.x)
+        refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE)
         draws[b] = np.exp(refit.x) if refit.success and refit.cost < _FAR else np.nan
     estimates = tuple(
         Estimate(name, unit, meaning, float(values[j]),
