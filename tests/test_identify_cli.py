@@ -90,3 +90,27 @@ def test_a_file_of_the_users_is_never_replaced(logs, tmp_path, capsys):
     one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out", str(mine)],
                    r"--out: '.*machine.toml' exists and acdrive did not write it")  # fmt: skip
     assert mine.read_text() == "[machine]\nmachine = 'delorenzo-im'\n"
+
+
+def test_a_fit_that_does_not_converge_says_so_with_its_residual_and_writes_nothing(
+    logs, tmp_path, capsys, monkeypatch
+):
+    """The solver is made to stop after two evaluations: the command reports the failure with
+    the residual reached, exit 1, and no parameter file."""
+    import scipy.optimize
+
+    injection, _ = logs
+    original = scipy.optimize.least_squares
+
+    def starved(*args, **kwargs):
+        kwargs["max_nfev"] = 2
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(scipy.optimize, "least_squares", starved)
+    out = tmp_path / "m.toml"
+    assert main(["identify", str(injection), "--pole-pairs", "1", "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert re.fullmatch(r"acdrive: error: impedance: the fit did not converge \(.*\); residual "
+                        r"[0-9.e+-]+ A \(rms of the tones' current error\); no parameters are "
+                        r"returned", err), err  # fmt: skip
+    assert not out.exists()
