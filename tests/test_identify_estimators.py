@@ -146,3 +146,14 @@ def test_a_current_that_is_absent_or_reversed_is_refused_before_the_fit():
     nothing = StandstillLog(log.time, log.v_a, np.zeros(log.time.size), "log")
     with pytest.raises(InputError, match=r"^log: column 'i_a': carries no current"):
         fit_impedance(nothing, 1.0, 2.0)
+
+
+def test_a_test_plan_with_a_bad_field_is_refused_naming_it():
+    from acdrive.identify import StandstillPlan
+
+    with pytest.raises(InputError, match=r"^tones: must be integer multiples >= 1"):
+        StandstillPlan(tones=(1, 2.5))
+    with pytest.raises(InputError, match=r"^dc_step: must be > 0"):
+        StandstillPlan(dc_step=0.0)
+    with pytest.raises(InputError, match=r"^periods: must be an integer >= 1"):
+        StandstillPlan(periods=0)

@@ -40,7 +40,7 @@ import numpy as np
 
 from acdrive._frames import K_PEAK
 from acdrive.core._profile import Profile
-from acdrive.errors import InputError, require_positive
+from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 
 #: the log's columns: name -> (unit, meaning); the one declaration readers and writers use
 LOG_COLUMNS = {
@@ -87,6 +87,20 @@ class StandstillPlan:
     t_d: float = 0.0
     v_drop: float = 0.0
     sensor: CurrentSensor = field(default_factory=CurrentSensor)
+
+    def __post_init__(self):
+        for name in ("dc_step", "base_frequency", "f_pwm", "v_dc"):
+            require_positive(name, getattr(self, name))
+        for name in ("settle", "t_d", "v_drop", "tone_amplitude"):
+            require_nonnegative(name, getattr(self, name))
+        for level in self.dc_levels:
+            require_finite("dc_levels", level)
+        if not self.tones or any(
+            isinstance(k, bool) or not isinstance(k, int) or k < 1 for k in self.tones
+        ):
+            raise InputError("tones", "must be integer multiples >= 1 of the base frequency")
+        if isinstance(self.periods, bool) or not isinstance(self.periods, int) or self.periods < 1:
+            raise InputError("periods", f"must be an integer >= 1, got {self.periods!r}")
 
     @property
     def sample_time(self) -> float:
@@ -191,7 +205,5 @@ def dc_test(machine, plan: StandstillPlan, seed: int = 0) -> StandstillLog:
 
 def injection_test(machine, plan: StandstillPlan, seed: int = 1) -> StandstillLog:
     """The multisine injection test of ``plan`` on ``machine`` (module docstring)."""
-    if any(not isinstance(k, int) or k < 1 for k in plan.tones):
-        raise InputError("tones", "must be integer multiples >= 1 of the base frequency")
     return run_test(machine, plan, lambda t: multisine(plan, t), plan.injection_duration(), seed,
                     "simulated injection test")  # fmt: skip
