@@ -32,5 +32,7 @@ __all__, __getattr__, __dir__ = namespace(
         "fit_impedance": "._impedance",
         "identify_standstill": "._standstill",
         "identifiability": "._standstill",
+        "Coverage": "._coverage",
+        "coverage": "._coverage",
     },
 )
