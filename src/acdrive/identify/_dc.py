@@ -72,6 +72,12 @@ class DCStepFit:
     chi2: float
     dof: int
 
+    @property
+    def voltage_error_std(self) -> float:
+        """The standard error of U [V] (its Jacobian interval's half-width over z_0.975)."""
+        low, high = self.voltage_error.jacobian
+        return 0.5 * (high - low) / Z_95
+
 
 def plateaus(log: StandstillLog) -> list[Plateau]:
     """The settled plateaus of ``log`` (module docstring); an InputError names the rule broken."""

@@ -16,8 +16,11 @@ the largest (DC excluded): what the experimenter injected, before any compensati
 
 **Voltage error.** The log's voltage is the command; the inverter applied v_a - U sign(i_a)
 (``identify._dc``). Given the voltage error U of a DC-step fit, the estimator compensates the
-logged voltage by it before the transform; without it, the dead time acts on the tones as a
-resistance-like describing function and biases R_s and R_R.
+logged voltage by it at the tones (command - U times the coefficients of sign(i_a)); without it,
+the dead time acts on the tones as a resistance-like describing function and biases R_s and R_R.
+U is itself an estimate: its standard error s_U, given, adds g g^T s_U^2 to the covariance
+(g = dp/dU from two refits at U +- s_U), and each bootstrap refit draws its own U from
+N(U, s_U^2).
 
 **The fit.** ``least_squares`` of the current residuals I_k - Y_d(w_k; p) V_k (real and
 imaginary parts) over log-parameters (positive by construction); their maximum-likelihood
@@ -73,13 +76,24 @@ _WHOLE_RTOL = 1e-6
 @dataclass(frozen=True)
 class Spectrum:
     """The analysed window's Fourier coefficients at the excited tones: ``frequency`` [Hz],
-    ``voltage`` [V] and ``current`` [A] (complex amplitudes), the sample ``hold`` [s]."""
+    ``voltage`` [V] (compensated) and ``current`` [A] (complex amplitudes), the sample ``hold``
+    [s]; ``command`` [V] is the voltage before compensation and ``polarity`` the coefficients of
+    sign(i_a), so the voltage for an error U is command - U polarity."""
 
     frequency: np.ndarray
     voltage: np.ndarray
     current: np.ndarray
     hold: float
     periods: int
+    command: np.ndarray
+    polarity: np.ndarray
+
+    def compensated(self, voltage_error: float, current=None) -> Spectrum:
+        """This spectrum with the voltage compensated by ``voltage_error`` (and ``current``
+        replacing the measured one, for the bootstrap)."""
+        return Spectrum(self.frequency, self.command - voltage_error * self.polarity,
+                        self.current if current is None else current, self.hold, self.periods,
+                        self.command, self.polarity)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -136,8 +150,7 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
     bins = np.arange(periods, V.size, periods)  # multiples of the base frequency, DC excluded
     strongest = np.max(np.abs(V[bins])) if bins.size else 0.0
     excited = bins[np.abs(V[bins]) > EXCITED_FRACTION * strongest] if strongest > 0.0 else bins[:0]
-    if voltage_error is not None:  # the tones are the command's; the voltage is what was applied
-        V = np.fft.rfft(v - voltage_error * np.sign(i)) * (2.0 / n)
+    polarity = np.fft.rfft(np.sign(i)) * (2.0 / n)
     if excited.size < MIN_TONES:
         raise InputError("excitation", f"needs at least {MIN_TONES} excited tones at multiples "
                          f"of {base_frequency:g} Hz, found {excited.size}")  # fmt: skip
@@ -157,7 +170,11 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
         raise InputError(f"{log.source}: column 'i_a'", f"the winding would deliver power at "
                          f"{bad:g} Hz (Re(V conj(I)) <= 0; a passive winding absorbs it): the "
                          "current's sign is reversed or it is not phase a's")  # fmt: skip
-    return Spectrum(frequency, V[excited], I[excited], hold, periods)
+    # the tones are the command's; the voltage is what was applied
+    U = 0.0 if voltage_error is None else voltage_error
+    applied = V[excited] - U * polarity[excited]
+    spec = Spectrum(frequency, applied, I[excited], hold, periods, V[excited], polarity[excited])
+    return spec
 
 
 #: the residual of a parameter set that leaves the physical range (a solver's wild trial step)
@@ -203,10 +220,13 @@ BOOTSTRAP_TOLERANCE = 1e-8
 
 def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                   voltage_error: float | None = None, seed: int = 0,
-                  bootstrap: int = BOOTSTRAP_COUNT, check: bool = True) -> ImpedanceFit:  # fmt: skip
+                  bootstrap: int = BOOTSTRAP_COUNT, check: bool = True,
+                  voltage_error_std: float = 0.0) -> ImpedanceFit:  # fmt: skip
     """The inverse-Gamma parameters of an injection log with their intervals (module docstring).
-    ``check=False`` skips the identifiability rules (to show what a bad test gives, e.g. the
-    bias of an uncompensated voltage error); the intervals are returned all the same."""
+    ``voltage_error_std`` [V], the standard error of ``voltage_error``, widens the intervals by
+    what it carries into the fit (module docstring). ``check=False`` skips the identifiability
+    rules (to show what a bad test gives, e.g. the bias of an uncompensated voltage error); the
+    intervals are returned all the same."""
     spec = spectrum(log, base_frequency, settle, voltage_error)
     fit = _solve(spec, _start(spec))
     m, n = 2 * spec.frequency.size, len(NAMES)
@@ -223,6 +243,13 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     s2 = 2.0 * fit.cost / dof
     cov_theta = covariance(fit.jac, s2)
     cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
+    U = 0.0 if voltage_error is None else voltage_error
+    spread = voltage_error_std if voltage_error is not None else 0.0
+    if spread > 0.0:  # + g g^T var(U), g = dp/dU by central differences of two refits
+        up = np.exp(_solve(spec.compensated(U + spread), fit.x).x)
+        down = np.exp(_solve(spec.compensated(U - spread), fit.x).x)
+        g = (up - down) / (2.0 * spread)
+        cov = cov + np.outer(g, g) * spread**2
     q = t_quantile(dof)
     rng = np.random.default_rng(seed)
     residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]
@@ -231,7 +258,7 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     draws = np.empty((bootstrap, n))
     for b in range(bootstrap):
         redrawn = model + rng.choice(residual, residual.size)
-        resampled = Spectrum(spec.frequency, spec.voltage, redrawn, spec.hold, spec.periods)
+        resampled = spec.compensated(U + spread * rng.standard_normal(), redrawn)
         refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE)
         draws[b] = np.exp(refit.x) if refit.success and refit.cost < _FAR else np.nan
     estimates = tuple(

@@ -2,7 +2,7 @@
 
 1. The DC-step log (optional) gives R_s and the inverter's voltage error U (``identify._dc``);
 2. the injection log, compensated by U when the DC steps gave it, gives the four inverse-Gamma
-   parameters with their intervals (``identify._impedance``);
+   parameters with their intervals, widened by U's own uncertainty (``identify._impedance``);
 3. a T-circuit (``machines.IMParams``) under a stated leakage split (``identify._circuit``), its
    parameters' intervals from the bootstrap draws converted one by one and from the Jacobian
    covariance carried through the conversion to first order.
@@ -71,8 +71,9 @@ def identify_standstill(injection: StandstillLog, base_frequency: float, settle:
     t_circuit(InverseGamma(1.0, 1.0, 1.0, 1.0), n_p, split)  # the split and n_p, checked first
     dc_fit = fit_dc_steps(dc, seed=seed, bootstrap=bootstrap) if dc is not None else None
     error = dc_fit.voltage_error.value if dc_fit is not None else None
+    error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
     fit = fit_impedance(injection, base_frequency, settle, voltage_error=error, seed=seed + 1,
-                        bootstrap=bootstrap)  # fmt: skip
+                        bootstrap=bootstrap, voltage_error_std=error_std)  # fmt: skip
     values = fit.params.as_array()
     t_values = _t_values(values, n_p, split)
     cov = propagate(lambda v: _t_values(v, n_p, split), values, fit.cov)
