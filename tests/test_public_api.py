@@ -20,6 +20,7 @@ PACKAGES = (
     "acdrive.scenarios",
     "acdrive.core",
     "acdrive.sweep",
+    "acdrive.identify",
 )
 
 
