@@ -126,10 +126,10 @@ def test_part_without_c_is_named():
 
 
 def test_cli_part_without_c_exit_2(tmp_path):
-    """im-foc-position's position loop has no C yet: one line naming it, exit 2, nothing written."""
+    """the PM drive has no C yet: one line naming it, exit 2, nothing written."""
     done = subprocess.run(
         [sys.executable, "-c", "import sys; from acdrive.cli import main; "
-         "raise SystemExit(main(sys.argv[1:]))", "export", "c", "im-foc-position", "--out",
+         "raise SystemExit(main(sys.argv[1:]))", "export", "c", "pm-bly171d-svpwm", "--out",
          str(tmp_path / "out")],
         capture_output=True, text=True,
     )  # fmt: skip

@@ -55,6 +55,7 @@ class KindTypes:
     cls: type
     cname: str
     step: CStep
+    body: str = ""
     members: dict = field(default_factory=dict)  # role -> [Member]
 
 
@@ -85,9 +86,16 @@ def kind_types(parts) -> dict[type, KindTypes]:
     for part in parts:
         cls = type(part)
         step = c_step_of(part)
+        body = step.body(part) if callable(step.body) else step.body
         if cls not in kinds:
-            kinds[cls] = KindTypes(cls, kind_name(cls), step)
+            kinds[cls] = KindTypes(cls, kind_name(cls), step, body)
         entry = kinds[cls]
+        if body != entry.body:
+            raise InputError(
+                part.name,
+                f"its C differs from another {cls.__name__} of the system (a kind whose C is "
+                "set per instance can be exported once per system)",
+            )
         for role in ROLES:
             members = []
             for v in layout_of(part, role):
@@ -376,7 +384,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         C.append(_step_signature(entry))
         C.append("{")
         C += ["    (void)t;", "    (void)T_s;"]
-        C.append(entry.step.body.strip("\n"))
+        C.append(entry.body.strip("\n"))
         C.append("}")
         C.append("")
     for model in models:

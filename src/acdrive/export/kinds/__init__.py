@@ -32,10 +32,12 @@ class CSupport:
 
 @dataclass(frozen=True)
 class CStep:
-    """The C of one part kind's step: ``body`` (statements, returning the event bits),
-    ``support`` (what it calls) and ``source`` (paper and equations it implements)."""
+    """The C of one part kind's step: ``body`` (statements, returning the event bits; or a
+    function of the part instance giving them, for a kind whose layout is set per instance,
+    such as a controller of any order), ``support`` (what it calls) and ``source`` (paper and
+    equations it implements)."""
 
-    body: str
+    body: object
     source: str
     support: tuple[CSupport, ...] = ()
 
@@ -44,6 +46,7 @@ class CStep:
 _MODULES = (
     "acdrive.export.kinds.sensors",
     "acdrive.export.kinds.bodson",
+    "acdrive.export.kinds.foc",
 )
 _REGISTRY: dict[type, CStep] = {}
 _loaded = False

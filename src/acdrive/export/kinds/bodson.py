@@ -5,7 +5,6 @@ rounds as the kernels do. The equation numbers are Bodson's."""
 
 from __future__ import annotations
 
-from acdrive._frames import LIMIT_RTOL
 from acdrive.control._bodson import (
     MODE_CURRENT,
     MODE_VOLTAGE,
@@ -16,6 +15,7 @@ from acdrive.control._bodson import (
 )
 from acdrive.control._dfim import MIN_SUPPLY_FREQUENCY
 from acdrive.export.kinds import CStep, CSupport, register
+from acdrive.export.kinds.common import CLIP_MAGNITUDE, SPEED_PI, WRAP
 
 #: constants of the laws, taken from the Python modules that define them
 CONSTANTS = CSupport(
@@ -28,26 +28,6 @@ CONSTANTS = CSupport(
 #define ACD_DFIM_ESTIMATES(p) (p)->R_s, (p)->R_r, (p)->L_s, (p)->L_r, (p)->M, (p)->n_p
 #define ACD_DFIM_ESTIMATE_ARGS ACDRIVE_REAL R_s, ACDRIVE_REAL R_r, ACDRIVE_REAL L_s, \\
     ACDRIVE_REAL L_r, ACDRIVE_REAL M, ACDRIVE_REAL n_p
-""",
-)
-
-#: _frames.clip_magnitude with beyond_limit's tolerance of a few ulps
-CLIP_MAGNITUDE = CSupport(
-    "clip_magnitude",
-    f"""
-#define ACD_LIMIT_RTOL ACD_R({LIMIT_RTOL!r}) /* _frames.LIMIT_RTOL */
-
-/* x scaled back to magnitude limit if |x| is beyond it (then *limited = 1) */
-static acd_complex acd_clip_magnitude(acd_complex x, ACDRIVE_REAL limit, int *limited)
-{{
-    ACDRIVE_REAL magnitude = acd_cabs(x);
-    if (!(magnitude > limit + ACD_LIMIT_RTOL * limit)) {{
-        *limited = 0;
-        return x;
-    }}
-    *limited = 1;
-    return acd_cscale(limit / magnitude, x);
-}}
 """,
 )
 
@@ -183,42 +163,6 @@ static void acd_dfim_torque_limit_case2(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_REAL w_e
     (void)L_r;
     *tau_max_2 = rest_s >= ACD_R(0.0) ? ACD_SQRT(rest_s) / k : -ACD_R(1.0);
     *tau_max_3 = rest_r >= ACD_R(0.0) ? ACD_SQRT(rest_r) / (m * k) : -ACD_R(1.0);
-}
-""",
-)
-
-SPEED_PI = CSupport(
-    "speed_pi",
-    r"""
-/* one sample of the speed PI (25) with conditional integration (control._speed.speed_pi):
-   returns the torque command, advances *e_int only while inside [tau_lo, tau_hi] */
-static ACDRIVE_REAL acd_speed_pi(ACDRIVE_REAL K_P, ACDRIVE_REAL K_I, ACDRIVE_REAL K_F,
-                                 ACDRIVE_REAL *e_int, ACDRIVE_REAL w_ref, ACDRIVE_REAL w,
-                                 ACDRIVE_REAL tau_lo, ACDRIVE_REAL tau_hi, ACDRIVE_REAL T_s,
-                                 int *clipped)
-{
-    ACDRIVE_REAL tau = K_F * K_P * w_ref - K_P * w + K_I * *e_int;
-    *clipped = 1;
-    if (tau > tau_hi) {
-        return tau_hi;
-    }
-    if (tau < tau_lo) {
-        return tau_lo;
-    }
-    *clipped = 0;
-    *e_int = *e_int + T_s * (w_ref - w);
-    return tau;
-}
-""",
-)
-
-WRAP = CSupport(
-    "wrap",
-    r"""
-/* an angle wrapped into [-pi, pi) */
-static ACDRIVE_REAL acd_wrap(ACDRIVE_REAL angle)
-{
-    return acd_pymod(angle + ACD_PI, ACD_R(2.0) * ACD_PI) - ACD_PI;
 }
 """,
 )

@@ -4,41 +4,9 @@
 from __future__ import annotations
 
 from acdrive.control._speed import SpeedReference
-from acdrive.export.kinds import CStep, CSupport, register
+from acdrive.export.kinds import CStep, register
+from acdrive.export.kinds.common import TABLE_AT
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
-
-#: core._tables.table_at: linear between points, held outside, a vertical step where two times
-#: are equal. The bisection halves [lo, hi] each pass: 32 passes cover any table an int counts.
-TABLE_AT = CSupport(
-    "table_at",
-    r"""
-static ACDRIVE_REAL acd_table_at(int n, const ACDRIVE_REAL *times, const ACDRIVE_REAL *values,
-                                 ACDRIVE_REAL t)
-{
-    int lo = 0, hi = n - 1, pass;
-    ACDRIVE_REAL dt;
-    if (n == 1 || t <= times[0]) {
-        return values[0];
-    }
-    if (t >= times[n - 1]) {
-        return values[n - 1];
-    }
-    for (pass = 0; pass < 32 && hi - lo > 1; ++pass) { /* times[lo] <= t < times[hi] */
-        int mid = (lo + hi) / 2;
-        if (times[mid] <= t) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    dt = times[hi] - times[lo];
-    if (dt <= ACD_R(0.0)) {
-        return values[hi];
-    }
-    return values[lo] + (values[hi] - values[lo]) * (t - times[lo]) / dt;
-}
-""",
-)
 
 register(
     Encoder,
