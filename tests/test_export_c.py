@@ -126,16 +126,17 @@ def test_part_without_c_is_named():
 
 
 def test_cli_part_without_c_exit_2(tmp_path):
-    """the PM drive has no C yet: one line naming it, exit 2, nothing written."""
+    """im-perturbed's current program (CurrentProgram) has no C yet: one line naming the part,
+    exit 2, nothing written."""
     done = subprocess.run(
         [sys.executable, "-c", "import sys; from acdrive.cli import main; "
-         "raise SystemExit(main(sys.argv[1:]))", "export", "c", "pm-bly171d-svpwm", "--out",
+         "raise SystemExit(main(sys.argv[1:]))", "export", "c", "im-perturbed", "--out",
          str(tmp_path / "out")],
         capture_output=True, text=True,
     )  # fmt: skip
     assert done.returncode == 2
     assert len(done.stderr.strip().splitlines()) == 1
-    assert "has no C implementation" in done.stderr
+    assert "reference: part kind CurrentProgram has no C implementation" in done.stderr
     assert not (tmp_path / "out").exists()
 
 
@@ -159,3 +160,11 @@ def test_cli_writes_and_keeps_users_folder(tmp_path, capsys):
     assert _cli("export", "c", "bodson-sync", "--out", str(out)) == 2
     assert (mine / "notes.txt").read_text() == "mine"
     assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
+
+
+def test_cli_comparison_scenario_refused(tmp_path, capsys):
+    """A scenario comparing two runs (both DFIM modes) names the rule: one line, exit 2."""
+    assert _cli("export", "c", "bodson-step", "--out", str(tmp_path / "out")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compares 2 runs" in err[0]
+    assert not (tmp_path / "out").exists()

@@ -87,3 +87,40 @@ def test_synchronisation():
     report = _sil("bodson-sync", "--duration", "0.5")
     _check_equal(report)
     assert report["events_c"]["sync0"]["relay_closed"] == 1
+
+
+def test_ifoc_with_controller_20():
+    """im-foc-speed: IFOC, speed PI and the ICAD controller (20) through the speed step."""
+    report = _sil("im-foc-speed", "--duration", "0.1")
+    _check_equal(report)
+    signals = report["signals"]
+    assert signals["speed.w"]["peak"] > 50.0  # the step at 0.05 s moved the shaft (rad/s)
+    assert report["events_c"]["speed_controller"]["torque_limit"] > 0
+
+
+def test_ifoc_with_pi_and_saturated_p(tmp_path):
+    """im-icad-vs-pi's PI run: IFOC, the saturated P speed loop (21), the stationary PI."""
+    path = _scenario(tmp_path, "im-icad-vs-pi", {
+        'compare_controllers = { icad = "paper-20", pi = "paper-pi" }\n': "",
+        "[inverter]": '[current_control]\ncontroller = "paper-pi"\n\n[inverter]',
+    })  # fmt: skip
+    report = _sil(path, "--duration", "0.1")
+    _check_equal(report)
+    assert report["signals"]["speed.w"]["peak"] > 10.0  # ramping at the torque limit
+    assert report["events_c"]["speed_controller"]["torque_limit"] > 0
+
+
+def test_pm_field_oriented_control():
+    """pm-bly171d-svpwm: speed PI within the available torque, MTPA / field-weakening reference,
+    rotor-frame current PIs, on the switching SVPWM inverter."""
+    report = _sil("pm-bly171d-svpwm", "--duration", "0.1")
+    _check_equal(report)
+    assert report["signals"]["speed.w"]["peak"] > 100.0  # the step to 300 rad/s moved the rotor
+    assert report["events_c"]["speed_pi"]["torque_limit"] > 0
+
+
+def test_forced_relay_close():
+    """fault-forced-close: the relay closed by force at 10 ms during synchronisation."""
+    report = _sil("fault-forced-close", "--duration", "0.1")
+    _check_equal(report)
+    assert report["events_c"]["forced0"]["forced"] > 0

@@ -30,8 +30,9 @@ ROLES = ("params", "state", "in", "out")
 
 
 def kind_name(cls: type) -> str:
-    """CamelCase class name -> snake_case C name: SpeedEstimator -> speed_estimator."""
-    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", cls.__name__).lower()
+    """CamelCase class name -> snake_case C name: SpeedEstimator -> speed_estimator,
+    PMSpeedPI -> pm_speed_pi."""
+    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z])", "_", cls.__name__).lower()
 
 
 def layout_of(part, role: str):

@@ -25,6 +25,13 @@ def built(setup):
     such as both DFIM modes, is refused by its drive with an InputError)."""
     from acdrive.drives import for_setup
 
+    runs = for_setup(setup).runs(setup)
+    if runs > 1:
+        raise InputError(
+            "scenario",
+            f"{setup.name} compares {runs} runs; the export takes a scenario of one run (one "
+            "mode, one controller)",
+        )
     drive = for_setup(setup).build(setup)
     initial, held = drive.initial()
     return drive, initial, held

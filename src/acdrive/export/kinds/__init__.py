@@ -47,6 +47,7 @@ _MODULES = (
     "acdrive.export.kinds.sensors",
     "acdrive.export.kinds.bodson",
     "acdrive.export.kinds.foc",
+    "acdrive.export.kinds.pm",
 )
 _REGISTRY: dict[type, CStep] = {}
 _loaded = False

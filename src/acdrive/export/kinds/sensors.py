@@ -1,4 +1,4 @@
-"""C steps of the sensors (``acdrive.plant._sensors``) and of the speed reference profile
+"""C steps of the sensors (``acdrive.plant._sensors``), the forced relay (``plant._network``) and of the speed reference profile
 (``acdrive.control._speed``); each body mirrors its kernel line for line."""
 
 from __future__ import annotations
@@ -6,6 +6,7 @@ from __future__ import annotations
 from acdrive.control._speed import SpeedReference
 from acdrive.export.kinds import CStep, register
 from acdrive.export.kinds.common import TABLE_AT
+from acdrive.plant._network import ForcedRelay
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
 
 register(
@@ -67,5 +68,24 @@ register(
     return 0u;
 """,
         support=(TABLE_AT,),
+    ),
+)
+
+register(
+    ForcedRelay,
+    CStep(
+        source="a relay closed from close_at whatever its command (plant._network)",
+        body=r"""
+    if (u->command != ACD_R(0.0)) {
+        y->closed = ACD_R(1.0);
+        return 0u;
+    }
+    if (t >= p->close_at) {
+        y->closed = ACD_R(1.0);
+        return ACD_FORCED_RELAY_FORCED;
+    }
+    y->closed = ACD_R(0.0);
+    return 0u;
+""",
     ),
 )
