@@ -27,7 +27,7 @@ def _sil(scenario: str, *extra: str) -> dict:
     code = "import sys; from acdrive.cli import main; raise SystemExit(main(sys.argv[1:]))"
     done = subprocess.run(
         [sys.executable, "-c", code, "export", "sil", scenario, "--json", *extra],
-        capture_output=True, text=True, env=env, timeout=1200,
+        check=False, capture_output=True, text=True, env=env, timeout=1200,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)

@@ -25,9 +25,9 @@ def register(subparsers):
 def run_c(args) -> int:
     from acdrive._output import OutputFolder
     from acdrive.export._c_source import require_c_name
+    from acdrive.export._scenario import export_setup
     from acdrive.export._sil import find_compiler
     from acdrive.scenarios._loader import load_scenario
-    from acdrive.export._scenario import export_setup
 
     setup = load_scenario(args.scenario)
     if args.name is not None:

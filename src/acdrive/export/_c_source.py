@@ -71,7 +71,10 @@ def _tables(part) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     out, offset = {}, part.PARAMS.table_start
     for v in part.PARAMS.tables:
         n = int(part.p[offset])
-        out[v.name] = (part.p[offset + 1 : offset + 1 + n], part.p[offset + 1 + n : offset + 1 + 2 * n])
+        out[v.name] = (
+            part.p[offset + 1 : offset + 1 + n],
+            part.p[offset + 1 + n : offset + 1 + 2 * n],
+        )
         offset += 1 + 2 * n
     return out
 
@@ -196,20 +199,26 @@ def chain_model(chain: Chain, kinds) -> ChainModel:
         if entry.members["state"]:
             state.append(Member(part.name, ("struct", f"acd_{entry.cname}_state", None), what))
         if entry.members["out"]:
+            held = f"{what}: outputs, held between samples"
             state.append(
-                Member(f"{part.name}_out", ("struct", f"acd_{entry.cname}_out", None),
-                       f"{what}: outputs, held between samples")  # fmt: skip
+                Member(f"{part.name}_out", ("struct", f"acd_{entry.cname}_out", None), held)
             )
     inputs = [
         Member(_port_name(port), port.var.kind, f"{_comment(port.var)} (from {port.path})")
         for port in chain.inputs
     ]
     for port in chain.outputs:
-        outputs.append(Member(_port_name(port), port.var.kind, f"{_comment(port.var)} ({port.path})"))
+        outputs.append(
+            Member(_port_name(port), port.var.kind, f"{_comment(port.var)} ({port.path})")
+        )
     for part in chain.parts:
         if part.EVENTS:
-            masks = ", ".join(f"ACD_{kinds[type(part)].cname.upper()}_{e.upper()}" for e in part.EVENTS)
-            outputs.append(Member(f"{part.name}_events", "uint32", f"{part.name}'s event bits: {masks}"))
+            masks = ", ".join(
+                f"ACD_{kinds[type(part)].cname.upper()}_{e.upper()}" for e in part.EVENTS
+            )
+            outputs.append(
+                Member(f"{part.name}_events", "uint32", f"{part.name}'s event bits: {masks}")
+            )
     if not inputs:
         raise InputError(chain.name, "the chain reads no plant output: nothing to export")
     return ChainModel(chain, params, state, inputs, outputs)
@@ -293,6 +302,13 @@ def _chain_step_lines(model: ChainModel, kinds, source_of) -> list[str]:
     return lines
 
 
+def _step_prototype(model: ChainModel) -> str:
+    c = model.chain.name
+    out = f", {c}_outputs *out" if model.outputs else ""
+    return (f"void {c}_step(ACDRIVE_REAL t, const {c}_params *p, {c}_state *s, "
+            f"const {c}_inputs *in{out})")  # fmt: skip
+
+
 @dataclass
 class CExport:
     """The generated files (``header``, ``source``: text) and the model of their structs."""
@@ -325,8 +341,10 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
     naming a part whose kind has no C (``acdrive.export.kinds``)."""
     name = require_c_name("name", name)
-    if isinstance(sample_time, bool) or not isinstance(sample_time, (int, float)) or not (
-        math.isfinite(sample_time) and sample_time > 0
+    if (
+        isinstance(sample_time, bool)
+        or not isinstance(sample_time, (int, float))
+        or not (math.isfinite(sample_time) and sample_time > 0)
     ):
         raise InputError("sample_time", "must be a finite number > 0")
     chains = chains_of(system, name)
@@ -351,8 +369,12 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
                 continue
             for m in members:
                 if isinstance(m.spec, tuple) and m.spec[0] == "table":
-                    H.append(f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}")
-            H += _struct_lines(f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}")
+                    H.append(
+                        f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
+                    )
+            H += _struct_lines(
+                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}"
+            )
         H.append("")
     for model in models:
         c = model.chain.name
@@ -362,15 +384,15 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
                                     ("state", model.state, "discrete states and held outputs"),
                                     ("inputs", model.inputs, "plant outputs read at each sample"),
                                     ("outputs", model.outputs, "commands and event bits")):  # fmt: skip
-            H += _struct_lines(f"{c}_{role}", members, f"{c}: {what}")
+            if members:  # a chain that commands nothing (estimators only) has no outputs
+                H += _struct_lines(f"{c}_{role}", members, f"{c}: {what}")
         H += [
-            f"/* one sample at time t [s]: reads in, updates s, writes out; call every",
+            "/* one sample at time t [s]: reads in, updates s, writes out; call every",
             f"   p->sample_time seconds, first with the state from {c}_reset */",
-            f"void {c}_step(ACDRIVE_REAL t, const {c}_params *p, {c}_state *s, "
-            f"const {c}_inputs *in, {c}_outputs *out);",
-            f"/* the parameter values of the exported system */",
+            f"{_step_prototype(model)};",
+            "/* the parameter values of the exported system */",
             f"void {c}_set_params({c}_params *p);",
-            f"/* the initial states and held outputs of the exported system */",
+            "/* the initial states and held outputs of the exported system */",
             f"void {c}_reset({c}_state *s);",
             "",
         ]
@@ -390,8 +412,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         C.append("")
     for model in models:
         c = model.chain.name
-        C.append(f"void {c}_step(ACDRIVE_REAL t, const {c}_params *p, {c}_state *s, "
-                 f"const {c}_inputs *in, {c}_outputs *out)")  # fmt: skip
+        C.append(_step_prototype(model))
         C.append("{")
         C += ["    " + line for line in _chain_step_lines(model, kinds, system.source_of)]
         C += ["}", "", f"void {c}_set_params({c}_params *p)", "{"]

@@ -60,11 +60,15 @@ def chains_of(system, name: str) -> list[Chain]:
                     inputs.append(src)
         outputs: list[Port] = []
         for (dst_name, _), src in system.source_of.items():
-            if id(src.part) in members and id(system.part(dst_name)) not in members:
-                if all(q.part is not src.part or q.var.name != src.var.name for q in outputs):
-                    outputs.append(src)
+            crosses = id(src.part) in members and id(system.part(dst_name)) not in members
+            if crosses and all(
+                q.part is not src.part or q.var.name != src.var.name for q in outputs
+            ):
+                outputs.append(src)
         order = {p.name: i for i, p in enumerate(system.parts)}
-        outputs.sort(key=lambda port: (order[port.part.name], port.part.OUTPUTS.slot(port.var.name)))
+        outputs.sort(
+            key=lambda port: (order[port.part.name], port.part.OUTPUTS.slot(port.var.name))
+        )
         chains.append(
             Chain(
                 name=name if len(groups) == 1 else f"{name}{k}",

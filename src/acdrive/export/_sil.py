@@ -50,6 +50,7 @@ def build_library(export: CExport, folder: Path, real: str = "double") -> Path:
         [compiler, *flags, "-o", str(library), str(folder / export.source_name), "-lm"],
         capture_output=True,
         text=True,
+        check=False,
     )
     if done.returncode != 0:
         first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
@@ -90,6 +91,8 @@ def ctypes_mirror(export: CExport, real: str = "double") -> dict:
         c = model.chain.name
         for role, members in (("params", model.params), ("state", model.state),
                               ("inputs", model.inputs), ("outputs", model.outputs)):  # fmt: skip
+            if not members:
+                continue
             types[f"{c}_{role}"] = _structure(
                 f"{c}_{role}", [(m.name, _ctype(m, c_real, types)) for m in members]
             )
@@ -117,9 +120,10 @@ def _load(export: CExport, library: Path, real: str, system) -> list[_LoadedChai
     loaded = []
     for model in export.chains:
         c = model.chain.name
-        P, S, IN, OUT = (types[f"{c}_{r}"] for r in ("params", "state", "inputs", "outputs"))
+        P, S, IN = (types[f"{c}_{r}"] for r in ("params", "state", "inputs"))
+        OUT = types[f"{c}_outputs"] if model.outputs else None
         step = getattr(lib, f"{c}_step")
-        step.argtypes = [c_real, *(ctypes.POINTER(t) for t in (P, S, IN, OUT))]
+        step.argtypes = [c_real, *(ctypes.POINTER(t) for t in (P, S, IN, OUT) if t is not None)]
         step.restype = None
         params, state = P(), S()
         getattr(lib, f"{c}_set_params")(ctypes.byref(params))
@@ -133,12 +137,11 @@ def _load(export: CExport, library: Path, real: str, system) -> list[_LoadedChai
                                port.var.width))  # fmt: skip
         events = [(index[p.name], f"{p.name}_events" if p.EVENTS else None)
                   for p in model.chain.parts]  # fmt: skip
-        loaded.append(_LoadedChain(model, step, params, state, IN(), OUT(), reads, writes, events))
+        outputs = OUT() if OUT is not None else None
+        loaded.append(
+            _LoadedChain(model, step, params, state, IN(), outputs, reads, writes, events)
+        )
     return loaded
-
-
-def _get(struct, field):
-    return getattr(struct, field)
 
 
 def _copy_in(chain: _LoadedChain, Y: np.ndarray) -> None:
@@ -194,8 +197,8 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
         E = np.zeros(n_ev, dtype=np.int64)
         IDX = np.zeros(int(module.N_MOD), dtype=np.int64)
         LEFT = np.zeros(int(module.N_MOD))
-        byref = [tuple(ctypes.byref(x) for x in (c.params, c.state, c.inputs, c.outputs))
-                 for c in chains]  # fmt: skip
+        byref = [tuple(ctypes.byref(x) for x in (c.params, c.state, c.inputs, c.outputs)
+                       if x is not None) for c in chains]  # fmt: skip
         T_s = float(sample_time)
         for k in range(n_steps):
             t = t0 + k * T_s

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from acdrive.control._current import CurrentProgram
+from acdrive.control._delay import ComputationDelay
 from acdrive.control._speed import SpeedReference
 from acdrive.export.kinds import CStep, register
 from acdrive.export.kinds.common import TABLE_AT
@@ -87,5 +89,29 @@ register(
     y->closed = ACD_R(0.0);
     return 0u;
 """,
+    ),
+)
+
+register(
+    ComputationDelay,
+    CStep(
+        source="one sample of computation delay (control._delay)",
+        body=r"""
+    y->x = s->stored; /* the input of the previous sample */
+    s->stored = u->x;
+    return 0u;
+""",
+    ),
+)
+
+register(
+    CurrentProgram,
+    CStep(
+        source="a complex current from two piecewise-linear tables (control._current)",
+        body=r"""
+    y->i = acd_c(acd_table_at(p->re.n, p->re.t, p->re.v, t), acd_table_at(p->im.n, p->im.t, p->im.v, t));
+    return 0u;
+""",
+        support=(TABLE_AT,),
     ),
 )
