@@ -126,6 +126,13 @@ def kind_types(parts) -> dict[type, KindTypes]:
     return kinds
 
 
+def _first_sentence(cls: type) -> str:
+    """The first sentence of a class's own docstring (for a struct's comment)."""
+    text = " ".join((getattr(cls, "_own_doc", None) or cls.__doc__ or cls.__name__).split())
+    end = text.find(". ")
+    return (text[: end + 1] if end >= 0 else text).replace("*/", "* /")
+
+
 def _struct_lines(type_name: str, members: list[Member], doc: str) -> list[str]:
     lines = [f"/* {doc} */", "typedef struct {"]
     for m in members:
@@ -359,7 +366,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     H = [*stamp, f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", PRELUDE]
     for entry in kinds.values():
         cls = entry.cls
-        first = (cls.__doc__ or cls.__name__).strip().splitlines()[0]
+        first = _first_sentence(cls)
         H.append(f"/* ---- {cls.__name__} ({cls.__module__}): {entry.step.source} ---- */")
         for b, event in enumerate(cls.EVENTS):
             H.append(f"#define ACD_{entry.cname.upper()}_{event.upper()} (1u << {b})")
