@@ -5,7 +5,10 @@ from __future__ import annotations
 
 
 def register(subparsers):
-    p = subparsers.add_parser("export", help="controller chains as C99, and run in the loop")
+    p = subparsers.add_parser(
+        "export",
+        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
+    )
     sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil}")
     c = sub.add_parser("c", help="write the C99 header and source of a scenario's controller")
     c.add_argument("scenario", help="built-in scenario name or TOML file")
