@@ -133,15 +133,15 @@ def _first_sentence(cls: type) -> str:
     return (text[: end + 1] if end >= 0 else text).replace("*/", "* /")
 
 
-def _struct_lines(type_name: str, members: list[Member], doc: str) -> list[str]:
+def _struct_lines(type_name: str, members: list[Member], doc: str, kind: str = "") -> list[str]:
     lines = [f"/* {doc} */", "typedef struct {"]
     for m in members:
-        lines.append(f"    {_declaration(m)} /* {m.comment} */")
+        lines.append(f"    {_declaration(m, kind)} /* {m.comment} */")
     lines.append(f"}} {type_name};")
     return lines
 
 
-def _declaration(m: Member) -> str:
+def _declaration(m: Member, kind: str = "") -> str:
     if m.spec == "real":
         return f"ACDRIVE_REAL {m.name};"
     if m.spec == "complex":
@@ -149,7 +149,7 @@ def _declaration(m: Member) -> str:
     if m.spec == "uint32":
         return f"uint32_t {m.name};"
     if m.spec[0] == "table":
-        n = m.spec[1]
+        n = f"ACD_{kind.upper()}_{m.name.upper()}_POINTS" if kind else m.spec[1]
         return f"struct {{ int n; ACDRIVE_REAL t[{n}]; ACDRIVE_REAL v[{n}]; }} {m.name};"
     return f"{m.spec[1]} {m.name};"
 
@@ -380,7 +380,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
                         f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
                     )
             H += _struct_lines(
-                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}"
+                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}", entry.cname
             )
         H.append("")
     for model in models:

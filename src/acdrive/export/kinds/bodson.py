@@ -39,7 +39,6 @@ static void acd_dfim_impedances(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_REAL w_e, ACDRIV
                                 acd_complex Z[4])
 {
     ACDRIVE_REAL w_slip = w_e - n_p * w_m;
-    (void)R_s;
     Z[0] = acd_c(R_s, w_e * L_s);
     Z[1] = acd_c(ACD_R(0.0), w_e * M);
     Z[2] = acd_c(R_r, w_slip * L_r);
