@@ -7,5 +7,6 @@ the system's C compiler and runs them in place of the compiled sampled parts
 """
 
 from acdrive.export._c_source import CExport, to_c
+from acdrive.export._sil import run_in_loop
 
-__all__ = ["CExport", "to_c"]
+__all__ = ["CExport", "run_in_loop", "to_c"]
