@@ -141,3 +141,10 @@ def test_float_build_runs_in_the_loop(tmp_path):
     ratios = [row["ratio"] for row in report["signals"].values()]
     assert all(math.isfinite(r) for r in ratios)
     assert report["worst_ratio"] > 0.0
+
+
+def test_two_motors_two_chains():
+    """bodson-two-motors: one chain per motor, both C steps in the loop on the shared bus."""
+    report = _sil("bodson-two-motors", "--duration", "0.2")
+    _check_equal(report)
+    assert report["chains"] == ["bodson_two_motors0", "bodson_two_motors1"]
