@@ -167,3 +167,15 @@ def test_cli_comparison_scenario_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "compares 2 runs" in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_missing_compiler_is_one_line(tmp_path, capsys, monkeypatch):
+    """export sil without gcc: one line naming the tool and the rule, exit 2, before any run;
+    export c needs no compiler (the files are for the user's toolchain)."""
+    from acdrive.export import _sil
+
+    monkeypatch.setattr(_sil.shutil, "which", lambda name: None)
+    assert _cli("export", "sil", "bodson-ramp", "--duration", "0.01") == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "gcc was not found on PATH" in err[0]
+    assert _cli("export", "c", "bodson-ramp", "--out", str(tmp_path / "out")) == 0

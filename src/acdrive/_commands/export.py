@@ -29,14 +29,12 @@ def run_c(args) -> int:
     from acdrive._output import OutputFolder
     from acdrive.export._c_source import require_c_name
     from acdrive.export._scenario import export_setup
-    from acdrive.export._sil import find_compiler
     from acdrive.scenarios._loader import load_scenario
 
     setup = load_scenario(args.scenario)
     if args.name is not None:
         require_c_name("--name", args.name)
     export = export_setup(setup, args.name)  # every error before anything is written
-    find_compiler()
     with OutputFolder(args.out, setup.name) as output:
         (output.staging / export.header_name).write_text(export.header)
         (output.staging / export.source_name).write_text(export.source)

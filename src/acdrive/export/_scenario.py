@@ -59,8 +59,9 @@ def compare_in_loop(setup, real: str = "double") -> dict:
     (``export._sil``), every output logged at every sample; per signal the largest difference
     and the peak, the event counts of both, and the worst ratio."""
     from acdrive._jit import STRICT_MATH
-    from acdrive.export._sil import deviation, run_in_loop
+    from acdrive.export._sil import deviation, find_compiler, run_in_loop
 
+    find_compiler()  # before any work
     drive, initial, held = built(setup)
     export = to_c(drive.system, setup.sample_time, initial, held, name=c_name(setup.name))
     compiled = drive.system.compile()

@@ -31,7 +31,9 @@ CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
 def find_compiler(name: str = "gcc") -> str:
     path = shutil.which(name)
     if path is None:
-        raise InputError("compiler", f"{name} was not found on PATH: the C export's loop needs it")
+        raise InputError(
+            "compiler", f"{name} was not found on PATH: running the exported C in the loop needs it"
+        )
     return path
 
 
