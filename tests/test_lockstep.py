@@ -2,12 +2,22 @@
 give each variant the result of the per-variant batch loop (itself bit-identical to a single run,
 tests/test_batch.py); a system whose modulator switches within a sample runs per variant."""
 
+from typing import ClassVar
+
 import numpy as np
 import pytest
+from numba import njit
 
 from acdrive._jit import STRICT_MATH
 from acdrive.batch import prepare_variant
+from acdrive.control._open_loop import VoltageProgram
+from acdrive.core import Layout, cplx, real
+from acdrive.core._parts import Modulator
 from acdrive.errors import InputError, Notice
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._induction import UGALDE_IM_300W
+from acdrive.plant._converter import AveragedConverter
+from acdrive.plant._mechanics import PrescribedSpeed
 from acdrive.sim._lockstep_source import (
     FAST_MATH_AGREEMENT,
     LANES,
@@ -16,6 +26,7 @@ from acdrive.sim._lockstep_source import (
     lockstep_refusal,
     lockstep_source,
 )
+from acdrive.sim._system import System
 
 BASE = "bodson-ramp"
 DURATION = 0.02  # 100 control samples: the start-up, with the converter near its limit
@@ -112,3 +123,93 @@ def test_a_broken_one_segment_rule_restores_the_batch_for_the_per_variant_rerun(
     for array, saved in zip((X, S, Y), before, strict=True):
         assert np.array_equal(array, saved)
     assert not LOG.any() and not ECOUNT.any()
+
+
+# --- a hand-built cage-IM system: averaged converter, and a modulator that breaks the rule ------
+
+HOLD_PARAMS = Layout(real("share", "", "fraction of the sample the held segment spans", "positive"))
+HOLD_INPUTS = Layout(cplx("v_ref", "V", "commanded voltage"))
+HOLD_OUTPUTS = Layout(cplx("v", "V", "applied voltage"))
+
+
+@njit
+def partial_hold_segments(T_s, u, p, s, dt, v):
+    """One segment of ``share`` T_s (the plant is not advanced over the rest of the sample)."""
+    dt[0] = p[0] * T_s
+    v[0, 0], v[0, 1] = u[0], u[1]
+    return 1, 0
+
+
+class PartialHold(Modulator):
+    """A one-segment modulator whose segment may end before the sample does."""
+
+    PARAMS, INPUTS, OUTPUTS = HOLD_PARAMS, HOLD_INPUTS, HOLD_OUTPUTS
+    EVENTS: ClassVar[tuple] = ()
+    segments = partial_hold_segments
+
+
+def _cage_system(modulator):
+    """A locked-rotor cage IM fed by a 50 Hz voltage program through ``modulator``."""
+    im = CageInductionMachine.from_params("im", UGALDE_IM_300W)
+    program = VoltageProgram("program", V_pk=20.0, f=50.0)
+    rotor = PrescribedSpeed("rotor", w=0.0)
+    wires = [(program.out.v_ref, modulator.inp.v_ref), (modulator.out.v, im.inp.v_s),
+             (rotor.out.w, im.inp.w)]  # fmt: skip
+    return System([program, modulator, im, rotor], wires)
+
+
+def _cage_variants(n, share=None):
+    rng = np.random.default_rng(5)
+    variants = []
+    for b in range(n):
+        v = {"program": {"V_pk": float(10.0 + 20.0 * rng.random()), "f": float(40 + 20 * rng.random())},
+             "im": {"R_s": float(UGALDE_IM_300W.R_s * (0.8 + 0.4 * rng.random()))}}  # fmt: skip
+        if share is not None:
+            v["hold"] = {"share": share(b)}
+        variants.append(v)
+    return variants
+
+
+@pytest.mark.slow
+def test_lockstep_equals_per_variant_on_a_cage_machine_behind_an_averaged_converter():
+    compiled = _cage_system(AveragedConverter("converter", V_dc=310.0)).compile()
+    variants = _cage_variants(LANES + 3)
+    run = {"duration": 0.01, "sample_time": 1e-4, "log_every": 1}
+    lock = compiled.run_batch(variants, lockstep=True, **run)
+    assert compiled.last_batch_loop == "lockstep"
+    alone = compiled.run_batch(variants, lockstep=False, **run)
+    assert compiled.last_batch_loop == "per-variant"
+    assert not np.array_equal(lock[0].data, lock[1].data)
+    for mine, theirs in zip(lock, alone, strict=True):
+        assert mine.extra["status"] == theirs.extra["status"] == "ok"
+        assert mine.events == theirs.events
+        if STRICT_MATH:
+            assert np.array_equal(mine.data, theirs.data)
+            assert np.array_equal(mine.final_state, theirs.final_state)
+        else:
+            peak = np.abs(theirs.data).max(axis=0)
+            assert (np.abs(mine.data - theirs.data) <= FAST_MATH_AGREEMENT * peak).all()
+
+
+@pytest.mark.slow
+def test_a_segment_shorter_than_the_sample_sends_the_batch_back_to_the_per_variant_loop():
+    compiled = _cage_system(PartialHold("hold", share=1.0)).compile()
+    run = {"duration": 0.005, "sample_time": 1e-4, "log_every": 1}
+    # every segment spans the sample: lockstep keeps the result
+    whole = compiled.run_batch(_cage_variants(LANES, share=lambda b: 1.0), lockstep=True, **run)
+    assert compiled.last_batch_loop == "lockstep"
+    # one variant's segment ends at half the sample: the lockstep loop notices, the batch reruns
+    # per variant and gives exactly what the per-variant loop gives
+    variants = _cage_variants(LANES, share=lambda b: 0.5 if b == 3 else 1.0)
+    with pytest.warns(Notice, match="reruns one variant at a time"):
+        rerun = compiled.run_batch(variants, lockstep=True, **run)
+    assert compiled.last_batch_loop == "per-variant"
+    alone = compiled.run_batch(variants, lockstep=False, **run)
+    for mine, theirs in zip(rerun, alone, strict=True):
+        assert np.array_equal(mine.data, theirs.data)
+        assert np.array_equal(mine.final_state, theirs.final_state)
+    # the half-sample variant's currents are not its full-sample twin's; the other variants'
+    # are, to the lockstep agreement
+    assert np.abs(rerun[3].data - whole[3].data).max() > 1e-3 * np.abs(whole[3].data).max()
+    peak = np.abs(whole[2].data).max(axis=0)
+    assert (np.abs(rerun[2].data - whole[2].data) <= FAST_MATH_AGREEMENT * peak).all()
