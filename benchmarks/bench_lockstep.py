@@ -4,8 +4,8 @@ measured floating-point yardsticks; prints one JSON object.
     python benchmarks/bench_lockstep.py [--variants 1000] [--duration 0.2] [--rounds 3]
 
 The batch is ``--variants`` variants of ``bodson-ramp`` (with the default reducers of
-``acdrive.batch``, as a user's batch runs) that differ in shaft inertia, speed bandwidth, rotor
-resistance and load torque. The two loops run interleaved (A B A B, ``--rounds`` windows each)
+``acdrive.batch``, as a user's batch runs, or none with ``--no-reducers``) that differ in shaft
+inertia and rotor resistance. The two loops run interleaved (A B A B, ``--rounds`` windows each)
 on all of numba's threads; each window's rate is control steps (variants x samples) per wall
 second and per process CPU second. The load average is recorded before and after.
 
@@ -90,18 +90,19 @@ def _scalar_yardstick() -> float:
     return float(out.strip().splitlines()[-1])
 
 
-def _group(n: int, duration: float):
-    """The packed batch: compiled system, P, PO, X, S, Y, setup."""
+def _group(n: int, duration: float, reducers=None):
+    """The packed batch: compiled system, P, PO, X, S, Y, setup (``reducers`` None: the drive's
+    default metrics, as ``simulate_batch`` appends them)."""
     from acdrive.batch import prepare_variant
 
     setup, _drive, system, initial, held, _used = prepare_variant(
-        "bodson-ramp", {"simulation.duration": duration}
+        "bodson-ramp", {"simulation.duration": duration}, reducers=reducers
     )
     rng = np.random.default_rng(2026)
     parts = []
     for _ in range(n):
         parts.append([
-            system.part("shaft0").with_params(J=float(0.0035 * (0.8 + 0.4 * rng.random()))),
+            system.part("shaft0").with_params(J=float(3.5e-4 * (0.8 + 0.4 * rng.random()))),
             system.part("dfim0").with_params(R_r=float(0.8 + 0.8 * rng.random())),
         ])  # fmt: skip
     P = np.stack([system.pack_params(p)[0] for p in parts])
@@ -117,6 +118,8 @@ def main() -> None:
     parser.add_argument("--variants", type=int, default=1000)
     parser.add_argument("--duration", type=float, default=0.2, help="model time per variant [s]")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--no-reducers", action="store_true",
+                        help="the plant and controllers only (no on-line metric parts)")  # fmt: skip
     parser.add_argument("--yardstick-only", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.yardstick_only:
@@ -125,7 +128,9 @@ def main() -> None:
     import numba
 
     os.environ.setdefault("ACDRIVE_COMPILE_NOTICE", "0")
-    compiled, P, PO, X, S, Y, setup = _group(args.variants, args.duration)
+    compiled, P, PO, X, S, Y, setup = _group(
+        args.variants, args.duration, [] if args.no_reducers else None
+    )
     n_steps = round(setup.duration / setup.sample_time)
 
     def window(lockstep: bool):
@@ -158,6 +163,7 @@ def main() -> None:
 
     out = {
         "scenario": "bodson-ramp",
+        "reducers": "none" if args.no_reducers else "the drive's defaults",
         "variants": args.variants,
         "samples_per_variant": n_steps,
         "threads": numba.get_num_threads(),

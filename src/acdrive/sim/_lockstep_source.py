@@ -58,8 +58,9 @@ LANES = 16
 
 #: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
 #: docstring). Measured on 20 variants of bodson-ramp, 100 samples: logged signals within
-#: 2.7e-14 of their peaks (the torque; currents 7e-15 to 8e-15, speed 1.4e-15), plant states
-#: within 1.4e-16; the issue's 1e-15 holds under ACDRIVE_STRICT_MATH=1 only (bit-identical).
+#: 4.0e-14 of their peaks (the torque; speed 1.6e-14, currents <= 8.3e-15, converter voltage
+#: 2.3e-15), plant states within 5.6e-16 (relative); the issue's 1e-15 holds under
+#: ACDRIVE_STRICT_MATH=1 only, where the results are bit-identical.
 FAST_MATH_AGREEMENT = 1e-13
 
 
