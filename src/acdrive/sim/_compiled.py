@@ -262,8 +262,9 @@ class CompiledSystem:
         start = time.perf_counter()
         if lanes is not None:
             before = X.copy(), S.copy(), Y.copy()
-            broken = lanes(X, P, S, Y, float(t0), float(sample_time), substeps, n_steps,
-                           log_every, idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+            broken = call_interruptible(lanes.run, X, P, S, Y, float(t0), float(sample_time),
+                                        substeps, n_steps, log_every, idx, LOG, ELOG, ECOUNT,
+                                        DONE, STATUS)  # fmt: skip
             if not broken:
                 self.last_batch_loop = "lockstep"
                 return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start

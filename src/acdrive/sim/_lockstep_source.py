@@ -31,7 +31,6 @@ as a fraction of the signal's peak over the first 100 samples of bodson-ramp (te
 
 from __future__ import annotations
 
-import functools
 import warnings
 
 import numba
@@ -39,7 +38,7 @@ import numpy as np
 from numba import carray, njit
 
 from acdrive._jit import STRICT_MATH
-from acdrive.errors import InputError, Notice, call_interruptible
+from acdrive.errors import InputError, Notice
 from acdrive.sim import _codegen as codegen
 from acdrive.sim._borrow import _pointer
 from acdrive.sim._integrators import INTEGRATORS
@@ -85,8 +84,7 @@ def lockstep_refusal(system) -> str | None:
 
 
 def lockstep_plan(system, PO, variants: int, lockstep=None):
-    """A function running ``variants`` rows of ``system`` in lockstep (the generated ``run``'s
-    arguments; it returns the number of blocks that broke the one-segment rule), or None for the
+    """The compiled lockstep module to run ``variants`` rows of ``system`` in, or None for the
     per-variant loop. ``lockstep``: True requires lockstep (an ``InputError`` if the system
     cannot), False refuses it, None (the default) takes it when it pays: at least ``LANES``
     variants for every thread numba runs (fewer would leave a core idle or lanes empty)."""
@@ -105,21 +103,7 @@ def lockstep_plan(system, PO, variants: int, lockstep=None):
         return None
     if lockstep is None and not wide:
         return None
-    return functools.partial(_run, system, tuple(int(o) for o in PO))
-
-
-def _run(system, PO, *arrays) -> int:
-    """The generated ``run`` on the packed ``arrays``: the number of blocks that broke the
-    one-segment rule. First with the sampled parts compiled without numba's reference counting
-    (their per-lane views then cost nothing: 670 -> 520 ns per variant and sample measured on
-    bodson-ramp); a sampled kernel that allocates an array needs it, and numba refuses such a
-    kernel at typing, before anything ran: then with it."""
-    try:
-        module = codegen.load_module(lockstep_source(system, PO))
-        return call_interruptible(module.run, *arrays)
-    except numba.core.errors.TypingError:
-        module = codegen.load_module(lockstep_source(system, PO, refcounts=True))
-        return call_interruptible(module.run, *arrays)
+    return codegen.load_module(lockstep_source(system, PO))
 
 
 def lockstep_broken(before, states, outputs) -> None:
@@ -149,9 +133,8 @@ def _rows(system, PO) -> dict[str, int]:
     return rows
 
 
-def lockstep_source(system, PO, refcounts: bool = False) -> str:
-    """The generated lockstep module of this topology and parameter layout ``PO``; ``refcounts``:
-    the sampled parts with numba's reference counting (needed by a kernel that allocates)."""
+def lockstep_source(system, PO) -> str:
+    """The generated lockstep module of this topology and parameter layout ``PO``."""
     reason = lockstep_refusal(system)
     if reason is not None:
         raise ValueError(reason)
@@ -226,7 +209,7 @@ def lockstep_source(system, PO, refcounts: bool = False) -> str:
     L.extend(step_body(system.method, lanes=True))
     emit("")
     # sampled parts, then modulators (one segment each, checked)
-    emit("@_jit_into_run" if refcounts else "@_jit_plant_into_run")
+    emit("@_jit_into_run")
     emit("def sample(t, T_s, P, S, Y, U, E, DT, V, BAD):")
     for i, p in enumerate(system.sampled):
         L.extend(lanes([*input_copies(system, p, lane=lane),
