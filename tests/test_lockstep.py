@@ -42,7 +42,7 @@ def _group(n):
     for _ in range(n):
         overrides = {
             "simulation.duration": DURATION,
-            "part:shaft0.J": float(0.0035 * (0.8 + 0.4 * rng.random())),
+            "part:shaft0.J": float(3.5e-4 * (0.8 + 0.4 * rng.random())),
             "motor[0].controller.speed_bandwidth": float(200.0 + 200.0 * rng.random()),
             "motor[0].params.R_r": float(0.8 + 0.8 * rng.random()),
             "motor[0].load_torque": float(0.1 * rng.random()),
