@@ -15,9 +15,12 @@ and initial states) and a list of variants, each a dict of overrides in three fo
 Every variant goes through the same validation as a single run (``scenarios._loader``): a bad one
 is recorded as invalid with the ``InputError`` text and the batch goes on. Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
-time, duration and substeps) and each group runs in one call of the compiled ``run_batch``
-(numba ``prange`` over the variants), bit-identical to running each variant alone: the loop is
-the single run's loop, one variant per row (``tests/test_batch.py`` checks ``np.array_equal``).
+time, duration and substeps) and each group runs in one call of the compiled batch loop
+(``CompiledSystem.run_packed``). A group of at least 16 variants per core whose modulators make one
+segment per sample runs in lockstep, 16 variants at a time over SIMD lanes (``sim._lockstep_source``:
+bit-identical to the single runs under ``ACDRIVE_STRICT_MATH=1``, within 1e-13 of each signal's
+peak with fast math); otherwise numba's ``prange`` runs the single run's loop one variant per row,
+bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
 (``acdrive._reducer_parts``) appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
