@@ -213,3 +213,24 @@ def test_a_segment_shorter_than_the_sample_sends_the_batch_back_to_the_per_varia
     assert np.abs(rerun[3].data - whole[3].data).max() > 1e-3 * np.abs(whole[3].data).max()
     peak = np.abs(whole[2].data).max(axis=0)
     assert (np.abs(rerun[2].data - whole[2].data) <= FAST_MATH_AGREEMENT * peak).all()
+
+
+def test_simulate_batch_passes_its_lockstep_choice_to_the_compiled_batch():
+    """``simulate_batch(..., lockstep=True/False)`` runs the chosen loop; the rows' metrics agree
+    (bit for bit under strict math, within the lockstep's stated rounding otherwise)."""
+    from acdrive.batch import simulate_batch
+
+    variants = [
+        {"simulation.duration": DURATION, "motor[0].load_torque": 0.02 * k} for k in range(3)
+    ]
+    rows = {}
+    for choice in (True, False):
+        result = simulate_batch(BASE, variants, lockstep=choice)
+        assert result.loops == ("lockstep" if choice else "per-variant",)
+        rows[choice] = result.rows
+    for a, b in zip(rows[True], rows[False], strict=True):
+        assert a["status"] == b["status"] == "ok"
+        for key, value in b.items():
+            if isinstance(value, float) and np.isfinite(value) and key in a:
+                bound = 0.0 if STRICT_MATH else 1e3 * FAST_MATH_AGREEMENT * max(abs(value), 1.0)
+                assert abs(a[key] - value) <= bound, (key, a[key], value)
