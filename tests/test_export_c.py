@@ -128,7 +128,7 @@ def test_cli_part_without_c_exit_2(tmp_path, capsys, monkeypatch):
     """A kind without C (here the speed reference's entry taken out of the registry): one line
     naming the part, exit 2, nothing written."""
     from acdrive.control._speed import SpeedReference
-    from acdrive.export import kinds
+    from acdrive.export import _kinds as kinds
 
     kinds.exportable_kinds()  # loads the registry
     monkeypatch.delitem(kinds._REGISTRY, SpeedReference)

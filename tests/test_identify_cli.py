@@ -28,8 +28,8 @@ def logs(tmp_path_factory):
 
 def test_a_measured_log_gives_the_table_and_a_parameter_file_a_scenario_accepts(logs, tmp_path,
                                                                                 capsys):  # fmt: skip
+    from acdrive._toml import Section
     from acdrive.drives.cage_im._schema import _machine
-    from acdrive.scenarios._files import Section
 
     injection, dc = logs
     out = tmp_path / "machine.toml"

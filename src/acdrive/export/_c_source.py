@@ -4,7 +4,7 @@ declarations (docs/guide/export.md).
 Per part kind: up to four structs (``acd_<kind>_params``, ``_state``, ``_in``, ``_out``, each
 present if the kind declares any such quantity) with one member per declared quantity, its unit
 and description in a comment, and a static step function whose body is the kind's C
-(``acdrive.export.kinds``). Per chain: ``<chain>_params`` (the sample time and each part's
+(``acdrive.export._kinds``). Per chain: ``<chain>_params`` (the sample time and each part's
 parameters), ``<chain>_state`` (each part's discrete state and held outputs),
 ``<chain>_inputs`` (the plant outputs it reads), ``<chain>_outputs`` (its commands and each
 part's event bits), and four functions: ``<chain>_step``, ``<chain>_set_params`` (the values of
@@ -23,8 +23,8 @@ import numpy as np
 from acdrive.core._parts import SampledPart
 from acdrive.errors import InputError
 from acdrive.export._chain import Chain, chains_of
+from acdrive.export._kinds import CStep, CSupport, c_step_of
 from acdrive.export._prelude import HELPERS, PRELUDE
-from acdrive.export.kinds import CStep, CSupport, c_step_of
 
 ROLES = ("params", "state", "in", "out")
 
@@ -346,7 +346,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
     ``initial`` and ``held`` as for ``CompiledSystem.run`` give the values ``<chain>_reset``
     writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
-    naming a part whose kind has no C (``acdrive.export.kinds``)."""
+    naming a part whose kind has no C (``acdrive.export._kinds``)."""
     name = require_c_name("name", name)
     if (
         isinstance(sample_time, bool)

@@ -44,10 +44,10 @@ class CStep:
 
 #: modules whose import registers their kinds (imported on first look-up)
 _MODULES = (
-    "acdrive.export.kinds.sensors",
-    "acdrive.export.kinds.bodson",
-    "acdrive.export.kinds.foc",
-    "acdrive.export.kinds.pm",
+    "acdrive.export._kinds.sensors",
+    "acdrive.export._kinds.bodson",
+    "acdrive.export._kinds.foc",
+    "acdrive.export._kinds.pm",
 )
 _REGISTRY: dict[type, CStep] = {}
 _loaded = False
@@ -74,7 +74,7 @@ def c_step_of(part) -> CStep:
         raise InputError(
             part.name,
             f"part kind {type(part).__name__} has no C implementation, so the chain cannot be "
-            "exported (acdrive.export.kinds lists the kinds that have one)",
+            "exported (acdrive.export._kinds lists the kinds that have one)",
         )
     return step
 

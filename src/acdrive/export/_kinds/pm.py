@@ -13,8 +13,8 @@ from acdrive.drives.pm._design import (
     CURRENT_LIMITED,
     VOLTAGE_LIMITED,
 )
-from acdrive.export.kinds import CStep, CSupport, register
-from acdrive.export.kinds.common import LIMIT_RTOL_C, SPEED_PI
+from acdrive.export._kinds import CStep, CSupport, register
+from acdrive.export._kinds.common import LIMIT_RTOL_C, SPEED_PI
 
 DESIGN = CSupport(
     "pm_design",

@@ -6,8 +6,8 @@ from __future__ import annotations
 from acdrive.control._current import CurrentProgram
 from acdrive.control._delay import ComputationDelay
 from acdrive.control._speed import SpeedReference
-from acdrive.export.kinds import CStep, register
-from acdrive.export.kinds.common import TABLE_AT
+from acdrive.export._kinds import CStep, register
+from acdrive.export._kinds.common import TABLE_AT
 from acdrive.plant._network import ForcedRelay
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
 
