@@ -306,6 +306,7 @@ ONE_DRIVE_MODULES = {
     "acdrive.analysis._drive_stability": "the DFIM drive's linearisation",
     "acdrive.analysis._drive_studies": "the DFIM drive's linearisation",
     "acdrive.analysis._drive_view": "the DFIM drive's linearisation",
+    "acdrive.export._kinds.pm": "the C steps of the PM drive's controller parts (keyed by their class)",
 }
 
 

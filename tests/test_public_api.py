@@ -20,6 +20,8 @@ PACKAGES = (
     "acdrive.scenarios",
     "acdrive.core",
     "acdrive.sweep",
+    "acdrive.identify",
+    "acdrive.export",
 )
 
 

@@ -15,9 +15,12 @@ and initial states) and a list of variants, each a dict of overrides in three fo
 Every variant goes through the same validation as a single run (``scenarios._loader``): a bad one
 is recorded as invalid with the ``InputError`` text and the batch goes on. Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
-time, duration and substeps) and each group runs in one call of the compiled ``run_batch``
-(numba ``prange`` over the variants), bit-identical to running each variant alone: the loop is
-the single run's loop, one variant per row (``tests/test_batch.py`` checks ``np.array_equal``).
+time, duration and substeps) and each group runs in one call of the compiled batch loop
+(``CompiledSystem.run_packed``). A group of at least 16 variants per core whose modulators make one
+segment per sample runs in lockstep, 16 variants at a time over SIMD lanes (``sim._lockstep_source``:
+bit-identical to the single runs under ``ACDRIVE_STRICT_MATH=1``, within 1e-13 of each signal's
+peak with fast math); otherwise numba's ``prange`` runs the single run's loop one variant per row,
+bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
 (``acdrive._reducer_parts``) appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
@@ -475,7 +478,8 @@ class BatchResult:
     ``events.<part>.<event>`` (samples on which the event was raised). ``traces[i]`` holds the
     ``SystemResult`` of variant i when ``log`` was asked for. ``wall_time`` is the compiled
     loops' time; ``steps`` the control steps simulated (valid variants). ``units``: column ->
-    unit ("" for flags, counts, ratios and text; ``Reducer.column_units``)."""
+    unit ("" for flags, counts, ratios and text; ``Reducer.column_units``). ``loops``: the
+    batch loop each group ran in ("lockstep" or "per-variant"), in group order."""
 
     rows: list[dict]
     traces: dict = field(default_factory=dict)
@@ -483,6 +487,7 @@ class BatchResult:
     steps: int = 0
     groups: int = 0
     units: dict = field(default_factory=dict)
+    loops: tuple = ()
 
     def to_dataframe(self):
         """The rows as a pandas DataFrame; each column's unit in ``frame.attrs["units"]``."""
@@ -542,7 +547,8 @@ def _invalid_row(i: int, reason: str, reducers) -> dict:
 
 
 def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | None = None,
-                   integrator: str | None = None, substeps: int | None = None) -> BatchResult:  # fmt: skip
+                   integrator: str | None = None, substeps: int | None = None,
+                   lockstep: bool | None = None) -> BatchResult:  # fmt: skip
     """Simulate every variant of ``base`` (module docstring) in the compiled batch loop.
 
     ``reducers``: the metrics (a list of ``Reducer``, or a function of a variant's setup giving
@@ -550,6 +556,9 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
     every ``log_every`` samples (default: the scenario's), in ``BatchResult.traces``.
     ``integrator`` / ``substeps``: override the scenario's (e.g. ``"rk6"``, 1), applied to every
     variant; running a variant alone with the same setup gives the same bits.
+    ``lockstep``: None lets the compiled system choose the SIMD lockstep loop where it applies
+    (module docstring), True requires it (``InputError`` naming the modulator where it cannot
+    apply), False runs one variant at a time.
     """
     if not isinstance(variants, (list, tuple)):
         raise InputError("variants", "must be a list of dicts of overrides")
@@ -578,6 +587,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             continue
         groups.setdefault(key, []).append(_Prepared(i, setup, system, initial, held, used, ports))
     wall, steps = 0.0, 0
+    loops = []
     traces, units = {}, {}
     for key, members in groups.items():
         _, PO, duration, sample_time, n_sub, every = key
@@ -590,9 +600,10 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
         Y = np.stack([m.system.pack_held(m.held) for m in members])
         LOG, ELOG, ECOUNT, DONE, STATUS, seconds = compiled.run_packed(
             P, np.array(PO, dtype=np.int64), X, S, Y, duration, sample_time, n_sub,
-            log=first.log_ports, log_every=every,
+            log=first.log_ports, log_every=every, lockstep=lockstep,
         )  # fmt: skip
         wall += seconds
+        loops.append(compiled.last_batch_loop)
         n_steps = round(duration / sample_time)
         steps += n_steps * len(members)
         names = first.system.event_names()
@@ -633,7 +644,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             for name in metric_names:
                 row.setdefault(name, math.nan)
     return BatchResult(rows=rows, traces=traces, wall_time=wall, steps=steps, groups=len(groups),
-                       units=units)  # fmt: skip
+                       units=units, loops=tuple(loops))  # fmt: skip
 
 
 def _verdict(setup, row: dict, finite: bool):

@@ -133,16 +133,19 @@ def dfim_direct_outputs(t, x, u, p, y):
     y[_Y_I_RR], y[_Y_I_RR + 1] = i_rr.real, i_rr.imag
     y[_Y_TAU] = electromagnetic_torque(p, i_s, i_r)
     y[_Y_DPSI_R], y[_Y_DPSI_R + 1] = dpsi_r.real, dpsi_r.imag
+    # both branches give every output a value and the stores come after them: a kernel that
+    # writes the same slots on every path vectorises over lanes (sim._lockstep_source)
     if connected:
         inv_det = 1.0 / (p[L_S] * p[L_R] - p[M_SR] * p[M_SR])
         b = (-p[L_R] * p[R_S] * i_s - p[M_SR] * dpsi_r) * inv_det
-        y[_Y_A] = p[L_R] * inv_det
-        y[_Y_B], y[_Y_B + 1] = b.real, b.imag
-        y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = 0.0, 0.0
+        a = p[L_R] * inv_det
+        v_open = 0.0 + 0.0j
     else:
         v_open = (p[M_SR] / p[L_R]) * dpsi_r
-        y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = v_open.real, v_open.imag
-        y[_Y_A], y[_Y_B], y[_Y_B + 1] = 0.0, 0.0, 0.0
+        a, b = 0.0, 0.0 + 0.0j
+    y[_Y_A] = a
+    y[_Y_B], y[_Y_B + 1] = b.real, b.imag
+    y[_Y_V_OPEN], y[_Y_V_OPEN + 1] = v_open.real, v_open.imag
 
 
 @jit_fast

@@ -131,9 +131,12 @@ _OUT_V, _OUT_CLOSED = RELAY_OUTPUTS.slot("v"), RELAY_OUTPUTS.slot("closed")
 
 @jit_fast
 def relay_direct_outputs(t, x, u, p, y):
-    source = _IN_BUS if u[_IN_CLOSED] != 0.0 else _IN_OPEN
-    y[_OUT_V], y[_OUT_V + 1] = u[source], u[source + 1]
-    y[_OUT_CLOSED] = 1.0 if u[_IN_CLOSED] != 0.0 else 0.0
+    closed = u[_IN_CLOSED] != 0.0
+    # a choice of values, not of slots: the same loads on every path vectorise over lanes
+    # (sim._lockstep_source)
+    y[_OUT_V] = u[_IN_BUS] if closed else u[_IN_OPEN]
+    y[_OUT_V + 1] = u[_IN_BUS + 1] if closed else u[_IN_OPEN + 1]
+    y[_OUT_CLOSED] = 1.0 if closed else 0.0
 
 
 class StatorRelay(ContinuousPart):

@@ -18,6 +18,7 @@ from acdrive.errors import InputError, SimulationDiverged, call_interruptible
 from acdrive.sim import _codegen as codegen
 from acdrive.sim import _kernels as kernels
 from acdrive.sim import _tier
+from acdrive.sim._lockstep_source import lockstep_broken, lockstep_plan
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._result import SystemResult
 
@@ -46,6 +47,8 @@ class CompiledSystem:
         self.tier = ""
         self.compile_time = 0.0
         self.compiled_now = False
+        #: the batch loop the last batch ran in: "lockstep" or "per-variant" (None: no batch yet)
+        self.last_batch_loop = None
         self._choose()
 
     @property
@@ -291,9 +294,11 @@ class CompiledSystem:
         )
 
     def run_batch(self, variants, duration, sample_time, substeps=4, initial=None, log=None,
-                  log_every=1, t0=0.0, held=None) -> list[SystemResult]:  # fmt: skip
+                  log_every=1, t0=0.0, held=None, lockstep=None) -> list[SystemResult]:  # fmt: skip
         """Run many variants at once on all cores. ``variants`` is a list of dicts
-        ``{part name: {parameter: value}}``; each variant's result equals running it alone."""
+        ``{part name: {parameter: value}}``; each variant's result equals running it alone (to
+        the rounding stated in ``sim._lockstep_source`` when the variants run in lockstep;
+        ``lockstep``: None chooses, True requires it, False runs one variant at a time)."""
         sys_ = self.system
         if not isinstance(variants, (list, tuple)):
             raise InputError(
@@ -326,7 +331,7 @@ class CompiledSystem:
         X, S = np.tile(X0, (B, 1)), np.tile(S0, (B, 1))
         Y = np.tile(sys_.pack_held(held), (B, 1))
         LOG, ELOG, ECOUNT, DONE, STATUS, wall = self._batch_loop(
-            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows
+            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows, lockstep
         )
         results = []
         spent, compiled = self._reported()
@@ -355,7 +360,7 @@ class CompiledSystem:
         return results
 
     def run_packed(self, P, PO, X, S, Y, duration, sample_time, substeps=4, log=None,
-                   log_every=None, t0=0.0):  # fmt: skip
+                   log_every=None, t0=0.0, lockstep=None):  # fmt: skip
         """The batch loop on arrays packed per variant, row b being variant b: ``P[b]`` (with the
         common offsets ``PO``), ``X[b]``, ``S[b]``, ``Y[b]`` as each variant's own system gives
         them (``pack_params``, ``pack_initial``, ``pack_held``). This is ``run_batch`` for
@@ -382,13 +387,15 @@ class CompiledSystem:
         self._check_size(n_steps, substeps, rows, len(columns), variants=B)
         PO = np.asarray(PO, dtype=np.int64)
         return self._batch_loop(
-            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows
+            P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every, columns, rows, lockstep
         )
 
     def _batch_loop(self, P, PO, X, S, Y, t0, sample_time, substeps, n_steps, log_every,
-                    columns, rows):  # fmt: skip
+                    columns, rows, lockstep=None):  # fmt: skip
         """The compiled batch loop over rows of packed arrays (states updated in place): the
-        logs, event counts, samples done and status of every variant, and the wall time."""
+        logs, event counts, samples done and status of every variant, and the wall time. The
+        variants run in lockstep where ``lockstep_plan`` chooses it (``sim._lockstep_source``);
+        ``self.last_batch_loop`` names the loop that ran."""
         B = X.shape[0]
         U = np.zeros((B, self.system.sizes["u"]))
         n_ev = len(self.system.event_names())
@@ -398,6 +405,18 @@ class CompiledSystem:
         DONE = np.zeros(B, dtype=np.int64)
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
+        lanes = lockstep_plan(self.system, PO, B, lockstep)
+        if lanes is not None:
+            start = time.perf_counter()
+            before = X.copy(), S.copy(), Y.copy()
+            broken = call_interruptible(lanes.run, X, P, S, Y, float(t0), float(sample_time),
+                                        substeps, n_steps, log_every, idx, LOG, ELOG, ECOUNT,
+                                        DONE, STATUS)  # fmt: skip
+            if not broken:
+                self.last_batch_loop = "lockstep"
+                return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
+            lockstep_broken(before, (X, S, Y), (LOG, ELOG, ECOUNT))
+        self.last_batch_loop = "per-variant"
         args = (X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps, log_every,
                 idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
         if self.tier != "specialised":

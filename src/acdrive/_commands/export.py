@@ -1,0 +1,69 @@
+"""``acdrive export``: a scenario's controller chains as C99 (``export c``), and that C run in
+acdrive's loop against acdrive's own run (``export sil``); docs/guide/export.md."""
+
+from __future__ import annotations
+
+
+def register(subparsers):
+    p = subparsers.add_parser(
+        "export",
+        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
+    )
+    sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil}")
+    c = sub.add_parser("c", help="write the C99 header and source of a scenario's controller")
+    c.add_argument("scenario", help="built-in scenario name or TOML file")
+    c.add_argument("--out", default="export", help="output folder (default: export/)")
+    c.add_argument("--name", default=None, help="C prefix of the chain (default: the scenario's)")
+    c.set_defaults(handler=run_c)
+    s = sub.add_parser(
+        "sil", help="run the exported C in acdrive's loop and compare it with acdrive's run"
+    )
+    s.add_argument("scenario", help="built-in scenario name or TOML file")
+    s.add_argument("--duration", type=float, default=None, help="shorten the run (s)")
+    s.add_argument("--real", choices=("double", "float"), default="double", help="C build")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(handler=run_sil)
+
+
+def run_c(args) -> int:
+    from acdrive._output import OutputFolder
+    from acdrive.export._c_source import require_c_name
+    from acdrive.export._scenario import export_setup
+    from acdrive.scenarios._loader import load_scenario
+
+    setup = load_scenario(args.scenario)
+    if args.name is not None:
+        require_c_name("--name", args.name)
+    export = export_setup(setup, args.name)  # every error before anything is written
+    with OutputFolder(args.out, setup.name) as output:
+        (output.staging / export.header_name).write_text(export.header)
+        (output.staging / export.source_name).write_text(export.source)
+        target = output.publish()
+    chains = ", ".join(m.chain.name for m in export.chains)
+    print(f"wrote {target / export.header_name} and {export.source_name} (chains: {chains})")
+    return 0
+
+
+def run_sil(args) -> int:
+    from acdrive._output import strict_json
+    from acdrive.export._scenario import DOUBLE_TOLERANCE, compare_in_loop, shortened
+    from acdrive.scenarios._loader import load_scenario
+
+    setup = shortened(load_scenario(args.scenario), args.duration)
+    report = compare_in_loop(setup, args.real)
+    if args.json:
+        print(strict_json(report))
+        return 0
+    print(f"{setup.name}: C controller ({args.real}) in acdrive's loop, {setup.duration:g} s, "
+          f"strict math {'on' if report['strict_math'] else 'off'}")  # fmt: skip
+    width = max(len(c) for c in report["signals"])
+    for column, row in report["signals"].items():
+        print(f"  {column:<{width}}  max |diff| {row['max_difference']:.3e}  peak "
+              f"{row['peak']:.3e}  ratio {row['ratio']:.3e}")  # fmt: skip
+    print(f"worst: {report['worst_signal']} at {report['worst_ratio']:.3e} of its peak; "
+          f"events {'equal' if report['events_equal'] else 'DIFFER'}")  # fmt: skip
+    if args.real == "double":
+        ok = report["worst_ratio"] <= DOUBLE_TOLERANCE and report["events_equal"]
+        print(f"double build within {DOUBLE_TOLERANCE:g} of each signal's peak: "
+              f"{'yes' if ok else 'no'}")  # fmt: skip
+    return 0

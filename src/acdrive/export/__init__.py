@@ -1,0 +1,12 @@
+"""Controllers exported as C99 and run in acdrive's loop (software in the loop).
+
+``to_c(system, sample_time, initial, held)`` writes the sampled controller chains of a system
+as one header and one source (``acdrive.export._c_source``); ``run_in_loop`` compiles them with
+the system's C compiler and runs them in place of the compiled sampled parts
+(``acdrive.export._sil``). docs/guide/export.md describes the files and the checks.
+"""
+
+from acdrive.export._c_source import CExport, to_c
+from acdrive.export._sil import run_in_loop
+
+__all__ = ["CExport", "run_in_loop", "to_c"]

@@ -1,0 +1,442 @@
+"""C99 source and header of a system's controller chains, generated from the parts'
+declarations (docs/guide/export.md).
+
+Per part kind: up to four structs (``acd_<kind>_params``, ``_state``, ``_in``, ``_out``, each
+present if the kind declares any such quantity) with one member per declared quantity, its unit
+and description in a comment, and a static step function whose body is the kind's C
+(``acdrive.export._kinds``). Per chain: ``<chain>_params`` (the sample time and each part's
+parameters), ``<chain>_state`` (each part's discrete state and held outputs),
+``<chain>_inputs`` (the plant outputs it reads), ``<chain>_outputs`` (its commands and each
+part's event bits), and four functions: ``<chain>_step``, ``<chain>_set_params`` (the values of
+the exported system), ``<chain>_reset`` (its initial states and held outputs) and nothing
+else: no global variables, no dynamic memory, no recursion, loops with fixed bounds.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acdrive.core._parts import SampledPart
+from acdrive.errors import InputError
+from acdrive.export._chain import Chain, chains_of
+from acdrive.export._kinds import CStep, CSupport, c_step_of
+from acdrive.export._prelude import HELPERS, PRELUDE
+
+ROLES = ("params", "state", "in", "out")
+
+
+def kind_name(cls: type) -> str:
+    """CamelCase class name -> snake_case C name: SpeedEstimator -> speed_estimator,
+    PMSpeedPI -> pm_speed_pi."""
+    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z])", "_", cls.__name__).lower()
+
+
+def layout_of(part, role: str):
+    return {"params": part.PARAMS, "state": part.STATES, "in": part.INPUTS, "out": part.OUTPUTS}[
+        role
+    ]
+
+
+@dataclass
+class Member:
+    """One struct member: ``spec`` is "real", "complex", "uint32", ("table", points) or
+    ("struct", type name, [members])."""
+
+    name: str
+    spec: object
+    comment: str = ""
+
+
+@dataclass
+class KindTypes:
+    cls: type
+    cname: str
+    step: CStep
+    body: str = ""
+    members: dict = field(default_factory=dict)  # role -> [Member]
+
+
+def literal(value: float, where: str) -> str:
+    if not math.isfinite(value):
+        raise InputError(where, f"is {value!r}: only finite values can be written as C literals")
+    return f"ACD_R({float(value)!r})"
+
+
+def _tables(part) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each table parameter of ``part``: (times, values), read from its packed parameters."""
+    out, offset = {}, part.PARAMS.table_start
+    for v in part.PARAMS.tables:
+        n = int(part.p[offset])
+        out[v.name] = (
+            part.p[offset + 1 : offset + 1 + n],
+            part.p[offset + 1 + n : offset + 1 + 2 * n],
+        )
+        offset += 1 + 2 * n
+    return out
+
+
+def _comment(var) -> str:
+    return f"[{var.unit or '-'}] {var.doc}"
+
+
+def kind_types(parts) -> dict[type, KindTypes]:
+    """The structs of every kind among ``parts`` (a table holds as many points as the longest
+    table of that name among the kind's instances)."""
+    kinds: dict[type, KindTypes] = {}
+    for part in parts:
+        cls = type(part)
+        step = c_step_of(part)
+        body = step.body(part) if callable(step.body) else step.body
+        if cls not in kinds:
+            kinds[cls] = KindTypes(cls, kind_name(cls), step, body)
+        entry = kinds[cls]
+        if body != entry.body:
+            raise InputError(
+                part.name,
+                f"its C differs from another {cls.__name__} of the system (a kind whose C is "
+                "set per instance can be exported once per system)",
+            )
+        for role in ROLES:
+            members = []
+            for v in layout_of(part, role):
+                if v.kind == "table":
+                    points = len(_tables(part)[v.name][0])
+                    members.append(Member(v.name, ("table", points), _comment(v)))
+                else:
+                    members.append(Member(v.name, v.kind, _comment(v)))
+            old = entry.members.get(role)
+            if old is None:
+                entry.members[role] = members
+                continue
+            if [(m.name, m.spec if not isinstance(m.spec, tuple) else "table") for m in old] != [
+                (m.name, m.spec if not isinstance(m.spec, tuple) else "table") for m in members
+            ]:
+                raise InputError(
+                    part.name,
+                    f"its {role} declarations differ from another {cls.__name__} of the system; "
+                    "one C kind needs one layout",
+                )
+            for a, b in zip(old, members, strict=True):
+                if isinstance(a.spec, tuple):
+                    a.spec = ("table", max(a.spec[1], b.spec[1]))
+    return kinds
+
+
+def _first_sentence(cls: type) -> str:
+    """The first sentence of a class's own docstring (for a struct's comment)."""
+    text = " ".join((getattr(cls, "_own_doc", None) or cls.__doc__ or cls.__name__).split())
+    end = text.find(". ")
+    return (text[: end + 1] if end >= 0 else text).replace("*/", "* /")
+
+
+def _struct_lines(type_name: str, members: list[Member], doc: str, kind: str = "") -> list[str]:
+    lines = [f"/* {doc} */", "typedef struct {"]
+    for m in members:
+        lines.append(f"    {_declaration(m, kind)} /* {m.comment} */")
+    lines.append(f"}} {type_name};")
+    return lines
+
+
+def _declaration(m: Member, kind: str = "") -> str:
+    if m.spec == "real":
+        return f"ACDRIVE_REAL {m.name};"
+    if m.spec == "complex":
+        return f"acd_complex {m.name};"
+    if m.spec == "uint32":
+        return f"uint32_t {m.name};"
+    if m.spec[0] == "table":
+        n = f"ACD_{kind.upper()}_{m.name.upper()}_POINTS" if kind else m.spec[1]
+        return f"struct {{ int n; ACDRIVE_REAL t[{n}]; ACDRIVE_REAL v[{n}]; }} {m.name};"
+    return f"{m.spec[1]} {m.name};"
+
+
+def _support_order(kinds) -> list[CSupport]:
+    seen, order = set(), []
+
+    def visit(support):
+        if support.name in seen:
+            return
+        seen.add(support.name)
+        for dep in support.needs:
+            visit(dep)
+        order.append(support)
+
+    for entry in kinds.values():
+        for support in entry.step.support:
+            visit(support)
+    return order
+
+
+def _step_signature(entry: KindTypes) -> str:
+    args = ["ACDRIVE_REAL t", "ACDRIVE_REAL T_s"]
+    for role, const, arg in (("in", True, "u"), ("params", True, "p"), ("state", False, "s"),
+                             ("out", False, "y")):  # fmt: skip
+        if entry.members.get(role):
+            args.append(f"{'const ' if const else ''}acd_{entry.cname}_{role} *{arg}")
+    return f"static uint32_t acd_{entry.cname}_step({', '.join(args)})"
+
+
+@dataclass
+class ChainModel:
+    """The structs of one chain (members by struct) for the C text and its ctypes mirror."""
+
+    chain: Chain
+    params: list[Member]
+    state: list[Member]
+    inputs: list[Member]
+    outputs: list[Member]
+
+
+def _port_name(port) -> str:
+    return f"{port.part.name}_{port.var.name}"
+
+
+def chain_model(chain: Chain, kinds) -> ChainModel:
+    params = [Member("sample_time", "real", "[s] T_s, the period at which the step is called")]
+    state, outputs = [], []
+    for part in chain.parts:
+        entry = kinds[type(part)]
+        what = f"{type(part).__name__} {part.name}"
+        if entry.members["params"]:
+            params.append(Member(part.name, ("struct", f"acd_{entry.cname}_params", None), what))
+        if entry.members["state"]:
+            state.append(Member(part.name, ("struct", f"acd_{entry.cname}_state", None), what))
+        if entry.members["out"]:
+            held = f"{what}: outputs, held between samples"
+            state.append(
+                Member(f"{part.name}_out", ("struct", f"acd_{entry.cname}_out", None), held)
+            )
+    inputs = [
+        Member(_port_name(port), port.var.kind, f"{_comment(port.var)} (from {port.path})")
+        for port in chain.inputs
+    ]
+    for port in chain.outputs:
+        outputs.append(
+            Member(_port_name(port), port.var.kind, f"{_comment(port.var)} ({port.path})")
+        )
+    for part in chain.parts:
+        if part.EVENTS:
+            masks = ", ".join(
+                f"ACD_{kinds[type(part)].cname.upper()}_{e.upper()}" for e in part.EVENTS
+            )
+            outputs.append(
+                Member(f"{part.name}_events", "uint32", f"{part.name}'s event bits: {masks}")
+            )
+    if not inputs:
+        raise InputError(chain.name, "the chain reads no plant output: nothing to export")
+    return ChainModel(chain, params, state, inputs, outputs)
+
+
+def _value_lines(target: str, var, values, where: str) -> list[str]:
+    """Assignments of a part's quantity ``var`` (value(s) from the packed arrays)."""
+    if var.kind == "complex":
+        return [f"{target}.re = {literal(values[0], where)};",
+                f"{target}.im = {literal(values[1], where)};"]  # fmt: skip
+    return [f"{target} = {literal(values[0], where)};"]
+
+
+def _set_params_lines(model: ChainModel, sample_time: float) -> list[str]:
+    lines = [f"p->sample_time = {literal(sample_time, 'sample_time')};"]
+    for part in model.chain.parts:
+        for v in part.PARAMS:
+            where = f"{part.name}.{v.name}"
+            if v.kind == "table":
+                times, values = _tables(part)[v.name]
+                lines.append(f"p->{part.name}.{v.name}.n = {len(times)};")
+                for i, (a, b) in enumerate(zip(times, values, strict=True)):
+                    lines.append(f"p->{part.name}.{v.name}.t[{i}] = {literal(a, where)};")
+                    lines.append(f"p->{part.name}.{v.name}.v[{i}] = {literal(b, where)};")
+                continue
+            k = part.PARAMS.slot(v.name)
+            lines += _value_lines(f"p->{part.name}.{v.name}", v, part.p[k : k + v.width], where)
+    return lines
+
+
+def _reset_lines(system, model: ChainModel, S: np.ndarray, Y: np.ndarray) -> list[str]:
+    lines = []
+    for part in model.chain.parts:
+        a, _ = system.slots[part.name].s
+        for v in part.STATES:
+            k = a + part.STATES.slot(v.name)
+            lines += _value_lines(f"s->{part.name}.{v.name}", v, S[k : k + v.width],
+                                  f"initial.{part.name}.{v.name}")  # fmt: skip
+        a, _ = system.slots[part.name].y
+        for v in part.OUTPUTS:
+            k = a + part.OUTPUTS.slot(v.name)
+            lines += _value_lines(f"s->{part.name}_out.{v.name}", v, Y[k : k + v.width],
+                                  f"held.{part.name}.{v.name}")  # fmt: skip
+    return lines
+
+
+def _chain_step_lines(model: ChainModel, kinds, source_of) -> list[str]:
+    """Body of ``<chain>_step``: each part's inputs gathered (from the chain's inputs or from
+    the held outputs of the parts before it), its step called, the commands copied out."""
+    chain = model.chain
+    members = {id(p) for p in chain.parts}
+    lines = ["const ACDRIVE_REAL T_s = p->sample_time;"]
+    for part in chain.parts:
+        entry = kinds[type(part)]
+        args = ["t", "T_s"]
+        lines.append(f"{{ /* {part.name}: {type(part).__name__} */")
+        if entry.members["in"]:
+            lines.append(f"    acd_{entry.cname}_in u;")
+            for v in part.INPUTS:
+                src = source_of[(part.name, v.name)]
+                if id(src.part) in members:
+                    value = f"s->{src.part.name}_out.{src.var.name}"
+                else:
+                    value = f"in->{_port_name(src)}"
+                lines.append(f"    u.{v.name} = {value};")
+            args.append("&u")
+        if entry.members["params"]:
+            args.append(f"&p->{part.name}")
+        if entry.members["state"]:
+            args.append(f"&s->{part.name}")
+        if entry.members["out"]:
+            args.append(f"&s->{part.name}_out")
+        call = f"acd_{entry.cname}_step({', '.join(args)})"
+        if part.EVENTS:
+            lines.append(f"    out->{part.name}_events = {call};")
+        else:
+            lines.append(f"    (void){call};")
+        lines.append("}")
+    for port in chain.outputs:
+        lines.append(f"out->{_port_name(port)} = s->{port.part.name}_out.{port.var.name};")
+    return lines
+
+
+def _step_prototype(model: ChainModel) -> str:
+    c = model.chain.name
+    out = f", {c}_outputs *out" if model.outputs else ""
+    return (f"void {c}_step(ACDRIVE_REAL t, const {c}_params *p, {c}_state *s, "
+            f"const {c}_inputs *in{out})")  # fmt: skip
+
+
+@dataclass
+class CExport:
+    """The generated files (``header``, ``source``: text) and the model of their structs."""
+
+    name: str
+    header: str
+    source: str
+    kinds: dict
+    chains: list[ChainModel]
+
+    @property
+    def header_name(self) -> str:
+        return f"{self.name}.h"
+
+    @property
+    def source_name(self) -> str:
+        return f"{self.name}.c"
+
+
+def require_c_name(field_name: str, name: str) -> str:
+    if not isinstance(name, str) or not re.fullmatch(r"[a-z_][a-z0-9_]*", name):
+        raise InputError(field_name, "must be a C identifier of lower-case letters, digits and _")
+    return name
+
+
+def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdrive_chain",
+         description: str = "") -> CExport:  # fmt: skip
+    """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
+    ``initial`` and ``held`` as for ``CompiledSystem.run`` give the values ``<chain>_reset``
+    writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
+    naming a part whose kind has no C (``acdrive.export._kinds``)."""
+    name = require_c_name("name", name)
+    if (
+        isinstance(sample_time, bool)
+        or not isinstance(sample_time, (int, float))
+        or not (math.isfinite(sample_time) and sample_time > 0)
+    ):
+        raise InputError("sample_time", "must be a finite number > 0")
+    chains = chains_of(system, name)
+    kinds = kind_types([p for c in chains for p in c.parts])
+    _, S = system.pack_initial(initial)
+    Y = system.pack_held(held)
+    models = [chain_model(c, kinds) for c in chains]
+    guard = f"{name.upper()}_H"
+    stamp = [f"/* Generated by acdrive.export.to_c{': ' + description if description else ''}.",
+             " * Compile with -DACDRIVE_FLOAT for the float build (docs/guide/export.md).",
+             " * Do not edit: regenerate from the system. */"]  # fmt: skip
+    H = [*stamp, f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", PRELUDE]
+    for entry in kinds.values():
+        cls = entry.cls
+        first = _first_sentence(cls)
+        H.append(f"/* ---- {cls.__name__} ({cls.__module__}): {entry.step.source} ---- */")
+        for b, event in enumerate(cls.EVENTS):
+            H.append(f"#define ACD_{entry.cname.upper()}_{event.upper()} (1u << {b})")
+        for role in ROLES:
+            members = entry.members[role]
+            if not members:
+                continue
+            for m in members:
+                if isinstance(m.spec, tuple) and m.spec[0] == "table":
+                    H.append(
+                        f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
+                    )
+            H += _struct_lines(
+                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}", entry.cname
+            )
+        H.append("")
+    for model in models:
+        c = model.chain.name
+        parts = ", ".join(p.name for p in model.chain.parts)
+        H.append(f"/* ==== chain {c}: {parts} ==== */")
+        for role, members, what in (("params", model.params, "parameters"),
+                                    ("state", model.state, "discrete states and held outputs"),
+                                    ("inputs", model.inputs, "plant outputs read at each sample"),
+                                    ("outputs", model.outputs, "commands and event bits")):  # fmt: skip
+            if members:  # a chain that commands nothing (estimators only) has no outputs
+                H += _struct_lines(f"{c}_{role}", members, f"{c}: {what}")
+        H += [
+            "/* one sample at time t [s]: reads in, updates s, writes out; call every",
+            f"   p->sample_time seconds, first with the state from {c}_reset */",
+            f"{_step_prototype(model)};",
+            "/* the parameter values of the exported system */",
+            f"void {c}_set_params({c}_params *p);",
+            "/* the initial states and held outputs of the exported system */",
+            f"void {c}_reset({c}_state *s);",
+            "",
+        ]
+    H.append(f"#endif /* {guard} */")
+
+    C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
+    for support in _support_order(kinds):
+        C.append(support.code.strip("\n"))
+        C.append("")
+    for entry in kinds.values():
+        C.append(f"/* {entry.cls.__name__}.step: {entry.step.source} */")
+        C.append(_step_signature(entry))
+        C.append("{")
+        C += ["    (void)t;", "    (void)T_s;"]
+        C.append(entry.body.strip("\n"))
+        C.append("}")
+        C.append("")
+    for model in models:
+        c = model.chain.name
+        C.append(_step_prototype(model))
+        C.append("{")
+        C += ["    " + line for line in _chain_step_lines(model, kinds, system.source_of)]
+        C += ["}", "", f"void {c}_set_params({c}_params *p)", "{"]
+        C += ["    " + line for line in _set_params_lines(model, sample_time)]
+        C += ["}", "", f"void {c}_reset({c}_state *s)", "{"]
+        C += ["    " + line for line in _reset_lines(system, model, S, Y)]
+        C += ["}", ""]
+    return CExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, models)
+
+
+def sampled_parts_without_c(system) -> list[str]:
+    """Names of the sampled parts whose kind has no C (for a message listing them all)."""
+    missing = []
+    for part in system.parts:
+        if isinstance(part, SampledPart):
+            try:
+                c_step_of(part)
+            except InputError:
+                missing.append(part.name)
+    return missing

@@ -1,0 +1,85 @@
+"""The C implementation of each sampled part kind: a registry keyed by the part's class.
+
+Each entry is a :class:`CStep`: the body of the kind's step function in C (the second
+implementation of its numba ``step`` kernel, kept equal to it by the software-in-the-loop tests,
+``tests/test_export_sil.py``) and the support code it calls. The generator writes the function's
+signature from the kind's declarations, so the body reads its inputs as ``u->name``, its
+parameters as ``p->name``, its discrete state as ``s->name`` and writes its outputs as
+``y->name`` (a complex quantity is an ``acd_complex`` with ``.re`` and ``.im``; a table
+``p->name`` has ``.n`` points ``.t[i]``, ``.v[i]``); ``t`` is the sample instant and ``T_s`` the
+sample period; it returns the event bits (``ACD_<KIND>_<EVENT>`` masks, from ``EVENTS``).
+
+A kind is looked up by its exact class: a subclass with another kernel needs its own entry.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+from acdrive.errors import InputError
+
+
+@dataclass(frozen=True)
+class CSupport:
+    """A piece of C (static functions, constants) that step bodies call, written once per file
+    whatever the number of kinds that use it; ``needs`` lists the support it calls in turn."""
+
+    name: str
+    code: str
+    needs: tuple[CSupport, ...] = ()
+
+
+@dataclass(frozen=True)
+class CStep:
+    """The C of one part kind's step: ``body`` (statements, returning the event bits; or a
+    function of the part instance giving them, for a kind whose layout is set per instance,
+    such as a controller of any order), ``support`` (what it calls) and ``source`` (paper and
+    equations it implements)."""
+
+    body: object
+    source: str
+    support: tuple[CSupport, ...] = ()
+
+
+#: modules whose import registers their kinds (imported on first look-up)
+_MODULES = (
+    "acdrive.export._kinds.sensors",
+    "acdrive.export._kinds.bodson",
+    "acdrive.export._kinds.foc",
+    "acdrive.export._kinds.pm",
+)
+_REGISTRY: dict[type, CStep] = {}
+_loaded = False
+
+
+def register(kind: type, step: CStep) -> None:
+    """Give part class ``kind`` its C step."""
+    _REGISTRY[kind] = step
+
+
+def _load() -> None:
+    global _loaded
+    if not _loaded:
+        for module in _MODULES:
+            importlib.import_module(module)
+        _loaded = True
+
+
+def c_step_of(part) -> CStep:
+    """The C step of ``part``'s kind, or an InputError naming the part and the rule."""
+    _load()
+    step = _REGISTRY.get(type(part))
+    if step is None:
+        raise InputError(
+            part.name,
+            f"part kind {type(part).__name__} has no C implementation, so the chain cannot be "
+            "exported (acdrive.export._kinds lists the kinds that have one)",
+        )
+    return step
+
+
+def exportable_kinds() -> list[str]:
+    """Names of the part kinds that have a C step."""
+    _load()
+    return sorted(k.__name__ for k in _REGISTRY)

@@ -1,0 +1,143 @@
+"""The C text every exported file starts with: the real type, the <math.h> functions by
+precision, the complex space vector and its arithmetic.
+
+``ACDRIVE_REAL`` is ``double`` unless the file is compiled with ``-DACDRIVE_FLOAT``, which makes
+it ``float`` and switches every math function to its ``f`` form (sinf, sqrtf, ...) so that a
+Cortex-M4F's single-precision FPU does all the work. Only functions of C99 <math.h> that
+newlib's libm also provides are used: sqrt, sin, cos, atan2, acos, hypot, exp, log, floor, fmod, fabs.
+
+The complex helpers repeat, operation for operation, what numba compiles for the kernels'
+Python complex numbers (CPython's algorithms): a product is (ac - bd) + j(ad + bc), a quotient
+is Smith's algorithm as in CPython's ``_Py_c_quot``, a magnitude is ``hypot``, an angle is
+``atan2(im, re)``. With ``-ffp-contract=off`` the double build then rounds as the kernels do.
+"""
+
+PRELUDE = r"""
+#ifdef ACDRIVE_FLOAT
+#define ACDRIVE_REAL float
+#define ACD_SQRT sqrtf
+#define ACD_SIN sinf
+#define ACD_COS cosf
+#define ACD_ATAN2 atan2f
+#define ACD_HYPOT hypotf
+#define ACD_EXP expf
+#define ACD_LOG logf
+#define ACD_FLOOR floorf
+#define ACD_FMOD fmodf
+#define ACD_FABS fabsf
+#define ACD_ACOS acosf
+#define ACD_HUGE ACD_R(1e38) /* a finite stand-in for "no limit" (1e300 in the double build) */
+#else
+#define ACDRIVE_REAL double
+#define ACD_SQRT sqrt
+#define ACD_SIN sin
+#define ACD_COS cos
+#define ACD_ATAN2 atan2
+#define ACD_HYPOT hypot
+#define ACD_EXP exp
+#define ACD_LOG log
+#define ACD_FLOOR floor
+#define ACD_FMOD fmod
+#define ACD_FABS fabs
+#define ACD_ACOS acos
+#define ACD_HUGE ACD_R(1e300) /* a finite stand-in for "no limit" */
+#endif
+
+/* a literal in the build's precision (folded by the compiler) */
+#define ACD_R(x) ((ACDRIVE_REAL)(x))
+#define ACD_PI ACD_R(3.141592653589793)
+#define ACD_INF ((ACDRIVE_REAL)HUGE_VAL) /* +infinity (HUGE_VAL of <math.h>) */
+
+/* a space vector: real and imaginary parts (the kernels' complex numbers) */
+typedef struct {
+    ACDRIVE_REAL re;
+    ACDRIVE_REAL im;
+} acd_complex;
+"""
+
+HELPERS = r"""
+static inline acd_complex acd_c(ACDRIVE_REAL re, ACDRIVE_REAL im)
+{
+    acd_complex z;
+    z.re = re;
+    z.im = im;
+    return z;
+}
+
+static inline acd_complex acd_cadd(acd_complex a, acd_complex b)
+{
+    return acd_c(a.re + b.re, a.im + b.im);
+}
+
+static inline acd_complex acd_csub(acd_complex a, acd_complex b)
+{
+    return acd_c(a.re - b.re, a.im - b.im);
+}
+
+/* (a + jb)(c + jd) = (ac - bd) + j(ad + bc) */
+static inline acd_complex acd_cmul(acd_complex z, acd_complex w)
+{
+    ACDRIVE_REAL ac = z.re * w.re, bd = z.im * w.im, ad = z.re * w.im, bc = z.im * w.re;
+    return acd_c(ac - bd, ad + bc);
+}
+
+/* a real times a complex, as the complex product with (r + j0) rounds for finite values */
+static inline acd_complex acd_cscale(ACDRIVE_REAL r, acd_complex z)
+{
+    return acd_c(r * z.re, r * z.im);
+}
+
+/* z / w by Smith's algorithm (the order of CPython's _Py_c_quot) */
+static inline acd_complex acd_cdiv(acd_complex z, acd_complex w)
+{
+    ACDRIVE_REAL ratio, denom;
+    if (ACD_FABS(w.re) >= ACD_FABS(w.im)) {
+        ratio = w.im / w.re;
+        denom = w.re + w.im * ratio;
+        return acd_c((z.re + z.im * ratio) / denom, (z.im - z.re * ratio) / denom);
+    }
+    ratio = w.re / w.im;
+    denom = w.re * ratio + w.im;
+    return acd_c((z.re * ratio + z.im) / denom, (z.im * ratio - z.re) / denom);
+}
+
+static inline acd_complex acd_conj(acd_complex z)
+{
+    return acd_c(z.re, -z.im);
+}
+
+static inline ACDRIVE_REAL acd_cabs(acd_complex z)
+{
+    return ACD_HYPOT(z.re, z.im);
+}
+
+static inline ACDRIVE_REAL acd_carg(acd_complex z)
+{
+    return ACD_ATAN2(z.im, z.re);
+}
+
+/* Python's x % m for reals: the remainder takes the sign of m */
+static inline ACDRIVE_REAL acd_pymod(ACDRIVE_REAL x, ACDRIVE_REAL m)
+{
+    ACDRIVE_REAL r = ACD_FMOD(x, m);
+    if (r != ACD_R(0.0)) {
+        if ((m < ACD_R(0.0)) != (r < ACD_R(0.0))) {
+            r += m;
+        }
+    } else {
+        r = (m < ACD_R(0.0)) ? -ACD_R(0.0) : ACD_R(0.0);
+    }
+    return r;
+}
+
+/* Python's max(a, b) and min(a, b) of two reals */
+static inline ACDRIVE_REAL acd_max(ACDRIVE_REAL a, ACDRIVE_REAL b)
+{
+    return (b > a) ? b : a;
+}
+
+static inline ACDRIVE_REAL acd_min(ACDRIVE_REAL a, ACDRIVE_REAL b)
+{
+    return (b < a) ? b : a;
+}
+"""

@@ -1,0 +1,89 @@
+"""A scenario's controller chains: the drive built from the scenario (``Drive.build``), its C
+export, and the comparison of the C controller in the loop against acdrive's own run."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from acdrive.errors import InputError
+from acdrive.export._c_source import CExport, to_c
+
+#: double build against acdrive (ACDRIVE_STRICT_MATH=1): each logged signal's largest
+#: difference over the run, as a fraction of that signal's peak (the issue's bound)
+DOUBLE_TOLERANCE = 1e-12
+
+
+def c_name(scenario_name: str) -> str:
+    """A scenario name as a C identifier prefix: bodson-ramp -> bodson_ramp."""
+    name = scenario_name.replace("-", "_").lower()
+    return name if name[:1].isalpha() else f"chain_{name}"
+
+
+def built(setup):
+    """(drive, initial, held) of one setup (``Drive.build``; a setup comparing several runs,
+    such as both DFIM modes, is refused by its drive with an InputError)."""
+    from acdrive.drives import for_setup
+
+    runs = for_setup(setup).runs(setup)
+    if runs > 1:
+        raise InputError(
+            "scenario",
+            f"{setup.name} compares {runs} runs; the export takes a scenario of one run (one "
+            "mode, one controller)",
+        )
+    drive = for_setup(setup).build(setup)
+    initial, held = drive.initial()
+    return drive, initial, held
+
+
+def export_setup(setup, name: str | None = None) -> CExport:
+    drive, initial, held = built(setup)
+    return to_c(drive.system, setup.sample_time, initial, held, name=name or c_name(setup.name),
+                description=f"scenario {setup.name}")  # fmt: skip
+
+
+def shortened(setup, duration: float | None):
+    """``setup`` with its run cut to ``duration`` seconds (None: unchanged)."""
+    if duration is None:
+        return setup
+    if isinstance(duration, bool) or not (math.isfinite(duration) and duration > 0):
+        raise InputError("--duration", "must be a finite number of seconds > 0")
+    if duration > setup.duration:
+        raise InputError("--duration", f"must not exceed the scenario's ({setup.duration:g} s)")
+    return dataclasses.replace(setup, duration=float(duration))
+
+
+def compare_in_loop(setup, real: str = "double") -> dict:
+    """Run ``setup`` with acdrive's compiled loop and with its exported C controller in the loop
+    (``export._sil``), every output logged at every sample; per signal the largest difference
+    and the peak, the event counts of both, and the worst ratio."""
+    from acdrive._jit import STRICT_MATH
+    from acdrive.export._sil import deviation, find_compiler, run_in_loop
+
+    find_compiler()  # before any work
+    drive, initial, held = built(setup)
+    export = to_c(drive.system, setup.sample_time, initial, held, name=c_name(setup.name))
+    compiled = drive.system.compile()
+    kwargs = {"initial": initial, "held": held}
+    reference = compiled.run(setup.duration, setup.sample_time, setup.substeps, **kwargs)
+    in_loop = run_in_loop(compiled, export, setup.duration, setup.sample_time, setup.substeps,
+                          real=real, **kwargs)  # fmt: skip
+    signals = {}
+    for column, (difference, peak) in deviation(reference, in_loop).items():
+        ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
+        signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
+    worst = max(signals, key=lambda c: signals[c]["ratio"])
+    return {
+        "scenario": setup.name,
+        "duration": setup.duration,
+        "real": real,
+        "strict_math": STRICT_MATH,
+        "chains": [m.chain.name for m in export.chains],
+        "signals": signals,
+        "worst_signal": worst,
+        "worst_ratio": signals[worst]["ratio"],
+        "events_equal": reference.events == in_loop.events,
+        "events_acdrive": reference.events,
+        "events_c": in_loop.events,
+    }

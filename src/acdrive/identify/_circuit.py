@@ -1,0 +1,164 @@
+"""The cage IM at standstill as the inverse-Gamma equivalent circuit: what a standstill test sees.
+
+The T-circuit of ``machines.IMParams`` (R_s, R_r, L_s, L_r, L_m; Amezquita-Brooks et al. (1),
+Ugalde-Loo et al. (37)-(39)) has one parameter more than its stator terminals can reveal: scaling
+the rotor winding by any turns ratio a changes L_r, L_m and R_r but not a single stator voltage,
+current or the torque. Choosing a = L_m / L_r (rotor flux psi_R = a psi_r) gives the
+inverse-Gamma circuit, four parameters, all of which a standstill test determines:
+
+    R_s                        stator resistance
+    L_sigma = L_s - L_m^2/L_r  transient (total leakage) inductance, = sigma L_s
+    L_M     = L_m^2 / L_r      magnetising inductance of the inverse-Gamma circuit
+    R_R     = R_r (L_m/L_r)^2  rotor resistance referred through a = L_m / L_r
+
+At standstill (w = 0) the a-axis of the stationary frame carries (the part's equations,
+``machines._cage_part``, with psi_R = (L_m / L_r) psi_r):
+
+    L_sigma di/dt = v - (R_s + R_R) i + (R_R / L_M) psi_R
+    dpsi_R/dt     = R_R i - (R_R / L_M) psi_R
+
+so the standstill impedance is
+
+    Z(s) = R_s + s L_sigma + s L_M R_R / (R_R + s L_M),
+
+the series stator branch and the rotor branch (L_M parallel to R_R). Its rotor corner is
+w_c = R_R / L_M = R_r / L_r = 1 / tau_r. Going back to a T-circuit needs the leakage split,
+which the data cannot give: :func:`t_circuit` takes it as an assumption (L_ls = L_lr by default).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive.errors import InputError, require_positive
+
+#: the inverse-Gamma parameters in the order every fit and table uses, with unit and meaning
+INVERSE_GAMMA = (
+    ("R_s", "ohm", "stator resistance"),
+    ("L_sigma", "H", "transient (total leakage) inductance sigma L_s"),
+    ("R_R", "ohm", "rotor resistance of the inverse-Gamma circuit, R_r (L_m/L_r)^2"),
+    ("L_M", "H", "magnetising inductance of the inverse-Gamma circuit, L_m^2/L_r"),
+)
+NAMES = tuple(name for name, _, _ in INVERSE_GAMMA)
+UNITS = {name: unit for name, unit, _ in INVERSE_GAMMA}
+
+#: the leakage splits :func:`t_circuit` knows -> what each assumes
+LEAKAGE_SPLITS = {
+    "equal": "stator and rotor leakage equal, L_ls = L_lr",
+    "rotor-only": "all leakage on the rotor side, L_ls = 0 (L_m = L_s)",
+}
+
+
+@dataclass(frozen=True)
+class InverseGamma:
+    """The four standstill-identifiable parameters of a cage IM (module docstring)."""
+
+    R_s: float
+    L_sigma: float
+    R_R: float
+    L_M: float
+
+    def __post_init__(self):
+        for name in NAMES:
+            require_positive(name, getattr(self, name))
+
+    def as_array(self) -> np.ndarray:
+        return np.array([getattr(self, n) for n in NAMES])
+
+    @classmethod
+    def from_array(cls, values) -> InverseGamma:
+        return cls(*(float(v) for v in values))
+
+    @property
+    def rotor_corner(self) -> float:
+        """w_c = R_R / L_M = R_r / L_r = 1 / tau_r [rad/s]."""
+        return self.R_R / self.L_M
+
+
+def inverse_gamma(machine) -> InverseGamma:
+    """The inverse-Gamma parameters of a T-circuit machine (``IMParams``; module docstring)."""
+    a = machine.L_m / machine.L_r
+    return InverseGamma(
+        R_s=machine.R_s,
+        L_sigma=machine.L_s - a * machine.L_m,
+        R_R=machine.R_r * a * a,
+        L_M=a * machine.L_m,
+    )
+
+
+def t_circuit(params: InverseGamma, n_p: int, split: str = "equal", J=None):
+    """An ``IMParams`` with the terminal behaviour of ``params``, under an assumed leakage split.
+
+    L_s = L_sigma + L_M is fixed by the data; how the leakage divides between the stator
+    (L_ls = L_s - L_m) and the rotor (L_lr = L_r - L_m) is not, so ``split`` names an
+    assumption (``LEAKAGE_SPLITS``):
+
+    - ``equal`` (L_ls = L_lr, the usual choice): L_r = L_s, L_m = sqrt(L_M L_s);
+    - ``rotor-only`` (L_ls = 0, the inverse-Gamma circuit itself): L_m = L_s, L_r = L_m^2 / L_M.
+
+    R_r = R_R (L_r / L_m)^2 in both. Every stator quantity and the torque are the same for any
+    split; only the rotor flux's scale (psi_r = psi_R L_r / L_m) differs.
+    """
+    from acdrive.machines._induction import IMParams
+
+    if split not in LEAKAGE_SPLITS:
+        raise InputError("leakage_split", f"must be one of {', '.join(LEAKAGE_SPLITS)}")
+    L_s = params.L_sigma + params.L_M
+    if split == "equal":
+        L_r = L_s
+        L_m = float(np.sqrt(params.L_M * L_s))
+    else:
+        L_m = L_s
+        L_r = L_m * L_m / params.L_M
+    R_r = params.R_R * (L_r / L_m) ** 2
+    return IMParams(R_s=params.R_s, R_r=R_r, L_s=L_s, L_r=L_r, L_m=L_m, n_p=n_p, J=J)
+
+
+def standstill_impedance(params, w) -> np.ndarray:
+    """Z(jw) = R_s + jw L_sigma + jw L_M R_R / (R_R + jw L_M) [ohm] (module docstring); ``params``
+    an ``InverseGamma`` or an array (R_s, L_sigma, R_R, L_M)."""
+    R_s, L_sigma, R_R, L_M = np.asarray(
+        params.as_array() if isinstance(params, InverseGamma) else params, dtype=float
+    )
+    s = 1j * np.asarray(w, dtype=float)
+    return R_s + s * L_sigma + s * L_M * R_R / (R_R + s * L_M)
+
+
+def standstill_state_space(params) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) of x = (i, psi_R), input v, output i = x[0] (module docstring)."""
+    R_s, L_sigma, R_R, L_M = np.asarray(
+        params.as_array() if isinstance(params, InverseGamma) else params, dtype=float
+    )
+    A = np.array([[-(R_s + R_R) / L_sigma, R_R / (L_M * L_sigma)], [R_R, -R_R / L_M]])
+    B = np.array([1.0 / L_sigma, 0.0])
+    return A, B
+
+
+def sampled_admittance(params, w, hold: float) -> np.ndarray:
+    """Y_d(e^{jwT}) = i_k / v_k [S] of the standstill circuit driven by a voltage held over each
+    period ``hold`` = T (zero-order hold, the inverter's latched command) and its current sampled
+    at the period starts: the exact discrete model x_{k+1} = Phi x_k + Gamma v_k, i_k = x_k[0],
+    Phi = e^{AT}, Gamma = A^{-1} (Phi - I) B, evaluated at z = e^{jwT} (a periodic steady state
+    sampled this way has exactly these Fourier coefficients)."""
+    A, B = standstill_state_space(params)
+    Phi = _expm_2x2(A, hold)
+    Gamma = np.linalg.solve(A, (Phi - np.eye(2)) @ B)
+    z = np.exp(1j * np.asarray(w, dtype=float) * hold)
+    # C (zI - Phi)^-1 Gamma for the 2x2 case, C = (1, 0)
+    det = (z - Phi[0, 0]) * (z - Phi[1, 1]) - Phi[0, 1] * Phi[1, 0]
+    return ((z - Phi[1, 1]) * Gamma[0] + Phi[0, 1] * Gamma[1]) / det
+
+
+def _expm_2x2(A: np.ndarray, T: float) -> np.ndarray:
+    """e^{AT} of the standstill matrix by Sylvester's formula: its eigenvalues are real, negative
+    and distinct (a passive RL network with two time constants; the discriminant
+    ((a11 - a22)^2 + 4 a12 a21) is positive since a12 a21 = R_R^2 / (L_M L_sigma) > 0)."""
+    trace = A[0, 0] + A[1, 1]
+    root = np.sqrt((A[0, 0] - A[1, 1]) ** 2 + 4.0 * A[0, 1] * A[1, 0])
+    l1, l2 = 0.5 * (trace + root), 0.5 * (trace - root)
+    # e^{l2 T} I + (e^{l1 T} - e^{l2 T}) / (l1 - l2) (A - l2 I), with l1 > l2 and the difference
+    # written as -e^{l1 T} expm1(-(l1 - l2) T): accurate for close eigenvalues, never overflowing
+    slope = -np.exp(l1 * T) * np.expm1(-(l1 - l2) * T) / (l1 - l2)
+    return np.exp(l2 * T) * np.eye(2) + slope * (A - l2 * np.eye(2))

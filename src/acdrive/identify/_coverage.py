@@ -1,0 +1,55 @@
+"""How often the 95 % intervals of the standstill identification cover the truth (issue 23,
+item 3): the simulated tests repeated with independent sensor noise (seeds ``seed`` to
+``seed + repetitions - 1``), each identified, each interval of each inverse-Gamma parameter
+checked against the machine's own (``identify._circuit.inverse_gamma``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive.errors import InputError
+from acdrive.identify._circuit import NAMES, inverse_gamma
+from acdrive.identify._experiment import StandstillPlan, dc_test, injection_test
+from acdrive.identify._fit import BOOTSTRAP_COUNT
+from acdrive.identify._standstill import identify_standstill
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """Per parameter (``_circuit.NAMES`` order): the fraction of repetitions whose Jacobian and
+    bootstrap intervals hold the truth, and the mean relative error of the estimates (its bias)."""
+
+    repetitions: int
+    jacobian: dict[str, float]
+    bootstrap: dict[str, float]
+    bias: dict[str, float]
+
+
+def coverage(machine, plan: StandstillPlan, repetitions: int, seed: int = 0,
+             bootstrap: int = BOOTSTRAP_COUNT) -> Coverage:  # fmt: skip
+    """Repeat the simulated standstill tests of ``plan`` on ``machine`` (module docstring)."""
+    if isinstance(repetitions, bool) or not isinstance(repetitions, int) or repetitions < 1:
+        raise InputError("repetitions", f"must be an integer >= 1, got {repetitions!r}")
+    truth = inverse_gamma(machine).as_array()
+    hits = {"jacobian": np.zeros(len(NAMES)), "bootstrap": np.zeros(len(NAMES))}
+    errors = np.zeros(len(NAMES))
+    for r in range(repetitions):
+        run = seed + r
+        result = identify_standstill(
+            injection_test(machine, plan, seed=2 * run + 1), plan.base_frequency, plan.settle,
+            dc=dc_test(machine, plan, seed=2 * run), n_p=machine.n_p, seed=run,
+            bootstrap=bootstrap,
+        )  # fmt: skip
+        for j, (estimate, true) in enumerate(zip(result.impedance.estimates, truth, strict=True)):
+            for which, count in hits.items():
+                count[j] += estimate.covers(true, which)
+            errors[j] += (estimate.value - true) / true
+    return Coverage(
+        repetitions,
+        {n: float(h) / repetitions for n, h in zip(NAMES, hits["jacobian"], strict=True)},
+        {n: float(h) / repetitions for n, h in zip(NAMES, hits["bootstrap"], strict=True)},
+        {n: float(e) / repetitions for n, e in zip(NAMES, errors, strict=True)},
+    )

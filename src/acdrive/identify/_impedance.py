@@ -1,0 +1,294 @@
+"""The inverse-Gamma parameters from a single-axis multisine injection at standstill.
+
+**Why the frequency domain.** The injection is periodic, so after the transient the log's
+Fourier coefficients at the injected frequencies hold all it says about the machine: a handful
+of complex numbers instead of tens of thousands of samples, each with (for white sensor noise)
+the same noise variance, and a model that is exact without simulating anything: the sampled,
+zero-order-hold admittance Y_d(e^{jwT}) of the standstill circuit (``identify._circuit``). The
+time-domain alternative (simulate the circuit over the log and fit the samples) would need the
+initial transient modelled or discarded anyway, and costs a simulation per iteration.
+
+**The window.** The first ``settle`` seconds are dropped; of the rest, the largest whole number of
+periods of the base frequency f_0 (the step between tones: every tone is a multiple of it) is
+analysed, the last ones of the log. A period must be a whole number of samples. The excited
+tones are the bins at multiples of f_0 whose commanded voltage exceeds ``EXCITED_FRACTION`` of
+the largest (DC excluded): what the experimenter injected, before any compensation.
+
+**Voltage error.** The log's voltage is the command; the inverter applied v_a - U sign(i_a)
+(``identify._dc``). Given the voltage error U of a DC-step fit, the estimator compensates the
+logged voltage by it at the tones (command - U times the coefficients of sign(i_a)); without it,
+the dead time acts on the tones as a resistance-like describing function and biases R_s and R_R.
+U is itself an estimate: its standard error s_U, given, adds g g^T s_U^2 to the covariance
+(g = dp/dU from two refits at U +- s_U), and each bootstrap refit draws its own U from
+N(U, s_U^2).
+
+**The fit.** ``least_squares`` of the current residuals I_k - Y_d(w_k; p) V_k (real and
+imaginary parts) over log-parameters (positive by construction); their maximum-likelihood
+weight is one for white current noise. 95 % intervals: Jacobian covariance scaled by the residual
+variance with Student's t over 2K - 4 degrees of freedom, and a bootstrap redrawing the K complex
+residuals (inflated by sqrt(2K / (2K - 4)) for the fitted degrees of freedom) (``identify._fit``).
+
+**Plausibility**, checked before the fit: every tone carries current, and the winding absorbs
+power at every tone (Re(V conj(I)) > 0: a reversed current sign or another phase's current is
+refused, naming ``i_a``).
+
+**Identifiability**, checked on the fit, each an ``InputError`` naming the parameter and the rule:
+at least ``MIN_TONES`` tones; at least ``SAMPLES_PER_TONE`` samples per period of the highest
+tone; the tones must bracket the fitted rotor corner R_R / (2 pi L_M) (all tones far below it
+cannot separate L_sigma from R_R, all far above it cannot see L_M); and every parameter's 95 %
+interval within +-``MAX_HALF_WIDTH`` of its value.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive.errors import InputError, require_positive
+from acdrive.identify._circuit import (
+    INVERSE_GAMMA,
+    NAMES,
+    InverseGamma,
+    sampled_admittance,
+    standstill_impedance,
+)
+from acdrive.identify._experiment import StandstillLog
+from acdrive.identify._fit import (
+    BOOTSTRAP_COUNT,
+    Estimate,
+    FitNotConverged,
+    covariance,
+    jacobian_interval,
+    percentile_interval,
+    t_quantile,
+)
+
+EXCITED_FRACTION = 1e-2
+MIN_TONES = 3
+SAMPLES_PER_TONE = 10
+MAX_HALF_WIDTH = 0.5
+#: a period is a whole number of samples to this relative tolerance
+_WHOLE_RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Spectrum:
+    """The analysed window's Fourier coefficients at the excited tones: ``frequency`` [Hz],
+    ``voltage`` [V] (compensated) and ``current`` [A] (complex amplitudes), the sample ``hold``
+    [s]; ``command`` [V] is the voltage before compensation and ``polarity`` the coefficients of
+    sign(i_a), so the voltage for an error U is command - U polarity."""
+
+    frequency: np.ndarray
+    voltage: np.ndarray
+    current: np.ndarray
+    hold: float
+    periods: int
+    command: np.ndarray
+    polarity: np.ndarray
+
+    def compensated(self, voltage_error: float, current=None) -> Spectrum:
+        """This spectrum with the voltage compensated by ``voltage_error`` (and ``current``
+        replacing the measured one, for the bootstrap)."""
+        return Spectrum(self.frequency, self.command - voltage_error * self.polarity,
+                        self.current if current is None else current, self.hold, self.periods,
+                        self.command, self.polarity)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class ImpedanceFit:
+    """The fitted inverse-Gamma parameters (``estimates`` in ``_circuit.NAMES`` order) with their
+    intervals, the spectrum fitted, the residual (rms [A] and relative to the currents), the
+    degrees of freedom, the voltage error compensated and the bootstrap draws."""
+
+    estimates: tuple[Estimate, ...]
+    spectrum: Spectrum
+    residual_rms: float
+    residual_relative: float
+    dof: int
+    voltage_error: float | None
+    draws: np.ndarray
+    cov: np.ndarray
+
+    @property
+    def params(self) -> InverseGamma:
+        return InverseGamma.from_array([e.value for e in self.estimates])
+
+    def measured_impedance(self) -> np.ndarray:
+        """V_k / I_k at the tones [ohm]: the log's own impedance, sampled-data effects included."""
+        return self.spectrum.voltage / self.spectrum.current
+
+    def fitted_impedance(self) -> np.ndarray:
+        """Z(jw) of the fitted circuit at the tones [ohm] (continuous time)."""
+        return standstill_impedance(self.params, 2.0 * math.pi * self.spectrum.frequency)
+
+
+def spectrum(log: StandstillLog, base_frequency: float, settle: float,
+             voltage_error: float | None = None) -> Spectrum:  # fmt: skip
+    """The window and tones of ``log`` (module docstring)."""
+    require_positive("base_frequency", base_frequency)
+    if not (math.isfinite(settle) and settle >= 0.0):
+        raise InputError("settle", "must be a finite number >= 0")
+    where = f"{log.source}: column 'time'"
+    hold = float(np.median(np.diff(log.time)))
+    per_period = 1.0 / (base_frequency * hold)
+    samples = round(per_period)
+    if samples < 1 or abs(per_period - samples) > _WHOLE_RTOL * per_period:
+        raise InputError("base_frequency", f"a period 1 / {base_frequency:g} Hz must be a whole "
+                         f"number of samples of {hold:.6g} s, got {per_period:.6g}")  # fmt: skip
+    first = int(np.searchsorted(log.time, log.time[0] + settle - 0.5 * hold))
+    periods = (log.time.size - first) // samples
+    if periods < 1:
+        raise InputError(where, f"too short: needs {settle:g} s to settle and at least one period "
+                         f"1 / {base_frequency:g} Hz after it, the log has "
+                         f"{log.time[-1] - log.time[0] + hold:g} s")  # fmt: skip
+    n = periods * samples
+    v, i = log.v_a[-n:], log.i_a[-n:]
+    V = np.fft.rfft(v) * (2.0 / n)
+    I = np.fft.rfft(i) * (2.0 / n)
+    bins = np.arange(periods, V.size, periods)  # multiples of the base frequency, DC excluded
+    strongest = np.max(np.abs(V[bins])) if bins.size else 0.0
+    excited = bins[np.abs(V[bins]) > EXCITED_FRACTION * strongest] if strongest > 0.0 else bins[:0]
+    polarity = np.fft.rfft(np.sign(i)) * (2.0 / n)
+    if excited.size < MIN_TONES:
+        raise InputError("excitation", f"needs at least {MIN_TONES} excited tones at multiples "
+                         f"of {base_frequency:g} Hz, found {excited.size}")  # fmt: skip
+    frequency = (excited // periods) * base_frequency
+    if frequency[-1] * hold * SAMPLES_PER_TONE > 1.0 + 1e-12:
+        raise InputError(where, f"sampling at {1 / hold:g} Hz is too coarse for the tone at "
+                         f"{frequency[-1]:g} Hz: at least {SAMPLES_PER_TONE} samples per period")  # fmt: skip
+    current = I[excited]
+    if np.any(current == 0.0):
+        raise InputError(f"{log.source}: column 'i_a'", "carries no current at the injected "
+                         "tones (is the motor connected and the current the phase-a one?)")  # fmt: skip
+    # twice the mean power at each tone, the sampled current advanced by the half hold period
+    # the zero-order hold delays it (identify._circuit.sampled_admittance, far below 1 / T)
+    power = (V[excited] * np.conj(current * np.exp(1j * np.pi * frequency * hold))).real
+    if np.any(power <= 0.0):
+        bad = frequency[int(np.argmax(power <= 0.0))]
+        raise InputError(f"{log.source}: column 'i_a'", f"the winding would deliver power at "
+                         f"{bad:g} Hz (Re(V conj(I)) <= 0; a passive winding absorbs it): the "
+                         "current's sign is reversed or it is not phase a's")  # fmt: skip
+    # the tones are the command's; the voltage is what was applied
+    U = 0.0 if voltage_error is None else voltage_error
+    applied = V[excited] - U * polarity[excited]
+    spec = Spectrum(frequency, applied, I[excited], hold, periods, V[excited], polarity[excited])
+    return spec
+
+
+#: the residual of a parameter set that leaves the physical range (a solver's wild trial step)
+_FAR = 1e6
+
+
+def _residual(theta, spec: Spectrum):
+    with np.errstate(all="ignore"):
+        params = np.exp(theta)
+        try:
+            Y = sampled_admittance(params, 2.0 * np.pi * spec.frequency, spec.hold)
+        except np.linalg.LinAlgError:
+            Y = np.full(spec.frequency.size, np.nan)
+    error = spec.current - Y * spec.voltage
+    if not np.all(np.isfinite(error)):
+        error = np.full(error.size, _FAR * (1.0 + 1.0j))
+    return np.concatenate((error.real, error.imag))
+
+
+def _start(spec: Spectrum) -> np.ndarray:
+    """A starting point read off the measured impedance: R_s and L_sigma + L_M from the lowest
+    tone, L_sigma and R_s + R_R from the highest."""
+    Z = spec.voltage / spec.current
+    w = 2.0 * np.pi * spec.frequency
+    R_s = max(Z[0].real, 1e-6)
+    L_sigma = max(Z[-1].imag / w[-1], 1e-9)
+    R_R = max(Z[-1].real - R_s, 0.1 * R_s)
+    L_M = max(Z[0].imag / w[0] - L_sigma, L_sigma)
+    return np.log([R_s, L_sigma, R_R, L_M])
+
+
+def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12):
+    from scipy.optimize import least_squares
+
+    return least_squares(_residual, theta0, args=(spec,), method="lm", xtol=tolerance,
+                         ftol=tolerance, gtol=tolerance, max_nfev=2000)  # fmt: skip
+
+
+#: tolerance of the bootstrap's refits, which start at the estimate: their percentiles need a
+#: few digits, not the estimate's full precision
+BOOTSTRAP_TOLERANCE = 1e-8
+
+
+def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
+                  voltage_error: float | None = None, seed: int = 0,
+                  bootstrap: int = BOOTSTRAP_COUNT, check: bool = True,
+                  voltage_error_std: float = 0.0) -> ImpedanceFit:  # fmt: skip
+    """The inverse-Gamma parameters of an injection log with their intervals (module docstring).
+    ``voltage_error_std`` [V], the standard error of ``voltage_error``, widens the intervals by
+    what it carries into the fit (module docstring). ``check=False`` skips the identifiability
+    rules (to show what a bad test gives, e.g. the bias of an uncompensated voltage error); the
+    intervals are returned all the same."""
+    spec = spectrum(log, base_frequency, settle, voltage_error)
+    fit = _solve(spec, _start(spec))
+    m, n = 2 * spec.frequency.size, len(NAMES)
+    dof = m - n
+    rms = float(np.sqrt(2.0 * fit.cost / m))
+    if not fit.success or not np.all(np.isfinite(fit.x)) or fit.cost >= _FAR:
+        reached = (
+            rms if fit.cost < _FAR else float(np.sqrt(np.mean(_residual(_start(spec), spec) ** 2)))
+        )
+        raise FitNotConverged(
+            "impedance", fit.message, reached, "A (rms of the tones' current error)"
+        )
+    values = np.exp(fit.x)
+    s2 = 2.0 * fit.cost / dof
+    cov_theta = covariance(fit.jac, s2)
+    cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
+    U = 0.0 if voltage_error is None else voltage_error
+    spread = voltage_error_std if voltage_error is not None else 0.0
+    if spread > 0.0:  # + g g^T var(U), g = dp/dU by central differences of two refits
+        up = np.exp(_solve(spec.compensated(U + spread), fit.x).x)
+        down = np.exp(_solve(spec.compensated(U - spread), fit.x).x)
+        g = (up - down) / (2.0 * spread)
+        cov = cov + np.outer(g, g) * spread**2
+    q = t_quantile(dof)
+    rng = np.random.default_rng(seed)
+    residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]
+    residual = residual * math.sqrt(m / dof)
+    model = spec.current - (fit.fun[: m // 2] + 1j * fit.fun[m // 2 :])
+    draws = np.empty((bootstrap, n))
+    for b in range(bootstrap):
+        redrawn = model + rng.choice(residual, residual.size)
+        resampled = spec.compensated(U + spread * rng.standard_normal(), redrawn)
+        refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE)
+        draws[b] = np.exp(refit.x) if refit.success and refit.cost < _FAR else np.nan
+    estimates = tuple(
+        Estimate(name, unit, meaning, float(values[j]),
+                 jacobian_interval(values[j], cov[j, j], q), percentile_interval(draws[:, j]))
+        for j, (name, unit, meaning) in enumerate(INVERSE_GAMMA)
+    )  # fmt: skip
+    current_scale = float(np.sqrt(np.mean(np.abs(spec.current) ** 2) / 2.0))
+    result = ImpedanceFit(estimates, spec, rms, rms / current_scale, dof, voltage_error, draws, cov)
+    if check:
+        check_identified(result)
+    return result
+
+
+def check_identified(fit: ImpedanceFit) -> None:
+    """The identifiability rules of the module docstring, on a fit."""
+    params = fit.params
+    corner = params.rotor_corner / (2.0 * math.pi)
+    low, high = fit.spectrum.frequency[0], fit.spectrum.frequency[-1]
+    if high < corner:
+        raise InputError("R_R", f"not separable from L_sigma: every tone ({low:g} to {high:g} Hz) "
+                         f"lies below the rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz of the "
+                         "fit; the tones must bracket it")  # fmt: skip
+    if low > corner:
+        raise InputError("L_M", f"not seen: every tone ({low:g} to {high:g} Hz) lies above the "
+                         f"rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz of the fit; the tones "
+                         "must bracket it")  # fmt: skip
+    for estimate in fit.estimates:
+        width = estimate.half_width()
+        if not width <= MAX_HALF_WIDTH:
+            raise InputError(estimate.name, f"not identified by this excitation: its 95 % "
+                             f"interval is +-{width:.0%} of the value, at most "
+                             f"+-{MAX_HALF_WIDTH:.0%} accepted (tones {low:g} to {high:g} Hz)")  # fmt: skip

@@ -1,0 +1,117 @@
+"""The standstill identification of a cage IM: DC steps, then the injection, then a T-circuit.
+
+1. The DC-step log (optional) gives R_s and the inverter's voltage error U (``identify._dc``);
+2. the injection log, compensated by U when the DC steps gave it, gives the four inverse-Gamma
+   parameters with their intervals, widened by U's own uncertainty (``identify._impedance``);
+3. a T-circuit (``machines.IMParams``) under a stated leakage split (``identify._circuit``), its
+   parameters' intervals from the bootstrap draws converted one by one and from the Jacobian
+   covariance carried through the conversion to first order.
+
+What the data identify is said in :func:`identifiability`: the inverse-Gamma parameters; not the
+leakage split, not the pole pairs (given), not the inertia (no motion at standstill).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from acdrive.identify._circuit import LEAKAGE_SPLITS, InverseGamma, t_circuit
+from acdrive.identify._dc import DCStepFit, fit_dc_steps
+from acdrive.identify._experiment import StandstillLog
+from acdrive.identify._fit import (
+    BOOTSTRAP_COUNT,
+    Estimate,
+    jacobian_interval,
+    percentile_interval,
+    propagate,
+    t_quantile,
+)
+from acdrive.identify._impedance import ImpedanceFit, fit_impedance
+
+#: the T-circuit fields written, with unit and meaning (those of ``machines.IMParams``)
+T_FIELDS = (
+    ("R_s", "ohm", "stator resistance"),
+    ("R_r", "ohm", "rotor resistance referred to the stator (depends on the split)"),
+    ("L_s", "H", "stator self inductance, L_sigma + L_M"),
+    ("L_r", "H", "rotor self inductance (depends on the split)"),
+    ("L_m", "H", "magnetising inductance (depends on the split)"),
+)
+
+
+@dataclass(frozen=True)
+class StandstillIdentification:
+    """Everything one standstill identification found (module docstring)."""
+
+    dc: DCStepFit | None
+    impedance: ImpedanceFit
+    split: str
+    n_p: int
+    t_estimates: tuple[Estimate, ...]
+
+    @property
+    def params(self) -> InverseGamma:
+        return self.impedance.params
+
+    def machine(self):
+        """The ``IMParams`` of the estimates under the leakage split."""
+        return t_circuit(self.params, self.n_p, self.split)
+
+
+def _t_values(values, n_p: int, split: str) -> np.ndarray:
+    machine = t_circuit(InverseGamma.from_array(values), n_p, split)
+    return np.array([getattr(machine, name) for name, _, _ in T_FIELDS])
+
+
+def identify_standstill(injection: StandstillLog, base_frequency: float, settle: float,
+                        dc: StandstillLog | None = None, n_p: int = 1, split: str = "equal",
+                        seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> StandstillIdentification:  # fmt: skip
+    """Identify a cage IM from its standstill logs (module docstring)."""
+    t_circuit(InverseGamma(1.0, 1.0, 1.0, 1.0), n_p, split)  # the split and n_p, checked first
+    dc_fit = fit_dc_steps(dc, seed=seed, bootstrap=bootstrap) if dc is not None else None
+    error = dc_fit.voltage_error.value if dc_fit is not None else None
+    error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
+    fit = fit_impedance(injection, base_frequency, settle, voltage_error=error, seed=seed + 1,
+                        bootstrap=bootstrap, voltage_error_std=error_std)  # fmt: skip
+    values = fit.params.as_array()
+    t_values = _t_values(values, n_p, split)
+    cov = propagate(lambda v: _t_values(v, n_p, split), values, fit.cov)
+    draws = np.array([_t_values(d, n_p, split) if np.all(np.isfinite(d)) else np.full(5, np.nan)
+                      for d in fit.draws])  # fmt: skip
+    q = t_quantile(fit.dof)
+    t_estimates = tuple(
+        Estimate(name, unit, meaning, float(t_values[j]),
+                 jacobian_interval(t_values[j], cov[j, j], q), percentile_interval(draws[:, j]))
+        for j, (name, unit, meaning) in enumerate(T_FIELDS)
+    )  # fmt: skip
+    return StandstillIdentification(dc_fit, fit, split, n_p, t_estimates)
+
+
+def identifiability(result: StandstillIdentification) -> list[str]:
+    """What the standstill data determine and what they do not, as sentences."""
+    spec = result.impedance.spectrum
+    corner = result.params.rotor_corner / (2.0 * np.pi)
+    lines = [
+        (
+            f"identified: R_s, L_sigma, R_R, L_M (the inverse-Gamma circuit) from "
+            f"{spec.frequency.size} tones, {spec.frequency[0]:g} to {spec.frequency[-1]:g} Hz, "
+            f"bracketing the rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz"
+        ),
+        (
+            "not identifiable at standstill: the split of the leakage between stator and rotor "
+            "(hence L_m, L_r, R_r separately); the T-circuit assumes "
+            f"{LEAKAGE_SPLITS[result.split]}"
+        ),
+        (
+            f"not identified: the pole pairs n_p = {result.n_p} (given), the inertia and "
+            "friction (no motion)"
+        ),
+    ]
+    if result.dc is None:
+        lines.append("no DC-step log: the inverter's voltage error was neither measured nor "
+                     "compensated")  # fmt: skip
+    else:
+        lines.append(f"inverter voltage error U_err = {result.dc.voltage_error.value:.4g} V "
+                     "(DC-step intercept), compensated in the injection")  # fmt: skip
+    return lines
