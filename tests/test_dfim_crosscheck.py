@@ -7,9 +7,9 @@ from __future__ import annotations
 
 import math
 
-from acdrive.analysis._drive_stability import OperatingPoint, linearize
-from acdrive.analysis._drive_studies import with_speed_bandwidth
 from acdrive.drives import for_setup
+from acdrive.drives.dfim.linearisation._stability import OperatingPoint, linearize
+from acdrive.drives.dfim.linearisation._studies import with_speed_bandwidth
 from acdrive.scenarios import load_scenario
 
 

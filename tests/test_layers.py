@@ -293,7 +293,6 @@ def test_engine_layers_know_no_drive():
 #: behind a ``Drive`` method) to leave this list. The list only shrinks: a module that no longer
 #: imports a drive must leave it (test below), a new one cannot join without an edit here.
 ONE_DRIVE_MODULES = {
-    "acdrive._commands.stability": "the DFIM linearisation's command",
     "acdrive._report.bodson.discussion": "Bodson reproduction",
     "acdrive._report.bodson.experiments": "Bodson reproduction",
     "acdrive._report.bodson.verdicts": "Bodson reproduction",
@@ -302,10 +301,6 @@ ONE_DRIVE_MODULES = {
     "acdrive._report.speed_overshoot": "Bodson reproduction",
     "acdrive._report.im.figures": "cage-IM paper reproduction",
     "acdrive._report.im.numbers": "cage-IM paper reproduction",
-    "acdrive.analysis._drive_loops": "the DFIM drive's linearisation",
-    "acdrive.analysis._drive_stability": "the DFIM drive's linearisation",
-    "acdrive.analysis._drive_studies": "the DFIM drive's linearisation",
-    "acdrive.analysis._drive_view": "the DFIM drive's linearisation",
     "acdrive.export._kinds.pm": "the C steps of the PM drive's controller parts (keyed by their class)",
 }
 

@@ -93,9 +93,17 @@ def register(subparsers) -> None:
     p.set_defaults(handler=run)
 
 
+def _linearisation():
+    """The linearisation this command studies: the default drive's (``acdrive.drives``)."""
+    from acdrive.analysis._drive_linearisation import default_linearisation
+
+    return default_linearisation()
+
+
 def _model(args, mode: str):
-    from acdrive.analysis._drive_stability import DriveModel
     from acdrive.machines._dfim import BODSON_DFIM
+
+    DriveModel = _linearisation().DriveModel
 
     bandwidth = _flag("--bandwidth", args.bandwidth)
     B = _flag("--viscous-friction", args.viscous_friction)
@@ -130,12 +138,9 @@ def run(args) -> int:
         return _map(args)
     if args.bench:
         return _bench(args)
-    from acdrive.analysis._drive_stability import (
-        RAD_S_PER_RPM,
-        OperatingPoint,
-        check_point,
-        linearize,
-    )
+    lin = _linearisation()
+    RAD_S_PER_RPM, OperatingPoint = lin.RAD_S_PER_RPM, lin.OperatingPoint
+    check_point, linearize = lin.check_point, lin.linearize
 
     if args.scenario is not None:
         return _scenario(args)
@@ -156,17 +161,19 @@ def run(args) -> int:
 
 def _scenario(args) -> int:
     """Linearise the scenario's own drive (``linearize(setup, point)``)."""
-    from acdrive.analysis._drive_stability import RAD_S_PER_RPM, OperatingPoint, linearize
-    from acdrive.drives import DriveSetup
+    from acdrive.drives import for_setup
     from acdrive.scenarios._loader import load_scenario
 
     if args.map or args.bench:
         raise InputError("--scenario", "linearises one operating point: no --map or --bench")
     setup = load_scenario(args.scenario)
-    if not isinstance(setup, DriveSetup):
+    try:
+        lin = for_setup(setup).linearisation()
+    except InputError as exc:
         raise InputError(
-            "--scenario", "must be a DFIM scenario (the linearised drive is the DFIM's)"
-        )
+            "--scenario", f"must be a scenario of a linearised drive: {exc.rule}"
+        ) from None
+    RAD_S_PER_RPM, OperatingPoint, linearize = lin.RAD_S_PER_RPM, lin.OperatingPoint, lin.linearize
     motor = setup.motors[0]
     speed = float(motor.speed_reference[1][-1])
     if args.speed_rpm is not None:
@@ -257,8 +264,9 @@ def _map_report(args, models, bar) -> tuple[dict, dict]:
     """(report per mode, StabilityMap per mode) of ``acdrive stability --map``."""
     import numpy as np
 
-    from acdrive.analysis._drive_studies import default_grid, max_stable_bandwidth, stability_map
-
+    lin = _linearisation()
+    default_grid, max_stable_bandwidth = lin.default_grid, lin.max_stable_bandwidth
+    stability_map = lin.stability_map
     n_speed, n_load = args.grid
     maps, report = {}, {}
     for mode, model in models.items():
@@ -297,11 +305,9 @@ def _map_report(args, models, bar) -> tuple[dict, dict]:
 
 
 def _bench(args) -> int:
-    from acdrive.analysis._drive_studies import (
-        bench_candidates,
-        evaluate_candidate,
-        stabilising_thresholds,
-    )
+    lin = _linearisation()
+    bench_candidates, evaluate_candidate = lin.bench_candidates, lin.evaluate_candidate
+    stabilising_thresholds = lin.stabilising_thresholds
 
     bandwidth = _flag("--bandwidth", args.bandwidth)
     results = [evaluate_candidate(c) for c in bench_candidates(bandwidth)]

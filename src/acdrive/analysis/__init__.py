@@ -1,5 +1,5 @@
 """Analysis: individual channel analysis (ICAD) of 2x2 plants, the machines' current-subsystem
-plants, controller design checks, and the whole-drive stability of the DFIM drive."""
+plants, controller design checks, and the whole-drive linearisation (each drive's own, asked of the drive registry)."""
 
 from acdrive._lazy import namespace
 
@@ -18,11 +18,11 @@ __all__, __getattr__, __dir__ = namespace(
         "plant_for": "._plants",
         "plants_for": "._plants",
         "plant_from_params": "._plants",
-        "DriveModel": "._drive_stability",
-        "OperatingPoint": "._drive_view",
-        "linearize": "._drive_stability",
-        "stability_map": "._drive_studies",
-        "max_stable_bandwidth": "._drive_studies",
+        "DriveModel": "._drive_linearisation",
+        "OperatingPoint": "._drive_linearisation",
+        "linearize": "._drive_linearisation",
+        "stability_map": "._drive_linearisation",
+        "max_stable_bandwidth": "._drive_linearisation",
         "evaluate_ss": "._freqresp",
         "icad_quantities": "._icad_frequency",
         "gm_min": "._icad_closed_forms",

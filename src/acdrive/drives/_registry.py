@@ -56,6 +56,11 @@ class Drive:
       one parameter of a built-in machine (None: no such form).
     * ``crosscheck(setup, lower, upper)``: the linearised tolerated speed-loop bandwidth of a
       setup for a sweep's ``[crosscheck]`` (drives without a linearisation refuse it).
+    * ``linearisation()``: the drive's small-signal linearisation, a namespace with at least
+      ``linearize(study, point=None, ...)``, ``OperatingPoint``, ``stability_map`` and
+      ``max_stable_bandwidth`` (``acdrive.analysis`` and ``acdrive stability`` reach it here);
+      ``linearize(study, point, ...)`` linearises a setup of this drive with it. A drive without
+      one refuses both with an ``InputError``.
     """
 
     kind: str = ""
@@ -96,6 +101,12 @@ class Drive:
 
     def crosscheck(self, setup, lower: float, upper: float) -> dict:
         raise InputError("crosscheck", f"the {self.kind} drive has no linearised speed loop")
+
+    def linearisation(self):
+        raise InputError("drive", f"drive {self.kind!r} has no linearisation")
+
+    def linearize(self, study, point=None, *args, **kwargs):
+        return self.linearisation().linearize(study, point, *args, **kwargs)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} kind={self.kind!r}>"

@@ -71,5 +71,10 @@ class DFIMDriveKind(Drive):
 
         return linearised_tolerated_bandwidth(setup, lower, upper)
 
+    def linearisation(self):
+        from acdrive.drives.dfim import linearisation
+
+        return linearisation
+
 
 DRIVE = DFIMDriveKind()
