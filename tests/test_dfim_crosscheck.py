@@ -8,8 +8,8 @@ from __future__ import annotations
 import math
 
 from acdrive.drives import for_setup
-from acdrive.drives.dfim.linearisation._stability import OperatingPoint, linearize
-from acdrive.drives.dfim.linearisation._studies import with_speed_bandwidth
+from acdrive.drives.dfim._linearisation._stability import OperatingPoint, linearize
+from acdrive.drives.dfim._linearisation._studies import with_speed_bandwidth
 from acdrive.scenarios import load_scenario
 
 

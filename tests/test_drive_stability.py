@@ -1,4 +1,4 @@
-"""Whole-drive linearisation (acdrive.drives.dfim.linearisation._stability): analytic limits of Bodson's
+"""Whole-drive linearisation (acdrive.drives.dfim._linearisation._stability): analytic limits of Bodson's
 equations, consistency of the continuous and sampled-data models, and nonlinear simulation."""
 
 import dataclasses
@@ -10,14 +10,14 @@ import pytest
 
 from acdrive.cli import main
 from acdrive.drives.dfim import simulate
-from acdrive.drives.dfim.linearisation._stability import (
+from acdrive.drives.dfim._linearisation._stability import (
     RAD_S_PER_RPM,
     DriveModel,
     OperatingPoint,
     linearize,
     simulate_from_equilibrium,
 )
-from acdrive.drives.dfim.linearisation._studies import max_stable_bandwidth, stability_map
+from acdrive.drives.dfim._linearisation._studies import max_stable_bandwidth, stability_map
 from acdrive.errors import InputError
 from acdrive.machines import (
     BODSON_DFIM,
@@ -263,7 +263,7 @@ def test_cli_map_writes_figure_and_bandwidths(tmp_path, capsys):
 def test_stabilising_threshold_is_a_stability_boundary():
     """The smallest true inertia that stabilises the zero-load line: stable there, unstable
     0.05 J below; the same for an extra rotor resistance unknown to the controller."""
-    from acdrive.drives.dfim.linearisation._studies import stabilising_thresholds
+    from acdrive.drives.dfim._linearisation._studies import stabilising_thresholds
 
     speeds = np.linspace(0.0, 2700.0, 4)
     th = {t.name: t for t in stabilising_thresholds(n_speed=4, n_load=3)}

@@ -34,7 +34,7 @@ def linearisation_of(study):
 
 def linearize(setup, point=None, *args, **kwargs):
     """Linearise the closed drive ``setup`` at ``point``: its drive's ``linearize`` (the DFIM's:
-    ``acdrive.drives.dfim.linearisation.linearize``, Bodson's closed speed loop)."""
+    ``acdrive.drives.dfim._linearisation.linearize``, Bodson's closed speed loop)."""
     return linearisation_of(setup).linearize(setup, point, *args, **kwargs)
 
 

@@ -4,7 +4,7 @@ A digital controller that computes its command during the sample period applies 
 sample instant: the converter sees the command of the previous sample. ``ComputationDelay`` placed
 between a controller output and the modulator input models that (the DFIM drive puts one between
 its controller and rotor converter when ``controller.computation_delay_samples = 1``, and its
-linearisation, ``drives.dfim.linearisation._stability``, runs that same part). The delayed signal is declared
+linearisation, ``drives.dfim._linearisation._stability``, runs that same part). The delayed signal is declared
 per instance (unit and kind), so one part serves any wire.
 """
 

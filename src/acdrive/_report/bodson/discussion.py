@@ -21,13 +21,13 @@ from acdrive._report.converter_effect import (
 )
 from acdrive._report.spread import SUBWINDOWS, peak_spread, round_to_spread
 from acdrive._report.verdicts import at_least
-from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
-from acdrive.drives.dfim.linearisation._stability import DriveModel
-from acdrive.drives.dfim.linearisation._studies import (
+from acdrive.drives.dfim._linearisation._stability import DriveModel
+from acdrive.drives.dfim._linearisation._studies import (
     default_grid,
     max_stable_bandwidth,
     stabilising_thresholds,
 )
+from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
 from acdrive.scenarios._loader import load_scenario
 
 

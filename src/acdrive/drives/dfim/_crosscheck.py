@@ -11,7 +11,7 @@ import math
 def linearised_tolerated_bandwidth(setup, lower: float, upper: float) -> dict:
     """``speed_rpm``, ``load_nm``, ``converter_loss_v`` (the operating point) and
     ``linearised_tolerated`` [rad/s] searched in [``lower``, ``upper``] to 1 rad/s."""
-    from acdrive.drives.dfim.linearisation._studies import max_stable_bandwidth
+    from acdrive.drives.dfim._linearisation._studies import max_stable_bandwidth
 
     m = setup.motors[0]
     speed_rpm = float(m.speed_reference[1][-1]) * 30 / math.pi

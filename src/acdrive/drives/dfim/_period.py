@@ -24,7 +24,7 @@ before the run (``InputError``, exit 2), a period that is merely long for a loop
   switching at ``converter_switching_frequency`` f_sw with f_sw T_s < 1 cannot (it switches less
   than once per command), which is warned.
 
-The reduced loops leave out what the linearised whole drive (``drives.dfim.linearisation._stability``)
+The reduced loops leave out what the linearised whole drive (``drives.dfim._linearisation._stability``)
 keeps (the flux dynamics, the torque window); they decide only what they can: a loop already
 unstable in its reduced sampled form will not be stabilised by the rest.
 """

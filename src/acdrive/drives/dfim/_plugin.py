@@ -72,9 +72,9 @@ class DFIMDriveKind(Drive):
         return linearised_tolerated_bandwidth(setup, lower, upper)
 
     def linearisation(self):
-        from acdrive.drives.dfim import linearisation
+        from acdrive.drives.dfim import _linearisation
 
-        return linearisation
+        return _linearisation
 
 
 DRIVE = DFIMDriveKind()

@@ -1,7 +1,7 @@
-"""What the whole-drive linearisation (``drives.dfim.linearisation._stability``) reads of a DFIM drive: the
+"""What the whole-drive linearisation (``drives.dfim._linearisation._stability``) reads of a DFIM drive: the
 operating point (shaft speed, load), the setup held there (``operating_setup``) and the view of
 its motor 0, controller and supply (``DriveView``: every property computed from the setup, no copy
-of its fields). Both closed loops (``drives.dfim.linearisation._loops``) and the linearisation build on it.
+of its fields). Both closed loops (``drives.dfim._linearisation._loops``) and the linearisation build on it.
 """
 
 from __future__ import annotations

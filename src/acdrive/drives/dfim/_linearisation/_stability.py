@@ -32,10 +32,10 @@ and its compiled loop; they are kept clearly apart:
                 eigenvalues z are reported also as s = ln(z) / T_s for comparison with the
                 continuous model.
 
-What the linearisation reads of the setup is ``drives.dfim.linearisation._view``, the loops themselves are in
-``drives.dfim.linearisation._loops``, the studies over many linearisations (maps, tolerated bandwidth, bench
-candidates) in ``drives.dfim.linearisation._studies``, the ``StateSpace`` of a result in
-``drives.dfim.linearisation._control``.
+What the linearisation reads of the setup is ``drives.dfim._linearisation._view``, the loops themselves are in
+``drives.dfim._linearisation._loops``, the studies over many linearisations (maps, tolerated bandwidth, bench
+candidates) in ``drives.dfim._linearisation._studies``, the ``StateSpace`` of a result in
+``drives.dfim._linearisation._control``.
 
 Units: SI (speeds in rad/s unless the name ends in ``_rpm``); complex space vectors in the
 power-invariant scaling of Bodson (1)-(8).
@@ -56,6 +56,14 @@ from acdrive.analysis._linearise import (
 )
 from acdrive.control._speed import SpeedPIGains
 from acdrive.drives.dfim._drive import DFIMDrive
+from acdrive.drives.dfim._linearisation import _control as _drive_control
+from acdrive.drives.dfim._linearisation._loops import _continuous_equilibrium, _Sampled
+from acdrive.drives.dfim._linearisation._view import (
+    RAD_S_PER_RPM,
+    SPEED_LOOPS,
+    DriveView,
+    OperatingPoint,
+)
 from acdrive.drives.dfim._setup import (
     ConverterLosses,
     DFIMController,
@@ -66,14 +74,6 @@ from acdrive.drives.dfim._setup import (
 )
 from acdrive.drives.dfim._setup import (
     speed_range as setup_speed_range,
-)
-from acdrive.drives.dfim.linearisation import _control as _drive_control
-from acdrive.drives.dfim.linearisation._loops import _continuous_equilibrium, _Sampled
-from acdrive.drives.dfim.linearisation._view import (
-    RAD_S_PER_RPM,
-    SPEED_LOOPS,
-    DriveView,
-    OperatingPoint,
 )
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines._dfim import (
@@ -225,7 +225,7 @@ class StabilityResult:
         discrete with dt = T_s for ``sampled``): inputs ``w_ref`` [rad/s] and ``tau_L`` [N m],
         outputs ``w`` [rad/s] and the currents ``i_s``, ``i_r`` [A] (``_re``/``_im``, supply
         frame), states ``state_names`` (``.`` written ``_``, as python-control requires); its poles are ``eigenvalues`` (``z_eigenvalues``)
-        (``drives.dfim.linearisation._control``)."""
+        (``drives.dfim._linearisation._control``)."""
         return _drive_control.to_control(self)
 
     @property

@@ -1,4 +1,4 @@
-"""Studies over many linearisations of the DFIM drive (``drives.dfim.linearisation._stability``): stability
+"""Studies over many linearisations of the DFIM drive (``drives.dfim._linearisation._stability``): stability
 maps over speed x load, the tolerated speed-loop bandwidth a_D,VEL, and the candidate effects of
 Bodson's test bench with the size each must have to remove the instability (docs/stability.md).
 """
@@ -12,14 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive.control._speed import SpeedPIGains
-from acdrive.drives.dfim._setup import ConverterLosses, DriveSetup
-from acdrive.drives.dfim.linearisation._stability import (
+from acdrive.drives.dfim._linearisation._stability import (
     DriveModel,
     _torque_window,
     linearize,
     view_of,
 )
-from acdrive.drives.dfim.linearisation._view import RAD_S_PER_RPM, OperatingPoint
+from acdrive.drives.dfim._linearisation._view import RAD_S_PER_RPM, OperatingPoint
+from acdrive.drives.dfim._setup import ConverterLosses, DriveSetup
 from acdrive.errors import InputError
 from acdrive.machines._dfim import BODSON_DFIM
 

@@ -1,4 +1,4 @@
-"""The linearised closed DFIM drive (``drives.dfim.linearisation._stability``) as a python-control
+"""The linearised closed DFIM drive (``drives.dfim._linearisation._stability``) as a python-control
 ``StateSpace``, with the speed reference and the load torque as inputs.
 
 The state matrix is the linearisation's own Jacobian (the continuous right-hand side or the
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive.analysis._linearise import get_complex, jacobian, slot
-from acdrive.drives.dfim.linearisation._loops import _continuous_equilibrium, _Sampled
+from acdrive.drives.dfim._linearisation._loops import _continuous_equilibrium, _Sampled
 
 INPUTS = ("w_ref", "tau_L")
 OUTPUTS = ("w", "i_s_re", "i_s_im", "i_r_re", "i_r_im")

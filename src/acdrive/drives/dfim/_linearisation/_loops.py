@@ -1,4 +1,4 @@
-"""The two closed loops the whole-drive linearisation (``drives.dfim.linearisation._stability``) differentiates,
+"""The two closed loops the whole-drive linearisation (``drives.dfim._linearisation._stability``) differentiates,
 both on the DFIM drive's own build of the setup (``acdrive.drives.get("dfim").build``):
 
 * ``_Continuous``: the continuous-time controller laws of Bodson (20)+(22) or (22)+(43)+(45)-(47)
@@ -6,7 +6,7 @@ both on the DFIM drive's own build of the setup (``acdrive.drives.get("dfim").bu
   (``_Plant``), in the frame that turns with the supply;
 * ``_Sampled``: one sample of the compiled drive as a ``SampleMap``, re-referenced every sample.
 
-Each reads the drive through a ``DriveView`` (``drives.dfim.linearisation._view``): the setup's motor 0
+Each reads the drive through a ``DriveView`` (``drives.dfim._linearisation._view``): the setup's motor 0
 held at its operating point.
 """
 
@@ -25,7 +25,7 @@ from acdrive.analysis._linearise import (
 from acdrive.control._bodson import rotor_current_loop
 from acdrive.control._speed import speed_pi
 from acdrive.drives.dfim._drive import DFIMDrive
-from acdrive.drives.dfim.linearisation._view import DriveView
+from acdrive.drives.dfim._linearisation._view import DriveView
 from acdrive.errors import InputError
 from acdrive.machines._dfim import (
     DFIMParams,
