@@ -250,6 +250,27 @@ def test_cli_bad_arguments_one_line_exit_2(capsys, extra, field):
     assert err.count("\n") == 1 and field in err
 
 
+def test_the_public_names_reach_a_drive_linearisation_through_the_registry(capsys):
+    """``acdrive.analysis``'s names are the default drive's own linearisation
+    (``Drive.linearisation()``); a setup of a drive without one is refused in one line naming
+    the drive, by ``analysis.linearize`` and by ``acdrive stability --scenario`` (exit 2)."""
+    from acdrive import analysis
+    from acdrive.drives import for_setup, get
+    from acdrive.drives._registry import DEFAULT_KIND
+    from acdrive.scenarios import load_scenario
+
+    own = get(DEFAULT_KIND).linearisation()
+    assert analysis.OperatingPoint is own.OperatingPoint
+    assert analysis.DriveModel is own.DriveModel
+    pm = load_scenario("pm-bly171d-speed")
+    kind = for_setup(pm).kind
+    with pytest.raises(InputError, match=f"drive '{kind}' has no linearisation"):
+        analysis.linearize(pm, analysis.OperatingPoint(100.0, 0.0))
+    assert main(["stability", "--scenario", "pm-bly171d-speed"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--scenario" in err and "no linearisation" in err
+
+
 def test_cli_map_writes_figure_and_bandwidths(tmp_path, capsys):
     args = ["stability", "--map", "--grid", "3", "2", "--out", str(tmp_path), "--json"]
     assert main(args) == 0

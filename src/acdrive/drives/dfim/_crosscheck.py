@@ -1,7 +1,7 @@
 """The linearised tolerated speed-loop bandwidth of a DFIM setup, for a sweep's ``[crosscheck]``
 (``acdrive.sweep._report``): the largest a_D,VEL at which the linearised sampled closed loop of
-motor 0 (``analysis._drive_studies.max_stable_bandwidth`` on the setup itself) is stable at the
-setup's final speed reference and load, with every other field of the setup as it is."""
+motor 0 (``_linearisation._studies.max_stable_bandwidth`` on the setup itself) is stable at
+the setup's final speed reference and load, with every other field of the setup as it is."""
 
 from __future__ import annotations
 
