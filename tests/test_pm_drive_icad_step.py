@@ -150,4 +150,7 @@ def test_outcome_is_written_with_its_summary(tmp_path):
     assert json.loads((tmp_path / "summary.json").read_text()) == summary
     assert (tmp_path / "step" / "data.csv").exists() and (tmp_path / "base" / "data.csv").exists()
     first, rows = _entry.headline(outcome, summary)
-    assert "matches ICAD" in first and len(rows) == 3 + len(setup.frequencies)
+    # three summary rows, one per injected frequency, and the timing row (simulation apart from
+    # the compile or load of its loop)
+    assert "matches ICAD" in first and len(rows) == 3 + len(setup.frequencies) + 1
+    assert rows[-1][0] == "simulation" and "simulated in" in rows[-1][1]
