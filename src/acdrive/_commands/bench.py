@@ -3,17 +3,7 @@ gym-electric-motor 3.0.3, measured in one run on this machine, plus the ICAD tim
 
 from __future__ import annotations
 
-CASE_NAMES = (
-    "motulator_averaged",
-    "motulator_pwm",
-    "gem_dfim",
-    "icad",
-    "first_result",
-    "command",
-    "compile_free",
-    "batch",
-    "loop_speed",
-)
+from acdrive._bench.suite import CASES as CASE_NAMES  # the suite names its cases once
 
 
 def register(subparsers):
