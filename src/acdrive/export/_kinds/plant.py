@@ -1,0 +1,139 @@
+"""C of the plant kinds the plant FMU is built from (``acdrive.export._plant_source``): the DC
+source, the cage induction motor, the free shaft and the averaged converters, and the C step of
+the PWM unit's latch (a sampled part in front of an averaged converter). Each body repeats its
+numba kernel operation for operation (complex products as (ac - bd) + j(ad + bc), quotients by
+Smith's algorithm, the kernels' order of sums), so a strict-math build agrees to rounding; the
+FMU tests (``tests/test_export_fmu.py``) keep the two equal."""
+
+from __future__ import annotations
+
+from acdrive.export._kinds import CStep, CSupport, PlantC, register, register_plant
+from acdrive.export._kinds.common import CLIP_MAGNITUDE, TABLE_AT
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.plant._converter import AveragedConverter, DCFedConverter
+from acdrive.plant._inverter import CarrierLatch
+from acdrive.plant._mechanics import W_COULOMB, Shaft
+from acdrive.plant._sources import DCSource
+
+#: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
+TANH = CSupport(
+    "tanh",
+    """
+#ifdef ACDRIVE_FLOAT
+#define ACD_TANH tanhf
+#else
+#define ACD_TANH tanh
+#endif
+""",
+)
+
+register_plant(
+    DCSource,
+    PlantC(
+        source="DC source: the voltage profile (plant._sources.dc_state_outputs)",
+        state_outputs="    y->v_dc = acd_table_at(p->V.n, p->V.t, p->V.v, t);",
+        support=(TABLE_AT,),
+    ),
+)
+
+register_plant(
+    CageInductionMachine,
+    PlantC(
+        source="Amezquita-Brooks et al. (1)-(2), complex form (machines._cage_part)",
+        state_outputs=r"""
+    y->i_s = x->i_s;
+    y->psi_r = x->psi_r;
+    /* (2): tau_e = n_p (L_m / L_r) Im(conj(psi_r) i_s) */
+    y->tau_e = p->n_p * p->L_m / p->L_r * acd_cmul(acd_conj(x->psi_r), x->i_s).im;
+""",
+        rhs=r"""
+    /* (1): sigma L_s di_s/dt = v_s - (R_s + L_m^2 R_r / L_r^2) i_s + (L_m / L_r) k psi_r,
+       dpsi_r/dt = (L_m R_r / L_r) i_s - k psi_r, with k = R_r / L_r - j n_p w */
+    ACDRIVE_REAL sigma_L_s = p->L_s - p->L_m * p->L_m / p->L_r;
+    acd_complex rotor_pole = acd_c(p->R_r / p->L_r, -(p->n_p * u->w));
+    ACDRIVE_REAL r_eq = p->R_s + p->L_m * p->L_m * p->R_r / (p->L_r * p->L_r);
+    acd_complex sum = acd_cadd(acd_csub(u->v_s, acd_cscale(r_eq, x->i_s)),
+                               acd_cmul(acd_cscale(p->L_m / p->L_r, rotor_pole), x->psi_r));
+    dx->i_s = acd_cdiv(sum, acd_c(sigma_L_s, ACD_R(0.0)));
+    dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r / p->L_r, x->i_s),
+                         acd_cmul(rotor_pole, x->psi_r));
+""",
+    ),
+)
+
+register_plant(
+    Shaft,
+    PlantC(
+        source="Bodson (26): J dw/dt = tau_e - tau_L(t) - (B + k_b(t)) w - tau_c tanh(w / "
+        "W_COULOMB) (plant._mechanics)",
+        state_outputs="    y->w = x->w;\n    y->theta = x->theta;",
+        rhs=rf"""
+    ACDRIVE_REAL load = acd_table_at(p->load.n, p->load.t, p->load.v, t) + p->B * x->w;
+    ACDRIVE_REAL k_b;
+    if (p->tau_c != ACD_R(0.0)) {{
+        load += p->tau_c * ACD_TANH(x->w / ACD_R({W_COULOMB!r})); /* W_COULOMB */
+    }}
+    dx->w = (u->tau_e - load) / p->J;
+    k_b = acd_table_at(p->brake.n, p->brake.t, p->brake.v, t);
+    if (k_b != ACD_R(0.0)) {{ /* a separate term, as the kernel */
+        dx->w -= k_b * x->w / p->J;
+    }}
+    dx->theta = x->w;
+""",
+        support=(TABLE_AT, TANH),
+    ),
+)
+
+register_plant(
+    AveragedConverter,
+    PlantC(
+        source="averaged converter: the command held over the sample, |v| <= V_dc / sqrt(2) "
+        "(plant._converter)",
+        segments=r"""
+    int saturated;
+    dt[0] = T_s;
+    v[0].v = acd_clip_magnitude(u->v_ref, p->V_dc / ACD_SQRT(ACD_R(2.0)), &saturated);
+    *n = 1;
+    return saturated ? ACD_AVERAGED_CONVERTER_SATURATED : 0u;
+""",
+        support=(CLIP_MAGNITUDE,),
+    ),
+)
+
+register_plant(
+    DCFedConverter,
+    PlantC(
+        source="averaged converter fed from a DC link: |v| <= max(v_dc, 0) / sqrt(2) "
+        "(plant._converter)",
+        segments=r"""
+    int saturated;
+    dt[0] = T_s;
+    v[0].v = acd_clip_magnitude(u->v_ref, acd_max(u->v_dc, ACD_R(0.0)) / ACD_SQRT(ACD_R(2.0)),
+                                &saturated);
+    *n = 1;
+    return saturated ? ACD_DC_FED_CONVERTER_SATURATED : 0u;
+""",
+        support=(CLIP_MAGNITUDE,),
+    ),
+)
+
+register(
+    CarrierLatch,
+    CStep(
+        source="the PWM unit's shadow register, N = max(1, round(1 / (f_pwm T_s))) samples "
+        "(plant._inverter.latch_step)",
+        body=r"""
+    ACDRIVE_REAL n = acd_max(ACD_R(1.0), ACD_FLOOR(ACD_R(1.0) / (p->f_pwm * T_s) + ACD_R(0.5)));
+    ACDRIVE_REAL j = s->k;
+    if (j < ACD_R(0.0) || j >= n) {
+        j = ACD_R(0.0);
+    }
+    if (j == ACD_R(0.0)) {
+        s->v = u->v_ref;
+    }
+    s->k = (j + ACD_R(1.0) < n) ? j + ACD_R(1.0) : ACD_R(0.0);
+    y->v_ref = s->v;
+    return 0u;
+""",
+    ),
+)
