@@ -189,8 +189,12 @@ def plant_model(export: PlantExport, system, held, sample_time: float, stop_time
         variables += _scalars(port.path, port.var, f"m->in.{_port_name(port)}",
                               Y0[k : k + port.var.width], causality="input",
                               variability="discrete")  # fmt: skip
-        defaults += ["    " + line for line in _value_lines(
-            f"m->in.{_port_name(port)}", port.var, Y0[k : k + port.var.width], port.path)]
+        defaults += [
+            "    " + line
+            for line in _value_lines(
+                f"m->in.{_port_name(port)}", port.var, Y0[k : k + port.var.width], port.path
+            )
+        ]
     for port in export.outputs:
         variables += _scalars(port.path, port.var, f"m->s.y.{port.part.name}.{port.var.name}",
                               None, causality="output", variability="continuous")  # fmt: skip

@@ -176,7 +176,9 @@ def compare_fmus(setup, duration: float | None = None) -> dict:
         p_run = simulate_fmu(str(paths["plant"]), input=_inputs(p_in, times, log),
                              output=p_out, **kw)  # fmt: skip
         closed = _closed_loop(paths, n, T_s)
-    modulated = {f"{q.path}{s}" for m in system.modulators for q in m.out for s in ("", ".re", ".im")}
+    modulated = {
+        f"{q.path}{s}" for m in system.modulators for q in m.out for s in ("", ".re", ".im")
+    }
     controller = {c: c_run[c][1:] for c in c_out}  # the command of sample k is out at t_{k+1}
     plant = {c: p_run[c] for c in p_out}
     shift = {c: 1 for c in p_out if c in modulated}
