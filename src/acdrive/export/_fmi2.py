@@ -380,14 +380,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     }
     if (n < 1.0 || fabs(communicationStepSize - n * period) > ACD_FMU_STEP_RTOL * period) {
         acd_fmu_log(instance, fmi2Error,
-                    "fmi2DoStep: the communication step %.17g s is not a whole number of the "
-                    "control period %.17g s", communicationStepSize, period);
+                    "fmi2DoStep: the communication step %.9g s is not a whole number of the "
+                    "control period %.9g s", communicationStepSize, period);
         return fmi2Error;
     }
     if (fabs(currentCommunicationPoint - now) > ACD_FMU_STEP_RTOL * period) {
         acd_fmu_log(instance, fmi2Error,
-                    "fmi2DoStep: the communication point %.17g s is not the FMU's time "
-                    "%.17g s", currentCommunicationPoint, now);
+                    "fmi2DoStep: the communication point %.9g s is not the FMU's time "
+                    "%.9g s", currentCommunicationPoint, now);
         return fmi2Error;
     }
     for (i = 0; i < (unsigned long)n; ++i) {

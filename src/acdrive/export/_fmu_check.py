@@ -51,7 +51,7 @@ def scenario_fmus(setup, parts, folder: Path, name: str | None = None) -> dict[s
     for part in parts:
         if part not in PARTS:
             raise InputError("--part", f"must be one of {', '.join(PARTS)} (got {part!r})")
-    find_compiler("gcc")
+    find_compiler("gcc", "building an FMU's binary")
     fmi_headers()
     drive, initial, held = built(setup)
     base = name or c_name(setup.name)

@@ -73,8 +73,7 @@ class PlantExport:
 
 def _check_exportable(system) -> None:
     for part in system.continuous:
-        kernels = part.kernels()
-        if "direct_outputs" in kernels:
+        if part.DIRECT_OUTPUTS:
             crosses = [
                 n
                 for n in part.DIRECT_FROM
@@ -92,7 +91,7 @@ def _check_exportable(system) -> None:
                 f"part kind {type(part).__name__} has direct outputs, which the plant export "
                 "does not write in C yet",
             )
-        if "project" in kernels:
+        if type(part).project is not None:
             raise InputError(
                 part.name,
                 f"part kind {type(part).__name__} re-normalises its states (project), which the "
@@ -204,8 +203,10 @@ def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
             "    }",
             f"    {d}(t + h, p, &xt.x, in, y, &k4.x);",
             f"    for (i = 0; i < {n_x}; ++i) {{",
-            "        X->v[i] += h / ACD_R(6.0) * (k1.v[i] + ACD_R(2.0) * k2.v[i] + "
-            "ACD_R(2.0) * k3.v[i] + k4.v[i]);",
+            (
+                "        X->v[i] += h / ACD_R(6.0) * (k1.v[i] + ACD_R(2.0) * k2.v[i] + "
+                "ACD_R(2.0) * k3.v[i] + k4.v[i]);"
+            ),
             "    }",
         ]
     if method != "rk6":
@@ -357,18 +358,18 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     C += _kind_functions(kinds)
     C += [f"/* the continuous states as one array, for the integrator ({n_x} reals) */",
           f"typedef union {{ {name}_continuous x; ACDRIVE_REAL v[{n_x}]; }} {name}_vector;",
-          f"typedef char {name}_states_are_reals[(sizeof({name}_continuous) == {n_x} * "
-          "sizeof(ACDRIVE_REAL)) ? 1 : -1];", ""]  # fmt: skip
+          (f"typedef char {name}_states_are_reals[(sizeof({name}_continuous) == {n_x} * "
+          "sizeof(ACDRIVE_REAL)) ? 1 : -1];"), ""]  # fmt: skip
     # outputs of every continuous part from the state
-    C += [f"static void {name}_state_outputs(ACDRIVE_REAL t, const {name}_params *p, "
-          f"const {name}_continuous *x, {name}_outputs *y)", "{", "    (void)x;"]  # fmt: skip
+    C += [(f"static void {name}_state_outputs(ACDRIVE_REAL t, const {name}_params *p, "
+          f"const {name}_continuous *x, {name}_outputs *y)"), "{", "    (void)x;"]  # fmt: skip
     for part in continuous:
         C.append(
             f"    acd_{kinds[type(part)].cname}_state_outputs({_call_args(kinds[type(part)], 'state_outputs', part, 'x', 'y')});"
         )
     C += ["}", ""]
-    C += [f"static void {name}_derivatives(ACDRIVE_REAL t, const {name}_params *p, "
-          f"const {name}_continuous *x, {in_arg}, {name}_outputs *y, {name}_continuous *dx)",
+    C += [(f"static void {name}_derivatives(ACDRIVE_REAL t, const {name}_params *p, "
+          f"const {name}_continuous *x, {in_arg}, {name}_outputs *y, {name}_continuous *dx)"),
           "{", "    (void)in;", f"    {name}_state_outputs(t, p, x, y);"]  # fmt: skip
     for part in continuous:
         entry = kinds[type(part)]
@@ -386,8 +387,8 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
         )
         C.append("    }")
     C += ["}", ""]
-    C += [f"static void {name}_plant_step(ACDRIVE_REAL t, ACDRIVE_REAL h, const {name}_params *p, "
-          f"{name}_vector *X, {in_arg}, {name}_outputs *y)", "{"]  # fmt: skip
+    C += [(f"static void {name}_plant_step(ACDRIVE_REAL t, ACDRIVE_REAL h, const {name}_params *p, "
+          f"{name}_vector *X, {in_arg}, {name}_outputs *y)"), "{"]  # fmt: skip
     C += _rk_lines(system.method, n_x, name)
     C += ["}", ""]
     C += [

@@ -1,0 +1,272 @@
+"""FMI 2.0 co-simulation FMUs (issue 22, item 4): the controller chains and the plant (cage IM,
+shaft, averaged converter fed from the DC link) of a scenario as FMUs built from the generated C,
+checked with fmpy: ``validate_fmu`` clean; ``simulate_fmu`` of the controller with acdrive's
+logged plant outputs gives acdrive's commands exactly; the plant with acdrive's logged commands
+gives acdrive's plant outputs within 1e-9 of each signal's peak; both FMUs stepped by a small
+master equal acdrive's closed loop within the same bound. The comparisons run in a child process
+with ACDRIVE_STRICT_MATH=1, as the software-in-the-loop tests do (numba without fast-math, the C
+with -ffp-contract=off): the bound then holds with room (the agreement is to the bit here)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from acdrive.scenarios._files import builtin_text
+
+fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed (pip install 'acdrive[fmu]')")
+pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+
+#: im-foc-speed on the averaged inverter, shortened: the speed step at 5 ms, the brake at 50 ms
+_CHANGES = {
+    'model = "switching"': 'model = "averaged"',
+    "dead_time_s = 2e-6\n": "",
+    "device_drop_v = 1.5\n": "",
+    "duration = 1.2": "duration = 0.1",
+    "brake_profile = [[0.0, 0.0], [0.6, 0.0], [0.6, 2.77e-3]]": (
+        "brake_profile = [[0.0, 0.0], [0.05, 0.0], [0.05, 2.77e-3]]"
+    ),
+    "speed_rad_s_profile = [[0.0, 0.0], [0.05, 0.0], [0.05, 150.0]]": (
+        "speed_rad_s_profile = [[0.0, 0.0], [0.005, 0.0], [0.005, 150.0]]"
+    ),
+}
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    text = builtin_text("im-foc-speed")
+    for old, new in _CHANGES.items():
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    path = tmp_path_factory.mktemp("scenario") / "im-averaged.toml"
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def fmus(scenario, tmp_path_factory):
+    from acdrive.export._fmu_check import PARTS, scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    return scenario_fmus(load_scenario(scenario), PARTS, tmp_path_factory.mktemp("fmus"))
+
+
+@pytest.fixture(scope="module")
+def report(scenario):
+    env = dict(os.environ, ACDRIVE_STRICT_MATH="1")
+    code = "import sys; from acdrive.cli import main; raise SystemExit(main(sys.argv[1:]))"
+    done = subprocess.run(
+        [sys.executable, "-c", code, "export", "fmu-check", scenario, "--json"],
+        check=False, capture_output=True, text=True, env=env, timeout=1200,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def test_both_fmus_validate_clean(fmus):
+    from fmpy.validation import validate_fmu
+
+    for path in fmus.values():
+        assert validate_fmu(str(path)) == [], path.name
+
+
+def test_model_description_from_the_declarations(fmus):
+    """Causalities, units with their SI exponents, start values and descriptions as declared;
+    the two FMUs connect by equal names; the C sources travel inside."""
+    import zipfile
+
+    from fmpy import read_model_description
+
+    controller = read_model_description(str(fmus["controller"]))
+    plant = read_model_description(str(fmus["plant"]))
+    c_vars = {v.name: v for v in controller.modelVariables}
+    p_vars = {v.name: v for v in plant.modelVariables}
+    c_in = {n for n, v in c_vars.items() if v.causality == "input"}
+    p_out = {n for n, v in p_vars.items() if v.causality == "output"}
+    assert c_in == {"machine.i_s.re", "machine.i_s.im", "shaft.theta", "dc.v_dc"} <= p_out | c_in
+    assert c_in <= p_out
+    p_in = {n for n, v in p_vars.items() if v.causality == "input"}
+    assert p_in == {"latch.v_ref.re", "latch.v_ref.im"}
+    assert p_in <= {n for n, v in c_vars.items() if v.causality == "output"}
+    i_s = p_vars["machine.i_s.re"]
+    assert i_s.unit == "A" and "stator current" in i_s.description
+    units = {u.name: u.baseUnit for u in plant.unitDefinitions}
+    brake = units["N m s/rad"]  # N m s / rad = kg m^2 s^-1 rad^-1
+    assert (brake.kg, brake.m, brake.s, brake.rad) == (1, 2, -1, -1)
+    assert (units["V"].kg, units["V"].m, units["V"].s, units["V"].A) == (1, 2, -3, -1)
+    J = p_vars["shaft.J"]
+    assert J.causality == "parameter" and float(J.start) == 0.000711 and J.unit == "kg m^2"
+    assert plant.defaultExperiment.stepSize == "2e-05" or float(
+        plant.defaultExperiment.stepSize
+    ) == pytest.approx(2e-5, rel=0)
+    for path in fmus.values():
+        names = zipfile.ZipFile(path).namelist()
+        stem = path.stem
+        assert f"binaries/linux64/{stem}.so" in names
+        assert {f"sources/{stem}.c", f"sources/{stem}.h", f"sources/{stem}_fmi2.c"} <= set(names)
+
+
+def test_controller_fmu_gives_acdrives_commands_exactly(report):
+    assert report["strict_math"] is True
+    controller = report["controller"]["signals"]
+    assert set(controller) == {"latch.v_ref.re", "latch.v_ref.im"}
+    for column, row in controller.items():
+        assert row["max_difference"] == 0.0, (column, row)
+        assert row["peak"] > 100.0  # the speed step drives the voltage command (V)
+
+
+def test_plant_fmu_open_loop_within_1e_9_of_peak(report):
+    plant = report["plant"]
+    assert report["plant_tolerance"] == 1e-9
+    assert plant["worst_ratio"] <= 1e-9, (plant["worst_signal"], plant["worst_ratio"])
+    signals = plant["signals"]
+    assert signals["shaft.w"]["peak"] > 50.0  # the shaft ran up (rad/s)
+    assert signals["machine.tau_e"]["peak"] > 0.5  # near the 0.83 N m torque limit and above
+    assert report["samples"] == 5000
+
+
+def test_closed_loop_within_the_plant_bound(report):
+    """The master's order is acdrive's within a sample, so the bound is the plant's."""
+    closed = report["closed_loop"]
+    assert closed["worst_ratio"] <= report["plant_tolerance"], closed["worst_signal"]
+    assert {"shaft.w", "latch.v_ref.re", "machine.i_s.im"} <= set(closed["signals"])
+
+
+def _slave(path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(path))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")  # fmt: skip
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    return slave, {v.name: v.valueReference for v in md.modelVariables}
+
+
+def test_do_step_takes_whole_periods_only(fmus):
+    """A step of 3 periods runs 3 periods (the plant's state moves as three single steps do); a
+    step of 1.5 periods and a communication point that is not the FMU's time are refused."""
+    T_s = 2e-5
+    a, vr = _slave(fmus["plant"])
+    b, _ = _slave(fmus["plant"])
+    for s in (a, b):
+        s.exitInitializationMode()
+    a.doStep(0.0, 3 * T_s)
+    for k in range(3):
+        b.doStep(k * T_s, T_s)
+    refs = [vr["machine.i_s.re"], vr["machine.psi_r.re"], vr["shaft.w"]]
+    assert a.getReal(refs) == b.getReal(refs)
+    with pytest.raises(Exception, match=r"status 3 \(error\)"):
+        a.doStep(3 * T_s, 1.5 * T_s)
+    with pytest.raises(Exception, match=r"status 3 \(error\)"):
+        a.doStep(5 * T_s, T_s)
+    for s in (a, b):
+        s.terminate()
+        s.freeInstance()
+
+
+def test_a_parameter_set_before_the_start_is_used(fmus):
+    """The plant's fixed parameters are settable in initialisation: a rotor resistance set to
+    zero stops the rotor flux from decaying (dpsi_r/dt = (L_m R_r / L_r) i_s - (R_r / L_r -
+    j w_r) psi_r is zero at standstill with R_r = 0), while the exported R_r lets it move."""
+    T_s = 2e-5
+    fluxes = []
+    for R_r in (None, 0.0):
+        slave, vr = _slave(fmus["plant"])
+        if R_r is not None:
+            slave.setReal([vr["machine.R_r"]], [R_r])
+        slave.setReal([vr["latch.v_ref.re"], vr["latch.v_ref.im"]], [0.0, 0.0])
+        slave.exitInitializationMode()
+        start = slave.getReal([vr["machine.psi_r.re"]])[0]
+        slave.doStep(0.0, 100 * T_s)
+        fluxes.append((start, slave.getReal([vr["machine.psi_r.re"]])[0]))
+        with pytest.raises(Exception, match=r"status 3 \(error\)"):  # fixed: not settable any more
+            slave.setReal([vr["machine.R_r"]], [1.0])
+        slave.terminate()
+        slave.freeInstance()
+    (start, moved), (start0, held) = fluxes
+    assert start == start0 == pytest.approx(0.964)
+    assert held == start0
+    assert abs(moved - start) > 1e-4 * start
+
+
+def _cli(*args):
+    from acdrive.cli import main
+
+    return main(list(args))
+
+
+def test_cli_writes_both_and_keeps_users_folder(scenario, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert _cli("export", "fmu", scenario, "--out", str(out)) == 0
+    folder = out / "im-foc-speed-fmu"
+    assert sorted(p.name for p in folder.glob("*.fmu")) == [
+        "im_foc_speed_controller.fmu", "im_foc_speed_plant.fmu"]  # fmt: skip
+    assert _cli("export", "fmu", scenario, "--out", str(out), "--part", "plant") == 0  # replaced
+    assert sorted(p.name for p in folder.glob("*.fmu")) == ["im_foc_speed_plant.fmu"]
+    mine = out / "bodson-ramp-fmu"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    assert _cli("export", "fmu", "bodson-ramp", "--out", str(out), "--part", "controller") == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
+
+
+def test_cli_plant_without_c_is_one_line_and_writes_nothing(tmp_path, capsys):
+    """The DFIM's grid source has no C yet: one line naming the part and the rule, exit 2."""
+    assert _cli("export", "fmu", "bodson-ramp", "--part", "plant", "--out", str(tmp_path)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "grid:" in err[0] and "not write in C" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_missing_compiler_is_one_line(scenario, tmp_path, capsys, monkeypatch):
+    from acdrive.export import _sil
+
+    monkeypatch.setattr(_sil.shutil, "which", lambda name: None)
+    assert _cli("export", "fmu", scenario, "--out", str(tmp_path / "out")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "gcc was not found on PATH: building an FMU's binary" in err[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_feedthrough_across_the_boundary_is_refused():
+    """A plant part whose direct output reads a controller command at the same instant would
+    make the plant FMU feed its input through: refused, naming the part and the rule."""
+    from typing import ClassVar
+
+    from acdrive.core._parts import ContinuousPart, SampledPart
+    from acdrive.core._signals import Layout, real
+    from acdrive.errors import InputError
+    from acdrive.export._plant_source import to_plant_c
+    from acdrive.sim._system import System
+
+    class Command(SampledPart):
+        OUTPUTS = Layout(real("u", "V", "command"))
+        step = None
+
+    class Through(ContinuousPart):
+        STATES = Layout(real("x", "", "state"))
+        INPUTS = Layout(real("u", "V", "command"))
+        OUTPUTS = Layout(real("y", "V", "the command, passed through"))
+        DIRECT_FROM: ClassVar = ("u",)
+        DIRECT_OUTPUTS: ClassVar = ("y",)
+        state_outputs = rhs = direct_outputs = None
+
+    command, through = Command("command"), Through("through")
+    system = System.__new__(System)  # the wiring only: the kernels are never compiled here
+    system.continuous, system.modulators = [through], []
+    system.source_of = {("through", "u"): command.out.u}
+    with pytest.raises(InputError) as caught:
+        to_plant_c(system, 1e-4, 1)
+    message = str(caught.value)
+    assert "through" in message and "algebraic loop across the export boundary" in message
+    assert "\n" not in message
