@@ -10,7 +10,8 @@ sample (rows k = 0 .. n-1 at t_k = k T_s):
   row k of acdrive's log.
 * **plant, open loop**: ``simulate_fmu`` of the plant FMU with the logged commands as its inputs
   (discrete: held from t_k); its outputs at t_k against row k (a modulator's output, the voltage
-  applied over the period before, against row k - 1, where acdrive logs the one applied from t_k).
+  applied over the period before, against row k - 1, where acdrive logs the one applied from t_k;
+  a controller reading a modulator's output reads that one too).
 * **closed loop**: both FMUs stepped by a small master (``fmpy.fmi2.FMU2Slave``): at each t_k
   the plant's outputs are given to the controller, the controller steps, its commands are given
   to the plant, the plant steps. This is acdrive's order within a sample (the controller reads
@@ -70,11 +71,12 @@ def scenario_fmus(setup, parts, folder: Path, name: str | None = None) -> dict[s
     return {part: build_fmu(m, Path(folder) / f"{m.identifier}.fmu") for part, m in models.items()}
 
 
-def _signals(names, reference: dict, other: dict, shift: dict) -> dict:
+def _signals(names, reference: dict, other: dict) -> dict:
+    """Per column: the largest difference of ``other`` from ``reference`` over their common
+    rows, the peak of ``reference`` and their ratio."""
     out = {}
     for column in names:
-        k = shift.get(column, 0)  # other's row k + j is reference's row j
-        a, b = reference[column], other[column][k:]
+        a, b = reference[column], other[column]
         rows = min(len(a), len(b))
         a, b = a[:rows], b[:rows]
         difference = float(np.max(np.abs(a - b)))
@@ -148,9 +150,10 @@ def _closed_loop(paths: dict, n: int, T_s: float) -> dict:
     return log
 
 
-def compare_fmus(setup, duration: float | None = None) -> dict:
-    """Build both FMUs of ``setup`` in a scratch folder and compare them with acdrive's run
-    (module docstring): per check, per signal (max |difference|, peak, ratio)."""
+def compare_fmus(setup, duration: float | None = None, parts=PARTS) -> dict:
+    """Build the FMUs ``parts`` of ``setup`` in a scratch folder and compare them with acdrive's
+    run (module docstring): per check, per signal (max |difference|, peak, ratio). The closed
+    loop needs both; a check not run is None."""
     from fmpy import simulate_fmu
 
     from acdrive._jit import STRICT_MATH
@@ -164,31 +167,37 @@ def compare_fmus(setup, duration: float | None = None) -> dict:
     log = {c: result.data[:, j] for j, c in enumerate(result.columns)}
     n = result.data.shape[0]
     times = np.arange(n) * T_s
-    with tempfile.TemporaryDirectory(prefix="acdrive-fmu-") as scratch:
-        paths = scenario_fmus(setup, PARTS, Path(scratch))
-        c_in = [v.name for v in _variables(paths["controller"], "input")]
-        c_out = [v.name for v in _variables(paths["controller"], "output")]
-        p_in = [v.name for v in _variables(paths["plant"], "input")]
-        p_out = [v.name for v in _variables(paths["plant"], "output")]
-        kw = {"start_time": 0.0, "stop_time": (n - 1) * T_s, "output_interval": T_s}
-        c_run = simulate_fmu(str(paths["controller"]), input=_inputs(c_in, times, log),
-                             output=c_out, **kw)  # fmt: skip
-        p_run = simulate_fmu(str(paths["plant"]), input=_inputs(p_in, times, log),
-                             output=p_out, **kw)  # fmt: skip
-        closed = _closed_loop(paths, n, T_s)
     modulated = {
         f"{q.path}{s}" for m in system.modulators for q in m.out for s in ("", ".re", ".im")
     }
-    controller = {c: c_run[c][1:] for c in c_out}  # the command of sample k is out at t_{k+1}
-    plant = {c: p_run[c] for c in p_out}
-    shift = {c: 1 for c in p_out if c in modulated}
-    return {
-        "scenario": setup.name,
-        "duration": setup.duration,
-        "samples": n,
-        "strict_math": STRICT_MATH,
-        "plant_tolerance": PLANT_TOLERANCE,
-        "controller": _worst(_signals(c_out, log, controller, {})),
-        "plant": _worst(_signals(p_out, log, plant, shift)),
-        "closed_loop": _worst(_signals([*p_out, *c_out], log, closed, shift)),
-    }
+    # acdrive logs a modulator's output of t_k after modulating at t_k; what the controller read
+    # at t_k, and what the plant FMU shows at t_k, is the one before (the held value at t_0)
+    Y0 = system.pack_held(held)
+    before = {c: np.concatenate(([Y0[slot]], log[c][:-1]))
+              for c, _, slot in system.log_columns() if c in modulated}  # fmt: skip
+    report = {"scenario": setup.name, "duration": setup.duration, "samples": n,
+              "strict_math": STRICT_MATH, "plant_tolerance": PLANT_TOLERANCE,
+              "controller": None, "plant": None, "closed_loop": None}  # fmt: skip
+    kw = {"start_time": 0.0, "stop_time": (n - 1) * T_s, "output_interval": T_s}
+    with tempfile.TemporaryDirectory(prefix="acdrive-fmu-") as scratch:
+        paths = scenario_fmus(setup, parts, Path(scratch))
+        names = {(part, causality): [v.name for v in _variables(path, causality)]
+                 for part, path in paths.items() for causality in ("input", "output")}  # fmt: skip
+        if "controller" in paths:
+            c_in, c_out = names[("controller", "input")], names[("controller", "output")]
+            c_run = simulate_fmu(str(paths["controller"]),
+                                 input=_inputs(c_in, times, {**log, **before}), output=c_out, **kw)  # fmt: skip
+            # the command of sample k is the output after the step from t_k, at t_{k+1}
+            controller = {c: c_run[c][1:] for c in c_out}
+            report["controller"] = _worst(_signals(c_out, log, controller))
+        if "plant" in paths:
+            p_in, p_out = names[("plant", "input")], names[("plant", "output")]
+            p_run = simulate_fmu(str(paths["plant"]), input=_inputs(p_in, times, log),
+                                 output=p_out, **kw)  # fmt: skip
+            reference = {**log, **before}
+            report["plant"] = _worst(_signals(p_out, reference, p_run))
+        if len(paths) == 2:
+            closed = _closed_loop(paths, n, T_s)
+            both = [*names[("plant", "output")], *names[("controller", "output")]]
+            report["closed_loop"] = _worst(_signals(both, {**log, **before}, closed))
+    return report
