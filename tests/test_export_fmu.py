@@ -56,16 +56,21 @@ def fmus(scenario, tmp_path_factory):
     return scenario_fmus(load_scenario(scenario), PARTS, tmp_path_factory.mktemp("fmus"))
 
 
-@pytest.fixture(scope="module")
-def report(scenario):
+def _fmu_check(*args: str) -> dict:
+    """``acdrive export fmu-check ... --json`` in a child process under strict math."""
     env = dict(os.environ, ACDRIVE_STRICT_MATH="1")
     code = "import sys; from acdrive.cli import main; raise SystemExit(main(sys.argv[1:]))"
     done = subprocess.run(
-        [sys.executable, "-c", code, "export", "fmu-check", scenario, "--json"],
+        [sys.executable, "-c", code, "export", "fmu-check", *args, "--json"],
         check=False, capture_output=True, text=True, env=env, timeout=1200,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
+
+
+@pytest.fixture(scope="module")
+def report(scenario):
+    return _fmu_check(scenario)
 
 
 def test_both_fmus_validate_clean(fmus):
@@ -118,6 +123,30 @@ def test_controller_fmu_gives_acdrives_commands_exactly(report):
     for column, row in controller.items():
         assert row["max_difference"] == 0.0, (column, row)
         assert row["peak"] > 100.0  # the speed step drives the voltage command (V)
+
+
+def test_dfim_voltage_mode_controller_fmu_is_exact(tmp_path):
+    """Bodson's DFIM chain (voltage command (20), synchroniser (28)) as an FMU: with acdrive's
+    logged plant outputs it gives acdrive's commands exactly over bodson-ramp with its ramp
+    compressed into 0.3 s (the DFIM plant has no C yet: the controller is checked alone)."""
+    text = builtin_text("bodson-ramp")
+    for old, new in {
+        "duration = 14.0": "duration = 0.3",
+        "speed_reference_rpm = [[0.0, 0.0], [0.5, 0.0], [9.5, 2700.0], [11.0, 2700.0], "
+        "[11.0, 0.0], [14.0, 0.0]]": "speed_reference_rpm = [[0.0, 0.0], [0.02, 0.0], "
+        "[0.3, 1500.0]]",
+    }.items():
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    path = tmp_path / "bodson-ramp.toml"
+    path.write_text(text)
+    report = _fmu_check(str(path), "--part", "controller")
+    assert report["plant"] is None and report["closed_loop"] is None
+    signals = report["controller"]["signals"]
+    assert {"controller0.v_r.re", "controller0.v_r.im", "sync0.closed"} <= set(signals)
+    for column, row in signals.items():
+        assert row["max_difference"] == 0.0, (column, row)
+    assert signals["controller0.v_r.re"]["peak"] > 1.0  # the rotor voltage command moved (V)
 
 
 def test_plant_fmu_open_loop_within_1e_9_of_peak(report):
