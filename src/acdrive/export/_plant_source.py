@@ -11,12 +11,13 @@ compiled loop (``sim._loop_source``) for one sample t_k:
   outputs at t_k (``modulate``), then the integration over the merged segments, ``substeps``
   Runge-Kutta steps per segment (``integrate``, ``plant_step``), the same method as the system's
   (``system.method``: rk4 written out as acdrive's, or the Butcher tableau of rk6);
-* ``<name>_update_outputs(t, p, s)``: the plant outputs from the state at t (``plant_outputs``);
+* ``<name>_update_outputs(t, p, s)``: the redundant states re-normalised (``project``), then
+  the plant outputs from the state at t (``plant_outputs``);
 * ``<name>_reset(t, p, s)``: initial states and held modulator outputs, then the outputs at t.
 
 Each kind's C is written once in ``acdrive.export._kinds.plant`` (the seam of the controller
-kinds). A part with direct outputs (an output of the same instant computed from its inputs) or a
-``project`` kernel has no C yet and is refused, naming the part.
+kinds). A part with direct outputs (an output of the same instant computed from its inputs), or
+with a ``project`` kernel its C lacks, is refused, naming the part.
 """
 
 from __future__ import annotations
@@ -91,7 +92,7 @@ def _check_exportable(system) -> None:
                 f"part kind {type(part).__name__} has direct outputs, which the plant export "
                 "does not write in C yet",
             )
-        if type(part).project is not None:
+        if type(part).project is not None and plant_c_of(part).project is None:
             raise InputError(
                 part.name,
                 f"part kind {type(part).__name__} re-normalises its states (project), which the "
@@ -128,6 +129,9 @@ def _signature(entry: KindTypes, role: str) -> str:
         args += [f"const acd_{c}_in *u"] if has["in"] else []
         args += [f"const acd_{c}_out *y", f"acd_{c}_state *dx"]
         return f"static void acd_{c}_rhs({', '.join(args)})"
+    if role == "project":
+        args = [f"const acd_{c}_params *p"] if has["params"] else []
+        return f"static void acd_{c}_project({', '.join([*args, f'acd_{c}_state *x'])})"
     args = ["ACDRIVE_REAL T_s"]
     args += [f"const acd_{c}_in *u"] if has["in"] else []
     args += [f"const acd_{c}_params *p"] if has["params"] else []
@@ -147,7 +151,7 @@ def _kind_functions(kinds) -> list[str]:
     C = []
     for entry in kinds.values():
         c = entry.step
-        for role in ("state_outputs", "rhs", "segments"):
+        for role in ("state_outputs", "rhs", "segments", "project"):
             body = getattr(c, role)
             if body is None:
                 continue
@@ -397,8 +401,15 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     ]
     C += _integrate_lines(system, kinds, modulators, name)
     C += ["}", ""]
+    # acdrive's sample instant: project (re-normalise redundant states), then the outputs
+    projections = []
+    for part in continuous:
+        entry = kinds[type(part)]
+        if entry.step.project is not None:
+            params = f"&p->{part.name}, " if entry.members["params"] else ""
+            projections.append(f"    acd_{entry.cname}_project({params}&s->x.{part.name});")
     C += [f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s)",
-          "{", f"    {name}_state_outputs(t, p, &s->x, &s->y);", "}", ""]  # fmt: skip
+          "{", *projections, f"    {name}_state_outputs(t, p, &s->x, &s->y);", "}", ""]  # fmt: skip
     C += [f"void {name}_set_params({name}_params *p)", "{",
           f"    p->sample_time = {literal(sample_time, 'sample_time')};",
           f"    p->substeps = {int(substeps)};"]  # fmt: skip

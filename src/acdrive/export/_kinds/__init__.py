@@ -52,19 +52,23 @@ class CStep:
 class PlantC:
     """The C of one plant kind. A continuous part: ``state_outputs`` (writes ``y`` from ``x``),
     ``rhs`` (writes ``dx``; may read ``u`` and its own ``y`` of the same evaluation; None for a
-    part without states). A modulator: ``segments`` (writes ``*n`` segments ``dt[i]``, ``v[i]``,
-    returns the event bits). ``source``: paper and equations; ``support``: what they call."""
+    part without states), ``project`` (re-normalises redundant states ``x`` at each sample, for
+    a kind with a ``project`` kernel). A modulator: ``segments`` (writes ``*n`` segments
+    ``dt[i]``, ``v[i]``, returns the event bits). ``source``: paper and equations; ``support``:
+    what they call."""
 
     source: str
     state_outputs: str | None = None
     rhs: str | None = None
     segments: str | None = None
+    project: str | None = None
     support: tuple[CSupport, ...] = ()
 
     @property
     def body(self) -> str:
         """All bodies as one text (``_c_source.kind_types`` compares the instances' C)."""
-        return "\n".join(b or "" for b in (self.state_outputs, self.rhs, self.segments))
+        bodies = (self.state_outputs, self.rhs, self.segments, self.project)
+        return "\n".join(b or "" for b in bodies)
 
 
 #: modules whose import registers their kinds (imported on first look-up)

@@ -1,5 +1,6 @@
 """C of the plant kinds the plant FMU is built from (``acdrive.export._plant_source``): the DC
-source, the cage induction motor, the free shaft and the averaged converters, and the C step of
+source, the cage induction motor, the PM machine, the free shaft and the averaged converters,
+and the C step of
 the PWM unit's latch (a sampled part in front of an averaged converter). Each body repeats its
 numba kernel operation for operation (complex products as (ac - bd) + j(ad + bc), quotients by
 Smith's algorithm, the kernels' order of sums), so a strict-math build agrees to rounding; the
@@ -7,9 +8,11 @@ FMU tests (``tests/test_export_fmu.py``) keep the two equal."""
 
 from __future__ import annotations
 
+from acdrive._frames import K_PEAK
 from acdrive.export._kinds import CStep, CSupport, PlantC, register, register_plant
 from acdrive.export._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch
 from acdrive.plant._mechanics import W_COULOMB, Shaft
@@ -57,6 +60,43 @@ register_plant(
     dx->i_s = acd_cdiv(sum, acd_c(sigma_L_s, ACD_R(0.0)));
     dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r / p->L_r, x->i_s),
                          acd_cmul(rotor_pole, x->psi_r));
+""",
+    ),
+)
+
+#: psi_pm = K_PEAK psi_m (machines._pmsm_part.magnet_flux)
+_PSI_PM = f"ACD_R({K_PEAK!r}) * p->psi_m"
+
+register_plant(
+    PermanentMagnetMachine,
+    PlantC(
+        source="Ugalde-Loo et al. (7)-(8) in rotor coordinates, fed from the stationary frame "
+        "(machines._pmsm_part)",
+        state_outputs=rf"""
+    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
+    y->i_s = acd_cmul(acd_c(i_d, i_q), x->e_r);
+    y->i_dq = acd_c(i_d, i_q);
+    y->psi_s = acd_cmul(acd_c(p->L_d * i_d + {_PSI_PM}, p->L_q * i_q), x->e_r);
+    /* (8): tau_e = n_p (psi_pm i_q + (L_d - L_q) i_d i_q) */
+    y->tau_e = p->n_p * ({_PSI_PM} * i_q + (p->L_d - p->L_q) * i_d * i_q);
+    y->theta = x->theta;
+""",
+        rhs=rf"""
+    /* (7): v_dq = v_s conj(e_r); L_d di_d/dt = v_d - R_s i_d + w_r L_q i_q,
+       L_q di_q/dt = v_q - R_s i_q - w_r (L_d i_d + psi_pm); de_r/dt = j w_r e_r */
+    acd_complex v_dq = acd_cmul(u->v_s, acd_c(x->e_r.re, -x->e_r.im));
+    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
+    ACDRIVE_REAL w_r = p->n_p * u->w;
+    dx->i_dq.re = (v_dq.re - p->R_s * i_d + w_r * p->L_q * i_q) / p->L_d;
+    dx->i_dq.im = (v_dq.im - p->R_s * i_q - w_r * (p->L_d * i_d + {_PSI_PM})) / p->L_q;
+    dx->theta = u->w;
+    dx->e_r.re = -w_r * x->e_r.im;
+    dx->e_r.im = w_r * x->e_r.re;
+""",
+        project=r"""
+    ACDRIVE_REAL angle = p->n_p * x->theta; /* e_r = e^(j n_p theta) */
+    x->e_r.re = ACD_COS(angle);
+    x->e_r.im = ACD_SIN(angle);
 """,
     ),
 )
