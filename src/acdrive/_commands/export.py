@@ -133,6 +133,10 @@ def run_fmu_check(args) -> int:
             print(f"  {check:<12} not run")
             continue
         print(f"  {check:<12} worst {row['worst_signal']} at {row['worst_ratio']:.3e} of its peak")
+    if report["not_compared"]:
+        print(
+            f"  not compared (a switching modulator's segments): {', '.join(report['not_compared'])}"
+        )
     if report["controller"] is not None:
         exact = report["controller"]["worst_ratio"] == 0.0
         print(f"controller exact: {'yes' if exact else 'no'}")

@@ -11,7 +11,10 @@ sample (rows k = 0 .. n-1 at t_k = k T_s):
 * **plant, open loop**: ``simulate_fmu`` of the plant FMU with the logged commands as its inputs
   (discrete: held from t_k); its outputs at t_k against row k (a modulator's output, the voltage
   applied over the period before, against row k - 1, where acdrive logs the one applied from t_k;
-  a controller reading a modulator's output reads that one too).
+  a controller reading a modulator's output reads that one too). The output of a switching
+  modulator (several segments per period) changes within the period: acdrive logs its first
+  segment, the FMU shows the last, so those columns are listed as not compared; the plant's
+  own outputs, driven by every segment, are.
 * **closed loop**: both FMUs stepped by a small master (``fmpy.fmi2.FMU2Slave``): at each t_k
   the plant's outputs are given to the controller, the controller steps, its commands are given
   to the plant, the plant steps. This is acdrive's order within a sample (the controller reads
@@ -167,9 +170,14 @@ def compare_fmus(setup, duration: float | None = None, parts=PARTS) -> dict:
     log = {c: result.data[:, j] for j, c in enumerate(result.columns)}
     n = result.data.shape[0]
     times = np.arange(n) * T_s
-    modulated = {
-        f"{q.path}{s}" for m in system.modulators for q in m.out for s in ("", ".re", ".im")
-    }
+
+    def columns(parts):
+        return {f"{q.path}{s}" for m in parts for q in m.out for s in ("", ".re", ".im")}
+
+    modulated = columns(system.modulators)
+    # a switching modulator's output changes within a period: acdrive logs its first segment
+    # (just after t_k), the FMU shows the last one (just before t_{k+1}), so it is not compared
+    switching = columns([m for m in system.modulators if m.MAX_SEGMENTS > 1])
     # acdrive logs a modulator's output of t_k after modulating at t_k; what the controller read
     # at t_k, and what the plant FMU shows at t_k, is the one before (the held value at t_0)
     Y0 = system.pack_held(held)
@@ -177,7 +185,8 @@ def compare_fmus(setup, duration: float | None = None, parts=PARTS) -> dict:
               for c, _, slot in system.log_columns() if c in modulated}  # fmt: skip
     report = {"scenario": setup.name, "duration": setup.duration, "samples": n,
               "strict_math": STRICT_MATH, "plant_tolerance": PLANT_TOLERANCE,
-              "controller": None, "plant": None, "closed_loop": None}  # fmt: skip
+              "controller": None, "plant": None, "closed_loop": None,
+              "not_compared": sorted(c for c, _, _ in system.log_columns() if c in switching)}  # fmt: skip
     kw = {"start_time": 0.0, "stop_time": (n - 1) * T_s, "output_interval": T_s}
     with tempfile.TemporaryDirectory(prefix="acdrive-fmu-") as scratch:
         paths = scenario_fmus(setup, parts, Path(scratch))
@@ -185,19 +194,25 @@ def compare_fmus(setup, duration: float | None = None, parts=PARTS) -> dict:
                  for part, path in paths.items() for causality in ("input", "output")}  # fmt: skip
         if "controller" in paths:
             c_in, c_out = names[("controller", "input")], names[("controller", "output")]
+            if switching & set(c_in):
+                raise InputError("scenario", "its controller reads a switching modulator's "
+                                 "output, which acdrive's log holds only per sample: not "
+                                 "checkable against the log")  # fmt: skip
             c_run = simulate_fmu(str(paths["controller"]),
                                  input=_inputs(c_in, times, {**log, **before}), output=c_out, **kw)  # fmt: skip
             # the command of sample k is the output after the step from t_k, at t_{k+1}
             controller = {c: c_run[c][1:] for c in c_out}
             report["controller"] = _worst(_signals(c_out, log, controller))
         if "plant" in paths:
-            p_in, p_out = names[("plant", "input")], names[("plant", "output")]
+            p_in = names[("plant", "input")]
+            p_out = [c for c in names[("plant", "output")] if c not in switching]
             p_run = simulate_fmu(str(paths["plant"]), input=_inputs(p_in, times, log),
                                  output=p_out, **kw)  # fmt: skip
             reference = {**log, **before}
             report["plant"] = _worst(_signals(p_out, reference, p_run))
         if len(paths) == 2:
             closed = _closed_loop(paths, n, T_s)
-            both = [*names[("plant", "output")], *names[("controller", "output")]]
+            both = [c for c in (*names[("plant", "output")], *names[("controller", "output")])
+                    if c not in switching]  # fmt: skip
             report["closed_loop"] = _worst(_signals(both, {**log, **before}, closed))
     return report
