@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import os
 import re
-import shutil
 import subprocess
+import tempfile
 import uuid
 import zipfile
 from dataclasses import dataclass
@@ -316,31 +317,38 @@ def fmi_headers() -> Path:
 
 def build_fmu(model: FMUModel, path: Path) -> Path:
     """Write the FMU of ``model`` to ``path`` (a .fmu zip): sources, the linux64 binary compiled
-    from them, modelDescription.xml. ``path``'s folder must be a scratch or staging folder."""
+    from them, modelDescription.xml. Built in a temporary folder; the zip is written beside
+    ``path`` under a hidden name and renamed into place, so ``path`` is whole or untouched."""
     compiler, headers = find_compiler("gcc", "building an FMU's binary"), fmi_headers()
+    path = Path(path)
     for i, v in enumerate(model.variables, 1):
         v.vr = i
     body = "".join(f"{v.name}|{v.type}|{v.causality}|{v.c}\n" for v in model.variables)
     digest = hashlib.sha256((model.glue + body + "".join(model.files.values())).encode())
     guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
     files = {**model.files, f"{model.identifier}_fmi2.c": fmi2_source(model, guid)}
-    work = path.parent / f".{model.identifier}-build"
-    (work / "sources").mkdir(parents=True)
-    for name, text in files.items():
-        (work / "sources" / name).write_text(text)
-    binary = work / "binaries" / PLATFORM / f"{model.identifier}.so"
-    binary.parent.mkdir(parents=True)
-    sources = [str(work / "sources" / f) for f in files if f.endswith(".c")]
-    flags = [*CFLAGS, "-fvisibility=default", f"-I{headers}", f"-I{work / 'sources'}"]
-    done = subprocess.run([compiler, *flags, "-o", str(binary), *sources, "-lm"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
-    if done.returncode != 0:
-        first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
-        raise InputError("compiler", f"{compiler} could not compile the FMU's sources: {first}")
-    (work / "modelDescription.xml").write_text(model_description(model, guid))
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as fmu:
-        for file in sorted(work.rglob("*")):
-            if file.is_file():
-                fmu.write(file, file.relative_to(work).as_posix())
-    shutil.rmtree(work)
+    with tempfile.TemporaryDirectory(prefix="acdrive-fmu-build-") as scratch:
+        work = Path(scratch)
+        (work / "sources").mkdir()
+        for name, text in files.items():
+            (work / "sources" / name).write_text(text)
+        binary = work / "binaries" / PLATFORM / f"{model.identifier}.so"
+        binary.parent.mkdir(parents=True)
+        sources = [str(work / "sources" / f) for f in files if f.endswith(".c")]
+        flags = [*CFLAGS, "-fvisibility=default", f"-I{headers}", f"-I{work / 'sources'}"]
+        done = subprocess.run([compiler, *flags, "-o", str(binary), *sources, "-lm"],
+                              capture_output=True, text=True, check=False)  # fmt: skip
+        if done.returncode != 0:
+            first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
+            raise InputError("compiler", f"{compiler} could not compile the FMU's sources: {first}")
+        (work / "modelDescription.xml").write_text(model_description(model, guid))
+        partial = path.with_name(f".{path.name}.partial")
+        try:
+            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
+                for file in sorted(work.rglob("*")):
+                    if file.is_file():
+                        fmu.write(file, file.relative_to(work).as_posix())
+            os.replace(partial, path)
+        finally:
+            partial.unlink(missing_ok=True)
     return path
