@@ -358,3 +358,25 @@ def test_fmu_sources_build_warning_free_elsewhere(fmus, tmp_path):
             check=False, capture_output=True, text=True,
         )  # fmt: skip
         assert done.returncode == 0, done.stderr
+
+
+def test_unit_exponents_obey_the_si_relations():
+    """The SI exponents written into UnitDefinitions satisfy the relations between the units:
+    V A = W, Wb = V s, H = Wb / A, ohm = V / A, N m = J, var has the dimension of W."""
+    from acdrive.export._fmu import si_exponents
+
+    def product(*units):
+        total: dict[str, int] = {}
+        for unit in units:
+            for k, e in si_exponents(unit).items():
+                total[k] = total.get(k, 0) + e
+        return {k: e for k, e in total.items() if e}
+
+    assert product("V", "A") == si_exponents("W")
+    assert product("V", "s") == si_exponents("Wb")
+    assert product("Wb", "1/A") == si_exponents("H") == si_exponents("Wb/A")
+    assert si_exponents("ohm") == si_exponents("V/A") == si_exponents("Ohm")
+    assert product("N", "m") == si_exponents("J") == si_exponents("N m")
+    assert si_exponents("var") == si_exponents("W")
+    assert product("1/(V s)", "Wb") == {}
+    assert si_exponents("furlong/s") is None  # a word outside the table: no BaseUnit

@@ -51,16 +51,19 @@ _SI = {
     "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3},
     "V": {"kg": 1, "m": 2, "s": -3, "A": -1}, "Wb": {"kg": 1, "m": 2, "s": -2, "A": -1},
     "H": {"kg": 1, "m": 2, "s": -2, "A": -2}, "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "ohm": {"kg": 1, "m": 2, "s": -3, "A": -2}, "var": {"kg": 1, "m": 2, "s": -3},
     "F": {"kg": -1, "m": -2, "s": 4, "A": 2},
 }  # fmt: skip
 
 
 def si_exponents(unit: str) -> dict[str, int] | None:
     """The SI base exponents of a unit written as acdrive declares them ("N m s/rad",
-    "kg m^2", "rad/s"), or None for a word outside ``_SI``."""
+    "kg m^2", "1/(V s)"), or None for a word outside ``_SI``."""
     total: dict[str, int] = {}
     for side, text in enumerate(unit.split("/", 1)):
-        for word in text.split():
+        for word in text.strip().removeprefix("(").removesuffix(")").split():
+            if word == "1":
+                continue
             base, _, power = word.partition("^")
             if base not in _SI or (power and not re.fullmatch(r"-?\d+", power)):
                 return None
