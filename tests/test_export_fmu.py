@@ -380,3 +380,24 @@ def test_unit_exponents_obey_the_si_relations():
     assert si_exponents("var") == si_exponents("W")
     assert product("1/(V s)", "Wb") == {}
     assert si_exponents("furlong/s") is None  # a word outside the table: no BaseUnit
+
+
+def test_two_chains_reading_one_plant_output_share_one_input(tmp_path):
+    """bodson-two-motors: two chains on one bus both read the grid voltage; the controller FMU
+    has it once as an input (validate_fmu refuses duplicate names) and both chains get it."""
+    import zipfile
+
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    from acdrive.export._fmu_check import scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    path = scenario_fmus(load_scenario("bodson-two-motors"), ("controller",), tmp_path)[
+        "controller"
+    ]
+    assert validate_fmu(str(path)) == []
+    names = [v.name for v in read_model_description(str(path)).modelVariables]
+    assert names.count("grid.v.re") == 1
+    glue = zipfile.ZipFile(path).read(f"sources/{path.stem}_fmi2.c").decode()
+    assert "_controller1.grid_v = m->in_bodson_two_motors_controller0.grid_v;" in glue

@@ -139,6 +139,7 @@ def controller_model(export: CExport, sample_time: float, stop_time: float,
     period ``to_c`` was given)."""
     variables: list[Variable] = []
     fields, defaults, start, advance = [], [], [], []
+    read_by: dict[str, str] = {}  # plant output path -> the inputs member that holds it
     for model in export.chains:
         c = model.chain.name
         fields += [f"    {c}_params p_{c};", f"    {c}_state s_{c};", f"    {c}_inputs in_{c};"]
@@ -147,13 +148,17 @@ def controller_model(export: CExport, sample_time: float, stop_time: float,
         defaults.append(f"    {c}_set_params(&m->p_{c});")
         start.append(f"    {c}_reset(&m->s_{c});")
         out = f", &m->out_{c}" if model.outputs else ""
-        advance.append(f"    {c}_step(t, &m->p_{c}, &m->s_{c}, &m->in_{c}{out});")
         for port in model.chain.inputs:
+            if port.path in read_by:  # one variable for a plant output several chains read
+                advance.append(f"    m->in_{c}.{_port_name(port)} = {read_by[port.path]};")
+                continue
+            read_by[port.path] = f"m->in_{c}.{_port_name(port)}"
             variables += _scalars(port.path, port.var, f"m->in_{c}.{_port_name(port)}", None,
                                   causality="input", variability="continuous")  # fmt: skip
             for var in variables[-port.var.width :]:
                 var.start = 0.0
             defaults += [f"    {v.c} = 0.0;" for v in variables[-port.var.width :]]
+        advance.append(f"    {c}_step(t, &m->p_{c}, &m->s_{c}, &m->in_{c}{out});")
         for port in model.chain.outputs:
             variables += _scalars(port.path, port.var, f"m->out_{c}.{_port_name(port)}", None,
                                   causality="output", variability="discrete")  # fmt: skip
