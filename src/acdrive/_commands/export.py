@@ -1,5 +1,7 @@
-"""``acdrive export``: a scenario's controller chains as C99 (``export c``), and that C run in
-acdrive's loop against acdrive's own run (``export sil``); docs/guide/export.md."""
+"""``acdrive export``: a scenario's controller chains as C99 (``export c``), that C run in
+acdrive's loop against acdrive's own run (``export sil``), the controller and the plant as FMI
+2.0 co-simulation FMUs (``export fmu``) and those checked with fmpy (``export fmu-check``);
+docs/guide/export.md, docs/guide/fmu.md."""
 
 from __future__ import annotations
 
@@ -7,9 +9,9 @@ from __future__ import annotations
 def register(subparsers):
     p = subparsers.add_parser(
         "export",
-        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
+        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil), controller and plant as FMI 2.0 FMUs (export fmu)",
     )
-    sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil}")
+    sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil,fmu,fmu-check}")
     c = sub.add_parser("c", help="write the C99 header and source of a scenario's controller")
     c.add_argument("scenario", help="built-in scenario name or TOML file")
     c.add_argument("--out", default="export", help="output folder (default: export/)")
@@ -23,6 +25,24 @@ def register(subparsers):
     s.add_argument("--real", choices=("double", "float"), default="double", help="C build")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(handler=run_sil)
+    f = sub.add_parser(
+        "fmu", help="write FMI 2.0 co-simulation FMUs of a scenario's controller and plant"
+    )
+    f.add_argument("scenario", help="built-in scenario name or TOML file")
+    f.add_argument("--part", choices=("controller", "plant", "both"), default="both",
+                   help="which FMU (default: both)")  # fmt: skip
+    f.add_argument("--out", default="export", help="output folder (default: export/)")
+    f.add_argument("--name", default=None, help="C prefix (default: the scenario's)")
+    f.set_defaults(handler=run_fmu)
+    k = sub.add_parser(
+        "fmu-check", help="build both FMUs and compare them with acdrive's run (fmpy)"
+    )
+    k.add_argument("scenario", help="built-in scenario name or TOML file")
+    k.add_argument("--part", choices=("controller", "plant", "both"), default="both",
+                   help="which FMU (default: both, and the closed loop)")  # fmt: skip
+    k.add_argument("--duration", type=float, default=None, help="shorten the run (s)")
+    k.add_argument("--json", action="store_true", help="print JSON")
+    k.set_defaults(handler=run_fmu_check)
 
 
 def run_c(args) -> int:
@@ -66,4 +86,63 @@ def run_sil(args) -> int:
         ok = report["worst_ratio"] <= DOUBLE_TOLERANCE and report["events_equal"]
         print(f"double build within {DOUBLE_TOLERANCE:g} of each signal's peak: "
               f"{'yes' if ok else 'no'}")  # fmt: skip
+    return 0
+
+
+def run_fmu(args) -> int:
+    import tempfile
+    from pathlib import Path
+
+    from acdrive._output import OutputFolder
+    from acdrive.export._c_source import require_c_name
+    from acdrive.export._fmu_check import PARTS, scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    setup = load_scenario(args.scenario)
+    if args.name is not None:
+        require_c_name("--name", args.name)
+    parts = PARTS if args.part == "both" else (args.part,)
+    # built in a scratch folder first: every error (a part without C, feedthrough, no
+    # compiler) comes before the output folder is touched
+    with tempfile.TemporaryDirectory(prefix="acdrive-fmu-") as scratch:
+        built = scenario_fmus(setup, parts, Path(scratch), args.name)
+        with OutputFolder(args.out, f"{setup.name}-fmu") as output:
+            for path in built.values():
+                (output.staging / path.name).write_bytes(path.read_bytes())
+            target = output.publish()
+    names = ", ".join(p.name for p in built.values())
+    print(f"wrote {names} into {target}")
+    return 0
+
+
+def run_fmu_check(args) -> int:
+    from acdrive._output import strict_json
+    from acdrive.export._fmu_check import PARTS, compare_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    parts = PARTS if args.part == "both" else (args.part,)
+    report = compare_fmus(load_scenario(args.scenario), args.duration, parts)
+    if args.json:
+        print(strict_json(report))
+        return 0
+    print(f"{report['scenario']}: FMUs against acdrive's run, {report['duration']:g} s, "
+          f"{report['samples']} samples, strict math {'on' if report['strict_math'] else 'off'}")  # fmt: skip
+    for check in ("controller", "plant", "closed_loop"):
+        row = report[check]
+        if row is None:
+            print(f"  {check:<12} not run")
+            continue
+        print(f"  {check:<12} worst {row['worst_signal']} at {row['worst_ratio']:.3e} of its peak")
+    if report["not_compared"]:
+        print(
+            f"  not compared (a switching modulator's segments): {', '.join(report['not_compared'])}"
+        )
+    if report["controller"] is not None:
+        exact = report["controller"]["worst_ratio"] == 0.0
+        print(f"controller exact: {'yes' if exact else 'no'}")
+    checked = [report[c]["worst_ratio"] for c in ("plant", "closed_loop") if report[c] is not None]
+    if checked:
+        ok = max(checked) <= report["plant_tolerance"]
+        print(f"plant{' and closed loop' if len(checked) == 2 else ''} within "
+              f"{report['plant_tolerance']:g} of each signal's peak: {'yes' if ok else 'no'}")  # fmt: skip
     return 0

@@ -83,13 +83,14 @@ def _comment(var) -> str:
     return f"[{var.unit or '-'}] {var.doc}"
 
 
-def kind_types(parts) -> dict[type, KindTypes]:
+def kind_types(parts, lookup=c_step_of) -> dict[type, KindTypes]:
     """The structs of every kind among ``parts`` (a table holds as many points as the longest
-    table of that name among the kind's instances)."""
+    table of that name among the kind's instances); ``lookup`` gives a part's C (the sampled
+    kinds' registry, or the plant kinds' one)."""
     kinds: dict[type, KindTypes] = {}
     for part in parts:
         cls = type(part)
-        step = c_step_of(part)
+        step = lookup(part)
         body = step.body(part) if callable(step.body) else step.body
         if cls not in kinds:
             kinds[cls] = KindTypes(cls, kind_name(cls), step, body)
@@ -239,20 +240,27 @@ def _value_lines(target: str, var, values, where: str) -> list[str]:
     return [f"{target} = {literal(values[0], where)};"]
 
 
+def part_params_lines(part) -> list[str]:
+    """Assignments of every parameter of ``part`` to ``p-><part name>`` (its packed values)."""
+    lines = []
+    for v in part.PARAMS:
+        where = f"{part.name}.{v.name}"
+        if v.kind == "table":
+            times, values = _tables(part)[v.name]
+            lines.append(f"p->{part.name}.{v.name}.n = {len(times)};")
+            for i, (a, b) in enumerate(zip(times, values, strict=True)):
+                lines.append(f"p->{part.name}.{v.name}.t[{i}] = {literal(a, where)};")
+                lines.append(f"p->{part.name}.{v.name}.v[{i}] = {literal(b, where)};")
+            continue
+        k = part.PARAMS.slot(v.name)
+        lines += _value_lines(f"p->{part.name}.{v.name}", v, part.p[k : k + v.width], where)
+    return lines
+
+
 def _set_params_lines(model: ChainModel, sample_time: float) -> list[str]:
     lines = [f"p->sample_time = {literal(sample_time, 'sample_time')};"]
     for part in model.chain.parts:
-        for v in part.PARAMS:
-            where = f"{part.name}.{v.name}"
-            if v.kind == "table":
-                times, values = _tables(part)[v.name]
-                lines.append(f"p->{part.name}.{v.name}.n = {len(times)};")
-                for i, (a, b) in enumerate(zip(times, values, strict=True)):
-                    lines.append(f"p->{part.name}.{v.name}.t[{i}] = {literal(a, where)};")
-                    lines.append(f"p->{part.name}.{v.name}.v[{i}] = {literal(b, where)};")
-                continue
-            k = part.PARAMS.slot(v.name)
-            lines += _value_lines(f"p->{part.name}.{v.name}", v, part.p[k : k + v.width], where)
+        lines += part_params_lines(part)
     return lines
 
 
@@ -316,6 +324,31 @@ def _step_prototype(model: ChainModel) -> str:
             f"const {c}_inputs *in{out})")  # fmt: skip
 
 
+def kind_declarations(kinds) -> list[str]:
+    """Header lines of every kind: its event masks, table sizes and structs."""
+    H = []
+    for entry in kinds.values():
+        cls = entry.cls
+        first = _first_sentence(cls)
+        H.append(f"/* ---- {cls.__name__} ({cls.__module__}): {entry.step.source} ---- */")
+        for b, event in enumerate(cls.EVENTS):
+            H.append(f"#define ACD_{entry.cname.upper()}_{event.upper()} (1u << {b})")
+        for role in ROLES:
+            members = entry.members[role]
+            if not members:
+                continue
+            for m in members:
+                if isinstance(m.spec, tuple) and m.spec[0] == "table":
+                    H.append(
+                        f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
+                    )
+            H += _struct_lines(
+                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}", entry.cname
+            )
+        H.append("")
+    return H
+
+
 @dataclass
 class CExport:
     """The generated files (``header``, ``source``: text) and the model of their structs."""
@@ -364,25 +397,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
              " * Compile with -DACDRIVE_FLOAT for the float build (docs/guide/export.md).",
              " * Do not edit: regenerate from the system. */"]  # fmt: skip
     H = [*stamp, f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", PRELUDE]
-    for entry in kinds.values():
-        cls = entry.cls
-        first = _first_sentence(cls)
-        H.append(f"/* ---- {cls.__name__} ({cls.__module__}): {entry.step.source} ---- */")
-        for b, event in enumerate(cls.EVENTS):
-            H.append(f"#define ACD_{entry.cname.upper()}_{event.upper()} (1u << {b})")
-        for role in ROLES:
-            members = entry.members[role]
-            if not members:
-                continue
-            for m in members:
-                if isinstance(m.spec, tuple) and m.spec[0] == "table":
-                    H.append(
-                        f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
-                    )
-            H += _struct_lines(
-                f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}", entry.cname
-            )
-        H.append("")
+    H += kind_declarations(kinds)
     for model in models:
         c = model.chain.name
         parts = ", ".join(p.name for p in model.chain.parts)

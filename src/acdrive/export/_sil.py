@@ -28,12 +28,10 @@ from acdrive.export._c_source import CExport, ChainModel, Member
 CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
 
 
-def find_compiler(name: str = "gcc") -> str:
+def find_compiler(name: str = "gcc", purpose: str = "running the exported C in the loop") -> str:
     path = shutil.which(name)
     if path is None:
-        raise InputError(
-            "compiler", f"{name} was not found on PATH: running the exported C in the loop needs it"
-        )
+        raise InputError("compiler", f"{name} was not found on PATH: {purpose} needs it")
     return path
 
 

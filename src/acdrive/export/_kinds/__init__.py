@@ -10,6 +10,12 @@ parameters as ``p->name``, its discrete state as ``s->name`` and writes its outp
 sample period; it returns the event bits (``ACD_<KIND>_<EVENT>`` masks, from ``EVENTS``).
 
 A kind is looked up by its exact class: a subclass with another kernel needs its own entry.
+
+Plant kinds (continuous parts and modulators, for the plant FMU, ``acdrive.export._plant_source``)
+have a second registry of :class:`PlantC` entries, the same seam: bodies written against the
+structs the generator declares from the kind's layouts (``p->``, ``x->`` its continuous state,
+``u->``, ``y->``, ``dx->`` the derivative of the state; a modulator's ``s->``, ``dt[i]`` and
+``v[i]``, the outputs of segment i).
 """
 
 from __future__ import annotations
@@ -42,20 +48,50 @@ class CStep:
     support: tuple[CSupport, ...] = ()
 
 
+@dataclass(frozen=True)
+class PlantC:
+    """The C of one plant kind. A continuous part: ``state_outputs`` (writes ``y`` from ``x``),
+    ``rhs`` (writes ``dx``; may read ``u`` and its own ``y`` of the same evaluation; None for a
+    part without states), ``project`` (re-normalises redundant states ``x`` at each sample, for
+    a kind with a ``project`` kernel). A modulator: ``segments`` (writes ``*n`` segments
+    ``dt[i]``, ``v[i]``, returns the event bits). ``source``: paper and equations; ``support``:
+    what they call."""
+
+    source: str
+    state_outputs: str | None = None
+    rhs: str | None = None
+    segments: str | None = None
+    project: str | None = None
+    support: tuple[CSupport, ...] = ()
+
+    @property
+    def body(self) -> str:
+        """All bodies as one text (``_c_source.kind_types`` compares the instances' C)."""
+        bodies = (self.state_outputs, self.rhs, self.segments, self.project)
+        return "\n".join(b or "" for b in bodies)
+
+
 #: modules whose import registers their kinds (imported on first look-up)
 _MODULES = (
     "acdrive.export._kinds.sensors",
     "acdrive.export._kinds.bodson",
     "acdrive.export._kinds.foc",
     "acdrive.export._kinds.pm",
+    "acdrive.export._kinds.plant",
 )
 _REGISTRY: dict[type, CStep] = {}
+_PLANT_REGISTRY: dict[type, PlantC] = {}
 _loaded = False
 
 
 def register(kind: type, step: CStep) -> None:
     """Give part class ``kind`` its C step."""
     _REGISTRY[kind] = step
+
+
+def register_plant(kind: type, c: PlantC) -> None:
+    """Give plant part class ``kind`` (continuous part or modulator) its C."""
+    _PLANT_REGISTRY[kind] = c
 
 
 def _load() -> None:
@@ -77,6 +113,19 @@ def c_step_of(part) -> CStep:
             "exported (acdrive.export._kinds lists the kinds that have one)",
         )
     return step
+
+
+def plant_c_of(part) -> PlantC:
+    """The C of plant ``part``'s kind, or an InputError naming the part and the rule."""
+    _load()
+    c = _PLANT_REGISTRY.get(type(part))
+    if c is None:
+        raise InputError(
+            part.name,
+            f"part kind {type(part).__name__} has no C implementation, so the plant cannot be "
+            "exported (acdrive.export._kinds.plant lists the plant kinds that have one)",
+        )
+    return c
 
 
 def exportable_kinds() -> list[str]:

@@ -1,0 +1,362 @@
+"""FMI 2.0 co-simulation FMUs of a system's controller chains and of its plant, built from the
+generated C (docs/guide/fmu.md).
+
+An FMU is a zip: ``modelDescription.xml`` (written here from the parts' declarations: every
+variable with its causality, variability, unit, start value and description; the units in
+``UnitDefinitions`` with their SI exponents), ``sources/`` (the generated C: the chain's or the
+plant's header and source, and ``<id>_fmi2.c``, the model glue plus the FMI 2.0 functions of
+``_fmi2``) and ``binaries/linux64/<id>.so`` compiled from those sources with gcc against the
+FMI 2.0 headers fmpy ships (``fmpy/c-code``; the headers are not copied into the FMU, an
+importing tool has its own).
+
+Variables. A real quantity is one ``Real``; a space vector two, ``<name>.re`` and ``<name>.im``.
+The controller FMU's inputs are the plant outputs its chains read, named ``<part>.<output>``
+after the plant part's output; its outputs the commands, named after the sampled part's output
+(``latch.v_ref.re``), and each part's event bits (``<part>.events``, Integer). The plant FMU's
+inputs are those commands, under the same names; its outputs every output of its parts and the
+modulators' event bits. So the two FMUs connect by equal names. Parameters are every real and
+space-vector parameter of the parts (causality parameter, variability fixed, start the
+exported value; a table parameter is not exposed, it stays the exported profile). Changing a
+parameter changes that number only: a value derived from it at design time (the discretised
+controller's matrices) is not recomputed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.util
+import os
+import re
+import subprocess
+import tempfile
+import uuid
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from acdrive.core._parts import Part
+from acdrive.errors import InputError
+from acdrive.export._c_source import CExport, _port_name, _value_lines
+from acdrive.export._fmi2 import FMI2_WRAPPER
+from acdrive.export._plant_source import PlantExport
+from acdrive.export._sil import CFLAGS, find_compiler
+
+PLATFORM = "linux64"
+
+#: SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the unit words acdrive declares
+_SI = {
+    "kg": {"kg": 1}, "m": {"m": 1}, "s": {"s": 1}, "A": {"A": 1}, "K": {"K": 1},
+    "rad": {"rad": 1}, "Hz": {"s": -1}, "N": {"kg": 1, "m": 1, "s": -2},
+    "J": {"kg": 1, "m": 2, "s": -2}, "W": {"kg": 1, "m": 2, "s": -3},
+    "V": {"kg": 1, "m": 2, "s": -3, "A": -1}, "Wb": {"kg": 1, "m": 2, "s": -2, "A": -1},
+    "H": {"kg": 1, "m": 2, "s": -2, "A": -2}, "Ohm": {"kg": 1, "m": 2, "s": -3, "A": -2},
+    "ohm": {"kg": 1, "m": 2, "s": -3, "A": -2}, "var": {"kg": 1, "m": 2, "s": -3},
+    "F": {"kg": -1, "m": -2, "s": 4, "A": 2},
+}  # fmt: skip
+
+
+def si_exponents(unit: str) -> dict[str, int] | None:
+    """The SI base exponents of a unit written as acdrive declares them ("N m s/rad",
+    "kg m^2", "1/(V s)"), or None for a word outside ``_SI``."""
+    total: dict[str, int] = {}
+    for side, text in enumerate(unit.split("/", 1)):
+        for word in text.strip().removeprefix("(").removesuffix(")").split():
+            if word == "1":
+                continue
+            base, _, power = word.partition("^")
+            if base not in _SI or (power and not re.fullmatch(r"-?\d+", power)):
+                return None
+            for k, e in _SI[base].items():
+                total[k] = total.get(k, 0) + e * int(power or 1) * (-1 if side else 1)
+    return {k: e for k, e in total.items() if e != 0}
+
+
+@dataclass
+class Variable:
+    """One FMU variable: ``c`` is its C lvalue in the model struct ``m``."""
+
+    name: str
+    type: str  # "Real" or "Integer"
+    causality: str  # "input", "output", "parameter"
+    variability: str  # "continuous", "discrete", "fixed"
+    c: str
+    unit: str = ""
+    description: str = ""
+    start: float | None = None
+    vr: int = 0
+
+
+def _scalars(name: str, var, c: str, values, **kw) -> list[Variable]:
+    """The Real variables of one declared quantity (``.re``/``.im`` for a space vector)."""
+    doc = var.doc
+    if var.kind == "complex":
+        return [
+            Variable(f"{name}.re", "Real", c=f"{c}.re", unit=var.unit, description=f"{doc} (real part)",
+                     start=None if values is None else float(values[0]), **kw),
+            Variable(f"{name}.im", "Real", c=f"{c}.im", unit=var.unit,
+                     description=f"{doc} (imaginary part)",
+                     start=None if values is None else float(values[1]), **kw),
+        ]  # fmt: skip
+    return [Variable(name, "Real", c=c, unit=var.unit, description=doc,
+                     start=None if values is None else float(values[0]), **kw)]  # fmt: skip
+
+
+def _parameters(parts, prefix) -> list[Variable]:
+    out = []
+    for part in parts:
+        for v in part.PARAMS:
+            if v.kind == "table":
+                continue
+            k = part.PARAMS.slot(v.name)
+            out += _scalars(f"{part.name}.{v.name}", v, f"{prefix}{part.name}.{v.name}",
+                            part.p[k : k + v.width], causality="parameter", variability="fixed")  # fmt: skip
+    return out
+
+
+def _events(part: Part, c: str, causality: str = "output") -> Variable:
+    return Variable(f"{part.name}.events", "Integer", causality, "discrete", c,
+                    description=f"{part.name}'s event bits of the last period: "
+                    + ", ".join(f"bit {b} {e}" for b, e in enumerate(part.EVENTS)))  # fmt: skip
+
+
+@dataclass
+class FMUModel:
+    """What one FMU is made of: its identifier, description, variables, C files and glue."""
+
+    identifier: str
+    description: str
+    variables: list[Variable]
+    files: dict[str, str]  # sources/ file name -> text
+    glue: str  # C of the model struct and the acd_fmu_* functions
+    sample_time: float
+    stop_time: float
+
+
+def controller_model(export: CExport, sample_time: float, stop_time: float,
+                     description: str) -> FMUModel:  # fmt: skip
+    """The controller FMU of ``export`` (every chain of it in one FMU; ``sample_time`` the
+    period ``to_c`` was given)."""
+    variables: list[Variable] = []
+    fields, defaults, start, advance = [], [], [], []
+    read_by: dict[str, str] = {}  # plant output path -> the inputs member that holds it
+    for model in export.chains:
+        c = model.chain.name
+        fields += [f"    {c}_params p_{c};", f"    {c}_state s_{c};", f"    {c}_inputs in_{c};"]
+        if model.outputs:
+            fields.append(f"    {c}_outputs out_{c};")
+        defaults.append(f"    {c}_set_params(&m->p_{c});")
+        start.append(f"    {c}_reset(&m->s_{c});")
+        out = f", &m->out_{c}" if model.outputs else ""
+        for port in model.chain.inputs:
+            if port.path in read_by:  # one variable for a plant output several chains read
+                advance.append(f"    m->in_{c}.{_port_name(port)} = {read_by[port.path]};")
+                continue
+            read_by[port.path] = f"m->in_{c}.{_port_name(port)}"
+            variables += _scalars(port.path, port.var, f"m->in_{c}.{_port_name(port)}", None,
+                                  causality="input", variability="continuous")  # fmt: skip
+            for var in variables[-port.var.width :]:
+                var.start = 0.0
+            defaults += [f"    {v.c} = 0.0;" for v in variables[-port.var.width :]]
+        advance.append(f"    {c}_step(t, &m->p_{c}, &m->s_{c}, &m->in_{c}{out});")
+        for port in model.chain.outputs:
+            variables += _scalars(port.path, port.var, f"m->out_{c}.{_port_name(port)}", None,
+                                  causality="output", variability="discrete")  # fmt: skip
+            start.append(f"    m->out_{c}.{_port_name(port)} = m->s_{c}.{port.part.name}_out."
+                         f"{port.var.name};")  # fmt: skip
+        for part in model.chain.parts:
+            if part.EVENTS:
+                variables.append(_events(part, f"m->out_{c}.{part.name}_events"))
+                start.append(f"    m->out_{c}.{part.name}_events = 0u;")
+        variables += _parameters(model.chain.parts, f"m->p_{c}.")
+    first = export.chains[0].chain.name
+    glue = "\n".join([
+        f'#include "{export.header_name}"', "",
+        "typedef struct {", *fields, "} acd_fmu_model;", "",
+        "static void acd_fmu_defaults(acd_fmu_model *m)", "{", *defaults, "}", "",
+        "static void acd_fmu_start(acd_fmu_model *m, double t0)", "{", "    (void)t0;", *start,
+        "}", "",
+        f"static double acd_fmu_period(const acd_fmu_model *m) {{ return m->p_{first}.sample_time; }}",
+        "",
+        "static void acd_fmu_advance(acd_fmu_model *m, double t, double t_next)", "{",
+        "    (void)t_next;", *advance, "}", "",
+    ])  # fmt: skip
+    files = {export.header_name: export.header, export.source_name: export.source}
+    return FMUModel(export.name, description, variables, files, glue, sample_time, stop_time)
+
+
+def plant_model(export: PlantExport, system, held, sample_time: float, stop_time: float,
+                description: str) -> FMUModel:  # fmt: skip
+    """The plant FMU of ``export``: inputs the commands (start: the held values), outputs every
+    part output and the modulators' event bits, parameters the parts' real parameters."""
+    n = export.name
+    Y0 = system.pack_held(held)
+    variables: list[Variable] = []
+    defaults = [f"    {n}_set_params(&m->p);"]
+    for port in export.inputs:
+        k = system.output_slot(port)
+        variables += _scalars(port.path, port.var, f"m->in.{_port_name(port)}",
+                              Y0[k : k + port.var.width], causality="input",
+                              variability="discrete")  # fmt: skip
+        defaults += [
+            "    " + line
+            for line in _value_lines(
+                f"m->in.{_port_name(port)}", port.var, Y0[k : k + port.var.width], port.path
+            )
+        ]
+    for port in export.outputs:
+        variables += _scalars(port.path, port.var, f"m->s.y.{port.part.name}.{port.var.name}",
+                              None, causality="output", variability="continuous")  # fmt: skip
+    for part in export.modulators:
+        if part.EVENTS:
+            variables.append(_events(part, f"m->s.{part.name}_events"))
+    variables += _parameters([*export.continuous, *export.modulators], "m->p.")
+    inputs = "&m->in" if export.inputs else "NULL"
+    glue = "\n".join([
+        f'#include "{export.header_name}"', "",
+        "typedef struct {", f"    {n}_params p;", f"    {n}_state s;",
+        *([f"    {n}_inputs in;"] if export.inputs else []), "} acd_fmu_model;", "",
+        "static void acd_fmu_defaults(acd_fmu_model *m)", "{", *defaults, "}", "",
+        "static void acd_fmu_start(acd_fmu_model *m, double t0)", "{",
+        f"    {n}_reset(t0, &m->p, &m->s);", "}", "",
+        "static double acd_fmu_period(const acd_fmu_model *m) { return m->p.sample_time; }", "",
+        "static void acd_fmu_advance(acd_fmu_model *m, double t, double t_next)", "{",
+        f"    {n}_step(t, &m->p, &m->s, {inputs});",
+        f"    {n}_update_outputs(t_next, &m->p, &m->s);", "}", "",
+    ])  # fmt: skip
+    files = {export.header_name: export.header, export.source_name: export.source}
+    return FMUModel(n, description, variables, files, glue, sample_time, stop_time)
+
+
+def _number(x: float) -> str:
+    return repr(float(x))
+
+
+def model_description(model: FMUModel, guid: str) -> str:
+    """modelDescription.xml of ``model`` (FMI 2.0, co-simulation)."""
+    from acdrive import __version__
+
+    units = sorted({v.unit for v in model.variables if v.unit})
+    sources = [*model.files, f"{model.identifier}_fmi2.c"]
+    L = ['<?xml version="1.0" encoding="UTF-8"?>',
+         (f'<fmiModelDescription fmiVersion="2.0" modelName={quoteattr(model.identifier)} '
+         f'guid="{guid}" description={quoteattr(model.description)} '
+         f'generationTool="acdrive {__version__}" variableNamingConvention="flat" '
+         'numberOfEventIndicators="0">'),
+         (f'  <CoSimulation modelIdentifier="{model.identifier}" '
+         'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUstate="false" '
+         'canSerializeFMUstate="false" providesDirectionalDerivative="false">'),
+         "    <SourceFiles>", *(f'      <File name="{f}"/>' for f in sources if f.endswith(".c")),
+         "    </SourceFiles>", "  </CoSimulation>"]  # fmt: skip
+    if units:
+        L.append("  <UnitDefinitions>")
+        for unit in units:
+            exponents = si_exponents(unit)
+            if exponents:
+                attrs = " ".join(f'{k}="{e}"' for k, e in exponents.items())
+                L += [f"    <Unit name={quoteattr(unit)}>", f"      <BaseUnit {attrs}/>",
+                      "    </Unit>"]  # fmt: skip
+            else:
+                L.append(f"    <Unit name={quoteattr(unit)}/>")
+        L.append("  </UnitDefinitions>")
+    L += ["  <LogCategories>",
+          '    <Category name="logStatusError" description="errors: a refused call, why"/>',
+          '    <Category name="logAll" description="every message"/>', "  </LogCategories>",
+          (f'  <DefaultExperiment startTime="0.0" stopTime="{_number(model.stop_time)}" '
+          f'stepSize="{_number(model.sample_time)}"/>'), "  <ModelVariables>"]  # fmt: skip
+    for v in model.variables:
+        L.append(f"    <ScalarVariable name={quoteattr(v.name)} valueReference=\"{v.vr}\" "
+                 f"description={quoteattr(v.description)} causality=\"{v.causality}\" "
+                 f"variability=\"{v.variability}\">")  # fmt: skip
+        attrs = ""
+        if v.start is not None:
+            attrs += f' start="{_number(v.start) if v.type == "Real" else int(v.start)}"'
+        if v.unit:
+            attrs += f" unit={quoteattr(v.unit)}"
+        L += [f"      <{v.type}{attrs}/>", "    </ScalarVariable>"]
+    L += ["  </ModelVariables>", "  <ModelStructure>"]
+    outputs = [i for i, v in enumerate(model.variables, 1) if v.causality == "output"]
+    if outputs:
+        L.append("    <Outputs>")
+        L += [f'      <Unknown index="{i}" dependencies=""/>' for i in outputs]
+        L += ["    </Outputs>", "    <InitialUnknowns>"]
+        L += [f'      <Unknown index="{i}"/>' for i in outputs]
+        L.append("    </InitialUnknowns>")
+    L += ["  </ModelStructure>", "</fmiModelDescription>"]
+    return "\n".join(L) + "\n"
+
+
+def fmi2_source(model: FMUModel, guid: str) -> str:
+    """``<id>_fmi2.c``: the model glue, the value-reference tables and the FMI functions."""
+    reals = [v for v in model.variables if v.type == "Real"]
+    integers = [v for v in model.variables if v.type == "Integer"]
+    access = {"output": 1, "input": 2, "parameter": 3}
+    table = ["0"] * (len(model.variables) + 1)
+    for v in model.variables:
+        table[v.vr] = str(access[v.causality]) if v.type == "Real" else "1"
+    L = [f"/* Generated by acdrive.export (FMI 2.0 co-simulation): {model.description}.",
+         (" * Build: cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I<FMI 2.0 headers> "
+         "*.c -lm */"), "", "#include <math.h>", '#include "fmi2Functions.h"', "",
+         "#ifdef ACDRIVE_FLOAT", "#error \"the FMU reals are fmi2Real: build it in double\"",
+         "#endif", "", f'#define ACD_FMU_GUID "{guid}"', "", model.glue,
+         "/* 1: output (read only), 2: input, 3: fixed parameter; by value reference */",
+         f"static const unsigned char acd_fmu_access[{len(table)}] = {{{', '.join(table)}}};", "",
+         "static fmi2Real *acd_fmu_real(acd_fmu_model *m, fmi2ValueReference vr)", "{",
+         "    switch (vr) {"]  # fmt: skip
+    L += [f"    case {v.vr}: return &{v.c}; /* {v.name} */" for v in reals]
+    L += ["    default: return NULL;", "    }", "}", "",
+          ("static int acd_fmu_integer(const acd_fmu_model *m, fmi2ValueReference vr, "
+          "fmi2Integer *value)"), "{", "    switch (vr) {"]  # fmt: skip
+    L += [f"    case {v.vr}: *value = (fmi2Integer){v.c}; return 1; /* {v.name} */"
+          for v in integers]  # fmt: skip
+    L += ["    default: (void)m; (void)value; return 0;", "    }", "}", FMI2_WRAPPER]
+    return "\n".join(L) + "\n"
+
+
+def fmi_headers() -> Path:
+    """The folder of the FMI 2.0 headers fmpy ships, or an InputError saying fmpy is needed."""
+    spec = importlib.util.find_spec("fmpy")
+    folder = Path(spec.origin).parent / "c-code" if spec and spec.origin else None
+    if folder is None or not (folder / "fmi2Functions.h").is_file():
+        raise InputError("fmpy", "is not installed: building an FMU needs the FMI 2.0 headers "
+                         "it ships (pip install 'acdrive[fmu]')")  # fmt: skip
+    return folder
+
+
+def build_fmu(model: FMUModel, path: Path) -> Path:
+    """Write the FMU of ``model`` to ``path`` (a .fmu zip): sources, the linux64 binary compiled
+    from them, modelDescription.xml. Built in a temporary folder; the zip is written beside
+    ``path`` under a hidden name and renamed into place, so ``path`` is whole or untouched."""
+    compiler, headers = find_compiler("gcc", "building an FMU's binary"), fmi_headers()
+    path = Path(path)
+    for i, v in enumerate(model.variables, 1):
+        v.vr = i
+    body = "".join(f"{v.name}|{v.type}|{v.causality}|{v.c}\n" for v in model.variables)
+    digest = hashlib.sha256((model.glue + body + "".join(model.files.values())).encode())
+    guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
+    files = {**model.files, f"{model.identifier}_fmi2.c": fmi2_source(model, guid)}
+    with tempfile.TemporaryDirectory(prefix="acdrive-fmu-build-") as scratch:
+        work = Path(scratch)
+        (work / "sources").mkdir()
+        for name, text in files.items():
+            (work / "sources" / name).write_text(text)
+        binary = work / "binaries" / PLATFORM / f"{model.identifier}.so"
+        binary.parent.mkdir(parents=True)
+        sources = [str(work / "sources" / f) for f in files if f.endswith(".c")]
+        flags = [*CFLAGS, "-fvisibility=default", f"-I{headers}", f"-I{work / 'sources'}"]
+        done = subprocess.run([compiler, *flags, "-o", str(binary), *sources, "-lm"],
+                              capture_output=True, text=True, check=False)  # fmt: skip
+        if done.returncode != 0:
+            first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
+            raise InputError("compiler", f"{compiler} could not compile the FMU's sources: {first}")
+        (work / "modelDescription.xml").write_text(model_description(model, guid))
+        partial = path.with_name(f".{path.name}.partial")
+        try:
+            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:
+                for file in sorted(work.rglob("*")):
+                    if file.is_file():
+                        fmu.write(file, file.relative_to(work).as_posix())
+            os.replace(partial, path)
+        finally:
+            partial.unlink(missing_ok=True)
+    return path

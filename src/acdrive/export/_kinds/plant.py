@@ -1,0 +1,339 @@
+"""C of the plant kinds the plant FMU is built from (``acdrive.export._plant_source``): the DC
+source, the cage induction motor, the PM machine, the free shaft and the averaged converters,
+the switching SVPWM inverter (its segments inside one control period), and the C step of
+the PWM unit's latch (a sampled part in front of an averaged converter). Each body repeats its
+numba kernel operation for operation (complex products as (ac - bd) + j(ad + bc), quotients by
+Smith's algorithm, the kernels' order of sums), so a strict-math build agrees to rounding; the
+FMU tests (``tests/test_export_fmu.py``) keep the two equal."""
+
+from __future__ import annotations
+
+import math
+
+from acdrive._frames import K_3C, K_PEAK
+from acdrive.export._kinds import CStep, CSupport, PlantC, register, register_plant
+from acdrive.export._kinds.common import CLIP_MAGNITUDE, TABLE_AT
+from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._pmsm_part import PermanentMagnetMachine
+from acdrive.plant._converter import AveragedConverter, DCFedConverter
+from acdrive.plant._inverter import CarrierLatch, Inverter
+from acdrive.plant._mechanics import W_COULOMB, Shaft
+from acdrive.plant._sources import DCSource
+
+#: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
+TANH = CSupport(
+    "tanh",
+    """
+#ifdef ACDRIVE_FLOAT
+#define ACD_TANH tanhf
+#else
+#define ACD_TANH tanh
+#endif
+""",
+)
+
+register_plant(
+    DCSource,
+    PlantC(
+        source="DC source: the voltage profile (plant._sources.dc_state_outputs)",
+        state_outputs="    y->v_dc = acd_table_at(p->V.n, p->V.t, p->V.v, t);",
+        support=(TABLE_AT,),
+    ),
+)
+
+register_plant(
+    CageInductionMachine,
+    PlantC(
+        source="Amezquita-Brooks et al. (1)-(2), complex form (machines._cage_part)",
+        state_outputs=r"""
+    y->i_s = x->i_s;
+    y->psi_r = x->psi_r;
+    /* (2): tau_e = n_p (L_m / L_r) Im(conj(psi_r) i_s) */
+    y->tau_e = p->n_p * p->L_m / p->L_r * acd_cmul(acd_conj(x->psi_r), x->i_s).im;
+""",
+        rhs=r"""
+    /* (1): sigma L_s di_s/dt = v_s - (R_s + L_m^2 R_r / L_r^2) i_s + (L_m / L_r) k psi_r,
+       dpsi_r/dt = (L_m R_r / L_r) i_s - k psi_r, with k = R_r / L_r - j n_p w */
+    ACDRIVE_REAL sigma_L_s = p->L_s - p->L_m * p->L_m / p->L_r;
+    acd_complex rotor_pole = acd_c(p->R_r / p->L_r, -(p->n_p * u->w));
+    ACDRIVE_REAL r_eq = p->R_s + p->L_m * p->L_m * p->R_r / (p->L_r * p->L_r);
+    acd_complex sum = acd_cadd(acd_csub(u->v_s, acd_cscale(r_eq, x->i_s)),
+                               acd_cmul(acd_cscale(p->L_m / p->L_r, rotor_pole), x->psi_r));
+    dx->i_s = acd_cdiv(sum, acd_c(sigma_L_s, ACD_R(0.0)));
+    dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r / p->L_r, x->i_s),
+                         acd_cmul(rotor_pole, x->psi_r));
+""",
+    ),
+)
+
+#: psi_pm = K_PEAK psi_m (machines._pmsm_part.magnet_flux)
+_PSI_PM = f"ACD_R({K_PEAK!r}) * p->psi_m"
+
+register_plant(
+    PermanentMagnetMachine,
+    PlantC(
+        source="Ugalde-Loo et al. (7)-(8) in rotor coordinates, fed from the stationary frame "
+        "(machines._pmsm_part)",
+        state_outputs=rf"""
+    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
+    y->i_s = acd_cmul(acd_c(i_d, i_q), x->e_r);
+    y->i_dq = acd_c(i_d, i_q);
+    y->psi_s = acd_cmul(acd_c(p->L_d * i_d + {_PSI_PM}, p->L_q * i_q), x->e_r);
+    /* (8): tau_e = n_p (psi_pm i_q + (L_d - L_q) i_d i_q) */
+    y->tau_e = p->n_p * ({_PSI_PM} * i_q + (p->L_d - p->L_q) * i_d * i_q);
+    y->theta = x->theta;
+""",
+        rhs=rf"""
+    /* (7): v_dq = v_s conj(e_r); L_d di_d/dt = v_d - R_s i_d + w_r L_q i_q,
+       L_q di_q/dt = v_q - R_s i_q - w_r (L_d i_d + psi_pm); de_r/dt = j w_r e_r */
+    acd_complex v_dq = acd_cmul(u->v_s, acd_c(x->e_r.re, -x->e_r.im));
+    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
+    ACDRIVE_REAL w_r = p->n_p * u->w;
+    dx->i_dq.re = (v_dq.re - p->R_s * i_d + w_r * p->L_q * i_q) / p->L_d;
+    dx->i_dq.im = (v_dq.im - p->R_s * i_q - w_r * (p->L_d * i_d + {_PSI_PM})) / p->L_q;
+    dx->theta = u->w;
+    dx->e_r.re = -w_r * x->e_r.im;
+    dx->e_r.im = w_r * x->e_r.re;
+""",
+        project=r"""
+    ACDRIVE_REAL angle = p->n_p * x->theta; /* e_r = e^(j n_p theta) */
+    x->e_r.re = ACD_COS(angle);
+    x->e_r.im = ACD_SIN(angle);
+""",
+    ),
+)
+
+register_plant(
+    Shaft,
+    PlantC(
+        source="Bodson (26): J dw/dt = tau_e - tau_L(t) - (B + k_b(t)) w - tau_c tanh(w / "
+        "W_COULOMB) (plant._mechanics)",
+        state_outputs="    y->w = x->w;\n    y->theta = x->theta;",
+        rhs=rf"""
+    ACDRIVE_REAL load = acd_table_at(p->load.n, p->load.t, p->load.v, t) + p->B * x->w;
+    ACDRIVE_REAL k_b;
+    if (p->tau_c != ACD_R(0.0)) {{
+        load += p->tau_c * ACD_TANH(x->w / ACD_R({W_COULOMB!r})); /* W_COULOMB */
+    }}
+    dx->w = (u->tau_e - load) / p->J;
+    k_b = acd_table_at(p->brake.n, p->brake.t, p->brake.v, t);
+    if (k_b != ACD_R(0.0)) {{ /* a separate term, as the kernel */
+        dx->w -= k_b * x->w / p->J;
+    }}
+    dx->theta = x->w;
+""",
+        support=(TABLE_AT, TANH),
+    ),
+)
+
+register_plant(
+    AveragedConverter,
+    PlantC(
+        source="averaged converter: the command held over the sample, |v| <= V_dc / sqrt(2) "
+        "(plant._converter)",
+        segments=r"""
+    int saturated;
+    dt[0] = T_s;
+    v[0].v = acd_clip_magnitude(u->v_ref, p->V_dc / ACD_SQRT(ACD_R(2.0)), &saturated);
+    *n = 1;
+    return saturated ? ACD_AVERAGED_CONVERTER_SATURATED : 0u;
+""",
+        support=(CLIP_MAGNITUDE,),
+    ),
+)
+
+register_plant(
+    DCFedConverter,
+    PlantC(
+        source="averaged converter fed from a DC link: |v| <= max(v_dc, 0) / sqrt(2) "
+        "(plant._converter)",
+        segments=r"""
+    int saturated;
+    dt[0] = T_s;
+    v[0].v = acd_clip_magnitude(u->v_ref, acd_max(u->v_dc, ACD_R(0.0)) / ACD_SQRT(ACD_R(2.0)),
+                                &saturated);
+    *n = 1;
+    return saturated ? ACD_DC_FED_CONVERTER_SATURATED : 0u;
+""",
+        support=(CLIP_MAGNITUDE,),
+    ),
+)
+
+register(
+    CarrierLatch,
+    CStep(
+        source="the PWM unit's shadow register, N = max(1, round(1 / (f_pwm T_s))) samples "
+        "(plant._inverter.latch_step)",
+        body=r"""
+    ACDRIVE_REAL n = acd_max(ACD_R(1.0), ACD_FLOOR(ACD_R(1.0) / (p->f_pwm * T_s) + ACD_R(0.5)));
+    ACDRIVE_REAL j = s->k;
+    if (j < ACD_R(0.0) || j >= n) {
+        j = ACD_R(0.0);
+    }
+    if (j == ACD_R(0.0)) {
+        s->v = u->v_ref;
+    }
+    s->k = (j + ACD_R(1.0) < n) ? j + ACD_R(1.0) : ACD_R(0.0);
+    y->v_ref = s->v;
+    return 0u;
+""",
+    ),
+)
+
+#: plant._inverter's helpers, each mirrored: the leg polarity, duty cycle, pulse and its edges
+SVPWM = CSupport(
+    "svpwm",
+    r"""
+/* plant._inverter._polarity */
+static ACDRIVE_REAL acd_polarity(ACDRIVE_REAL x)
+{
+    if (x > ACD_R(0.0)) {
+        return ACD_R(1.0);
+    }
+    if (x < ACD_R(0.0)) {
+        return ACD_R(-1.0);
+    }
+    return ACD_R(0.0);
+}
+
+/* plant._inverter._duty: pole duty cycle of phase value x with zero-sequence offset */
+static ACDRIVE_REAL acd_duty(ACDRIVE_REAL x, ACDRIVE_REAL offset, ACDRIVE_REAL v_dc)
+{
+    if (v_dc <= ACD_R(0.0)) {
+        return ACD_R(0.5);
+    }
+    return acd_min(acd_max(ACD_R(0.5) + (x + offset) / v_dc, ACD_R(0.0)), ACD_R(1.0));
+}
+
+/* plant._inverter._pulse: a leg's high interval [*start, *end] in control samples */
+static void acd_pulse(ACDRIVE_REAL d, ACDRIVE_REAL polarity, ACDRIVE_REAL n_carrier,
+                      ACDRIVE_REAL delta, ACDRIVE_REAL *start, ACDRIVE_REAL *end)
+{
+    if (d <= ACD_R(0.0)) {
+        *start = ACD_R(0.0);
+        *end = ACD_R(0.0);
+        return;
+    }
+    if (d >= ACD_R(1.0)) {
+        *start = ACD_R(0.0);
+        *end = n_carrier;
+        return;
+    }
+    *start = ACD_R(0.5) * (ACD_R(1.0) - d) * n_carrier;
+    *end = ACD_R(0.5) * (ACD_R(1.0) + d) * n_carrier;
+    if (polarity > ACD_R(0.0)) {
+        *start += delta; /* rising edge delayed: the lower diode holds the pole low */
+        if (*start >= *end) {
+            *start = ACD_R(0.0);
+            *end = ACD_R(0.0);
+        }
+    } else if (polarity < ACD_R(0.0)) {
+        *end = acd_min(*end + delta, n_carrier); /* falling edge delayed */
+    }
+}
+
+/* plant._inverter._add_edges: the pulse edges strictly inside sample j, appended to dt[m..] */
+static int acd_add_edges(ACDRIVE_REAL start, ACDRIVE_REAL end, ACDRIVE_REAL j, ACDRIVE_REAL *dt,
+                         int m)
+{
+    if (start < end) {
+        ACDRIVE_REAL e = start - j;
+        if (ACD_R(0.0) < e && e < ACD_R(1.0)) {
+            dt[m++] = e;
+        }
+        e = end - j;
+        if (ACD_R(0.0) < e && e < ACD_R(1.0)) {
+            dt[m++] = e;
+        }
+    }
+    return m;
+}
+""",
+)
+
+register_plant(
+    Inverter,
+    PlantC(
+        source="two-level inverter, centred SVPWM, dead time and device drops; Amezquita-Brooks "
+        "et al. VI (plant._inverter.inverter_segments)",
+        segments=rf"""
+    const ACDRIVE_REAL k_3c = ACD_R({K_3C!r}), half_sqrt3 = ACD_R({math.sqrt(3.0) / 2.0!r});
+    const ACDRIVE_REAL inv_sqrt2 = ACD_R({1.0 / math.sqrt(2.0)!r});
+    ACDRIVE_REAL n_carrier = acd_max(ACD_R(1.0), ACD_FLOOR(ACD_R(1.0) / (p->f_pwm * T_s) + ACD_R(0.5)));
+    ACDRIVE_REAL j = s->k, v_dc = acd_max(u->v_dc, ACD_R(0.0));
+    ACDRIVE_REAL sig_a, sig_b, sig_c, delta, a0, a1, b0, b1, c0, c1, m_a, m_b, m_c;
+    ACDRIVE_REAL previous = ACD_R(0.0), used = ACD_R(0.0);
+    int m, i, count = 0;
+    if (j < ACD_R(0.0) || j >= n_carrier) {{
+        j = ACD_R(0.0);
+    }}
+    if (j == ACD_R(0.0)) {{ /* carrier period start: latch the limited command as duties */
+        int limited;
+        acd_complex applied = acd_clip_magnitude(u->v_ref, v_dc / ACD_SQRT(ACD_R(2.0)), &limited);
+        ACDRIVE_REAL re = applied.re, im = applied.im;
+        ACDRIVE_REAL x_a = k_3c * re;
+        ACDRIVE_REAL x_b = k_3c * (ACD_R(-0.5) * re + half_sqrt3 * im);
+        ACDRIVE_REAL x_c = k_3c * (ACD_R(-0.5) * re - half_sqrt3 * im);
+        ACDRIVE_REAL offset = ACD_R(-0.5) * (acd_max(acd_max(x_a, x_b), x_c) +
+                                             acd_min(acd_min(x_a, x_b), x_c));
+        s->d_a = acd_duty(x_a, offset, v_dc);
+        s->d_b = acd_duty(x_b, offset, v_dc);
+        s->d_c = acd_duty(x_c, offset, v_dc);
+        s->v_lim = applied;
+        s->limited = limited ? ACD_R(1.0) : ACD_R(0.0);
+    }}
+    s->k = (j + ACD_R(1.0) < n_carrier) ? j + ACD_R(1.0) : ACD_R(0.0);
+
+    /* current polarity of each phase (Bodson (2) without its positive factor) */
+    sig_a = acd_polarity(u->i_s.re);
+    sig_b = acd_polarity(ACD_R(-0.5) * u->i_s.re + half_sqrt3 * u->i_s.im);
+    sig_c = acd_polarity(ACD_R(-0.5) * u->i_s.re - half_sqrt3 * u->i_s.im);
+    delta = p->t_d / T_s;
+    acd_pulse(s->d_a, sig_a, n_carrier, delta, &a0, &a1);
+    acd_pulse(s->d_b, sig_b, n_carrier, delta, &b0, &b1);
+    acd_pulse(s->d_c, sig_c, n_carrier, delta, &c0, &c1);
+
+    /* switching instants inside this sample, sorted (insertion sort, at most six) */
+    m = acd_add_edges(a0, a1, j, dt, 0);
+    m = acd_add_edges(b0, b1, j, dt, m);
+    m = acd_add_edges(c0, c1, j, dt, m);
+    for (i = 1; i < m; ++i) {{
+        ACDRIVE_REAL e = dt[i];
+        int q = i - 1;
+        while (q >= 0 && dt[q] > e) {{
+            dt[q + 1] = dt[q];
+            q -= 1;
+        }}
+        dt[q + 1] = e;
+    }}
+
+    m_a = ACD_R(2.0) * s->d_a - ACD_R(1.0);
+    m_b = ACD_R(2.0) * s->d_b - ACD_R(1.0);
+    m_c = ACD_R(2.0) * s->d_c - ACD_R(1.0);
+    for (i = 0; i < m + 1; ++i) {{
+        ACDRIVE_REAL e = i < m ? dt[i] : ACD_R(1.0); /* read before dt[count] is overwritten */
+        ACDRIVE_REAL middle, e_a, e_b, e_c, length;
+        if (e <= previous) {{
+            continue; /* two legs switching at the same instant */
+        }}
+        middle = j + ACD_R(0.5) * (previous + e);
+        e_a = ((a0 < middle && middle < a1) ? v_dc : ACD_R(0.0)) - p->v_drop * sig_a;
+        e_b = ((b0 < middle && middle < b1) ? v_dc : ACD_R(0.0)) - p->v_drop * sig_b;
+        e_c = ((c0 < middle && middle < c1) ? v_dc : ACD_R(0.0)) - p->v_drop * sig_c;
+        length = i < m ? (e - previous) * T_s : T_s - used;
+        dt[count] = length;
+        used += length;
+        v[count].v = acd_c(k_3c * (e_a - ACD_R(0.5) * (e_b + e_c)), inv_sqrt2 * (e_b - e_c));
+        v[count].v_lim = s->v_lim;
+        v[count].m_a = m_a;
+        v[count].m_b = m_b;
+        v[count].m_c = m_c;
+        count += 1;
+        previous = e;
+    }}
+    *n = count;
+    return s->limited != ACD_R(0.0) ? ACD_INVERTER_OVERMODULATION : 0u;
+""",
+        support=(CLIP_MAGNITUDE, SVPWM),
+    ),
+)

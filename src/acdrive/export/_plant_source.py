@@ -1,0 +1,445 @@
+"""C99 source and header of a system's plant: its continuous parts and modulators with
+acdrive's integrator, one control period per call (docs/guide/fmu.md).
+
+The plant is everything that is not sampled: machines, shafts, sources (continuous parts) and
+converters (modulators). Its **inputs** are the sampled outputs wired into it (the commands of
+the controller chain, named ``<part>_<output>`` after the output that feeds them), its
+**outputs** every output of its parts. The generated functions repeat the steps of acdrive's
+compiled loop (``sim._loop_source``) for one sample t_k:
+
+* ``<name>_step(t, p, s, in)``: the modulators' segments from the commands ``in`` and the plant
+  outputs at t_k (``modulate``), then the integration over the merged segments, ``substeps``
+  Runge-Kutta steps per segment (``integrate``, ``plant_step``), the same method as the system's
+  (``system.method``: rk4 written out as acdrive's, or the Butcher tableau of rk6);
+* ``<name>_update_outputs(t, p, s)``: the redundant states re-normalised (``project``), then
+  the plant outputs from the state at t (``plant_outputs``);
+* ``<name>_reset(t, p, s)``: initial states and held modulator outputs, then the outputs at t.
+
+Each kind's C is written once in ``acdrive.export._kinds.plant`` (the seam of the controller
+kinds). A part with direct outputs (an output of the same instant computed from its inputs), or
+with a ``project`` kernel its C lacks, is refused, naming the part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from acdrive.core._parts import Port, SampledPart
+from acdrive.errors import InputError
+from acdrive.export._c_source import (
+    KindTypes,
+    Member,
+    _comment,
+    _port_name,
+    _struct_lines,
+    _support_order,
+    _value_lines,
+    kind_declarations,
+    kind_types,
+    literal,
+    part_params_lines,
+    require_c_name,
+)
+from acdrive.export._kinds import plant_c_of
+from acdrive.export._prelude import HELPERS, PRELUDE
+from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
+
+#: the compiled loop's rule (sim._loop_source.integrate): a segment whose remaining length is
+#: at most this fraction of T_s is finished
+SEGMENT_END_RTOL = 1e-12
+
+
+@dataclass
+class PlantExport:
+    """The generated files and what the FMU needs to know of them: the plant parts, the FMU's
+    inputs (ports of sampled parts feeding the plant) and outputs (every plant part output)."""
+
+    name: str
+    header: str
+    source: str
+    kinds: dict
+    continuous: list
+    modulators: list
+    inputs: list[Port]
+    outputs: list[Port]
+
+    @property
+    def header_name(self) -> str:
+        return f"{self.name}.h"
+
+    @property
+    def source_name(self) -> str:
+        return f"{self.name}.c"
+
+
+def _check_exportable(system) -> None:
+    for part in system.continuous:
+        if part.DIRECT_OUTPUTS:
+            crosses = [
+                n
+                for n in part.DIRECT_FROM
+                if isinstance(system.source_of[(part.name, n)].part, SampledPart)
+            ]
+            if crosses:
+                raise InputError(
+                    part.name,
+                    f"its direct outputs read the controller's {crosses[0]} at the same "
+                    "instant: an algebraic loop across the export boundary (the plant FMU has "
+                    "no direct feedthrough)",
+                )
+            raise InputError(
+                part.name,
+                f"part kind {type(part).__name__} has direct outputs, which the plant export "
+                "does not write in C yet",
+            )
+        if type(part).project is not None and plant_c_of(part).project is None:
+            raise InputError(
+                part.name,
+                f"part kind {type(part).__name__} re-normalises its states (project), which the "
+                "plant export does not write in C yet",
+            )
+
+
+def _plant_inputs(system, parts) -> list[Port]:
+    inputs: list[Port] = []
+    for part in parts:
+        for v in part.INPUTS:
+            src = system.source_of[(part.name, v.name)]
+            if isinstance(src.part, SampledPart) and all(
+                q.part is not src.part or q.var.name != src.var.name for q in inputs
+            ):
+                inputs.append(src)
+    return inputs
+
+
+def _signature(entry: KindTypes, role: str) -> str:
+    """The static function of one kernel role of a plant kind (arguments present only for the
+    structs the kind declares)."""
+    c, has = entry.cname, {r: bool(entry.members.get(r)) for r in ("params", "state", "in", "out")}
+    if role == "state_outputs":
+        args = ["ACDRIVE_REAL t"]
+        args += [f"const acd_{c}_params *p"] if has["params"] else []
+        args += [f"const acd_{c}_state *x"] if has["state"] else []
+        args += [f"acd_{c}_out *y"]
+        return f"static void acd_{c}_state_outputs({', '.join(args)})"
+    if role == "rhs":
+        args = ["ACDRIVE_REAL t"]
+        args += [f"const acd_{c}_params *p"] if has["params"] else []
+        args += [f"const acd_{c}_state *x"]
+        args += [f"const acd_{c}_in *u"] if has["in"] else []
+        args += [f"const acd_{c}_out *y", f"acd_{c}_state *dx"]
+        return f"static void acd_{c}_rhs({', '.join(args)})"
+    if role == "project":
+        args = [f"const acd_{c}_params *p"] if has["params"] else []
+        return f"static void acd_{c}_project({', '.join([*args, f'acd_{c}_state *x'])})"
+    args = ["ACDRIVE_REAL T_s"]
+    args += [f"const acd_{c}_in *u"] if has["in"] else []
+    args += [f"const acd_{c}_params *p"] if has["params"] else []
+    args += [f"acd_{c}_state *s"] if has["state"] else []
+    args += ["int *n", "ACDRIVE_REAL *dt", f"acd_{c}_out *v"]
+    return f"static uint32_t acd_{c}_segments({', '.join(args)})"
+
+
+def _unused(signature: str) -> list[str]:
+    """``(void)arg;`` for every argument, so a body need not use them all (-Wextra clean)."""
+    inner = signature[signature.index("(") + 1 : signature.rindex(")")]
+    names = [a.split()[-1].lstrip("*") for a in inner.split(", ")]
+    return [f"    (void){n};" for n in names]
+
+
+def _kind_functions(kinds) -> list[str]:
+    C = []
+    for entry in kinds.values():
+        c = entry.step
+        for role in ("state_outputs", "rhs", "segments", "project"):
+            body = getattr(c, role)
+            if body is None:
+                continue
+            signature = _signature(entry, role)
+            C += [f"/* {entry.cls.__name__}.{role}: {c.source} */", signature, "{"]
+            C += _unused(signature)
+            C += [body.strip("\n"), "}", ""]
+    return C
+
+
+def _input_source(system, part, var_name: str, outputs: str) -> str:
+    """The C expression of one input of ``part``: a command of the chain (``in->``) or an output
+    of a plant part (``outputs`` is the prefix of the outputs struct, ``y->`` or ``s->y.``)."""
+    src = system.source_of[(part.name, var_name)]
+    if isinstance(src.part, SampledPart):
+        return f"in->{_port_name(src)}"
+    return f"{outputs}{src.part.name}.{src.var.name}"
+
+
+def _call_args(entry: KindTypes, role: str, part, x: str, y: str, dx: str = "") -> str:
+    has = {r: bool(entry.members.get(r)) for r in ("params", "state", "in")}
+    args = ["t"]
+    args += [f"&p->{part.name}"] if has["params"] else []
+    if role == "state_outputs":
+        args += [f"&{x}->{part.name}"] if has["state"] else []
+        args += [f"&{y}->{part.name}"]
+    else:
+        args += [f"&{x}->{part.name}"]
+        args += ["&u"] if has["in"] else []
+        args += [f"&{y}->{part.name}", f"&{dx}->{part.name}"]
+    return ", ".join(args)
+
+
+def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
+    """Body of ``<name>_plant_step``: one Runge-Kutta step with the inputs held, the arithmetic
+    of ``sim._loop_source._step_lines`` in the same order."""
+    d = f"{name}_derivatives"
+    if method == "rk4":
+        return [
+            "    int i;",
+            f"    {name}_vector k1, k2, k3, k4, xt;",
+            f"    {d}(t, p, &X->x, in, y, &k1.x);",
+            f"    for (i = 0; i < {n_x}; ++i) {{",
+            "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k1.v[i];",
+            "    }",
+            f"    {d}(t + ACD_R(0.5) * h, p, &xt.x, in, y, &k2.x);",
+            f"    for (i = 0; i < {n_x}; ++i) {{",
+            "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k2.v[i];",
+            "    }",
+            f"    {d}(t + ACD_R(0.5) * h, p, &xt.x, in, y, &k3.x);",
+            f"    for (i = 0; i < {n_x}; ++i) {{",
+            "        xt.v[i] = X->v[i] + h * k3.v[i];",
+            "    }",
+            f"    {d}(t + h, p, &xt.x, in, y, &k4.x);",
+            f"    for (i = 0; i < {n_x}; ++i) {{",
+            (
+                "        X->v[i] += h / ACD_R(6.0) * (k1.v[i] + ACD_R(2.0) * k2.v[i] + "
+                "ACD_R(2.0) * k3.v[i] + k4.v[i]);"
+            ),
+            "    }",
+        ]
+    if method != "rk6":
+        raise InputError("integrator", f"{method} has no C in the plant export (rk4, rk6 have)")
+    stages = len(RK6_B)
+
+    def combination(weights):
+        return " + ".join(f"ACD_R({w!r}) * k[{j}].v[i]" for j, w in enumerate(weights) if w != 0.0)
+
+    lines = ["    int i;", f"    {name}_vector k[{stages}], xt;"]
+    lines.append(f"    {d}(t, p, &X->x, in, y, &k[0].x);")
+    for s in range(1, stages):
+        lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
+                  f"        xt.v[i] = X->v[i] + h * ({combination(RK6_A[s])});", "    }",
+                  f"    {d}(t + ACD_R({RK6_C[s]!r}) * h, p, &xt.x, in, y, &k[{s}].x);"]  # fmt: skip
+    lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
+              f"        X->v[i] += h * ({combination(RK6_B)});", "    }"]  # fmt: skip
+    return lines
+
+
+def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
+    """Body of ``<name>_step``: modulate, then integrate over the merged segments
+    (``sim._loop_source``: ``modulate`` and ``integrate``, same rule and order)."""
+    L = ["    const ACDRIVE_REAL T_s = p->sample_time;", "    ACDRIVE_REAL h, tk = t;",
+         "    int j;"]  # fmt: skip
+    if not modulators:
+        L += ["    h = T_s / (ACDRIVE_REAL)p->substeps;",
+              "    for (j = 0; j < p->substeps; ++j) {",
+              f"        {name}_plant_step(t + (ACDRIVE_REAL)j * h, h, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
+              "    }"]  # fmt: skip
+        return L
+    total = sum(m.MAX_SEGMENTS for m in modulators)
+    L += ["    int pass;"]
+    for k, part in enumerate(modulators):
+        entry = kinds[type(part)]
+        seg = part.MAX_SEGMENTS
+        L += [f"    int n{k} = 0, index{k} = 0;", f"    ACDRIVE_REAL dt{k}[{seg}], left{k};",
+              f"    acd_{entry.cname}_out v{k}[{seg}];"]  # fmt: skip
+    for k, part in enumerate(modulators):  # modulate: inputs from the outputs at t, segments
+        entry = kinds[type(part)]
+        has = {r: bool(entry.members.get(r)) for r in ("params", "state", "in")}
+        L.append(f"    {{ /* {part.name}: {type(part).__name__} */")
+        args = ["T_s"]
+        if has["in"]:
+            L.append(f"        acd_{entry.cname}_in u;")
+            for v in part.INPUTS:
+                L.append(f"        u.{v.name} = {_input_source(system, part, v.name, 's->y.')};")
+            args.append("&u")
+        args += [f"&p->{part.name}"] if has["params"] else []
+        args += [f"&s->s.{part.name}"] if has["state"] else []
+        args += [f"&n{k}", f"dt{k}", f"v{k}"]
+        call = f"acd_{entry.cname}_segments({', '.join(args)})"
+        L.append(
+            f"        s->{part.name}_events = {call};" if part.EVENTS else f"        (void){call};"
+        )
+        L.append(f"        s->y.{part.name} = v{k}[0];")
+        L.append("    }")
+    for k in range(len(modulators)):
+        L.append(f"    left{k} = n{k} > 0 ? dt{k}[0] : ACD_INF;")
+    L.append(f"    for (pass = 0; pass <= {total}; ++pass) {{ /* each pass ends >= 1 segment */")
+    L.append("        ACDRIVE_REAL span = ACD_INF;")
+    for k, part in enumerate(modulators):
+        L.append(f"        if (index{k} < n{k}) {{ s->y.{part.name} = v{k}[index{k}]; }}")
+    for k in range(len(modulators)):
+        L.append(f"        if (left{k} < span) {{ span = left{k}; }}")
+    L += ["        if (span == ACD_INF) {", "            break;", "        }",
+          "        if (span > ACD_R(0.0)) {",
+          "            h = span / (ACDRIVE_REAL)p->substeps;",
+          "            for (j = 0; j < p->substeps; ++j) {",
+          f"                {name}_plant_step(tk + (ACDRIVE_REAL)j * h, h, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
+          "            }", "            tk += span;", "        }"]  # fmt: skip
+    rtol = literal(SEGMENT_END_RTOL, "SEGMENT_END_RTOL")
+    for k in range(len(modulators)):
+        L += [f"        left{k} -= span;", f"        if (left{k} <= {rtol} * T_s) {{",
+              f"            index{k} += 1;",
+              f"            left{k} = index{k} < n{k} ? dt{k}[index{k}] : ACD_INF;", "        }"]  # fmt: skip
+    L.append("    }")
+    return L
+
+
+def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=None,
+               name: str = "acdrive_plant", description: str = "") -> PlantExport:  # fmt: skip
+    """C99 header and source of the plant of ``system`` (module docstring); ``initial`` and
+    ``held`` as for ``CompiledSystem.run`` give what ``<name>_reset`` writes. Raises
+    ``InputError`` naming a part without C or with direct feedthrough from the controller."""
+    name = require_c_name("name", name)
+    _check_exportable(system)
+    continuous, modulators = list(system.continuous), list(system.modulators)
+    if not continuous:
+        raise InputError("system", "has no continuous part: there is no plant to export")
+    kinds = kind_types([*continuous, *modulators], lookup=plant_c_of)
+    X0, S0 = system.pack_initial(initial)
+    Y0 = system.pack_held(held)
+    inputs = _plant_inputs(system, [*continuous, *modulators])
+    outputs = [port for part in (*continuous, *modulators) for port in part.out]
+    n_x = system.sizes["x"]
+
+    stamp = [f"/* Generated by acdrive.export (plant){': ' + description if description else ''}.",
+             " * One control period per <name>_step; docs/guide/fmu.md.",
+             " * Do not edit: regenerate from the system. */"]  # fmt: skip
+    guard = f"{name.upper()}_H"
+    H = [*stamp, f"#ifndef {guard}", f"#define {guard}", "", "#include <stdint.h>", PRELUDE]
+    H += kind_declarations(kinds)
+    params = [Member("sample_time", "real", "[s] T_s, the control period of one step"),
+              Member("substeps", ("struct", "int", None), "Runge-Kutta steps per segment")]  # fmt: skip
+    params += [Member(p.name, ("struct", f"acd_{kinds[type(p)].cname}_params", None),
+                      type(p).__name__) for p in (*continuous, *modulators)
+               if kinds[type(p)].members["params"]]  # fmt: skip
+    states = [Member(p.name, ("struct", f"acd_{kinds[type(p)].cname}_state", None),
+                     type(p).__name__) for p in continuous if kinds[type(p)].members["state"]]  # fmt: skip
+    discrete = [Member(p.name, ("struct", f"acd_{kinds[type(p)].cname}_state", None),
+                       type(p).__name__) for p in modulators if kinds[type(p)].members["state"]]  # fmt: skip
+    outs = [Member(p.name, ("struct", f"acd_{kinds[type(p)].cname}_out", None), type(p).__name__)
+            for p in (*continuous, *modulators)]  # fmt: skip
+    ins = [Member(_port_name(q), q.var.kind, f"{_comment(q.var)} (from {q.path})") for q in inputs]
+    if not states:
+        raise InputError("system", "its plant has no continuous state: nothing to integrate")
+    H += _struct_lines(f"{name}_params", params, f"{name}: parameters")
+    H += _struct_lines(f"{name}_continuous", states, f"{name}: continuous states (integrated)")
+    if discrete:
+        H += _struct_lines(f"{name}_discrete", discrete, f"{name}: modulators' discrete states")
+    H += _struct_lines(f"{name}_outputs", outs, f"{name}: every part's outputs")
+    if ins:
+        H += _struct_lines(f"{name}_inputs", ins, f"{name}: the controller's commands, held")
+    whole = [Member("x", ("struct", f"{name}_continuous", None), "continuous states")]
+    whole += (
+        [Member("s", ("struct", f"{name}_discrete", None), "discrete states")] if discrete else []
+    )
+    whole += [Member("y", ("struct", f"{name}_outputs", None), "outputs")]
+    whole += [Member(f"{p.name}_events", "uint32", f"{p.name}'s event bits of the last step")
+              for p in modulators if p.EVENTS]  # fmt: skip
+    H += _struct_lines(f"{name}_state", whole, f"{name}: everything that evolves")
+    in_arg = f"const {name}_inputs *in" if ins else "const void *in"
+    H += [
+        "/* one control period from t [s]: the commands in held, p->substeps steps per segment */",
+        f"void {name}_step(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg});",
+        "/* the outputs s->y of the state s->x at t */",
+        f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s);",
+        "/* the parameter values of the exported system */",
+        f"void {name}_set_params({name}_params *p);",
+        "/* the initial states and held outputs of the exported system, and the outputs at t */",
+        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s);",
+        "", f"#endif /* {guard} */",
+    ]  # fmt: skip
+
+    C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
+    for support in _support_order(kinds):
+        C += [support.code.strip("\n"), ""]
+    C += _kind_functions(kinds)
+    C += [f"/* the continuous states as one array, for the integrator ({n_x} reals) */",
+          f"typedef union {{ {name}_continuous x; ACDRIVE_REAL v[{n_x}]; }} {name}_vector;",
+          (f"typedef char {name}_states_are_reals[(sizeof({name}_continuous) == {n_x} * "
+          "sizeof(ACDRIVE_REAL)) ? 1 : -1];"), ""]  # fmt: skip
+    # outputs of every continuous part from the state
+    C += [(f"static void {name}_state_outputs(ACDRIVE_REAL t, const {name}_params *p, "
+          f"const {name}_continuous *x, {name}_outputs *y)"), "{", "    (void)x;"]  # fmt: skip
+    for part in continuous:
+        C.append(
+            f"    acd_{kinds[type(part)].cname}_state_outputs({_call_args(kinds[type(part)], 'state_outputs', part, 'x', 'y')});"
+        )
+    C += ["}", ""]
+    C += [(f"static void {name}_derivatives(ACDRIVE_REAL t, const {name}_params *p, "
+          f"const {name}_continuous *x, {in_arg}, {name}_outputs *y, {name}_continuous *dx)"),
+          "{", "    (void)in;", f"    {name}_state_outputs(t, p, x, y);"]  # fmt: skip
+    for part in continuous:
+        entry = kinds[type(part)]
+        if not entry.members["state"]:
+            continue  # no states, no derivative (the kernel's rhs is empty)
+        if entry.step.rhs is None:
+            raise InputError(part.name, f"part kind {type(part).__name__} has states but no C rhs")
+        C.append(f"    {{ /* {part.name}: {type(part).__name__} */")
+        if entry.members["in"]:
+            C.append(f"        acd_{entry.cname}_in u;")
+            for v in part.INPUTS:
+                C.append(f"        u.{v.name} = {_input_source(system, part, v.name, 'y->')};")
+        C.append(
+            f"        acd_{entry.cname}_rhs({_call_args(entry, 'rhs', part, 'x', 'y', 'dx')});"
+        )
+        C.append("    }")
+    C += ["}", ""]
+    C += [(f"static void {name}_plant_step(ACDRIVE_REAL t, ACDRIVE_REAL h, const {name}_params *p, "
+          f"{name}_vector *X, {in_arg}, {name}_outputs *y)"), "{"]  # fmt: skip
+    C += _rk_lines(system.method, n_x, name)
+    C += ["}", ""]
+    C += [
+        f"void {name}_step(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg})",
+        "{",
+    ]
+    C += _integrate_lines(system, kinds, modulators, name)
+    C += ["}", ""]
+    # acdrive's sample instant: project (re-normalise redundant states), then the outputs
+    projections = []
+    for part in continuous:
+        entry = kinds[type(part)]
+        if entry.step.project is not None:
+            params = f"&p->{part.name}, " if entry.members["params"] else ""
+            projections.append(f"    acd_{entry.cname}_project({params}&s->x.{part.name});")
+    C += [f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s)",
+          "{", *projections, f"    {name}_state_outputs(t, p, &s->x, &s->y);", "}", ""]  # fmt: skip
+    C += [f"void {name}_set_params({name}_params *p)", "{",
+          f"    p->sample_time = {literal(sample_time, 'sample_time')};",
+          f"    p->substeps = {int(substeps)};"]  # fmt: skip
+    for part in (*continuous, *modulators):
+        C += ["    " + line for line in part_params_lines(part)]
+    C += [
+        "}",
+        "",
+        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s)",
+        "{",
+    ]
+    for part in continuous:
+        a, _ = system.slots[part.name].x
+        for v in part.STATES:
+            k = a + part.STATES.slot(v.name)
+            C += ["    " + line for line in _value_lines(f"s->x.{part.name}.{v.name}", v,
+                  X0[k : k + v.width], f"initial.{part.name}.{v.name}")]  # fmt: skip
+    for part in modulators:
+        a, _ = system.slots[part.name].s
+        for v in part.STATES:
+            k = a + part.STATES.slot(v.name)
+            C += ["    " + line for line in _value_lines(f"s->s.{part.name}.{v.name}", v,
+                  S0[k : k + v.width], f"initial.{part.name}.{v.name}")]  # fmt: skip
+        a, _ = system.slots[part.name].y
+        for v in part.OUTPUTS:
+            k = a + part.OUTPUTS.slot(v.name)
+            C += ["    " + line for line in _value_lines(f"s->y.{part.name}.{v.name}", v,
+                  Y0[k : k + v.width], f"held.{part.name}.{v.name}")]  # fmt: skip
+        if part.EVENTS:
+            C.append(f"    s->{part.name}_events = 0u;")
+    C += [f"    {name}_update_outputs(t, p, s);", "}", ""]
+    return PlantExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, continuous,
+                       modulators, inputs, outputs)  # fmt: skip

@@ -1,0 +1,422 @@
+"""FMI 2.0 co-simulation FMUs (issue 22, item 4): the controller chains and the plant (cage IM,
+shaft, averaged converter fed from the DC link) of a scenario as FMUs built from the generated C,
+checked with fmpy: ``validate_fmu`` clean; ``simulate_fmu`` of the controller with acdrive's
+logged plant outputs gives acdrive's commands exactly; the plant with acdrive's logged commands
+gives acdrive's plant outputs within 1e-9 of each signal's peak; both FMUs stepped by a small
+master equal acdrive's closed loop within the same bound. The comparisons run in a child process
+with ACDRIVE_STRICT_MATH=1, as the software-in-the-loop tests do (numba without fast-math, the C
+with -ffp-contract=off): the bound then holds with room (the agreement is to the bit here)."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from acdrive.scenarios._files import builtin_text
+
+fmpy = pytest.importorskip("fmpy", reason="fmpy is not installed (pip install 'acdrive[fmu]')")
+pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+
+#: im-foc-speed on the averaged inverter, shortened: the speed step at 5 ms, the brake at 50 ms
+_CHANGES = {
+    'model = "switching"': 'model = "averaged"',
+    "dead_time_s = 2e-6\n": "",
+    "device_drop_v = 1.5\n": "",
+    "duration = 1.2": "duration = 0.1",
+    "brake_profile = [[0.0, 0.0], [0.6, 0.0], [0.6, 2.77e-3]]": (
+        "brake_profile = [[0.0, 0.0], [0.05, 0.0], [0.05, 2.77e-3]]"
+    ),
+    "speed_rad_s_profile = [[0.0, 0.0], [0.05, 0.0], [0.05, 150.0]]": (
+        "speed_rad_s_profile = [[0.0, 0.0], [0.005, 0.0], [0.005, 150.0]]"
+    ),
+}
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    text = builtin_text("im-foc-speed")
+    for old, new in _CHANGES.items():
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    path = tmp_path_factory.mktemp("scenario") / "im-averaged.toml"
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def fmus(scenario, tmp_path_factory):
+    from acdrive.export._fmu_check import PARTS, scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    return scenario_fmus(load_scenario(scenario), PARTS, tmp_path_factory.mktemp("fmus"))
+
+
+def _fmu_check(*args: str) -> dict:
+    """``acdrive export fmu-check ... --json`` in a child process under strict math."""
+    env = dict(os.environ, ACDRIVE_STRICT_MATH="1")
+    code = "import sys; from acdrive.cli import main; raise SystemExit(main(sys.argv[1:]))"
+    done = subprocess.run(
+        [sys.executable, "-c", code, "export", "fmu-check", *args, "--json"],
+        check=False, capture_output=True, text=True, env=env, timeout=1200,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+@pytest.fixture(scope="module")
+def report(scenario):
+    return _fmu_check(scenario)
+
+
+def test_both_fmus_validate_clean(fmus):
+    from fmpy.validation import validate_fmu
+
+    for path in fmus.values():
+        assert validate_fmu(str(path)) == [], path.name
+
+
+def test_model_description_from_the_declarations(fmus):
+    """Causalities, units with their SI exponents, start values and descriptions as declared;
+    the two FMUs connect by equal names; the C sources travel inside."""
+    import zipfile
+
+    from fmpy import read_model_description
+
+    controller = read_model_description(str(fmus["controller"]))
+    plant = read_model_description(str(fmus["plant"]))
+    c_vars = {v.name: v for v in controller.modelVariables}
+    p_vars = {v.name: v for v in plant.modelVariables}
+    c_in = {n for n, v in c_vars.items() if v.causality == "input"}
+    p_out = {n for n, v in p_vars.items() if v.causality == "output"}
+    assert c_in == {"machine.i_s.re", "machine.i_s.im", "shaft.theta", "dc.v_dc"} <= p_out | c_in
+    assert c_in <= p_out
+    p_in = {n for n, v in p_vars.items() if v.causality == "input"}
+    assert p_in == {"latch.v_ref.re", "latch.v_ref.im"}
+    assert p_in <= {n for n, v in c_vars.items() if v.causality == "output"}
+    i_s = p_vars["machine.i_s.re"]
+    assert i_s.unit == "A" and "stator current" in i_s.description
+    units = {u.name: u.baseUnit for u in plant.unitDefinitions}
+    brake = units["N m s/rad"]  # N m s / rad = kg m^2 s^-1 rad^-1
+    assert (brake.kg, brake.m, brake.s, brake.rad) == (1, 2, -1, -1)
+    assert (units["V"].kg, units["V"].m, units["V"].s, units["V"].A) == (1, 2, -3, -1)
+    J = p_vars["shaft.J"]
+    assert J.causality == "parameter" and float(J.start) == 0.000711 and J.unit == "kg m^2"
+    assert plant.defaultExperiment.stepSize == "2e-05" or float(
+        plant.defaultExperiment.stepSize
+    ) == pytest.approx(2e-5, rel=0)
+    for path in fmus.values():
+        names = zipfile.ZipFile(path).namelist()
+        stem = path.stem
+        assert f"binaries/linux64/{stem}.so" in names
+        assert {f"sources/{stem}.c", f"sources/{stem}.h", f"sources/{stem}_fmi2.c"} <= set(names)
+
+
+def test_controller_fmu_gives_acdrives_commands_exactly(report):
+    assert report["strict_math"] is True
+    controller = report["controller"]["signals"]
+    assert set(controller) == {"latch.v_ref.re", "latch.v_ref.im"}
+    for column, row in controller.items():
+        assert row["max_difference"] == 0.0, (column, row)
+        assert row["peak"] > 100.0  # the speed step drives the voltage command (V)
+
+
+def test_dfim_voltage_mode_controller_fmu_is_exact(tmp_path):
+    """Bodson's DFIM chain (voltage command (20), synchroniser (28)) as an FMU: with acdrive's
+    logged plant outputs it gives acdrive's commands exactly over bodson-ramp with its ramp
+    compressed into 0.3 s (the DFIM plant has no C yet: the controller is checked alone)."""
+    text = builtin_text("bodson-ramp")
+    for old, new in {
+        "duration = 14.0": "duration = 0.3",
+        "speed_reference_rpm = [[0.0, 0.0], [0.5, 0.0], [9.5, 2700.0], [11.0, 2700.0], "
+        "[11.0, 0.0], [14.0, 0.0]]": "speed_reference_rpm = [[0.0, 0.0], [0.02, 0.0], "
+        "[0.3, 1500.0]]",
+    }.items():
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    path = tmp_path / "bodson-ramp.toml"
+    path.write_text(text)
+    report = _fmu_check(str(path), "--part", "controller")
+    assert report["plant"] is None and report["closed_loop"] is None
+    signals = report["controller"]["signals"]
+    assert {"controller0.v_r.re", "controller0.v_r.im", "sync0.closed"} <= set(signals)
+    for column, row in signals.items():
+        assert row["max_difference"] == 0.0, (column, row)
+    assert signals["controller0.v_r.re"]["peak"] > 1.0  # the rotor voltage command moved (V)
+
+
+def test_plant_fmu_open_loop_within_1e_9_of_peak(report):
+    plant = report["plant"]
+    assert report["plant_tolerance"] == 1e-9
+    assert plant["worst_ratio"] <= 1e-9, (plant["worst_signal"], plant["worst_ratio"])
+    signals = plant["signals"]
+    assert signals["shaft.w"]["peak"] > 50.0  # the shaft ran up (rad/s)
+    assert signals["machine.tau_e"]["peak"] > 0.5  # near the 0.83 N m torque limit and above
+    assert report["samples"] == 5000
+
+
+def test_closed_loop_within_the_plant_bound(report):
+    """The master's order is acdrive's within a sample, so the bound is the plant's."""
+    closed = report["closed_loop"]
+    assert closed["worst_ratio"] <= report["plant_tolerance"], closed["worst_signal"]
+    assert {"shaft.w", "latch.v_ref.re", "machine.i_s.im"} <= set(closed["signals"])
+
+
+def test_switching_inverter_plant_fmu_equals_acdrive(tmp_path):
+    """The switching SVPWM inverter (5 kHz carrier, 50 kHz control, 2 us dead time, 1.5 V
+    device drops) inside the plant FMU, its segments integrated within each communication step:
+    im-foc-speed as built in (speed step moved to 5 ms, brake to 50 ms, 0.06 s). Controller
+    exact; plant and closed loop within 1e-9 of each signal's peak. The inverter's own outputs
+    change within a period (acdrive logs the first segment, the FMU shows the last) and are
+    reported as not compared; the machine and shaft, driven by every segment, are compared."""
+    text = builtin_text("im-foc-speed")
+    for old, new in _CHANGES.items():
+        if "model" in old or "dead_time" in old or "device_drop" in old:
+            continue
+        text = text.replace(old, new.replace("duration = 0.1", "duration = 0.06"))
+    path = tmp_path / "im-switching.toml"
+    path.write_text(text)
+    report = _fmu_check(str(path))
+    assert "inverter.v.re" in report["not_compared"]
+    for column, row in report["controller"]["signals"].items():
+        assert row["max_difference"] == 0.0, (column, row)
+    for check in ("plant", "closed_loop"):
+        assert report[check]["worst_ratio"] <= 1e-9, (check, report[check]["worst_signal"])
+        assert "inverter.v.re" not in report[check]["signals"]
+    signals = report["plant"]["signals"]
+    assert signals["shaft.w"]["peak"] > 50.0 and signals["machine.i_s.re"]["peak"] > 0.5
+
+
+def test_rk6_plant_fmu_equals_acdrive(tmp_path):
+    """The plant FMU integrates with the scenario's method: rk6 (Butcher's seven stages), one
+    step per switching segment, on the switching-inverter drive over 0.02 s."""
+    text = builtin_text("im-foc-speed").replace(
+        "log_every = 5", 'log_every = 5\nintegrator = "rk6"\nsubsteps = 1', 1
+    )
+    for old, new in _CHANGES.items():
+        if "model" in old or "dead_time" in old or "device_drop" in old:
+            continue
+        text = text.replace(old, new.replace("duration = 0.1", "duration = 0.02"))
+    path = tmp_path / "im-rk6.toml"
+    path.write_text(text)
+    assert 'integrator = "rk6"' in text
+    report = _fmu_check(str(path))
+    for check in ("plant", "closed_loop"):
+        assert report[check]["worst_ratio"] <= 1e-9, (check, report[check]["worst_signal"])
+    assert report["plant"]["signals"]["shaft.w"]["peak"] > 1.0  # the step at 5 ms moved it
+
+
+def test_pm_drive_fmus_equal_acdrive():
+    """The PM drive (Ugalde-Loo (7)-(8) machine with its rotor phasor re-normalised at each
+    sample, shaft with the load step at 0.1 s, averaged converter; FOC with MTPA, speed PI):
+    controller exact, plant and closed loop within 1e-9 of each signal's peak, over 0.15 s."""
+    report = _fmu_check("pm-bly171d-speed", "--duration", "0.15")
+    assert report["strict_math"] is True
+    for column, row in report["controller"]["signals"].items():
+        assert row["max_difference"] == 0.0, (column, row)
+    for check in ("plant", "closed_loop"):
+        assert report[check]["worst_ratio"] <= 1e-9, (check, report[check]["worst_signal"])
+    signals = report["plant"]["signals"]
+    assert signals["shaft.w"]["peak"] > 250.0  # the speed step to 300 rad/s
+    assert signals["machine.theta"]["peak"] > 2 * 3.14159  # more than a turn: e_r re-normalised
+
+
+def _slave(path):
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    md = read_model_description(str(path))
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(path)),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="t")  # fmt: skip
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    return slave, {v.name: v.valueReference for v in md.modelVariables}
+
+
+def test_do_step_takes_whole_periods_only(fmus):
+    """A step of 3 periods runs 3 periods (the plant's state moves as three single steps do); a
+    step of 1.5 periods and a communication point that is not the FMU's time are refused."""
+    T_s = 2e-5
+    a, vr = _slave(fmus["plant"])
+    b, _ = _slave(fmus["plant"])
+    for s in (a, b):
+        s.exitInitializationMode()
+    a.doStep(0.0, 3 * T_s)
+    for k in range(3):
+        b.doStep(k * T_s, T_s)
+    refs = [vr["machine.i_s.re"], vr["machine.psi_r.re"], vr["shaft.w"]]
+    assert a.getReal(refs) == b.getReal(refs)
+    with pytest.raises(Exception, match=r"status 3 \(error\)"):
+        a.doStep(3 * T_s, 1.5 * T_s)
+    with pytest.raises(Exception, match=r"status 3 \(error\)"):
+        a.doStep(5 * T_s, T_s)
+    for s in (a, b):
+        s.terminate()
+        s.freeInstance()
+
+
+def test_a_parameter_set_before_the_start_is_used(fmus):
+    """The plant's fixed parameters are settable in initialisation: a rotor resistance set to
+    zero stops the rotor flux from decaying (dpsi_r/dt = (L_m R_r / L_r) i_s - (R_r / L_r -
+    j w_r) psi_r is zero at standstill with R_r = 0), while the exported R_r lets it move."""
+    T_s = 2e-5
+    fluxes = []
+    for R_r in (None, 0.0):
+        slave, vr = _slave(fmus["plant"])
+        if R_r is not None:
+            slave.setReal([vr["machine.R_r"]], [R_r])
+        slave.setReal([vr["latch.v_ref.re"], vr["latch.v_ref.im"]], [0.0, 0.0])
+        slave.exitInitializationMode()
+        start = slave.getReal([vr["machine.psi_r.re"]])[0]
+        slave.doStep(0.0, 100 * T_s)
+        fluxes.append((start, slave.getReal([vr["machine.psi_r.re"]])[0]))
+        with pytest.raises(Exception, match=r"status 3 \(error\)"):  # fixed: not settable any more
+            slave.setReal([vr["machine.R_r"]], [1.0])
+        slave.terminate()
+        slave.freeInstance()
+    (start, moved), (start0, held) = fluxes
+    assert start == start0 == pytest.approx(0.964)
+    assert held == start0
+    assert abs(moved - start) > 1e-4 * start
+
+
+def _cli(*args):
+    from acdrive.cli import main
+
+    return main(list(args))
+
+
+def test_cli_writes_both_and_keeps_users_folder(scenario, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert _cli("export", "fmu", scenario, "--out", str(out)) == 0
+    folder = out / "im-foc-speed-fmu"
+    assert sorted(p.name for p in folder.glob("*.fmu")) == [
+        "im_foc_speed_controller.fmu", "im_foc_speed_plant.fmu"]  # fmt: skip
+    assert _cli("export", "fmu", scenario, "--out", str(out), "--part", "plant") == 0  # replaced
+    assert sorted(p.name for p in folder.glob("*.fmu")) == ["im_foc_speed_plant.fmu"]
+    mine = out / "bodson-ramp-fmu"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    assert _cli("export", "fmu", "bodson-ramp", "--out", str(out), "--part", "controller") == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
+
+
+def test_cli_plant_without_c_is_one_line_and_writes_nothing(tmp_path, capsys):
+    """The DFIM's grid source has no C yet: one line naming the part and the rule, exit 2."""
+    assert _cli("export", "fmu", "bodson-ramp", "--part", "plant", "--out", str(tmp_path)) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "grid:" in err[0] and "has no C implementation" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_missing_compiler_is_one_line(scenario, tmp_path, capsys, monkeypatch):
+    from acdrive.export import _sil
+
+    monkeypatch.setattr(_sil.shutil, "which", lambda name: None)
+    assert _cli("export", "fmu", scenario, "--out", str(tmp_path / "out")) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "gcc was not found on PATH: building an FMU's binary" in err[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_feedthrough_across_the_boundary_is_refused():
+    """A plant part whose direct output reads a controller command at the same instant would
+    make the plant FMU feed its input through: refused, naming the part and the rule."""
+    from typing import ClassVar
+
+    from acdrive.core._parts import ContinuousPart, SampledPart
+    from acdrive.core._signals import Layout, real
+    from acdrive.errors import InputError
+    from acdrive.export._plant_source import to_plant_c
+    from acdrive.sim._system import System
+
+    class Command(SampledPart):
+        OUTPUTS = Layout(real("u", "V", "command"))
+        step = None
+
+    class Through(ContinuousPart):
+        STATES = Layout(real("x", "", "state"))
+        INPUTS = Layout(real("u", "V", "command"))
+        OUTPUTS = Layout(real("y", "V", "the command, passed through"))
+        DIRECT_FROM: ClassVar = ("u",)
+        DIRECT_OUTPUTS: ClassVar = ("y",)
+        state_outputs = rhs = direct_outputs = None
+
+    command, through = Command("command"), Through("through")
+    system = System.__new__(System)  # the wiring only: the kernels are never compiled here
+    system.continuous, system.modulators = [through], []
+    system.source_of = {("through", "u"): command.out.u}
+    with pytest.raises(InputError) as caught:
+        to_plant_c(system, 1e-4, 1)
+    message = str(caught.value)
+    assert "through" in message and "algebraic loop across the export boundary" in message
+    assert "\n" not in message
+
+
+def test_fmu_sources_build_warning_free_elsewhere(fmus, tmp_path):
+    """The sources inside each FMU are all another tool needs besides its FMI 2.0 headers:
+    they compile pedantic and warning-free (-Werror) from the unzipped folder alone."""
+    import zipfile
+
+    from acdrive.export._fmu import fmi_headers
+
+    for path in fmus.values():
+        folder = tmp_path / path.stem
+        zipfile.ZipFile(path).extractall(folder)
+        sources = sorted(str(p) for p in (folder / "sources").glob("*.c"))
+        done = subprocess.run(
+            ["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-fPIC",
+             "-shared", f"-I{fmi_headers()}", "-o", str(folder / "again.so"), *sources, "-lm"],
+            check=False, capture_output=True, text=True,
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+
+
+def test_unit_exponents_obey_the_si_relations():
+    """The SI exponents written into UnitDefinitions satisfy the relations between the units:
+    V A = W, Wb = V s, H = Wb / A, ohm = V / A, N m = J, var has the dimension of W."""
+    from acdrive.export._fmu import si_exponents
+
+    def product(*units):
+        total: dict[str, int] = {}
+        for unit in units:
+            for k, e in si_exponents(unit).items():
+                total[k] = total.get(k, 0) + e
+        return {k: e for k, e in total.items() if e}
+
+    assert product("V", "A") == si_exponents("W")
+    assert product("V", "s") == si_exponents("Wb")
+    assert product("Wb", "1/A") == si_exponents("H") == si_exponents("Wb/A")
+    assert si_exponents("ohm") == si_exponents("V/A") == si_exponents("Ohm")
+    assert product("N", "m") == si_exponents("J") == si_exponents("N m")
+    assert si_exponents("var") == si_exponents("W")
+    assert product("1/(V s)", "Wb") == {}
+    assert si_exponents("furlong/s") is None  # a word outside the table: no BaseUnit
+
+
+def test_two_chains_reading_one_plant_output_share_one_input(tmp_path):
+    """bodson-two-motors: two chains on one bus both read the grid voltage; the controller FMU
+    has it once as an input (validate_fmu refuses duplicate names) and both chains get it."""
+    import zipfile
+
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    from acdrive.export._fmu_check import scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    path = scenario_fmus(load_scenario("bodson-two-motors"), ("controller",), tmp_path)[
+        "controller"
+    ]
+    assert validate_fmu(str(path)) == []
+    names = [v.name for v in read_model_description(str(path)).modelVariables]
+    assert names.count("grid.v.re") == 1
+    glue = zipfile.ZipFile(path).read(f"sources/{path.stem}_fmi2.c").decode()
+    assert "_controller1.grid_v = m->in_bodson_two_motors_controller0.grid_v;" in glue
