@@ -40,7 +40,8 @@ COMMANDS = {
     "reproduce": "regenerate a reproduction report",
     "sweep": "run a scenario over a grid of parameter values",
     "identify": "cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
-    "export": "a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
+    "export": "a scenario's controller chains as C99 (export c), run in acdrive's loop (export "
+    "sil), their cost on a Cortex-M4F (export m4)",
     "parts": "list the built-in part kinds, or describe one (parameters, states, ports, units)",
     "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor (both "
     "sides timed in interleaved process-CPU-time windows, with spread and load) with both "

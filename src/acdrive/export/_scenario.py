@@ -12,6 +12,11 @@ from acdrive.export._c_source import CExport, to_c
 #: double build against acdrive (ACDRIVE_STRICT_MATH=1): each logged signal's largest
 #: difference over the run, as a fraction of that signal's peak (the issue's bound)
 DOUBLE_TOLERANCE = 1e-12
+#: float build: its worst ratio may be at most FLOAT_MARGIN times the worst ratio of the double
+#: build run with its inputs rounded to float32 at every sample (``float_bound``)
+FLOAT_MARGIN = 100.0
+#: float32's unit roundoff 2^-24: the bound is at least FLOAT_MARGIN of it
+FLOAT_UNIT_ROUNDOFF = 2.0**-24
 
 
 def c_name(scenario_name: str) -> str:
@@ -54,12 +59,40 @@ def shortened(setup, duration: float | None):
     return dataclasses.replace(setup, duration=float(duration))
 
 
+def _worst(reference, other) -> tuple[dict, str]:
+    from acdrive.export._sil import deviation
+
+    signals = {}
+    for column, (difference, peak) in deviation(reference, other).items():
+        ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
+        signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
+    return signals, max(signals, key=lambda c: signals[c]["ratio"])
+
+
+def float_bound(input_rounding_ratio: float) -> float:
+    """The bound of the float build's worst ratio (docs/guide/export.md, "The float bound").
+
+    The float build rounds its inputs to float32 and then every operation of its step, each
+    rounding of the same relative size (2^-24). ``input_rounding_ratio`` is what the first of
+    those roundings alone does to the closed loop: the worst ratio of the double build whose
+    inputs are rounded to float32 at every sample, against acdrive's run. A stable loop maps a
+    perturbation in proportion to its size, and n roundings in sequence add at most about n
+    times one (Higham's gamma_n = n u / (1 - n u)); the chains' steps do on the order of a
+    hundred float operations (their instruction counts on the Cortex-M4, ``export m4``), hence
+    FLOAT_MARGIN = 100. An engineering bound, stated, not a theorem: a float build beyond it
+    has a numerical weakness the double build hides. Never below FLOAT_MARGIN * 2^-24."""
+    return FLOAT_MARGIN * max(input_rounding_ratio, FLOAT_UNIT_ROUNDOFF)
+
+
 def compare_in_loop(setup, real: str = "double") -> dict:
     """Run ``setup`` with acdrive's compiled loop and with its exported C controller in the loop
     (``export._sil``), every output logged at every sample; per signal the largest difference
-    and the peak, the event counts of both, and the worst ratio."""
+    and the peak, the event counts of both, and the worst ratio. For ``real="float"`` also the
+    double build with float32-rounded inputs (``input_rounding_ratio``), the bound derived from
+    it (``float_bound``) and whether the float build is within it; beyond it an InputError
+    naming the bound (the issue's bad-input rule, exit 2)."""
     from acdrive._jit import STRICT_MATH
-    from acdrive.export._sil import deviation, find_compiler, run_in_loop
+    from acdrive.export._sil import find_compiler, run_in_loop
 
     find_compiler()  # before any work
     drive, initial, held = built(setup)
@@ -69,12 +102,8 @@ def compare_in_loop(setup, real: str = "double") -> dict:
     reference = compiled.run(setup.duration, setup.sample_time, setup.substeps, **kwargs)
     in_loop = run_in_loop(compiled, export, setup.duration, setup.sample_time, setup.substeps,
                           real=real, **kwargs)  # fmt: skip
-    signals = {}
-    for column, (difference, peak) in deviation(reference, in_loop).items():
-        ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
-        signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
-    worst = max(signals, key=lambda c: signals[c]["ratio"])
-    return {
+    signals, worst = _worst(reference, in_loop)
+    report = {
         "scenario": setup.name,
         "duration": setup.duration,
         "real": real,
@@ -87,3 +116,20 @@ def compare_in_loop(setup, real: str = "double") -> dict:
         "events_acdrive": reference.events,
         "events_c": in_loop.events,
     }
+    if real == "float":
+        rounded = run_in_loop(compiled, export, setup.duration, setup.sample_time,
+                              setup.substeps, real="double", float_inputs=True, **kwargs)  # fmt: skip
+        rounded_signals, rounded_worst = _worst(reference, rounded)
+        input_rounding = rounded_signals[rounded_worst]["ratio"]
+        bound = float_bound(input_rounding)
+        report.update(input_rounding_ratio=input_rounding, input_rounding_signal=rounded_worst,
+                      float_bound=bound, float_margin=FLOAT_MARGIN,
+                      within_float_bound=report["worst_ratio"] <= bound)  # fmt: skip
+        if not report["within_float_bound"]:
+            raise InputError(
+                "float build",
+                f"{worst} deviates by {report['worst_ratio']:.3e} of its peak, beyond the float "
+                f"bound {bound:.3e} ({FLOAT_MARGIN:g} x the {input_rounding:.3e} of the double "
+                "build with float32-rounded inputs)",
+            )
+    return report
