@@ -78,6 +78,9 @@ def test_dfim_modes_and_ifoc_on_the_board(capsys):
         )
         assert row["object"]["text"] > row["functions"][f"{row['chain']}_step"] > 0
         assert row["image"]["text"] > row["object"]["text"]
+        # the chain's RAM is in the caller's structs: the object itself has none
+        assert row["object"]["data"] == row["object"]["bss"] == 0
+        assert all(v > 0 and v % 4 == 0 for v in row["structs"].values())
         # the mean step lies within the shortest and longest single windows (to one tick)
         assert row["shortest_step_window"] - 40 <= n <= row["longest_step_window"] + 40
     assert report["cases"][0]["samples"] == 1500  # 0.3 s at 5 kHz

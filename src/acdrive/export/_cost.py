@@ -88,7 +88,8 @@ def _case_setup(target: str, duration: float | None):
 
 def replay_inputs(setup, drive, initial, held, export) -> tuple[list[bytes], int]:
     """Each chain's inputs at every sample of ``setup``'s run with the C chain (double) in the
-    loop, as float32 structs (the float build's layout: every member a real or a complex)."""
+    loop, as the double build's structs, one after another (every member a real or a complex,
+    so ``as_float32`` gives the float build's)."""
     from acdrive.export._sil import run_in_loop
 
     for model in export.chains:
@@ -102,35 +103,47 @@ def replay_inputs(setup, drive, initial, held, export) -> tuple[list[bytes], int
 
     run_in_loop(drive.system.compile(), export, setup.duration, setup.sample_time,
                 setup.substeps, initial=initial, held=held, on_inputs=log)  # fmt: skip
-    replays = [np.frombuffer(b"".join(rows), dtype=np.float64).astype(np.float32).tobytes()
-               for rows in captured]  # fmt: skip
-    return replays, len(captured[0])
+    return [b"".join(rows) for rows in captured], len(captured[0])
+
+
+def as_float32(replay: bytes) -> bytes:
+    """Double inputs structs (all members real) as the float build's: each value rounded."""
+    return np.frombuffer(replay, dtype=np.float64).astype(np.float32).tobytes()
+
+
+def case_export(target: str, duration: float | None = None):
+    """(setup, drive, initial, held, export) of a case or a scenario of one run, shortened."""
+    from acdrive.export._c_source import to_c
+    from acdrive.export._scenario import built, c_name
+
+    case, setup = _case_setup(target, duration)
+    drive, initial, held = built(setup)
+    name = c_name(target if target in CASES else setup.name)
+    export = to_c(drive.system, setup.sample_time, initial, held, name=name,
+                  description=f"scenario {setup.name}")  # fmt: skip
+    return case, setup, drive, initial, held, export
 
 
 def measure_case(target: str, duration: float | None = None, folder: Path | None = None) -> dict:
     """Instructions per step and sizes of one case (a name of CASES or a scenario of one run)
     on the board model; the files are built in ``folder`` (default: a temporary folder)."""
-    from acdrive.export._c_source import to_c
-    from acdrive.export._scenario import built, c_name
     from acdrive.export._sil import find_compiler
     from acdrive.export._target import chain_on_board, find_cross_tools
 
     find_compiler()
     tools = find_cross_tools()
-    case, setup = _case_setup(target, duration)
+    case, setup, drive, initial, held, export = case_export(target, duration)
     samples = int(round(setup.duration / setup.sample_time))
     if samples > MAX_SAMPLES:
         raise InputError("--duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
-    drive, initial, held = built(setup)
-    name = c_name(target if target in CASES else setup.name)
-    export = to_c(drive.system, setup.sample_time, initial, held, name=name,
-                  description=f"scenario {setup.name}")  # fmt: skip
     replays, samples = replay_inputs(setup, drive, initial, held, export)
     chains = []
     with tempfile.TemporaryDirectory(prefix="acdrive-m4-") as scratch:
         where = Path(folder) if folder is not None else Path(scratch)
         for model, replay in zip(export.chains, replays, strict=True):
-            chains.append(chain_on_board(export, model, replay, samples, where, tools))
+            chains.append(
+                chain_on_board(export, model, as_float32(replay), samples, where, tools)
+            )
     rate = 1.0 / setup.sample_time
     for row in chains:
         n = row["instructions_per_step"]
@@ -208,8 +221,9 @@ def report_lines(report: dict) -> list[str]:
             )
             lines.append(
                 f"    size: object text {size['text']} B (step function {step} B), data "
-                f"{size['data']} B, bss {size['bss']} B; linked image with libm text "
-                f"{row['image']['text']} B"
+                f"{size['data']} B, bss {size['bss']} B; linked image (with libm, libc, startup and "
+                f"the measuring loop) code {row['image']['text']} B; structs "
+                + ", ".join(f"{k} {v} B" for k, v in row["structs"].items())
             )
     vc = report.get("voltage_vs_current")
     if vc:

@@ -146,6 +146,7 @@ SECTIONS
 {
     .text : { KEEP(*(.vectors)) *(.text*) *(.rodata*) . = ALIGN(4); } > FLASH
     .ARM.exidx : { *(.ARM.exidx*) } > FLASH
+    .acd_replay : { KEEP(*(.acd_replay)) } > FLASH /* the measurement's inputs, not code */
     _sidata = LOADADDR(.data);
     .data : { _sdata = .; *(.data*) . = ALIGN(4); _edata = .; } > RAM AT > FLASH
     .bss (NOLOAD) : { _sbss = .; *(.bss*) *(COMMON) . = ALIGN(4); _ebss = .; end = .; } > RAM
@@ -257,6 +258,23 @@ def sizes(path: Path, tools: dict) -> dict[str, int]:
     return {"text": text, "data": data, "bss": bss}
 
 
+def image_sizes(elf: Path, tools: dict) -> dict[str, int]:
+    """Bytes of a linked image by what they are (``arm-none-eabi-size -A``): code and constants
+    (``.text``, ``.ARM.exidx``: the controller, libm, libc, the frame), initialised and zeroed
+    RAM; the replayed inputs (``.acd_replay``) are left out."""
+    out = _run([tools["arm-none-eabi-size"], "-A", str(elf)], f"sizing {elf.name}")
+    section = {}
+    for line in out.splitlines():
+        fields = line.split()
+        if len(fields) == 3 and fields[0].startswith(".") and fields[1].isdigit():
+            section[fields[0]] = int(fields[1])
+    return {
+        "text": section.get(".text", 0) + section.get(".ARM.exidx", 0),
+        "data": section.get(".data", 0),
+        "bss": section.get(".bss", 0),
+    }
+
+
 def symbol_sizes(obj: Path, tools: dict) -> dict[str, int]:
     """Bytes of each function of an object (from its disassembly's symbol table)."""
     objdump = tools["arm-none-eabi-objdump"]
@@ -347,6 +365,20 @@ def _chain_measure(export, model, samples: int) -> str:
     return measure_source(f'#include "{export.header_name}"', decls, setup, call, samples)
 
 
+def struct_sizes(export, model) -> dict[str, int]:
+    """Bytes of the chain's four structs in the float build (the RAM the firmware gives it:
+    parameters, state, inputs, outputs), from the ctypes mirror of the same model; every
+    member is 4-byte (float, uint32_t, int), laid out alike by the host and the Arm EABI."""
+    import ctypes
+
+    from acdrive.export._sil import ctypes_mirror
+
+    types = ctypes_mirror(export, "float")
+    c = model.chain.name
+    return {role: ctypes.sizeof(types[f"{c}_{role}"]) for role in
+            ("params", "state", "inputs", "outputs") if f"{c}_{role}" in types}  # fmt: skip
+
+
 def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, tools: dict) -> dict:
     """Cross-compile the float build of ``export`` (the chain ``model``), size it, and count the
     instructions of its step over ``samples`` replayed inputs (``replay``: the inputs structs,
@@ -358,7 +390,7 @@ def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, too
     chain_obj = compile_object(folder / export.source_name, folder / f"{export.name}.o", tools)
     (folder / f"replay_{c}.bin").write_bytes(replay)
     (folder / f"replay_{c}.s").write_text(
-        "    .section .rodata.acd_replay, \"a\"\n    .balign 4\n    .global acd_replay\n"
+        "    .section .acd_replay, \"a\"\n    .balign 4\n    .global acd_replay\n"
         f"acd_replay:\n    .incbin \"{folder / f'replay_{c}.bin'}\"\n"
     )
     replay_obj = compile_object(folder / f"replay_{c}.s", folder / f"replay_{c}.o", tools, ())
@@ -367,10 +399,11 @@ def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, too
     elf = link([measure_obj, chain_obj, replay_obj], folder / f"{c}.elf", folder, tools)
     functions = symbol_sizes(chain_obj, tools)
     return {
+        "structs": struct_sizes(export, model),
         "chain": c,
         "object": sizes(chain_obj, tools),
         "functions": {name: functions[name] for name in
                       (f"{c}_step", f"{c}_set_params", f"{c}_reset") if name in functions},
-        "image": sizes(elf, tools),
+        "image": image_sizes(elf, tools),
         **instructions_per_step(run_on_board(elf, tools)),
     }  # fmt: skip
