@@ -1,5 +1,6 @@
-"""``acdrive export``: a scenario's controller chains as C99 (``export c``), and that C run in
-acdrive's loop against acdrive's own run (``export sil``); docs/guide/export.md."""
+"""``acdrive export``: a scenario's controller chains as C99 (``export c``), that C run in
+acdrive's loop against acdrive's own run (``export sil``), and its float build's size and
+instructions per step on a Cortex-M4F board model (``export m4``); docs/guide/export.md."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from __future__ import annotations
 def register(subparsers):
     p = subparsers.add_parser(
         "export",
-        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
+        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export "
+        "sil), their cost on a Cortex-M4F (export m4)",
     )
     sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil,m4}")
     c = sub.add_parser("c", help="write the C99 header and source of a scenario's controller")
