@@ -133,7 +133,7 @@ def measure_case(target: str, duration: float | None = None, folder: Path | None
     find_compiler()
     tools = find_cross_tools()
     case, setup, drive, initial, held, export = case_export(target, duration)
-    samples = int(round(setup.duration / setup.sample_time))
+    samples = round(setup.duration / setup.sample_time)
     if samples > MAX_SAMPLES:
         raise InputError("--duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
     replays, samples = replay_inputs(setup, drive, initial, held, export)
@@ -141,9 +141,7 @@ def measure_case(target: str, duration: float | None = None, folder: Path | None
     with tempfile.TemporaryDirectory(prefix="acdrive-m4-") as scratch:
         where = Path(folder) if folder is not None else Path(scratch)
         for model, replay in zip(export.chains, replays, strict=True):
-            chains.append(
-                chain_on_board(export, model, as_float32(replay), samples, where, tools)
-            )
+            chains.append(chain_on_board(export, model, as_float32(replay), samples, where, tools))
     rate = 1.0 / setup.sample_time
     for row in chains:
         n = row["instructions_per_step"]
@@ -177,10 +175,12 @@ def target_report(targets: list[str], duration: float | None = None,
     report = {
         "board": t.BOARD,
         "flags": list(t.M4_FLAGS),
-        "method": (f"qemu-system-arm -icount shift=0 (1 ns of virtual time per instruction), "
-                   f"SysTick at the board's {t.BOARD_CLOCK_HZ / 1e6:g} MHz "
-                   f"({t.INSTRUCTIONS_PER_TICK} instructions per tick), the step over the "
-                   "replayed samples with and without the call"),  # fmt: skip
+        "method": (
+            f"qemu-system-arm -icount shift=0 (1 ns of virtual time per instruction), "
+            f"SysTick at the board's {t.BOARD_CLOCK_HZ / 1e6:g} MHz "
+            f"({t.INSTRUCTIONS_PER_TICK} instructions per tick), the step over the "
+            "replayed samples with and without the call"
+        ),
         "core_clock_hz": CORE_CLOCK_HZ,
         "cases": cases,
     }
@@ -201,8 +201,10 @@ def report_lines(report: dict) -> list[str]:
     lines = [
         f"Float build on QEMU {report['board']} (Cortex-M4F), {' '.join(report['flags'])}",
         f"counted: {report['method']}",
-        f"fractions: of a {rates} period on a {CORE_CLOCK_HZ / 1e6:g} MHz core at one "
-        "instruction per cycle (an instruction count, not a cycle count)",
+        (
+            f"fractions: of a {rates} period on a {CORE_CLOCK_HZ / 1e6:g} MHz core at one "
+            "instruction per cycle (an instruction count, not a cycle count)"
+        ),
     ]
     for case in report["cases"]:
         lines.append(f"{case['case']}: {case['what']} ({case['scenario']}"

@@ -352,7 +352,7 @@ def known_loop_instructions(iterations: int, folder: Path, samples: int = 1000) 
 
 def _chain_measure(export, model, samples: int) -> str:
     c = model.chain.name
-    out = f", &acd_outputs" if model.outputs else ""
+    out = ", &acd_outputs" if model.outputs else ""
     decls = "\n".join([
         f"extern const {c}_inputs acd_replay[ACD_SAMPLES]; /* replay.s: the logged inputs */",
         f"static {c}_params acd_params;",
@@ -390,8 +390,8 @@ def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, too
     chain_obj = compile_object(folder / export.source_name, folder / f"{export.name}.o", tools)
     (folder / f"replay_{c}.bin").write_bytes(replay)
     (folder / f"replay_{c}.s").write_text(
-        "    .section .acd_replay, \"a\"\n    .balign 4\n    .global acd_replay\n"
-        f"acd_replay:\n    .incbin \"{folder / f'replay_{c}.bin'}\"\n"
+        '    .section .acd_replay, "a"\n    .balign 4\n    .global acd_replay\n'
+        f'acd_replay:\n    .incbin "{folder / f"replay_{c}.bin"}"\n'
     )
     replay_obj = compile_object(folder / f"replay_{c}.s", folder / f"replay_{c}.o", tools, ())
     (folder / f"measure_{c}.c").write_text(_chain_measure(export, model, samples))
