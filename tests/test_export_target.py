@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from acdrive.export._target import TOOLS, known_loop_instructions
+from acdrive.export._target import TOOLS, known_loop_instructions, statement_instructions
 
 ROOT = Path(__file__).resolve().parents[1]
 MISSING = [tool for tool in TOOLS if shutil.which(tool) is None]
@@ -143,3 +143,17 @@ def test_ci_runs_the_install_script_before_pytest():
     ci = (ROOT / ".ci" / "run").read_text()
     assert ci.index("scripts/install-cross-tools.sh") < ci.index("\npytest")
     assert "scripts/install-cross-tools.sh" in (ROOT / "README.md").read_text()
+
+
+@needs_cross_tools
+def test_newlib_sine_of_a_large_angle_is_expensive(tmp_path):
+    """Why the PM chain's count grows as the rotor turns (docs/guide/export.md): newlib's sinf
+    reduces an argument beyond 2^7 pi/2 (about 201 rad) the long way."""
+    counts = {}
+    for x in ("1.0f", "300.0f"):
+        folder = tmp_path / x
+        folder.mkdir()
+        decls = f"static volatile float acd_x = {x}, acd_y;"
+        counts[x] = statement_instructions("acd_y = sinf(acd_x);", decls, folder)
+    assert 20 < counts["1.0f"] < 300
+    assert counts["300.0f"] > 10 * counts["1.0f"]

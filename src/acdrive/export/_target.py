@@ -407,3 +407,16 @@ def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, too
         "image": image_sizes(elf, tools),
         **instructions_per_step(run_on_board(elf, tools)),
     }  # fmt: skip
+
+
+def statement_instructions(statement: str, decls: str, folder: Path, samples: int = 200) -> float:
+    """Instructions of one C ``statement`` (with ``<math.h>`` and ``decls``), float build flags,
+    measured by the same loop as a controller step (the call overhead included)."""
+    tools = find_cross_tools()
+    folder = Path(folder)
+    (folder / "statement.c").write_text(
+        measure_source("#include <math.h>", decls, "", statement, samples)
+    )
+    obj = compile_object(folder / "statement.c", folder / "statement.o", tools)
+    elf = link([obj], folder / "statement.elf", folder, tools)
+    return instructions_per_step(run_on_board(elf, tools))["instructions_per_step"]
