@@ -157,3 +157,28 @@ def test_newlib_sine_of_a_large_angle_is_expensive(tmp_path):
         counts[x] = statement_instructions("acd_y = sinf(acd_x);", decls, folder)
     assert 20 < counts["1.0f"] < 300
     assert counts["300.0f"] > 10 * counts["1.0f"]
+
+
+@needs_cross_tools
+def test_a_failing_target_leaves_nothing_in_the_output_folder(tmp_path, capsys):
+    """The second target is a scenario comparing two runs (refused in one line, exit 2) after
+    the first was built: the staged files are discarded, no m4 folder appears."""
+    out = tmp_path / "out"
+    assert _cli("export", "m4", "ifoc-pi", "bodson-step", "--duration", "0.005",
+                "--out", str(out)) == 2  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "compares 2 runs" in err[0]
+    assert not (out / "m4").exists()
+    assert not out.exists() or not any(out.iterdir())
+
+
+@needs_cross_tools
+def test_a_scenario_of_one_run_is_a_target(capsys):
+    """A scenario that is not one of the cases: replayed over the given seconds, named after
+    the scenario."""
+    assert _cli("export", "m4", "bodson-ramp", "--duration", "0.01", "--json") == 0
+    (case,) = json.loads(capsys.readouterr().out)["cases"]
+    assert case["scenario"] == "bodson-ramp" and case["run"] is None
+    assert case["samples"] == 50  # 0.01 s at 5 kHz
+    assert case["chains"][0]["chain"] == "bodson_ramp"
+    assert case["chains"][0]["instructions_per_step"] > 50

@@ -80,7 +80,8 @@ def _case_setup(target: str, duration: float | None):
     case = CASES.get(target)
     if case is None:
         setup = load_scenario(target)
-        case = Case(setup.name, None, min(setup.duration, DEFAULT_SECONDS), setup.description)
+        what = getattr(setup, "description", "") or f"scenario {setup.name}"
+        case = Case(setup.name, None, min(setup.duration, DEFAULT_SECONDS), what)
     else:
         setup = one_run(load_scenario(case.scenario), case.run)
     return case, shortened(setup, duration if duration is not None else case.duration)
