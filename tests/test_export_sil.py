@@ -176,3 +176,34 @@ def test_two_motors_two_chains():
     report = _sil("bodson-two-motors", "--duration", "0.2")
     _check_equal(report)
     assert report["chains"] == ["bodson_two_motors0", "bodson_two_motors1"]
+
+
+def test_no_limit_stand_ins_are_left_out_of_a_float_comparison():
+    """Where acdrive and the double build hold 1e300 for "no limit" (the PM drive's flux limit
+    at standstill), the float build holds float32(1e38): such samples are left out, a sample
+    where only one side is "no limit" is the difference it is."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from acdrive.export._prelude import FLOAT_NO_LIMIT, PRELUDE
+    from acdrive.export._sil import deviation
+
+    assert f"ACD_R({FLOAT_NO_LIMIT!r})" in PRELUDE
+    held = float(np.float32(FLOAT_NO_LIMIT))
+    reference = SimpleNamespace(columns=["psi"], data=np.array([[1e300], [2.0], [4.0]]))
+    in_float = SimpleNamespace(columns=["psi"], data=np.array([[held], [2.5], [4.0]]))
+    assert deviation(reference, in_float, held) == {"psi": (0.5, 4.0)}
+    assert deviation(reference, in_float)["psi"][1] == 1e300  # without: the stand-in is the peak
+    finite = SimpleNamespace(columns=["psi"], data=np.array([[3.0], [2.0], [4.0]]))
+    assert deviation(reference, finite, held)["psi"][0] == 1e300 - 3.0
+
+
+def test_pm_float_build_within_its_bound():
+    """The PM drive's float build from standstill (flux limit "no limit" there) through the
+    speed step: within its derived bound, the flux limit compared where it is finite."""
+    report = _sil("pm-bly171d-svpwm", "--duration", "0.1", "--real", "float")
+    assert report["within_float_bound"] is True
+    assert report["worst_ratio"] <= report["float_bound"]
+    assert report["signals"]["torque_reference.psi_max"]["ratio"] < 1e-4
+    assert report["signals"]["speed.w"]["peak"] > 100.0

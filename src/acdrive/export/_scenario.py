@@ -6,8 +6,11 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+
 from acdrive.errors import InputError
 from acdrive.export._c_source import CExport, to_c
+from acdrive.export._prelude import FLOAT_NO_LIMIT
 
 #: double build against acdrive (ACDRIVE_STRICT_MATH=1): each logged signal's largest
 #: difference over the run, as a fraction of that signal's peak (the issue's bound)
@@ -59,11 +62,11 @@ def shortened(setup, duration: float | None):
     return dataclasses.replace(setup, duration=float(duration))
 
 
-def _worst(reference, other) -> tuple[dict, str]:
+def _worst(reference, other, no_limit: float | None = None) -> tuple[dict, str]:
     from acdrive.export._sil import deviation
 
     signals = {}
-    for column, (difference, peak) in deviation(reference, other).items():
+    for column, (difference, peak) in deviation(reference, other, no_limit).items():
         ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
         signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
     return signals, max(signals, key=lambda c: signals[c]["ratio"])
@@ -102,7 +105,9 @@ def compare_in_loop(setup, real: str = "double") -> dict:
     reference = compiled.run(setup.duration, setup.sample_time, setup.substeps, **kwargs)
     in_loop = run_in_loop(compiled, export, setup.duration, setup.sample_time, setup.substeps,
                           real=real, **kwargs)  # fmt: skip
-    signals, worst = _worst(reference, in_loop)
+    # the float build's stand-in as it holds it: 1e38 rounded to float32 (just below 1e38)
+    no_limit = float(np.float32(FLOAT_NO_LIMIT)) if real == "float" else None
+    signals, worst = _worst(reference, in_loop, no_limit)
     report = {
         "scenario": setup.name,
         "duration": setup.duration,
@@ -119,7 +124,7 @@ def compare_in_loop(setup, real: str = "double") -> dict:
     if real == "float":
         rounded = run_in_loop(compiled, export, setup.duration, setup.sample_time,
                               setup.substeps, real="double", float_inputs=True, **kwargs)  # fmt: skip
-        rounded_signals, rounded_worst = _worst(reference, rounded)
+        rounded_signals, rounded_worst = _worst(reference, rounded, no_limit)
         input_rounding = rounded_signals[rounded_worst]["ratio"]
         bound = float_bound(input_rounding)
         report.update(input_rounding_ratio=input_rounding, input_rounding_signal=rounded_worst,

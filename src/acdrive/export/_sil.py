@@ -227,10 +227,19 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
                             0.0, n_steps)  # fmt: skip
 
 
-def deviation(reference, other) -> dict[str, tuple[float, float]]:
-    """Per logged signal: (largest |difference| over the run, peak |value| of the reference)."""
+def deviation(reference, other, no_limit: float | None = None) -> dict[str, tuple[float, float]]:
+    """Per logged signal: (largest |difference| over the run, peak |value| of the reference).
+    ``no_limit``: samples where both runs are at or beyond it in magnitude (each holding its
+    build's "no limit" stand-in, ``_prelude.FLOAT_NO_LIMIT`` in float, 1e300 in double) are left
+    out of both; a sample where only one of them is counts as the difference it is."""
     out = {}
     for j, name in enumerate(reference.columns):
         a, b = reference.data[:, j], other.data[:, j]
+        if no_limit is not None:
+            kept = ~((np.abs(a) >= no_limit) & (np.abs(b) >= no_limit))
+            a, b = a[kept], b[kept]
+        if a.size == 0:
+            out[name] = (0.0, 0.0)
+            continue
         out[name] = (float(np.max(np.abs(a - b))), float(np.max(np.abs(a))))
     return out
