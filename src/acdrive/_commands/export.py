@@ -83,7 +83,10 @@ def run_sil(args) -> int:
         print(f"double build within {DOUBLE_TOLERANCE:g} of each signal's peak: "
               f"{'yes' if ok else 'no'}")  # fmt: skip
     else:
-        print(f"float build within its bound {report['float_bound']:.3e} "
+        left_out = ", ".join(report["modulator_signals_left_out"]) or "none"
+        print(f"float build: worst {report['bounded_worst_signal']} at "
+              f"{report['bounded_worst_ratio']:.3e} of its peak (modulators' switched outputs "
+              f"left out: {left_out}), within its bound {report['float_bound']:.3e} "
               f"({report['float_margin']:g} x {report['input_rounding_ratio']:.3e}, the double "
               f"build with float32-rounded inputs, worst {report['input_rounding_signal']}): yes")  # fmt: skip
     return 0

@@ -122,19 +122,34 @@ def compare_in_loop(setup, real: str = "double") -> dict:
         "events_c": in_loop.events,
     }
     if real == "float":
+        # the modulators' outputs switch: a carrier comparison that flips one sample earlier
+        # moves a switched voltage by its full swing (an event, counted apart), so the bound is
+        # on every other signal
+        modulated = tuple(f"{m.name}." for m in drive.system.modulators)
         rounded = run_in_loop(compiled, export, setup.duration, setup.sample_time,
                               setup.substeps, real="double", float_inputs=True, **kwargs)  # fmt: skip
-        rounded_signals, rounded_worst = _worst(reference, rounded, no_limit)
+        rounded_signals, _ = _worst(reference, rounded, no_limit)
+        rounded_worst = _worst_of(rounded_signals, modulated)
         input_rounding = rounded_signals[rounded_worst]["ratio"]
         bound = float_bound(input_rounding)
+        bounded = _worst_of(signals, modulated)
+        ratio = signals[bounded]["ratio"]
         report.update(input_rounding_ratio=input_rounding, input_rounding_signal=rounded_worst,
                       float_bound=bound, float_margin=FLOAT_MARGIN,
-                      within_float_bound=report["worst_ratio"] <= bound)  # fmt: skip
+                      bounded_worst_signal=bounded, bounded_worst_ratio=ratio,
+                      modulator_signals_left_out=[m.name for m in drive.system.modulators],
+                      within_float_bound=ratio <= bound)  # fmt: skip
         if not report["within_float_bound"]:
             raise InputError(
                 "float build",
-                f"{worst} deviates by {report['worst_ratio']:.3e} of its peak, beyond the float "
-                f"bound {bound:.3e} ({FLOAT_MARGIN:g} x the {input_rounding:.3e} of the double "
-                "build with float32-rounded inputs)",
+                f"{bounded} deviates by {ratio:.3e} of its peak, beyond the float bound "
+                f"{bound:.3e} ({FLOAT_MARGIN:g} x the {input_rounding:.3e} of the double build "
+                "with float32-rounded inputs)",
             )
     return report
+
+
+def _worst_of(signals: dict, left_out: tuple[str, ...]) -> str:
+    """The signal of largest ratio among those whose name starts with none of ``left_out``."""
+    kept = [c for c in signals if not c.startswith(left_out)] or list(signals)
+    return max(kept, key=lambda c: signals[c]["ratio"])

@@ -350,11 +350,13 @@ def known_loop_instructions(iterations: int, folder: Path, samples: int = 1000) 
     return {**instructions_per_step(run_on_board(elf, tools)), "mnemonics": mnemonics}
 
 
-def _chain_measure(export, model, samples: int) -> str:
+def _chain_measure(export, model, samples: int, sample_bytes: int) -> str:
     c = model.chain.name
     out = ", &acd_outputs" if model.outputs else ""
     decls = "\n".join([
         f"extern const {c}_inputs acd_replay[ACD_SAMPLES]; /* replay.s: the logged inputs */",
+        "/* the replayed file holds one inputs struct per sample: the layouts must agree */",
+        f"typedef char acd_replay_layout[(sizeof({c}_inputs) == {sample_bytes}u) ? 1 : -1];",
         f"static {c}_params acd_params;",
         f"static {c}_state acd_state;",
         *([f"static {c}_outputs acd_outputs;"] if model.outputs else []),
@@ -394,7 +396,11 @@ def chain_on_board(export, model, replay: bytes, samples: int, folder: Path, too
         f'acd_replay:\n    .incbin "{folder / f"replay_{c}.bin"}"\n'
     )
     replay_obj = compile_object(folder / f"replay_{c}.s", folder / f"replay_{c}.o", tools, ())
-    (folder / f"measure_{c}.c").write_text(_chain_measure(export, model, samples))
+    if samples <= 0 or len(replay) % samples:
+        raise RuntimeError(f"{c}: {len(replay)} bytes of inputs are not {samples} samples")
+    (folder / f"measure_{c}.c").write_text(
+        _chain_measure(export, model, samples, len(replay) // samples)
+    )
     measure_obj = compile_object(folder / f"measure_{c}.c", folder / f"measure_{c}.o", tools)
     elf = link([measure_obj, chain_obj, replay_obj], folder / f"{c}.elf", folder, tools)
     functions = symbol_sizes(chain_obj, tools)
