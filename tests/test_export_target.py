@@ -109,11 +109,15 @@ def test_out_folder_keeps_the_built_files(tmp_path, capsys):
 @pytest.mark.parametrize("tool", ["arm-none-eabi-gcc", "qemu-system-arm"])
 def test_missing_tool_is_one_line(tmp_path, capsys, monkeypatch, tool):
     """A missing cross tool: one line naming it and the script that installs it, exit 2, before
-    any run, and no output folder."""
+    any run, and no output folder (the other tools are taken as present: nothing runs)."""
     from acdrive.export import _target
 
     real_which = shutil.which
-    monkeypatch.setattr(_target.shutil, "which", lambda n: None if n == tool else real_which(n))
+
+    def which(name):
+        return None if name == tool else (real_which(name) or f"/usr/bin/{name}")
+
+    monkeypatch.setattr(_target.shutil, "which", which)
     out = tmp_path / "out"
     assert _cli("export", "m4", "ifoc-20", "--out", str(out)) == 2
     err = capsys.readouterr().err.strip().splitlines()
