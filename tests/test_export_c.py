@@ -179,3 +179,13 @@ def test_missing_compiler_is_one_line(tmp_path, capsys, monkeypatch):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "gcc was not found on PATH" in err[0]
     assert _cli("export", "c", "bodson-ramp", "--out", str(tmp_path / "out")) == 0
+
+
+def test_a_list_of_parts_is_refused_in_one_line():
+    """to_c takes a System: a list of parts has no wiring (which plant outputs the chain reads,
+    which commands it gives), so it is refused by name."""
+    with pytest.raises(InputError) as caught:
+        to_c([_NoC("toy")], 1e-4)
+    message = str(caught.value)
+    assert message.startswith("system: must be a System") and "a list of parts" in message
+    assert "\n" not in message

@@ -17,7 +17,7 @@ import sys
 
 import pytest
 
-from acdrive.export._scenario import DOUBLE_TOLERANCE
+from acdrive.export._scenario import DOUBLE_TOLERANCE, FLOAT_MARGIN, float_bound
 from acdrive.scenarios._files import builtin_text
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
@@ -127,20 +127,48 @@ def test_forced_relay_close():
     assert report["events_c"]["forced0"]["forced"] > 0
 
 
+def _scenario_file(tmp_path, duration: str = "0.1", fault: str = "0.05") -> str:
+    return _scenario(tmp_path, "bodson-sensor-fault", {
+        "duration = 4.0": f"duration = {duration}",
+        "current_sensor_fault_time = 1.5": f"current_sensor_fault_time = {fault}",
+    })  # fmt: skip
+
+
 def test_float_build_runs_in_the_loop(tmp_path):
     """The float build (-DACDRIVE_FLOAT) runs the current-command chain in the loop to the end:
-    it really computes in float (it differs from acdrive's double run) and every signal stays
-    finite. Its deviation is printed by ``acdrive export sil --real float``; no bound is derived
-    yet (docs/guide/export.md)."""
-    path = _scenario(tmp_path, "bodson-sensor-fault", {
-        "duration = 4.0": "duration = 0.1",
-        "current_sensor_fault_time = 1.5": "current_sensor_fault_time = 0.05",
-    })  # fmt: skip
-    report = _sil(path, "--real", "float")
+    it really computes in float (it differs from acdrive's double run), every signal stays
+    finite, and its worst deviation is within the derived bound: FLOAT_MARGIN times the worst
+    deviation of the double build with its inputs rounded to float32 (``float_bound``), which
+    is itself of float's size (above the unit roundoff 2^-24, far below 1)."""
+    report = _sil(_scenario_file(tmp_path), "--real", "float")
     assert report["real"] == "float"
     ratios = [row["ratio"] for row in report["signals"].values()]
     assert all(math.isfinite(r) for r in ratios)
     assert report["worst_ratio"] > 0.0
+    rounding = report["input_rounding_ratio"]
+    assert 2.0**-24 < rounding < 1e-2
+    assert report["float_bound"] == FLOAT_MARGIN * rounding
+    assert report["within_float_bound"] is True
+    assert report["bounded_worst_ratio"] <= report["float_bound"]
+
+
+def test_float_bound_is_the_margin_times_the_input_rounding():
+    assert float_bound(1e-5) == FLOAT_MARGIN * 1e-5
+    assert float_bound(0.0) == FLOAT_MARGIN * 2.0**-24  # never below float's resolution
+
+
+def test_float_build_beyond_its_bound_is_one_line(tmp_path, capsys, monkeypatch):
+    """A float build whose deviation exceeds its bound: one line naming the bound, exit 2 (the
+    margin is shrunk here so that the real float build of a short run exceeds it)."""
+    from acdrive.cli import main
+    from acdrive.export import _scenario
+
+    monkeypatch.setattr(_scenario, "FLOAT_MARGIN", 1e-3)
+    path = _scenario_file(tmp_path)
+    assert main(["export", "sil", path, "--real", "float"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "float build" in err[0] and "beyond the float bound" in err[0]
 
 
 def test_two_motors_two_chains():
@@ -148,3 +176,34 @@ def test_two_motors_two_chains():
     report = _sil("bodson-two-motors", "--duration", "0.2")
     _check_equal(report)
     assert report["chains"] == ["bodson_two_motors0", "bodson_two_motors1"]
+
+
+def test_no_limit_stand_ins_are_left_out_of_a_float_comparison():
+    """Where acdrive and the double build hold 1e300 for "no limit" (the PM drive's flux limit
+    at standstill), the float build holds float32(1e38): such samples are left out, a sample
+    where only one side is "no limit" is the difference it is."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from acdrive.export._prelude import FLOAT_NO_LIMIT, PRELUDE
+    from acdrive.export._sil import deviation
+
+    assert f"ACD_R({FLOAT_NO_LIMIT!r})" in PRELUDE
+    held = float(np.float32(FLOAT_NO_LIMIT))
+    reference = SimpleNamespace(columns=["psi"], data=np.array([[1e300], [2.0], [4.0]]))
+    in_float = SimpleNamespace(columns=["psi"], data=np.array([[held], [2.5], [4.0]]))
+    assert deviation(reference, in_float, held) == {"psi": (0.5, 4.0)}
+    assert deviation(reference, in_float)["psi"][1] == 1e300  # without: the stand-in is the peak
+    finite = SimpleNamespace(columns=["psi"], data=np.array([[3.0], [2.0], [4.0]]))
+    assert deviation(reference, finite, held)["psi"][0] == 1e300 - 3.0
+
+
+def test_pm_float_build_within_its_bound():
+    """The PM drive's float build from standstill (flux limit "no limit" there) through the
+    speed step: within its derived bound, the flux limit compared where it is finite."""
+    report = _sil("pm-bly171d-svpwm", "--duration", "0.1", "--real", "float")
+    assert report["within_float_bound"] is True
+    assert report["bounded_worst_ratio"] <= report["float_bound"]
+    assert report["signals"]["torque_reference.psi_max"]["ratio"] < 1e-4
+    assert report["signals"]["speed.w"]["peak"] > 100.0

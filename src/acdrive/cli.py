@@ -42,7 +42,8 @@ COMMANDS = {
     "identify": "cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
     "export": (
         "a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil), "
-        "controller and plant as FMI 2.0 FMUs (export fmu)"
+        "their cost on a Cortex-M4F (export m4), controller and plant as FMI 2.0 FMUs "
+        "(export fmu)"
     ),
     "parts": "list the built-in part kinds, or describe one (parameters, states, ports, units)",
     "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor (both "

@@ -1,6 +1,7 @@
 """``acdrive export``: a scenario's controller chains as C99 (``export c``), that C run in
-acdrive's loop against acdrive's own run (``export sil``), the controller and the plant as FMI
-2.0 co-simulation FMUs (``export fmu``) and those checked with fmpy (``export fmu-check``);
+acdrive's loop against acdrive's own run (``export sil``), its float build's size and
+instructions per step on a Cortex-M4F board model (``export m4``), the controller and the plant as
+FMI 2.0 co-simulation FMUs (``export fmu``) and those checked with fmpy (``export fmu-check``);
 docs/guide/export.md, docs/guide/fmu.md."""
 
 from __future__ import annotations
@@ -9,9 +10,11 @@ from __future__ import annotations
 def register(subparsers):
     p = subparsers.add_parser(
         "export",
-        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil), controller and plant as FMI 2.0 FMUs (export fmu)",
+        help="a scenario's controller chains as C99 (export c), run in acdrive's loop (export "
+        "sil), their cost on a Cortex-M4F (export m4), controller and plant as FMI 2.0 FMUs "
+        "(export fmu)",
     )
-    sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil,fmu,fmu-check}")
+    sub = p.add_subparsers(dest="what", required=True, metavar="{c,sil,m4,fmu,fmu-check}")
     c = sub.add_parser("c", help="write the C99 header and source of a scenario's controller")
     c.add_argument("scenario", help="built-in scenario name or TOML file")
     c.add_argument("--out", default="export", help="output folder (default: export/)")
@@ -25,6 +28,20 @@ def register(subparsers):
     s.add_argument("--real", choices=("double", "float"), default="double", help="C build")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(handler=run_sil)
+    m = sub.add_parser(
+        "m4",
+        help="the float build on a Cortex-M4F: code and data size, instructions per control "
+        "step on QEMU's mps2-an386 (needs scripts/install-cross-tools.sh)",
+    )
+    m.add_argument(
+        "targets", nargs="*", metavar="TARGET",
+        help="a case (dfim-voltage, dfim-current, ifoc-20, ifoc-pi, pm-foc) or a scenario of "
+        "one run; default: the five cases",
+    )  # fmt: skip
+    m.add_argument("--duration", type=float, default=None, help="seconds replayed (s)")
+    m.add_argument("--out", default=None, help="keep the built files (sources, ELF) here")
+    m.add_argument("--json", action="store_true", help="print JSON")
+    m.set_defaults(handler=run_m4)
     f = sub.add_parser(
         "fmu", help="write FMI 2.0 co-simulation FMUs of a scenario's controller and plant"
     )
@@ -86,6 +103,33 @@ def run_sil(args) -> int:
         ok = report["worst_ratio"] <= DOUBLE_TOLERANCE and report["events_equal"]
         print(f"double build within {DOUBLE_TOLERANCE:g} of each signal's peak: "
               f"{'yes' if ok else 'no'}")  # fmt: skip
+    else:
+        left_out = ", ".join(report["modulator_signals_left_out"]) or "none"
+        print(f"float build: worst {report['bounded_worst_signal']} at "
+              f"{report['bounded_worst_ratio']:.3e} of its peak (modulators' switched outputs "
+              f"left out: {left_out}), within its bound {report['float_bound']:.3e} "
+              f"({report['float_margin']:g} x {report['input_rounding_ratio']:.3e}, the double "
+              f"build with float32-rounded inputs, worst {report['input_rounding_signal']}): yes")  # fmt: skip
+    return 0
+
+
+def run_m4(args) -> int:
+    from acdrive._output import OutputFolder, strict_json
+    from acdrive.export._cost import CASES, report_lines, target_report
+    from acdrive.export._sil import find_compiler
+    from acdrive.export._target import find_cross_tools
+
+    find_compiler()  # every missing tool named before any work
+    find_cross_tools()
+    targets = args.targets or list(CASES)
+    if args.out is None:
+        report = target_report(targets, args.duration)
+    else:
+        with OutputFolder(args.out, "m4") as output:
+            report = target_report(targets, args.duration, output.staging)
+            (output.staging / "report.json").write_text(strict_json(report))
+            output.publish()
+    print(strict_json(report) if args.json else "\n".join(report_lines(report)))
     return 0
 
 

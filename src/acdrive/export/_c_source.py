@@ -379,7 +379,18 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
     ``initial`` and ``held`` as for ``CompiledSystem.run`` give the values ``<chain>_reset``
     writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
-    naming a part whose kind has no C (``acdrive.export._kinds``)."""
+    naming a part whose kind has no C (``acdrive.export._kinds``), and one for anything but a
+    ``System``: a list of parts has no wiring, and the wiring is what says which plant outputs a
+    chain reads and which commands it gives (build the System from the parts first)."""
+    from acdrive.sim._system import System
+
+    if not isinstance(system, System):
+        what = "a list of parts" if isinstance(system, (list, tuple)) else type(system).__name__
+        raise InputError(
+            "system",
+            f"must be a System (acdrive.sim.System), got {what}: the export reads the chain's "
+            "inputs and commands from the System's wiring; build one from the parts first",
+        )
     name = require_c_name("name", name)
     if (
         isinstance(sample_time, bool)

@@ -6,12 +6,20 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+
 from acdrive.errors import InputError
 from acdrive.export._c_source import CExport, to_c
+from acdrive.export._prelude import FLOAT_NO_LIMIT
 
 #: double build against acdrive (ACDRIVE_STRICT_MATH=1): each logged signal's largest
 #: difference over the run, as a fraction of that signal's peak (the issue's bound)
 DOUBLE_TOLERANCE = 1e-12
+#: float build: its worst ratio may be at most FLOAT_MARGIN times the worst ratio of the double
+#: build run with its inputs rounded to float32 at every sample (``float_bound``)
+FLOAT_MARGIN = 100.0
+#: float32's unit roundoff 2^-24: the bound is at least FLOAT_MARGIN of it
+FLOAT_UNIT_ROUNDOFF = 2.0**-24
 
 
 def c_name(scenario_name: str) -> str:
@@ -54,12 +62,40 @@ def shortened(setup, duration: float | None):
     return dataclasses.replace(setup, duration=float(duration))
 
 
+def _worst(reference, other, no_limit: float | None = None) -> tuple[dict, str]:
+    from acdrive.export._sil import deviation
+
+    signals = {}
+    for column, (difference, peak) in deviation(reference, other, no_limit).items():
+        ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
+        signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
+    return signals, max(signals, key=lambda c: signals[c]["ratio"])
+
+
+def float_bound(input_rounding_ratio: float) -> float:
+    """The bound of the float build's worst ratio (docs/guide/export.md, "The float bound").
+
+    The float build rounds its inputs to float32 and then every operation of its step, each
+    rounding of the same relative size (2^-24). ``input_rounding_ratio`` is what the first of
+    those roundings alone does to the closed loop: the worst ratio of the double build whose
+    inputs are rounded to float32 at every sample, against acdrive's run. A stable loop maps a
+    perturbation in proportion to its size, and n roundings in sequence add at most about n
+    times one (Higham's gamma_n = n u / (1 - n u)); the chains' steps do on the order of a
+    hundred float operations (their instruction counts on the Cortex-M4, ``export m4``), hence
+    FLOAT_MARGIN = 100. An engineering bound, stated, not a theorem: a float build beyond it
+    has a numerical weakness the double build hides. Never below FLOAT_MARGIN * 2^-24."""
+    return FLOAT_MARGIN * max(input_rounding_ratio, FLOAT_UNIT_ROUNDOFF)
+
+
 def compare_in_loop(setup, real: str = "double") -> dict:
     """Run ``setup`` with acdrive's compiled loop and with its exported C controller in the loop
     (``export._sil``), every output logged at every sample; per signal the largest difference
-    and the peak, the event counts of both, and the worst ratio."""
+    and the peak, the event counts of both, and the worst ratio. For ``real="float"`` also the
+    double build with float32-rounded inputs (``input_rounding_ratio``), the bound derived from
+    it (``float_bound``) and whether the float build is within it; beyond it an InputError
+    naming the bound (the issue's bad-input rule, exit 2)."""
     from acdrive._jit import STRICT_MATH
-    from acdrive.export._sil import deviation, find_compiler, run_in_loop
+    from acdrive.export._sil import find_compiler, run_in_loop
 
     find_compiler()  # before any work
     drive, initial, held = built(setup)
@@ -69,12 +105,10 @@ def compare_in_loop(setup, real: str = "double") -> dict:
     reference = compiled.run(setup.duration, setup.sample_time, setup.substeps, **kwargs)
     in_loop = run_in_loop(compiled, export, setup.duration, setup.sample_time, setup.substeps,
                           real=real, **kwargs)  # fmt: skip
-    signals = {}
-    for column, (difference, peak) in deviation(reference, in_loop).items():
-        ratio = difference / peak if peak > 0 else (0.0 if difference == 0 else math.inf)
-        signals[column] = {"max_difference": difference, "peak": peak, "ratio": ratio}
-    worst = max(signals, key=lambda c: signals[c]["ratio"])
-    return {
+    # the float build's stand-in as it holds it: 1e38 rounded to float32 (just below 1e38)
+    no_limit = float(np.float32(FLOAT_NO_LIMIT)) if real == "float" else None
+    signals, worst = _worst(reference, in_loop, no_limit)
+    report = {
         "scenario": setup.name,
         "duration": setup.duration,
         "real": real,
@@ -87,3 +121,35 @@ def compare_in_loop(setup, real: str = "double") -> dict:
         "events_acdrive": reference.events,
         "events_c": in_loop.events,
     }
+    if real == "float":
+        # the modulators' outputs switch: a carrier comparison that flips one sample earlier
+        # moves a switched voltage by its full swing (an event, counted apart), so the bound is
+        # on every other signal
+        modulated = tuple(f"{m.name}." for m in drive.system.modulators)
+        rounded = run_in_loop(compiled, export, setup.duration, setup.sample_time,
+                              setup.substeps, real="double", float_inputs=True, **kwargs)  # fmt: skip
+        rounded_signals, _ = _worst(reference, rounded, no_limit)
+        rounded_worst = _worst_of(rounded_signals, modulated)
+        input_rounding = rounded_signals[rounded_worst]["ratio"]
+        bound = float_bound(input_rounding)
+        bounded = _worst_of(signals, modulated)
+        ratio = signals[bounded]["ratio"]
+        report.update(input_rounding_ratio=input_rounding, input_rounding_signal=rounded_worst,
+                      float_bound=bound, float_margin=FLOAT_MARGIN,
+                      bounded_worst_signal=bounded, bounded_worst_ratio=ratio,
+                      modulator_signals_left_out=[m.name for m in drive.system.modulators],
+                      within_float_bound=ratio <= bound)  # fmt: skip
+        if not report["within_float_bound"]:
+            raise InputError(
+                "float build",
+                f"{bounded} deviates by {ratio:.3e} of its peak, beyond the float bound "
+                f"{bound:.3e} ({FLOAT_MARGIN:g} x the {input_rounding:.3e} of the double build "
+                "with float32-rounded inputs)",
+            )
+    return report
+
+
+def _worst_of(signals: dict, left_out: tuple[str, ...]) -> str:
+    """The signal of largest ratio among those whose name starts with none of ``left_out``."""
+    kept = [c for c in signals if not c.startswith(left_out)] or list(signals)
+    return max(kept, key=lambda c: signals[c]["ratio"])

@@ -144,13 +144,14 @@ def _load(export: CExport, library: Path, real: str, system) -> list[_LoadedChai
     return loaded
 
 
-def _copy_in(chain: _LoadedChain, Y: np.ndarray) -> None:
+def _copy_in(chain: _LoadedChain, Y: np.ndarray, float_inputs: bool = False) -> None:
+    values = Y.astype(np.float32).astype(np.float64) if float_inputs else Y
     for name, slot, width in chain.reads:
         if width == 2:
             z = getattr(chain.inputs, name)
-            z.re, z.im = Y[slot], Y[slot + 1]
+            z.re, z.im = values[slot], values[slot + 1]
         else:
-            setattr(chain.inputs, name, Y[slot])
+            setattr(chain.inputs, name, values[slot])
 
 
 def _copy_out(chain: _LoadedChain, Y: np.ndarray, E: np.ndarray) -> None:
@@ -166,12 +167,17 @@ def _copy_out(chain: _LoadedChain, Y: np.ndarray, E: np.ndarray) -> None:
 
 def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
                 substeps: int = 4, initial=None, held=None, log=None, log_every: int = 1,
-                t0: float = 0.0, real: str = "double", folder=None):  # fmt: skip
+                t0: float = 0.0, real: str = "double", folder=None,
+                on_inputs=None, float_inputs: bool = False):  # fmt: skip
     """Run ``compiled`` (a CompiledSystem) with the C chains of ``export`` in place of its
     sampled parts; returns the same result type as ``compiled.run`` with the same arguments.
     ``export`` must have been generated from ``compiled.system`` with the same ``initial``,
     ``held`` and ``sample_time`` (its ``_reset`` and ``_set_params`` give the controller's
-    start). ``folder``: where the library is built (default: a temporary folder)."""
+    start). ``folder``: where the library is built (default: a temporary folder).
+    ``on_inputs(chain_index, inputs)``, if given, sees each chain's inputs struct (ctypes) just
+    before its step (the replay of ``acdrive export m4``); ``float_inputs`` rounds every input to
+    float32 before the step (the perturbation the float bound is derived from,
+    ``export._scenario.float_bound``)."""
     system = compiled.system
     covered = {p.name for m in export.chains for p in m.chain.parts}
     if covered != {p.name for p in system.sampled}:
@@ -204,8 +210,10 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
             t = t0 + k * T_s
             module.project(X, P, PO)
             module.plant_outputs(t, X, P, PO, Y, U)
-            for chain, refs in zip(chains, byref, strict=True):
-                _copy_in(chain, Y)
+            for c, (chain, refs) in enumerate(zip(chains, byref, strict=True)):
+                _copy_in(chain, Y, float_inputs)
+                if on_inputs is not None:
+                    on_inputs(c, chain.inputs)
                 chain.step(t, *refs)
                 _copy_out(chain, Y, E)
             module.modulate(T_s, P, PO, S, Y, U, E, DT, V, NSEG)
@@ -217,10 +225,19 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
                             0.0, n_steps)  # fmt: skip
 
 
-def deviation(reference, other) -> dict[str, tuple[float, float]]:
-    """Per logged signal: (largest |difference| over the run, peak |value| of the reference)."""
+def deviation(reference, other, no_limit: float | None = None) -> dict[str, tuple[float, float]]:
+    """Per logged signal: (largest |difference| over the run, peak |value| of the reference).
+    ``no_limit``: samples where both runs are at or beyond it in magnitude (each holding its
+    build's "no limit" stand-in, ``_prelude.FLOAT_NO_LIMIT`` in float, 1e300 in double) are left
+    out of both; a sample where only one of them is counts as the difference it is."""
     out = {}
     for j, name in enumerate(reference.columns):
         a, b = reference.data[:, j], other.data[:, j]
+        if no_limit is not None:
+            kept = ~((np.abs(a) >= no_limit) & (np.abs(b) >= no_limit))
+            a, b = a[kept], b[kept]
+        if a.size == 0:
+            out[name] = (0.0, 0.0)
+            continue
         out[name] = (float(np.max(np.abs(a - b))), float(np.max(np.abs(a))))
     return out
