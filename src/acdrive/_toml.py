@@ -180,3 +180,25 @@ def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
             f"{sim.field('duration')} / {sim.field('sample_time')})",
         )
     return log_every
+
+
+def perturbed_plant(section: Section, nominal, fields: tuple[str, ...], apart: tuple[str, ...] = ()):
+    """(simulated plant, factors) of the table ``perturbation`` of ``section``: each of
+    ``fields`` (parameters of ``nominal``) multiplied by its factor (> 0, default 1) on the
+    simulated plant only; the controllers keep ``nominal`` (Amezquita-Brooks et al. sec. VIII:
+    the controller of the nominal design on a perturbed machine); the factors named in ``apart``
+    are read and returned but not applied (a parameter the drive keeps elsewhere, as the cage
+    IM's shaft inertia). No table: (nominal, {})."""
+    if not section.has("perturbation"):
+        return nominal, {}
+    import dataclasses
+
+    pert = Section(section.get("perturbation"), section.field("perturbation"))
+    factors = {k: pert.number(k, 1.0, require_positive) for k in (*fields, *apart)}
+    pert.done()
+    scaled = {k: getattr(nominal, k) * factors[k] for k in fields}
+    try:
+        plant = dataclasses.replace(nominal, **scaled)
+    except InputError as exc:
+        raise InputError(pert.field(exc.field), f"the perturbed plant: {exc.rule}") from None
+    return plant, factors
