@@ -21,5 +21,6 @@ __all__, __getattr__, __dir__ = namespace(
         "PAPER_PERTURBATION": "._map",
         "paper_factors": "._map",
         "robustness_map": "._map",
+        "write_map_report": "._report",
     },
 )
