@@ -182,7 +182,9 @@ def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
     return log_every
 
 
-def perturbed_plant(section: Section, nominal, fields: tuple[str, ...], apart: tuple[str, ...] = ()):
+def perturbed_plant(
+    section: Section, nominal, fields: tuple[str, ...], apart: tuple[str, ...] = ()
+):
     """(simulated plant, factors) of the table ``perturbation`` of ``section``: each of
     ``fields`` (parameters of ``nominal``) multiplied by its factor (> 0, default 1) on the
     simulated plant only; the controllers keep ``nominal`` (Amezquita-Brooks et al. sec. VIII:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 #: the criteria every map reports, in the order a report lists them
 CRITERIA = ("tracking", "current_limit", "stability")
@@ -69,9 +69,8 @@ class RobustnessSeam:
 @dataclass(frozen=True)
 class Tolerances:
     """The stated tolerances of a map: ``tracking`` (the RMS tracking error as a fraction of the
-    reference's scale, which the drive names), ``current`` (the fraction by which a peak current
-    may exceed its limit)."""
+    reference's scale, which the drive names; None: the drive's default), ``current`` (the
+    fraction by which a peak current may exceed its limit)."""
 
-    tracking: float = 0.01
+    tracking: float | None = None
     current: float = 0.05
-    extra: dict = field(default_factory=dict)

@@ -92,7 +92,9 @@ class MapSpec:
         require_positive("--low", self.low)
         require_positive("--high", self.high)
         if not self.low < self.high:
-            raise InputError("--high", f"must be larger than --low ({self.low:g}), got {self.high:g}")
+            raise InputError(
+                "--high", f"must be larger than --low ({self.low:g}), got {self.high:g}"
+            )
         require_positive("--severity-max", self.severity_max)
         if self.size > MAX_VARIANTS:
             raise InputError(
@@ -124,7 +126,9 @@ class MapSpec:
         draws = np.exp(rng.uniform(math.log(self.low), math.log(self.high),
                                    size=(self.variants - 1, len(self.params))))  # fmt: skip
         for row in draws:
-            out.append(("monte-carlo", math.nan, dict(zip(self.params, map(float, row), strict=True))))
+            out.append(
+                ("monte-carlo", math.nan, dict(zip(self.params, map(float, row), strict=True)))
+            )
         return out
 
 
@@ -233,7 +237,9 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
     if tracking_tolerance is not None:
         require_positive("--tracking-tolerance", tracking_tolerance)
     if current_tolerance is None or current_tolerance < 0 or not math.isfinite(current_tolerance):
-        raise InputError("--current-tolerance", f"must be a finite number >= 0, got {current_tolerance!r}")
+        raise InputError(
+            "--current-tolerance", f"must be a finite number >= 0, got {current_tolerance!r}"
+        )
     tolerances = Tolerances(tracking=tracking_tolerance, current=float(current_tolerance))
     data, setup = _base_data(scenario)
     if data is None:
@@ -286,8 +292,13 @@ def _first_break(rows: list, criterion: str, below: bool):
     """The axis value nearest the nominal (in |ln f|; on the ``paper`` axis the smallest
     severity, ``below`` None) that breaks ``criterion`` on one side of it
     (``below``: factors < 1), or None if none does."""
-    side = [r for r in rows if r["log_distance"] > 0 and r["verdicts"][criterion] is False
-            and (below is None or (r["value"] < 1.0) == below)]
+    side = [
+        r
+        for r in rows
+        if r["log_distance"] > 0
+        and r["verdicts"][criterion] is False
+        and (below is None or (r["value"] < 1.0) == below)
+    ]
     if not side:
         return None
     return min(side, key=lambda r: r["log_distance"])["value"]
@@ -372,8 +383,13 @@ def summarise(m: RobustnessMap) -> dict:
             passing = [r for r in valid if r["verdicts"][n] is True]
             per = {}
             for p in m.spec.params:
+
                 def med(rs, p=p):
-                    return float(np.median([abs(math.log(r["factors"][p])) for r in rs])) if rs else None
+                    return (
+                        float(np.median([abs(math.log(r["factors"][p])) for r in rs]))
+                        if rs
+                        else None
+                    )
 
                 per[p] = {"median_abs_log_factor_broken": med(broken),
                           "median_abs_log_factor_passing": med(passing)}  # fmt: skip

@@ -25,9 +25,9 @@ def report_lines(m: RobustnessMap) -> list[str]:
     s = m.summary
     lines = [f"<!-- {REPORT_STAMP}robustness` -->",
              f"# Robustness map of `{m.scenario}` ({m.spec.kind}, {len(m.rows)} variants)", "",
-             f"Factor f on a parameter: the simulated plant has f x the nominal value in "
+             (f"Factor f on a parameter: the simulated plant has f x the nominal value in "
              f"`{m.table}`; the controllers keep the nominal design (their estimate is 1/f x "
-             "the truth).", "", "## Criteria (stated tolerances)", ""]  # fmt: skip
+             "the truth)."), "", "## Criteria (stated tolerances)", ""]  # fmt: skip
     for c in m.criteria:
         lines.append(f"- **{c.name}** (`{c.column}`): {c.rule}")
     nominal = s["nominal"]
@@ -35,14 +35,18 @@ def report_lines(m: RobustnessMap) -> list[str]:
               f"status {nominal['status']}; " + "; ".join(
                   f"{c.name} {'passes' if nominal['verdicts'][c.name] else 'BREAKS'} "
                   f"({c.column} = {_fmt(nominal.get(c.column))})" for c in m.criteria), "",
-              f"{s['valid_variants']} variants ran, {s['refused_variants']} were refused by the "
-              "scenario's checks (not a machine, or a pre-check; reasons in map.json).", ""]  # fmt: skip
+              (f"{s['valid_variants']} variants ran, {s['refused_variants']} were refused by the "
+              "scenario's checks (not a machine, or a pre-check; reasons in map.json)."), ""]  # fmt: skip
     if m.spec.kind == "grid":
         lines += ["## First factor that breaks each criterion", "",
                   "| axis | valid range | " + " | ".join(f"{c.name} below / above" for c in m.criteria) + " |",
                   "| --- | --- |" + " --- |" * len(m.criteria)]  # fmt: skip
         for axis, a in s["axes"].items():
-            rng = "none" if a["valid_range"] is None else f"{_fmt(a['valid_range'][0])} to {_fmt(a['valid_range'][1])}"
+            rng = (
+                "none"
+                if a["valid_range"] is None
+                else f"{_fmt(a['valid_range'][0])} to {_fmt(a['valid_range'][1])}"
+            )
             cells = [f"{_fmt(a['first_break_below'][c.name])} / {_fmt(a['first_break_above'][c.name])}"
                      for c in m.criteria]  # fmt: skip
             label = "paper (severity s)" if axis == PAPER else axis
@@ -77,12 +81,12 @@ def report_lines(m: RobustnessMap) -> list[str]:
     if "linear_vs_simulation" in s:
         lv = s["linear_vs_simulation"]
         lines += ["", "## Linearised prediction beside the simulation", "", m.linear_rule + ".", "",
-                  f"{lv['agree']} of {lv['compared']} compared variants agree; predicted stable "
+                  (f"{lv['agree']} of {lv['compared']} compared variants agree; predicted stable "
                   f"but simulated unstable {lv['predicted_stable_simulated_unstable']}, predicted "
                   f"unstable but simulated stable {lv['predicted_unstable_simulated_stable']}; "
-                  f"no prediction {lv['no_prediction']}."]  # fmt: skip
-    lines += ["", f"Wall time {m.wall_time:.3g} s (compiled batch loop {m.batch_wall_time:.3g} s, "
-              f"linearisations {m.linear_time:.3g} s).", ""]  # fmt: skip
+                  f"no prediction {lv['no_prediction']}.")]  # fmt: skip
+    lines += ["", (f"Wall time {m.wall_time:.3g} s (compiled batch loop {m.batch_wall_time:.3g} s, "
+              f"linearisations {m.linear_time:.3g} s)."), ""]  # fmt: skip
     return lines
 
 

@@ -25,18 +25,21 @@ from acdrive.drives.dfim._reducers import dfim_reducers
 from acdrive.robustness._criteria import Criterion, RobustnessSeam
 from acdrive.sim._metrics import OSCILLATION_FINDING_RPM, RPM_PER_RAD_S
 
+#: default tracking tolerance: RMS speed error over the tracking window / largest |reference|
+TRACKING_DEFAULT = 0.01
 FIELDS = {"R_s": "R_s", "R_r": "R_r", "L_s": "L_s", "L_r": "L_r", "L_m": "M", "J": "J"}
 
 
 def criteria(setup, tolerances) -> list[Criterion]:
     motor = setup.motors[0]
     c = motor.controller
+    tol = tolerances.tracking if tolerances.tracking is not None else TRACKING_DEFAULT
     top_rpm = float(np.max(np.abs(motor.speed_reference[1]))) * RPM_PER_RAD_S
     limit = max(c.stator_current_limit_pk, c.rotor_current_limit_pk)
     peak = "peak_phase_current_over_limit"
     return [
-        Criterion("tracking", "speed_rms_error_tracking_rpm", tolerances.tracking * top_rpm, "rpm",
-                  f"RMS speed error over the tracking window <= {tolerances.tracking:g} x the "
+        Criterion("tracking", "speed_rms_error_tracking_rpm", tol * top_rpm, "rpm",
+                  f"RMS speed error over the tracking window <= {tol:g} x the "
                   f"largest |speed reference| ({top_rpm:g} rpm)"),
         Criterion(
             "current_limit", peak, 1.0 + tolerances.current, "",
