@@ -386,7 +386,7 @@ def summarise(m: RobustnessMap) -> dict:
 
                 def med(rs, p=p):
                     return (
-                        float(np.median([abs(math.log(r["factors"][p])) for r in rs]))
+                        float(np.median([abs(math.log(r["factors"].get(p, 1.0))) for r in rs]))
                         if rs
                         else None
                     )

@@ -23,6 +23,10 @@ units in the key names where not SI; defaults in brackets):
     [machine.perturbation]  R_s, R_r, L_s, L_r, L_m, J: factors on the simulated plant only [1]
                   (the controllers, the IFOC's estimates and the speed PI's design keep the
                   nominal machine)
+    [design]      machine_file (a machine parameter file, e.g. written by ``acdrive identify``:
+                  its [machine.params]) or [design.params]: the machine the controllers are
+                  designed on (the IFOC's default estimates, the current-loop checks' controller
+                  side); fields not given keep the scenario's machine, which stays the plant
     [inverter]    model ("averaged" | "switching") ["averaged"], dc_link_voltage |
                   dc_link_voltage_profile [310], pwm_frequency_hz [5000], dead_time_s and
                   device_drop_v (switching model only) [0]
@@ -73,7 +77,13 @@ import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._toml import Section as _Section
-from acdrive._toml import log_every_of, machine_from, perturbed_plant, simulation_span
+from acdrive._toml import (
+    design_machine,
+    log_every_of,
+    machine_from,
+    perturbed_plant,
+    simulation_span,
+)
 from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
@@ -412,6 +422,10 @@ def build_im_setup(data: dict) -> IMDriveSetup:
 
     msec = _Section(top.get("machine", {}), "machine")
     nominal, plant, J_factor = _machine(msec)
+    if top.has("design"):  # the controllers designed on estimates, the plant the truth
+        dsec = _Section(top.get("design"), "design")
+        nominal, _ = design_machine(dsec, nominal, PARAMS_FIELDS)
+        dsec.done()
     mechanics = _mechanics(msec, nominal)
     design_J = mechanics.J  # the speed PI's design inertia; the shaft's is perturbed
     if J_factor != 1.0:
