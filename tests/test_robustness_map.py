@@ -206,3 +206,62 @@ def test_a_drive_without_a_perturbation_table_is_refused():
         Drive().robustness()
     assert exc.value.field == "drive"
     assert dataclasses.is_dataclass(MapSpec())
+
+
+# --- design from estimates (issue 23, item 4) -------------------------------------------------
+
+
+def test_a_design_on_the_truth_equals_the_existing_design():
+    """Estimates equal to the truth: the run designed on them is the scenario's own, bit for bit,
+    and so are Bodson's gains (27), (49) and the controller's estimates."""
+    from acdrive.machines import BODSON_DFIM
+    from acdrive.robustness import design_comparison
+
+    d = _dfim_step()
+    c = design_comparison(d, BODSON_DFIM)
+    t, e = c.rows["truth"], c.rows["estimates"]
+    _same(t, e)
+    assert t["design"] == e["design"]
+    assert set(c.from_estimates) >= {"R_s", "R_r", "L_s", "L_r", "M", "J"}
+
+
+def test_a_parameter_file_designs_the_controllers_and_the_plant_stays(tmp_path, capsys):
+    """A machine parameter file as ``acdrive identify`` writes it ([machine.params], L_m): the
+    cage IM's IFOC takes its estimates, the plant keeps the scenario's machine; the command
+    prints both runs side by side."""
+    from acdrive.robustness import design_comparison
+
+    path = tmp_path / "estimates.toml"
+    path.write_text("[machine.params]\nR_s = 17.0\nR_r = 20.0\nL_s = 1.40\nL_r = 1.46\n"
+                    "L_m = 1.38\nn_p = 1\n")  # fmt: skip
+    d = read_scenario("im-foc-speed")
+    d["simulation"]["duration"] = 0.2
+    c = design_comparison(d, str(path))
+    assert c.rows["estimates"]["design"]["ifoc_R_r"] == 20.0
+    assert c.rows["truth"]["design"]["ifoc_R_r"] == build_setup(d).plant.R_r
+    assert c.from_estimates == ("R_s", "R_r", "L_s", "L_r", "L_m", "n_p")
+    setup = build_setup({**d, "design": {"machine_file": str(path)}})
+    assert setup.plant == build_setup(d).plant and setup.machine.L_m == 1.38
+    # a wrong rotor-resistance estimate mis-orients the IFOC: the speed error differs
+    assert (
+        c.rows["estimates"]["speed_rms_error_whole_run_rad_s"]
+        != c.rows["truth"]["speed_rms_error_whole_run_rad_s"]
+    )
+    for row in c.rows.values():
+        assert set(row["verdicts"]) == {"tracking", "current_limit", "stability"}
+
+
+def test_bad_design_tables_name_the_field(tmp_path):
+    d = _dfim_step()
+    d["motor"][0]["design"] = {"params": {"R_r": -1.0}}
+    with pytest.raises(InputError) as exc:
+        build_setup(d)
+    assert exc.value.field == "motor[0].design.params.R_r"
+    d["motor"][0]["design"] = {"machine_file": str(tmp_path / "none.toml")}
+    with pytest.raises(InputError) as exc:
+        build_setup(d)
+    assert exc.value.field == "motor[0].design.machine_file"
+    d["motor"][0]["design"] = {"params": {"Q": 1.0}}
+    with pytest.raises(InputError) as exc:
+        build_setup(d)
+    assert exc.value.field == "motor[0].design.params.Q"

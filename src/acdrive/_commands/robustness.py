@@ -46,6 +46,10 @@ def register(subparsers) -> None:
                    help="override simulation.duration of every variant (s)")  # fmt: skip
     p.add_argument("--linear", action=argparse.BooleanOptionalAction, default=None,
                    help="linearised prediction per variant (default: grid yes, monte-carlo no)")  # fmt: skip
+    p.add_argument("--estimates", default=None, metavar="PARAMS_FILE",
+                   help="instead of a map: run the scenario with its controllers designed on this "
+                        "machine parameter file (e.g. from acdrive identify) and on the truth, "
+                        "side by side")  # fmt: skip
     p.add_argument("--out", default=None, help="folder to write map.json, report.md, map.png into")
     p.add_argument("--json", action="store_true", help="print the map as JSON")
     p.set_defaults(handler=run)
@@ -63,6 +67,20 @@ def _params(text: str | None, kind: str) -> tuple:
     return names
 
 
+def _compare(args) -> int:
+    from acdrive._output import strict_json
+    from acdrive.errors import InputError
+    from acdrive.robustness._design import design_comparison
+
+    if args.out is not None:
+        raise InputError("--out", "applies to a map, not to --estimates (use --json to keep it)")
+    overrides = {} if args.duration is None else {"simulation.duration": args.duration}
+    c = design_comparison(args.scenario, args.estimates, tracking_tolerance=args.tracking_tolerance,
+                          current_tolerance=args.current_tolerance, overrides=overrides)  # fmt: skip
+    print(strict_json(c.to_json(), indent=1) if args.json else "\n".join(c.lines()))
+    return 0
+
+
 def run(args) -> int:
     import contextlib
     from pathlib import Path
@@ -71,6 +89,8 @@ def run(args) -> int:
     from acdrive.robustness._map import MapSpec, robustness_map
     from acdrive.robustness._report import report_lines, write_into
 
+    if args.estimates is not None:
+        return _compare(args)
     spec = MapSpec(kind=args.map, params=_params(args.params, args.map), points=args.points,
                    variants=args.variants, low=args.low, high=args.high,
                    severity_max=args.severity_max, seed=args.seed)  # fmt: skip

@@ -16,6 +16,8 @@ __all__, __getattr__, __dir__ = namespace(
         "Criterion": "._criteria",
         "RobustnessSeam": "._criteria",
         "Tolerances": "._criteria",
+        "DesignComparison": "._design",
+        "design_comparison": "._design",
         "MapSpec": "._map",
         "RobustnessMap": "._map",
         "PAPER_PERTURBATION": "._map",

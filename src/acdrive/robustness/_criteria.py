@@ -54,7 +54,10 @@ class RobustnessSeam:
     figures a criterion reads that are computed from the row (e.g. a peak over its limit);
     ``linear(setup)``: the
     linearised prediction ``{"predicted_stable": bool, <figure>: value}`` or None where the
-    drive has none.
+    drive has none; ``design_table``: the dotted path of its ``[design]`` table (controllers
+    designed on estimates, ``_toml.design_machine``), ``design_fields`` / ``design_aliases`` the
+    parameters it takes, ``design_figures(setup)`` the design quantities of a setup (gains,
+    estimates) as the drive computes them.
     """
 
     table: str
@@ -64,6 +67,10 @@ class RobustnessSeam:
     derived: Callable | None = None
     linear: Callable | None = None
     linear_rule: str = ""
+    design_table: str = ""
+    design_fields: tuple = ()
+    design_aliases: dict | None = None
+    design_figures: Callable | None = None
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ import numpy as np
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.batch import Reducer
 from acdrive.drives.cage_im._reducers import im_reducers
+from acdrive.drives.cage_im._schema import PARAMS_FIELDS
 from acdrive.robustness._criteria import Criterion, RobustnessSeam
 
 FIELDS = {"R_s": "R_s", "R_r": "R_r", "L_s": "L_s", "L_r": "L_r", "L_m": "L_m", "J": "J"}
@@ -88,6 +89,21 @@ def linear(setup) -> dict:
     return {"predicted_stable": bool(radius < 1.0), "spectral_radius": radius}
 
 
+def design_figures(setup) -> dict:
+    """The designs of the drive as it builds them: the IFOC's estimates R_r, L_r, L_m (its slip
+    law, ``control._foc`` (slip)), the speed PI's K_P, K_I (mode speed-pi), the current
+    controller by name (a built-in transfer function: designed once on the paper's nominal
+    machine, not recomputed from parameters) and the spectral radius of the sampled current loop
+    on the simulated plant (``linear``)."""
+    est = setup.estimates
+    out = {f"ifoc_{k}": float(getattr(est, k)) for k in ("R_r", "L_r", "L_m")}
+    if setup.mode == "speed-pi":
+        out.update({"K_P": setup.speed_pi.K_P, "K_I": setup.speed_pi.K_I})
+    out["current_controller"] = setup.current_control.controller
+    out["current_loop_spectral_radius"] = linear(setup)["spectral_radius"]
+    return out
+
+
 SEAM = RobustnessSeam(
     table="machine.perturbation",
     fields=FIELDS,
@@ -95,6 +111,9 @@ SEAM = RobustnessSeam(
     criteria=criteria,
     derived=derived,
     linear=linear,
+    design_table="design",
+    design_fields=PARAMS_FIELDS,
+    design_figures=design_figures,
     linear_rule=(
         "spectral radius of the sampled current loop over one carrier period (plant of the "
         "variant, controller of the nominal design) at 0, 1/2 and 1 x the run's top speed: "

@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from acdrive.drives.dfim._reducers import dfim_reducers
+from acdrive.drives.dfim._schema import DESIGN_ALIASES, PARAMS_FIELDS
 from acdrive.robustness._criteria import Criterion, RobustnessSeam
 from acdrive.sim._metrics import OSCILLATION_FINDING_RPM, RPM_PER_RAD_S
 
@@ -74,6 +75,20 @@ def linear(setup) -> dict:
             "within_limits": bool(r.within_limits)}  # fmt: skip
 
 
+def design_figures(setup) -> dict:
+    """Bodson's a-priori design of motor 0 as the drive uses it: K_P, K_I, K_F of (25)-(27), K_P,C
+    and K_I,C of (49) (``DFIMController.current_gains``), the controller's estimates (its laws'
+    R_s, R_r, L_s, L_r, M) and the design inertia J = K_P^2 / (4 K_I) (27)."""
+    motor = setup.motors[0]
+    c = motor.controller
+    est = c.params or motor.machine
+    k_pc, k_ic = c.current_gains(motor.machine)
+    out = {"K_P": c.gains.K_P, "K_I": c.gains.K_I, "K_F": c.gains.K_F, "K_PC": k_pc, "K_IC": k_ic,
+           "design_J": c.gains.K_P**2 / (4.0 * c.gains.K_I)}  # fmt: skip
+    out.update({f"estimate_{k}": float(getattr(est, k)) for k in ("R_s", "R_r", "L_s", "L_r", "M")})
+    return out
+
+
 SEAM = RobustnessSeam(
     table="motor[0].perturbation",
     fields=FIELDS,
@@ -81,6 +96,10 @@ SEAM = RobustnessSeam(
     criteria=criteria,
     derived=derived,
     linear=linear,
+    design_table="motor[0].design",
+    design_fields=PARAMS_FIELDS,
+    design_aliases=DESIGN_ALIASES,
+    design_figures=design_figures,
     linear_rule=(
         "sampled-data linearisation at the final speed reference and load (where the stability "
         "window lies): stable if the one-sample map's spectral radius < 1"
