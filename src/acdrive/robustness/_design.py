@@ -62,8 +62,8 @@ class DesignComparison:
         def fmt(v):
             return f"{v:.6g}" if isinstance(v, float) else str(v)
 
-        out = [f"{self.scenario}: controllers designed on the truth and on the estimates "
-               f"({', '.join(self.from_estimates)} from the estimates), the plant the truth",
+        out = [(f"{self.scenario}: controllers designed on the truth and on the estimates "
+               f"({', '.join(self.from_estimates)} from the estimates), the plant the truth"),
                f"{'figure':<36} {'design on truth':>18} {'design on estimates':>20}"]  # fmt: skip
         for c in self.criteria:
             out.append(f"{c.column:<36} {fmt(t.get(c.column)):>18} {fmt(e.get(c.column)):>20}")
