@@ -30,11 +30,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive.analysis._robustness import PAPER_PERTURBATION as _ICAD_PAPER
 from acdrive.errors import InputError, require_positive
 from acdrive.robustness._criteria import CRITERIA, Tolerances
 
-#: Amezquita-Brooks et al. sec. VIII: the perturbed plant of Figs. 21-23 (factors on the plant)
-PAPER_PERTURBATION = {"R_s": 2.0, "R_r": 2.0, "L_s": 0.6, "L_r": 0.6, "L_m": 0.59}
+#: Amezquita-Brooks et al. sec. VIII: the perturbed plant of Figs. 21-23 (factors on the plant),
+#: the ICAD robustness study's ``analysis._robustness.PAPER_PERTURBATION`` as a dict
+PAPER_PERTURBATION = {k: float(getattr(_ICAD_PAPER, k)) for k in ("R_s", "R_r", "L_s", "L_r", "L_m")}
 #: the single parameters a map varies (the map's names; ``RobustnessSeam.fields`` translates)
 PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
 #: the combined axis of a grid
