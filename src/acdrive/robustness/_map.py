@@ -36,7 +36,9 @@ from acdrive.robustness._criteria import CRITERIA, Tolerances
 
 #: Amezquita-Brooks et al. sec. VIII: the perturbed plant of Figs. 21-23 (factors on the plant),
 #: the ICAD robustness study's ``analysis._robustness.PAPER_PERTURBATION`` as a dict
-PAPER_PERTURBATION = {k: float(getattr(_ICAD_PAPER, k)) for k in ("R_s", "R_r", "L_s", "L_r", "L_m")}
+PAPER_PERTURBATION = {
+    k: float(getattr(_ICAD_PAPER, k)) for k in ("R_s", "R_r", "L_s", "L_r", "L_m")
+}
 #: the single parameters a map varies (the map's names; ``RobustnessSeam.fields`` translates)
 PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
 #: the combined axis of a grid
@@ -306,6 +308,17 @@ def _first_break(rows: list, criterion: str, below: bool):
     return min(side, key=lambda r: r["log_distance"])["value"]
 
 
+def _first_refused(rows: list, below: bool | None):
+    """{value, reason} of the refused variant nearest the nominal on one side (as
+    ``_first_break``), or None: where the scenario's own checks refuse the plant (not a machine,
+    or a pre-check such as an unstable sampled loop), with their one-line reason."""
+    side = [r for r in rows if not r["valid"] and (below is None or (r["value"] < 1.0) == below)]
+    if not side:
+        return None
+    r = min(side, key=lambda r: r["log_distance"])
+    return {"value": r["value"], "reason": r["reason"]}
+
+
 def _wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
     """95 % Wilson score interval of a proportion k / n."""
     if n == 0:
@@ -321,7 +334,8 @@ def summarise(m: RobustnessMap) -> dict:
     """The map's findings, every one computed from the rows here.
 
     ``nominal``: the nominal run's verdicts. Grid: per axis, per criterion, the breaking factor
-    nearest the nominal below and above 1 (severity on the ``paper`` axis) and the refused range;
+    nearest the nominal below and above 1 (severity on the ``paper`` axis) and the refused
+    variant nearest the nominal on each side with the scenario's reason;
     ``first_to_break``: per criterion, the single parameter whose break is nearest the nominal
     in |ln f|. Monte Carlo: per criterion, the broken fraction of the valid variants with its
     95 % Wilson interval and, per parameter, the median |ln f| of the broken and of the passing
@@ -348,7 +362,8 @@ def summarise(m: RobustnessMap) -> dict:
             axes[axis] = {
                 "valid_range": [min(r["value"] for r in ok), max(r["value"] for r in ok)] if ok else None,
                 "refused": len(refused),
-                "refused_example": next((r["reason"] for r in mine if not r["valid"]), ""),
+                "first_refused_below": None if axis == PAPER else _first_refused(mine, True),
+                "first_refused_above": _first_refused(mine, None if axis == PAPER else False),
                 "first_break_below": {n: None if axis == PAPER else _first_break(ok, n, True)
                                       for n in names},
                 "first_break_above": {n: _first_break(ok, n, None if axis == PAPER else False)

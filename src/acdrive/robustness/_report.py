@@ -51,6 +51,17 @@ def report_lines(m: RobustnessMap) -> list[str]:
                      for c in m.criteria]  # fmt: skip
             label = "paper (severity s)" if axis == PAPER else axis
             lines.append(f"| {label} | {rng} | " + " | ".join(cells) + " |")
+        lines += [
+            "",
+            "Refused nearest the nominal (the scenario's own checks; such a plant is not "
+            "simulated):",
+            "",
+        ]
+        for axis, a in s["axes"].items():
+            for side in ("first_refused_below", "first_refused_above"):
+                r = a[side]
+                if r is not None:
+                    lines.append(f"- {axis} at {_fmt(r['value'])}: {r['reason']}")
         lines.append("")
         for c in m.criteria:
             f = s["first_to_break"][c.name]
