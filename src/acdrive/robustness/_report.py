@@ -53,8 +53,10 @@ def report_lines(m: RobustnessMap) -> list[str]:
             lines.append(f"| {label} | {rng} | " + " | ".join(cells) + " |")
         lines += [
             "",
-            "Refused nearest the nominal (the scenario's own checks; such a plant is not "
-            "simulated):",
+            (
+                "Refused nearest the nominal (the scenario's own checks; such a plant is not "
+                "simulated):"
+            ),
             "",
         ]
         for axis, a in s["axes"].items():
