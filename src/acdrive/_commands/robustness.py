@@ -22,7 +22,7 @@ tolerances on tracking, current limits and stability, with the linearised predic
 def register(subparsers) -> None:
     from acdrive.robustness._map import DEFAULT_POINTS, DEFAULT_VARIANTS, KINDS, PAPER, PARAMETERS
 
-    p = subparsers.add_parser("robustness", help="robustness map of parameter errors",
+    p = subparsers.add_parser("robustness", help="robustness map of parameter errors (grid or Monte Carlo, batch engine)",
                               description=HELP)  # fmt: skip
     p.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or TOML path")
     p.add_argument("--map", choices=KINDS, default="grid", help="grid (default) or monte-carlo")
