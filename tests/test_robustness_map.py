@@ -145,6 +145,9 @@ def test_grid_and_monte_carlo_points():
     draws = mc.points_of()
     assert len(draws) == 50 and mc.points_of() == draws  # seeded
     assert all(0.5 <= f <= 2.0 for _, _, fs in draws[1:] for f in fs.values())
+    # the default maps hold at least 1,000 variants (issue 23)
+    assert MapSpec().size >= 1000
+    assert MapSpec(kind="monte-carlo", params=("R_s", "R_r", "L_s", "L_r", "L_m", "J")).size >= 1000
 
 
 @pytest.mark.parametrize(

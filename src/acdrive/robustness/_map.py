@@ -44,8 +44,9 @@ PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
 #: the combined axis of a grid
 PAPER = "paper"
 KINDS = ("grid", "monte-carlo")
-#: default points per grid axis: 7 axes x 143 points + the nominal = 1,002 variants
-DEFAULT_POINTS = 143
+#: default points per grid axis: with 7 axes, 144 on each besides the nominal (the paper axis with
+#: s = 1 inserted) and the nominal: 1,009 variants
+DEFAULT_POINTS = 145
 DEFAULT_VARIANTS = 1000
 #: the most variants one map runs (memory of the rows, minutes of a 2-core machine)
 MAX_VARIANTS = 100_000
