@@ -268,3 +268,30 @@ def test_bad_design_tables_name_the_field(tmp_path):
     with pytest.raises(InputError) as exc:
         build_setup(d)
     assert exc.value.field == "motor[0].design.params.Q"
+
+
+def test_the_command_writes_its_report_and_json(tmp_path, capsys):
+    """``acdrive robustness --json --out``: the JSON's paper point is the row it names, the
+    report states its verdicts, and a folder acdrive did not write is never replaced."""
+    import json
+
+    argv = ["robustness", "im-perturbed", "--params", "paper", "--points", "2",
+            "--duration", "0.06", "--json"]  # fmt: skip
+    assert main([*argv, "--out", str(tmp_path)]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    point = doc["summary"]["paper_point"]
+    row = doc["rows"][point["variant"]]
+    assert row["factors"] == PAPER_PERTURBATION and row["axis"] == "paper"
+    assert point["current_error_rms_settled_a"] == row["current_error_rms_settled_a"]
+    folder = tmp_path / "im-perturbed-robustness"
+    assert {p.name for p in folder.iterdir()} >= {"map.json", "report.md", "map.png"}
+    assert "Amezquita-Brooks et al. sec. VIII (severity 1)" in (folder / "report.md").read_text()
+    users = tmp_path / "users"
+    (users / "im-perturbed-robustness").mkdir(parents=True)
+    (users / "im-perturbed-robustness" / "notes.txt").write_text("mine")
+    try:
+        code = main([*argv, "--out", str(users)])
+    except SystemExit as exc:
+        code = exc.code
+    assert code == 2 and "--out" in capsys.readouterr().err
+    assert (users / "im-perturbed-robustness" / "notes.txt").read_text() == "mine"
