@@ -81,6 +81,9 @@ def test_a_map_point_equals_the_single_run_with_that_perturbation():
         m.summary["paper_point"]["current_error_rms_settled_a"]
         == paper[0]["current_error_rms_settled_a"]
     )
+    # Figs. 21-22 at the same point: gamma of the perturbed plant with (20) does not encircle
+    # (1, 0) at any speed (the paper's finding, as the ICAD report's section on perturbed plants)
+    assert m.summary["paper_point"]["analysis"]["conditions_hold"] is True
     r_r = next(r for r in m.rows if r["axis"] == "R_r" and r["value"] == 2.0)
     alone = simulate_batch(d, [{"machine.perturbation": {"R_r": 2.0}}], reducers=seam.reducers)
     _same(r_r, alone.rows[0])

@@ -57,7 +57,9 @@ class RobustnessSeam:
     drive has none; ``design_table``: the dotted path of its ``[design]`` table (controllers
     designed on estimates, ``_toml.design_machine``), ``design_fields`` / ``design_aliases`` the
     parameters it takes, ``design_figures(setup)`` the design quantities of a setup (gains,
-    estimates) as the drive computes them.
+    estimates) as the drive computes them; ``point_analysis(setup, factors)``: an analysis of one
+    perturbed plant too costly for every variant (the cage IM: ICAD of Amezquita-Brooks et al.'s
+    Figs. 21-22), run on the paper's point.
     """
 
     table: str
@@ -71,6 +73,7 @@ class RobustnessSeam:
     design_fields: tuple = ()
     design_aliases: dict | None = None
     design_figures: Callable | None = None
+    point_analysis: Callable | None = None
 
 
 @dataclass(frozen=True)

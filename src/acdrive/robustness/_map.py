@@ -286,6 +286,9 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
         batch_wall_time=result.wall_time, linear_time=linear_time,
     )  # fmt: skip
     m.summary = summarise(m)
+    point = m.summary.get("paper_point")
+    if point is not None and point["valid"] and seam.point_analysis is not None:
+        point["analysis"] = seam.point_analysis(nominal, dict(PAPER_PERTURBATION))
     m.wall_time = time.perf_counter() - start
     return m
 

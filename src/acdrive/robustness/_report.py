@@ -77,6 +77,14 @@ def report_lines(m: RobustnessMap) -> list[str]:
             lines += ["", "## Amezquita-Brooks et al. sec. VIII (severity 1)", "",
                       f"factors {p['factors']}: {verdicts}; "
                       + ", ".join(f"{c.column} = {_fmt(p.get(c.column))}" for c in m.criteria)]  # fmt: skip
+            a = p.get("analysis")
+            if a is not None:
+                speeds = ", ".join(_fmt(w) for w in a["speeds_rad_s"])
+                lines += ["", (f"ICAD of the continuous current loop on this plant (Figs. 21-22) at "
+                          f"electrical rotor speeds {speeds} rad/s: conditions i-iv "
+                          f"{'hold' if a['conditions_hold'] else 'FAIL'}, worst structural gain "
+                          f"margin {_fmt(a['worst_structural_gm_db'])} dB, worst channel phase "
+                          f"margin {_fmt(a['worst_channel_pm_deg'])} deg.")]  # fmt: skip
     else:
         lines += ["## Broken fraction (95 % Wilson interval)", ""]
         for c in m.criteria:

@@ -104,6 +104,28 @@ def design_figures(setup) -> dict:
     return out
 
 
+#: electrical rotor speeds of the ICAD check, as fractions of the run's top speed
+_ICAD_SPEEDS = (0.0, 1 / 3, 2 / 3, 1.0)
+
+
+def icad_point(setup, factors: dict) -> dict:
+    """ICAD of the continuous current loop (Amezquita-Brooks et al. Figs. 21-22; ``analysis.
+    perturbation_sweep``) with the scenario's current controller on the nominal machine perturbed
+    by ``factors``, at electrical rotor speeds ``_ICAD_SPEEDS`` x n_p x the run's top speed
+    (at least 375 rad/s, Fig. 21's range): conditions i-iv at every speed (gamma does not
+    encircle (1, 0)) and the worst structural gain margin and channel phase margin."""
+    from acdrive.analysis._robustness import Perturbation, perturbation_sweep
+
+    top = max(setup.machine.n_p * setup.top_speed(), 375.0)
+    speeds = [f * top for f in _ICAD_SPEEDS]
+    lti = setup.current_control.lti
+    r = perturbation_sweep(setup.machine, lti, lti, speeds, [Perturbation(**factors)])
+    return {"conditions_hold": bool(r.all_conditions),
+            "worst_structural_gm_db": r.worst["structural_gm_db"].value,
+            "worst_channel_pm_deg": r.worst["pm_deg"].value,
+            "speeds_rad_s": speeds}  # fmt: skip
+
+
 SEAM = RobustnessSeam(
     table="machine.perturbation",
     fields=FIELDS,
@@ -114,6 +136,7 @@ SEAM = RobustnessSeam(
     design_table="design",
     design_fields=PARAMS_FIELDS,
     design_figures=design_figures,
+    point_analysis=icad_point,
     linear_rule=(
         "spectral radius of the sampled current loop over one carrier period (plant of the "
         "variant, controller of the nominal design) at 0, 1/2 and 1 x the run's top speed: "
