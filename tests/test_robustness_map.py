@@ -144,6 +144,8 @@ def test_grid_and_monte_carlo_points():
     assert points[0] == ("nominal", 1.0, {})
     assert len(points) == spec.size == 1 + 4 + 4 + 4  # the nominal point is shared
     assert ("paper", 1.0, PAPER_PERTURBATION) in points
+    assert MapSpec(kind="monte-carlo").params == ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
+    assert MapSpec().params[-1] == "paper"
     mc = MapSpec(kind="monte-carlo", params=("R_s", "R_r"), variants=50, low=0.5, high=2.0)
     draws = mc.points_of()
     assert len(draws) == 50 and mc.points_of() == draws  # seeded
@@ -203,6 +205,12 @@ def test_the_command_refuses_bad_input_in_one_line(tmp_path, capsys, argv, field
     assert code == 2
     assert len(err.splitlines()) == 1 and err.startswith(f"acdrive: error: {field}:"), err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_scenario_comparing_runs_is_refused_before_work():
+    with pytest.raises(InputError) as exc:
+        robustness_map("im-locked-rotor", MapSpec(params=("R_s",), points=2))
+    assert "compare" in exc.value.field + exc.value.rule
 
 
 def test_a_drive_without_a_perturbation_table_is_refused():

@@ -57,10 +57,8 @@ def register(subparsers) -> None:
 
 def _params(text: str | None, kind: str) -> tuple:
     from acdrive.errors import InputError
-    from acdrive.robustness._map import PAPER, PARAMETERS
-
     if text is None:
-        return (*PARAMETERS, PAPER) if kind == "grid" else PARAMETERS
+        return None  # MapSpec's default: every parameter, and on a grid the paper axis
     names = tuple(t.strip() for t in text.split(","))
     if any(not n for n in names):
         raise InputError("--params", "must be comma-separated names without empty entries")

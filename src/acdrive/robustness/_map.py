@@ -60,7 +60,7 @@ class MapSpec:
     command-line option."""
 
     kind: str = "grid"
-    params: tuple = (*PARAMETERS, PAPER)
+    params: tuple | None = None  # None: every parameter (and on a grid the paper axis)
     points: int = DEFAULT_POINTS
     variants: int = DEFAULT_VARIANTS
     low: float = 0.5
@@ -71,6 +71,12 @@ class MapSpec:
     def __post_init__(self):
         if self.kind not in KINDS:
             raise InputError("--map", f"must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        if self.params is None:
+            object.__setattr__(
+                self, "params", (*PARAMETERS, PAPER) if self.kind == "grid" else PARAMETERS
+            )
+        if isinstance(self.params, str) or not isinstance(self.params, (tuple, list)):
+            raise InputError("--params", f"must be a list of parameter names, got {self.params!r}")
         params = tuple(self.params)
         if not params:
             raise InputError("--params", "must name at least one parameter")
@@ -260,6 +266,9 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
             raise InputError("--params", f"{PAPER!r} needs {absent[0]!r}, which the drive lacks")
     base = apply_overrides(data, dict(overrides or {}))
     nominal = build_variant_setup(copy.deepcopy(base))  # a bad scenario fails here, before work
+    from acdrive.drives import for_setup
+
+    for_setup(nominal).build(nominal)  # a setup no batch can run (several runs) fails here
     criteria = seam.criteria(nominal, tolerances)
     points = spec.points_of()
     variants = [{seam.table: _table_value(seam, f)} for _, _, f in points]
