@@ -21,6 +21,7 @@ PACKAGES = (
     "acdrive.core",
     "acdrive.sweep",
     "acdrive.identify",
+    "acdrive.robustness",
     "acdrive.export",
 )
 

@@ -180,3 +180,86 @@ def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
             f"{sim.field('duration')} / {sim.field('sample_time')})",
         )
     return log_every
+
+
+def perturbed_plant(
+    section: Section, nominal, fields: tuple[str, ...], apart: tuple[str, ...] = ()
+):
+    """(simulated plant, factors) of the table ``perturbation`` of ``section``: each of
+    ``fields`` (parameters of ``nominal``) multiplied by its factor (> 0, default 1) on the
+    simulated plant only; the controllers keep ``nominal`` (Amezquita-Brooks et al. sec. VIII:
+    the controller of the nominal design on a perturbed machine); the factors named in ``apart``
+    are read and returned but not applied (a parameter the drive keeps elsewhere, as the cage
+    IM's shaft inertia). No table: (nominal, {})."""
+    if not section.has("perturbation"):
+        return nominal, {}
+    import dataclasses
+
+    pert = Section(section.get("perturbation"), section.field("perturbation"))
+    factors = {k: pert.number(k, 1.0, require_positive) for k in (*fields, *apart)}
+    pert.done()
+    scaled = {k: getattr(nominal, k) * factors[k] for k in fields}
+    try:
+        plant = dataclasses.replace(nominal, **scaled)
+    except InputError as exc:
+        raise InputError(pert.field(exc.field), f"the perturbed plant: {exc.rule}") from None
+    return plant, factors
+
+
+#: the largest machine parameter file ``[design] machine_file`` reads (an ``acdrive identify``
+#: file is a few kB)
+_MAX_DESIGN_FILE_BYTES = 1_000_000
+
+
+def design_machine(section: Section, truth, fields: tuple[str, ...], aliases: dict | None = None):
+    """(design machine, fields taken from the estimates) of a ``[design]`` table: the machine the
+    controllers are designed on, the simulated plant staying ``truth``.
+
+    ``machine_file``: a machine parameter file (``acdrive identify`` writes one; its
+    ``[machine.params]``), or ``[design.params]`` inline; each of ``fields`` given there (or under
+    its alias, e.g. the DFIM's M as L_m) replaces ``truth``'s, the others keep ``truth``'s value
+    (the pole pairs, the inertia a standstill test does not give). Relative paths are read from
+    the working folder. The design machine is validated by its class, errors naming the field."""
+    import dataclasses
+    from pathlib import Path
+
+    aliases = aliases or {}
+    if section.has("machine_file") and section.has("params"):
+        raise InputError(section.field("machine_file"), "give either it or [params], not both")
+    if section.has("machine_file"):
+        name = section.field("machine_file")
+        path = Path(section.text("machine_file"))
+        if not path.is_file():
+            raise InputError(name, f"'{path}' is not a file")
+        if path.stat().st_size > _MAX_DESIGN_FILE_BYTES:
+            raise InputError(name, f"'{path}' is larger than a machine parameter file can be")
+        doc = parse_toml(path.read_text(encoding="utf-8", errors="replace"), f"'{path}'", name)
+        table = doc.get("machine", {}).get("params") if isinstance(doc.get("machine"), dict) else None
+        if not isinstance(table, dict):
+            raise InputError(name, f"'{path}' has no [machine.params] table")
+        where = f"{name} [machine.params]"
+    elif section.has("params"):
+        table = section.get("params")
+        if not isinstance(table, dict):
+            raise InputError(section.field("params"), "must be a table of machine parameters")
+        where = section.field("params")
+    else:
+        raise InputError(section.field("machine_file"), "is required in a [design] table (or [params])")
+    section.used.add("params")
+    values, taken = {}, []
+    for key in fields:
+        for name in (key, aliases.get(key)):
+            if name is not None and name in table:
+                value = require_positive(f"{where}.{name}", table[name]) if key != "n_p" else table[name]
+                values[key] = value
+                taken.append(key)
+                break
+    known = set(fields) | {aliases[k] for k in fields if k in aliases}
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise InputError(f"{where}.{unknown[0]}", f"unknown machine parameter (known: {', '.join(fields)})")
+    try:
+        design = dataclasses.replace(truth, **values)
+    except InputError as exc:
+        raise InputError(f"{where}.{exc.field}", exc.rule) from None
+    return design, tuple(taken)

@@ -39,6 +39,7 @@ COMMANDS = {
     "stability": "drive stability (eigenvalues, map)",
     "reproduce": "regenerate a reproduction report",
     "sweep": "run a scenario over a grid of parameter values",
+    "robustness": "robustness map of parameter errors (grid or Monte Carlo, batch engine)",
     "identify": "cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
     "export": (
         "a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil), "

@@ -54,6 +54,7 @@ class Drive:
     * ``default_machine`` and ``params_fields(machine)``: the built-in machine a scenario's
       machine table defaults to and the fields of its ``[params]`` form, so a batch can vary
       one parameter of a built-in machine (None: no such form).
+    * ``robustness()``: what a robustness map needs of the drive (``acdrive.robustness``).
     * ``crosscheck(setup, lower, upper)``: the linearised tolerated speed-loop bandwidth of a
       setup for a sweep's ``[crosscheck]`` (drives without a linearisation refuse it).
     * ``linearisation()``: the drive's small-signal linearisation, a namespace with at least
@@ -107,6 +108,11 @@ class Drive:
 
     def linearize(self, study, point=None, *args, **kwargs):
         return self.linearisation().linearize(study, point, *args, **kwargs)
+
+    def robustness(self):
+        """The drive's ``acdrive.robustness.RobustnessSeam`` (its plant-only perturbation table,
+        criteria and linearised prediction); a drive without one refuses a map."""
+        raise InputError("drive", f"drive {self.kind!r} has no plant perturbation for a robustness map")
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} kind={self.kind!r}>"

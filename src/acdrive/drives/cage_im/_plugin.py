@@ -53,6 +53,11 @@ class CageIMDriveKind(Drive):
 
         return im_reducers(setup)
 
+    def robustness(self):
+        from acdrive.drives.cage_im._robustness import SEAM
+
+        return SEAM
+
     def params_fields(self, machine) -> tuple[str, ...] | None:
         from acdrive.drives.cage_im._schema import PARAMS_FIELDS
 

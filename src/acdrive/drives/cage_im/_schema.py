@@ -20,7 +20,13 @@ units in the key names where not SI; defaults in brackets):
                   brake | brake_profile (N m s/rad, eddy-current brake, torque k_b w) [0],
                   prescribed_speed_rad_s | prescribed_speed_rad_s_profile (the shaft held at
                   this speed; 0 = locked rotor; omit for a free shaft)
-    [machine.perturbation]  R_s, R_r, L_s, L_r, L_m: factors on the simulated plant only [1]
+    [machine.perturbation]  R_s, R_r, L_s, L_r, L_m, J: factors on the simulated plant only [1]
+                  (the controllers, the IFOC's estimates and the speed PI's design keep the
+                  nominal machine)
+    [design]      machine_file (a machine parameter file, e.g. written by ``acdrive identify``:
+                  its [machine.params]) or [design.params]: the machine the controllers are
+                  designed on (the IFOC's default estimates, the current-loop checks' controller
+                  side); fields not given keep the scenario's machine, which stays the plant
     [inverter]    model ("averaged" | "switching") ["averaged"], dc_link_voltage |
                   dc_link_voltage_profile [310], pwm_frequency_hz [5000], dead_time_s and
                   device_drop_v (switching model only) [0]
@@ -71,7 +77,13 @@ import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._toml import Section as _Section
-from acdrive._toml import log_every_of, machine_from, simulation_span
+from acdrive._toml import (
+    design_machine,
+    log_every_of,
+    machine_from,
+    perturbed_plant,
+    simulation_span,
+)
 from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
@@ -112,6 +124,9 @@ DRIVE = "cage-im"
 DEFAULT_MACHINE = "delorenzo-im"
 #: the fields of the ``[machine.params]`` table
 PARAMS_FIELDS = electrical_fields(IMParams)
+#: the factors of ``[machine.perturbation]``: the electrical parameters on the simulated machine,
+#: J on the simulated shaft (the speed PI's bandwidth design keeps the nominal J)
+PERTURBATION_FIELDS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
 #: relative tolerance of "the sample time divides the carrier period" (as plant._inverter)
 _N_TOLERANCE = 1e-9
 #: speeds (fractions of the run's top speed) at which the sampled current loop is checked
@@ -124,25 +139,14 @@ def _require_nothing(section: _Section, mode: str, why: str) -> None:
         raise InputError(section.path, f"is not used in mode {mode} ({why}); remove it")
 
 
-def _machine(sec: _Section) -> tuple[IMParams, IMParams]:
-    """(nominal machine, simulated plant)."""
+def _machine(sec: _Section) -> tuple[IMParams, IMParams, float]:
+    """(nominal machine, simulated plant, factor on the plant's J)."""
     nominal = machine_from(
         sec, IMParams, PARAMS_FIELDS, DEFAULT_MACHINE,
         params_label="[machine.params]",
     )  # fmt: skip
-    plant = nominal
-    if sec.has("perturbation"):
-        pert = _Section(sec.get("perturbation"), sec.field("perturbation"))
-        factors = {
-            k: pert.number(k, 1.0, require_positive) for k in ("R_s", "R_r", "L_s", "L_r", "L_m")
-        }
-        pert.done()
-        scaled = {k: getattr(nominal, k) * f for k, f in factors.items()}
-        try:
-            plant = dataclasses.replace(nominal, **scaled)
-        except InputError as exc:
-            raise InputError(pert.field(exc.field), f"the perturbed plant: {exc.rule}") from None
-    return nominal, plant
+    plant, factors = perturbed_plant(sec, nominal, PERTURBATION_FIELDS[:-1], ("J",))
+    return nominal, plant, factors.get("J", 1.0)
 
 
 def _mechanics(sec: _Section, machine: IMParams) -> Mechanics:
@@ -417,8 +421,15 @@ def build_im_setup(data: dict) -> IMDriveSetup:
     sim.done()
 
     msec = _Section(top.get("machine", {}), "machine")
-    nominal, plant = _machine(msec)
+    nominal, plant, J_factor = _machine(msec)
+    if top.has("design"):  # the controllers designed on estimates, the plant the truth
+        dsec = _Section(top.get("design"), "design")
+        nominal, _ = design_machine(dsec, nominal, PARAMS_FIELDS)
+        dsec.done()
     mechanics = _mechanics(msec, nominal)
+    design_J = mechanics.J  # the speed PI's design inertia; the shaft's is perturbed
+    if J_factor != 1.0:
+        mechanics = dataclasses.replace(mechanics, J=design_J * J_factor)
     msec.done()
     inverter = _inverter(_Section(top.get("inverter", {}), "inverter"), sample_time)
     ccsec = _Section(top.get("current_control", {}), "current_control")
@@ -465,7 +476,7 @@ def build_im_setup(data: dict) -> IMDriveSetup:
         if mode == "speed-p":
             speed_p = _speed_p(speed_sec)
         else:
-            speed_pi = _speed_pi(speed_sec, mechanics.J)
+            speed_pi = _speed_pi(speed_sec, design_J)
     ref.done()
 
     sens = _Section(top.get("sensors", {}), "sensors")

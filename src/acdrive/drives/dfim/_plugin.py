@@ -71,6 +71,11 @@ class DFIMDriveKind(Drive):
 
         return linearised_tolerated_bandwidth(setup, lower, upper)
 
+    def robustness(self):
+        from acdrive.drives.dfim._robustness import SEAM
+
+        return SEAM
+
     def linearisation(self):
         from acdrive.drives.dfim import _linearisation
 

@@ -22,6 +22,14 @@ Schema (all tables optional except [[motor]]; units in the key names where not S
                   current_sensor_fault_time (s; current measurements fail from then on),
                   relay_forced_close_time (s; the stator relay closes then whatever the
                   synchroniser says: a mis-operation; needs controller.sync.enabled)
+    [motor.perturbation]  R_s, R_r, L_s, L_r, M, J: factors on the simulated machine and shaft
+                  only [1]; the controller keeps the nominal machine as its estimates (R_s to M in
+                  its laws, sigma L_r in (49)) and the nominal J in (27) (Amezquita-Brooks et al.
+                  sec. VIII's perturbed-plant experiment, for the DFIM drive)
+    [motor.design]  machine_file (a machine parameter file, e.g. written by ``acdrive identify``:
+                  its [machine.params], L_m read as M) or [motor.design.params]: the machine the
+                  controller is designed on (its estimates, (27) with its J, (49)); fields not
+                  given keep the scenario's machine, which stays the simulated plant
     [motor.controller]  mode ("voltage" | "current"), lossless_law (R_s = 0 form (39)),
                   current_bandwidth, R_T,
                   reactive_power_kp, reactive_power_ki | reactive_power_bandwidth, speed_bandwidth, design_inertia (J used in (27),
@@ -56,7 +64,13 @@ import warnings
 import numpy as np
 
 from acdrive._toml import Section as _Section
-from acdrive._toml import log_every_of, machine_from, simulation_span
+from acdrive._toml import (
+    design_machine,
+    log_every_of,
+    machine_from,
+    perturbed_plant,
+    simulation_span,
+)
 from acdrive.control._speed import SpeedPIGains, require_feedforward_fraction
 from acdrive.drives.dfim._period import check_control_period
 from acdrive.drives.dfim._result import N_LOG
@@ -105,6 +119,10 @@ MAX_SUPPLY_HZ = 1000.0
 #: motors, 489 s for 8); Bodson's experiments use one or two, the built-ins up to three. Four
 #: keeps a first run near a minute.
 MAX_MOTORS = 4
+#: the factors of ``[motor.perturbation]`` (on the simulated machine and shaft only)
+PERTURBATION_FIELDS = ("R_s", "R_r", "L_s", "L_r", "M", "J")
+#: a machine parameter file names the magnetising inductance L_m (``acdrive identify``)
+DESIGN_ALIASES = {"M": "L_m"}
 #: sample time [s] and substeps per sample when the scenario does not say
 DEFAULT_SAMPLE_TIME = 200e-6
 DEFAULT_SUBSTEPS = 4
@@ -543,17 +561,26 @@ def build_dfim_setup(data: dict) -> DriveSetup:
     motors = []
     for k, raw in enumerate(motors_data):
         sec = _Section(raw, f"motor[{k}]")
-        machine = _machine(sec, k)
+        nominal = _machine(sec, k)
+        machine, _ = perturbed_plant(sec, nominal, PERTURBATION_FIELDS)
         if not sec.has("speed_reference_rpm"):
             raise InputError(sec.field("speed_reference_rpm"), "is required")
         dc_link = sec.constant_or_profile("dc_link_voltage", 30.0, rule=require_positive)
         dc_link_profile = dc_link if sec.has("dc_link_voltage_profile") else None
         dc_link_voltage = float(dc_link[1][0])  # nominal: the voltage the drive starts with
+        design = nominal
+        if sec.has("design"):  # the controller designed on estimates, the plant the truth
+            dsec = _Section(sec.get("design"), sec.field("design"))
+            design, _ = design_machine(dsec, nominal, PARAMS_FIELDS, DESIGN_ALIASES)
+            dsec.done()
+        controller = _controller(
+            _Section(sec.get("controller", {}), sec.field("controller")), design
+        )
+        if machine is not design:  # the controller keeps its design machine as its estimates
+            controller = dataclasses.replace(controller, params=design)
         motor = MotorSetup(
             machine=machine,
-            controller=_controller(
-                _Section(sec.get("controller", {}), sec.field("controller")), machine
-            ),
+            controller=controller,
             speed_reference=sec.profile("speed_reference_rpm", RAD_S_PER_RPM),
             load_torque=sec.constant_or_profile("load_torque", 0.0),
             dc_link_voltage=dc_link_voltage,
