@@ -1,7 +1,7 @@
 """``acdrive identify``: a cage IM's parameters from standstill tests, with 95 % intervals.
 
-``TEST_FILE_OR_SCENARIO`` is either the injection log of a measured test (``.csv`` or
-``.parquet``, columns ``time [s]``, ``v_a [V]``, ``i_a [A]``; ``--dc-log`` adds the DC-step log)
+``TEST_FILE_OR_SCENARIO`` is either the injection log of a measured test (``.csv``, ``.parquet``
+or ``.mat``, columns ``time [s]``, ``v_a [V]``, ``i_a [A]``; ``--dc-log`` adds the DC-step log)
 or the name of a built-in cage IM, whose standstill tests are then simulated on acdrive's
 inverter-fed, locked-rotor bench (``identify._experiment``) with sensor noise and the dead time
 and device drop given. Prints the table (quantity, value, unit, the two 95 % intervals, meaning)
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import sys
 
-LOG_SUFFIXES = (".csv", ".parquet")
+LOG_SUFFIXES = (".csv", ".parquet", ".mat")
 #: the intervals printed beside each value
 INTERVAL_HEADER = (
     "quantity",
@@ -32,8 +32,8 @@ def register(subparsers):
         help="cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
     )
     p.add_argument("source", metavar="TEST_FILE_OR_SCENARIO",
-                   help="injection log (.csv / .parquet) or a built-in cage IM to simulate")  # fmt: skip
-    p.add_argument("--dc-log", help="DC-step log (.csv / .parquet) of a measured test")
+                   help="injection log (.csv / .parquet / .mat) or a built-in cage IM to simulate")  # fmt: skip
+    p.add_argument("--dc-log", help="DC-step log (.csv / .parquet / .mat) of a measured test")
     p.add_argument("--base-frequency-hz", type=float, default=None,
                    help="step between the injected tones (Hz; default that of the built-in test)")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=None,
