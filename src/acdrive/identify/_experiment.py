@@ -140,13 +140,30 @@ def measured_current(i_a: np.ndarray, sensor: CurrentSensor, rng) -> np.ndarray:
     return reading
 
 
-@functools.cache
-def _bench():
-    """The standstill bench (module docstring), compiled once per process: (compiled system,
-    parts by role). Runs swap in re-parametrised parts of the same shape."""
-    from acdrive.control._open_loop import ComplexProgram
+def machine_part(machine):
+    """The plant part of ``machine``: a cage IM (``IMParams``) or a PM machine (``PMSGParams``,
+    ``identify._pm``), named ``machine``."""
     from acdrive.machines._cage_part import CageInductionMachine
-    from acdrive.machines._induction import DELORENZO_IM
+    from acdrive.machines._induction import IMParams
+    from acdrive.machines._pmsm import PMSGParams
+    from acdrive.machines._pmsm_part import PermanentMagnetMachine
+
+    if isinstance(machine, IMParams):
+        return CageInductionMachine.from_params("machine", machine)
+    if isinstance(machine, PMSGParams):
+        return PermanentMagnetMachine.from_params("machine", machine)
+    raise InputError("machine", f"a standstill bench takes a cage IM or a PM machine, got "
+                     f"{type(machine).__name__}")  # fmt: skip
+
+
+@functools.cache
+def _bench(kind: type):
+    """The standstill bench (module docstring) for a machine record of type ``kind``, compiled
+    once per process: (compiled system, parts by role). Runs swap in re-parametrised parts of the
+    same shape."""
+    from acdrive.control._open_loop import ComplexProgram
+    from acdrive.machines._induction import DELORENZO_IM, IMParams
+    from acdrive.machines._pmsm import PMSG_2MW
     from acdrive.plant._inverter import Inverter
     from acdrive.plant._mechanics import PrescribedSpeed
     from acdrive.plant._sources import DCSource
@@ -156,7 +173,7 @@ def _bench():
         "program": ComplexProgram("program"),
         "dc": DCSource("dc", V=310.0),
         "inverter": Inverter("inverter"),
-        "machine": CageInductionMachine.from_params("machine", DELORENZO_IM),
+        "machine": machine_part(DELORENZO_IM if kind is IMParams else PMSG_2MW),
         "shaft": PrescribedSpeed("shaft", w=0.0),
     }
     p = parts
@@ -171,13 +188,13 @@ def _bench():
 
 
 def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
-             source: str) -> StandstillLog:  # fmt: skip
-    """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on the cage IM
-    ``machine`` (an ``IMParams``) and return the log with the sensor's reading (seeded)."""
-    from acdrive.machines._cage_part import CageInductionMachine
-
+             source: str, initial=None, torque: list | None = None) -> StandstillLog:  # fmt: skip
+    """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on ``machine``
+    (a cage IM's ``IMParams`` or a PM machine's ``PMSGParams``, its part's states from
+    ``initial``, e.g. a locked rotor's angle) and return the log with the sensor's reading
+    (seeded). A list ``torque`` receives the torque the locked shaft holds [N m], per sample."""
     require_positive("duration", duration)
-    compiled, parts = _bench()
+    compiled, parts = _bench(type(machine))
     T = plan.sample_time
     n = round(duration / T)
     t = np.arange(n + 1) * T
@@ -186,11 +203,13 @@ def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
         parts["program"].with_params(re=Profile(t, command), im=0.0),
         parts["dc"].with_params(V=plan.v_dc),
         parts["inverter"].with_params(f_pwm=plan.f_pwm, t_d=plan.t_d, v_drop=plan.v_drop),
-        CageInductionMachine.from_params("machine", machine),
+        machine_part(machine),
     ]
     inverter, motor = parts["inverter"], parts["machine"]
-    result = compiled.run(n * T, T, substeps=2, parts=variants,
-                          log=[inverter.out.v_lim, motor.out.i_s])  # fmt: skip
+    result = compiled.run(n * T, T, substeps=2, parts=variants, initial=initial,
+                          log=[inverter.out.v_lim, motor.out.i_s, motor.out.tau_e])  # fmt: skip
+    if torque is not None:
+        torque.append(result.signal(motor.out.tau_e).copy())
     v_a = result.signal(inverter.out.v_lim).real / K_PEAK
     i_a = result.signal(motor.out.i_s).real / K_PEAK
     rng = np.random.default_rng(seed)
