@@ -262,9 +262,7 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     rms = float(np.sqrt(2.0 * fit.cost / m))
     if not fit.success or not np.all(np.isfinite(fit.x)) or fit.cost >= _FAR:
         reached = (
-            rms
-            if fit.cost < _FAR
-            else float(np.sqrt(np.mean(_residual(theta0, spec, model) ** 2)))
+            rms if fit.cost < _FAR else float(np.sqrt(np.mean(_residual(theta0, spec, model) ** 2)))
         )
         raise FitNotConverged(
             "impedance", fit.message, reached, "A (rms of the tones' current error)"
@@ -272,7 +270,8 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     values = np.exp(fit.x)
     s2 = 2.0 * fit.cost / dof
     cov_theta = covariance(fit.jac, s2)
-    cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
+    with np.errstate(invalid="ignore"):  # an unbounded direction stays unbounded (inf, NaN)
+        cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
     U = 0.0 if voltage_error is None else voltage_error
     spread = voltage_error_std if voltage_error is not None else 0.0
     if spread > 0.0:  # + g g^T var(U), g = dp/dU by central differences of two refits
@@ -331,6 +330,7 @@ def _check_widths(estimates, excitation: str) -> None:
     for estimate in estimates:
         width = estimate.half_width()
         if not width <= MAX_HALF_WIDTH:
+            told = f"+-{width:.0%} of the value" if math.isfinite(width) else "unbounded"
             raise InputError(estimate.name, f"not identified by this excitation: its 95 % "
-                             f"interval is +-{width:.0%} of the value, at most "
-                             f"+-{MAX_HALF_WIDTH:.0%} accepted ({excitation})")  # fmt: skip
+                             f"interval is {told}, at most +-{MAX_HALF_WIDTH:.0%} of the value "
+                             f"accepted ({excitation})")  # fmt: skip
