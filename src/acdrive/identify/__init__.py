@@ -8,7 +8,8 @@ columns). ``fit_dc_steps`` gives R_s and the inverter's voltage error, ``fit_imp
 inverse-Gamma parameters, ``identify_standstill`` both and a T-circuit under a stated leakage
 split; every estimate carries its 95 % intervals (Jacobian covariance and bootstrap).
 ``axis_test`` / ``identify_pm_standstill`` give a PM machine's R_s, L_d, L_q (rotor locked with
-its d, then its q axis on phase a); ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
+its d, then its q axis on phase a); ``no_load_test`` / ``fit_no_load`` a cage IM's L_M at the
+flux of a no-load run; ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
 and Coulomb friction from speed steps of a running drive. Logs may be CSV, Parquet or .mat.
 """
 
@@ -53,6 +54,15 @@ __all__, __getattr__, __dir__ = namespace(
         "mechanics_identifiability": "._mechanics",
         "read_mechanics_log": "._mechanics",
         "write_mechanics_log": "._mechanics",
+        "NO_LOAD_COLUMNS": "._no_load",
+        "NoLoadLog": "._no_load",
+        "NoLoadPlan": "._no_load",
+        "NoLoadFit": "._no_load",
+        "no_load_test": "._no_load",
+        "running_admittance": "._no_load",
+        "fit_no_load": "._no_load",
+        "read_no_load_log": "._no_load",
+        "write_no_load_log": "._no_load",
         "Coverage": "._coverage",
         "coverage": "._coverage",
     },

@@ -188,19 +188,25 @@ def _bench(kind: type):
 
 
 def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
-             source: str, initial=None, torque: list | None = None) -> StandstillLog:  # fmt: skip
+             source: str, initial=None, torque: list | None = None,
+             speed: float = 0.0) -> StandstillLog:  # fmt: skip
     """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on ``machine``
     (a cage IM's ``IMParams`` or a PM machine's ``PMSGParams``, its part's states from
     ``initial``, e.g. a locked rotor's angle) and return the log with the sensor's reading
-    (seeded). A list ``torque`` receives the torque the locked shaft holds [N m], per sample."""
+    (seeded). A list ``torque`` receives the torque the shaft holds [N m], per sample. A complex
+    ``voltage(t)`` is a space vector over sqrt(3/2) (its real part phase a's voltage: a balanced
+    set for e^{jwt}); ``speed`` [rad/s] is the speed the shaft is driven at (a dynamometer;
+    0: locked)."""
     require_positive("duration", duration)
     compiled, parts = _bench(type(machine))
     T = plan.sample_time
     n = round(duration / T)
     t = np.arange(n + 1) * T
-    command = K_PEAK * voltage(t)
+    command = K_PEAK * np.asarray(voltage(t))
+    imaginary = Profile(t, command.imag) if np.iscomplexobj(command) else 0.0
     variants = [
-        parts["program"].with_params(re=Profile(t, command), im=0.0),
+        parts["program"].with_params(re=Profile(t, command.real), im=imaginary),
+        parts["shaft"].with_params(w=float(speed)),
         parts["dc"].with_params(V=plan.v_dc),
         parts["inverter"].with_params(f_pwm=plan.f_pwm, t_d=plan.t_d, v_drop=plan.v_drop),
         machine_part(machine),
