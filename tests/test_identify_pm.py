@@ -1,8 +1,9 @@
-"""A PM machine identified at standstill on acdrive's own bench (SVPWM inverter, PM machine part,
-rotor locked with its d, then its q axis on phase a, noisy quantised current): the estimates of
+"""A PM machine identified on acdrive's own bench (SVPWM inverter, PM machine part, noisy quantised
+current): at standstill (rotor locked with its d, then its q axis on phase a) the estimates of
 R_s, L_d, L_q cover the machines' own values within their 95 % intervals over a few seeded
 repetitions, the d test makes no torque while the q test's lock holds n_p psi_pm i_q, and an
-excitation that cannot separate R_s from L is refused naming the parameter (identify._pm)."""
+excitation that cannot separate R_s from L is refused naming the parameter (identify._pm); a
+short-circuit spin test then gives the magnet flux within its intervals (identify._spin)."""
 
 import dataclasses
 import math
@@ -13,12 +14,18 @@ import pytest
 from acdrive.drives.pm import BLY171D, IPMSM_2KW2
 from acdrive.errors import InputError
 from acdrive.identify import (
+    SpinPlan,
     StandstillPlan,
     axis_test,
     dc_test,
+    fit_spin,
     identify_pm_standstill,
     pm_identifiability,
+    read_spin_log,
     rl_admittance,
+    short_circuit_gain,
+    spin_test,
+    write_spin_log,
 )
 
 pytestmark = pytest.mark.slow
@@ -92,3 +99,50 @@ def test_tones_far_above_the_corner_cannot_separate_the_resistance():
     q = axis_test(IPMSM_2KW2, plan, "q")
     with pytest.raises(InputError, match=r"^R_s: not identified by this excitation: its 95 % "):
         identify_pm_standstill(d.log, q.log, plan.base_frequency, plan.settle, bootstrap=10)
+
+
+#: the spin tests: speeds whose short-circuit current stays near each machine's rating
+BLY_SPIN = SpinPlan(speeds=(20.0, 40.0, 60.0), v_dc=24.0)
+IPM_SPIN = SpinPlan(speeds=(5.0, 10.0, 15.0), hold=3.0, v_dc=540.0)
+
+
+def test_the_short_circuit_gain_is_the_steady_state_of_the_dq_equations():
+    """g against (7) solved as a linear system at v_d = v_q = 0 (power-invariant, then phase
+    peak: the sqrt(3/2) of psi_pm and of |i_s| cancel)."""
+    m = IPMSM_2KW2
+    for w_r in (10.0, 100.0, 1000.0):
+        A = np.array([[m.R_s, -w_r * m.L_q], [w_r * m.L_d, m.R_s]])
+        i_dq = np.linalg.solve(A, [0.0, -w_r * math.sqrt(1.5) * m.psi_m])
+        peak = math.hypot(*i_dq) / math.sqrt(1.5)
+        assert m.psi_m * short_circuit_gain((m.R_s, m.L_d, m.L_q), w_r) == pytest.approx(peak)
+
+
+@pytest.mark.parametrize(("machine", "plan", "spin"), [(BLY171D, BLY_PLAN, BLY_SPIN),
+                                                       (IPMSM_2KW2, IPM_PLAN, IPM_SPIN)],
+                         ids=["bly171d", "ipmsm-2kw2"])  # fmt: skip
+def test_the_spin_test_recovers_the_magnet_flux_within_its_intervals(machine, plan, spin):
+    standstill = identify_pm_standstill(axis_test(machine, plan, "d").log,
+                                        axis_test(machine, plan, "q", seed=2).log,
+                                        plan.base_frequency, plan.settle,
+                                        dc=dc_test(machine, plan), bootstrap=100)  # fmt: skip
+    misses = 0
+    for seed in range(2):
+        test = spin_test(machine, spin, seed=5 + seed)
+        fit = fit_spin(test.log, machine.n_p, spin.settle, standstill, seed=seed)
+        misses += not fit.psi_m.covers(machine.psi_m)
+        assert abs(fit.psi_m.value - machine.psi_m) < 0.005 * machine.psi_m, fit.psi_m
+        # the dynamometer brakes against n_p psi_pm i_q + ...: within the machine's torque range
+        assert 0.0 < test.braking_torque < 1.2 * (0.0566 if machine is BLY171D else 14.0)
+    assert misses <= 1
+
+
+def test_a_spin_log_that_is_not_a_short_circuit_or_too_short_is_refused(tmp_path):
+    test = spin_test(BLY171D, dataclasses.replace(BLY_SPIN, speeds=(20.0,)))
+    standstill = None  # refused before the standstill values are needed
+    log = dataclasses.replace(test.log, v_a=test.log.v_a + 0.1, source="x")
+    with pytest.raises(InputError, match=r"^x: column 'v_a': a short-circuit spin test commands"):
+        fit_spin(log, BLY171D.n_p, BLY_SPIN.settle, standstill)
+    with pytest.raises(InputError, match=r"^x: column 'w': the plateau at 20 rad/s must hold 5 "):
+        fit_spin(dataclasses.replace(test.log, source="x"), BLY171D.n_p, 0.9, standstill)
+    back = read_spin_log(write_spin_log(test.log, tmp_path / "spin.mat"))
+    np.testing.assert_array_equal(back.i_a, test.log.i_a)

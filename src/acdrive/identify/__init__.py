@@ -9,7 +9,8 @@ inverse-Gamma parameters, ``identify_standstill`` both and a T-circuit under a s
 split; every estimate carries its 95 % intervals (Jacobian covariance and bootstrap).
 ``axis_test`` / ``identify_pm_standstill`` give a PM machine's R_s, L_d, L_q (rotor locked with
 its d, then its q axis on phase a); ``no_load_test`` / ``fit_no_load`` a cage IM's L_M at the
-flux of a no-load run; ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
+flux of a no-load run; ``spin_test`` / ``fit_spin`` its magnet flux
+from a short-circuit spin test; ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
 and Coulomb friction from speed steps of a running drive. Logs may be CSV, Parquet or .mat.
 """
 
@@ -63,6 +64,16 @@ __all__, __getattr__, __dir__ = namespace(
         "fit_no_load": "._no_load",
         "read_no_load_log": "._no_load",
         "write_no_load_log": "._no_load",
+        "SPIN_COLUMNS": "._spin",
+        "SpinPlan": "._spin",
+        "SpinLog": "._spin",
+        "SpinTest": "._spin",
+        "SpinFit": "._spin",
+        "spin_test": "._spin",
+        "short_circuit_gain": "._spin",
+        "fit_spin": "._spin",
+        "read_spin_log": "._spin",
+        "write_spin_log": "._spin",
         "Coverage": "._coverage",
         "coverage": "._coverage",
     },
