@@ -9,7 +9,9 @@ inverse-Gamma parameters, ``identify_standstill`` both and a T-circuit under a s
 split; every estimate carries its 95 % intervals (Jacobian covariance and bootstrap).
 ``axis_test`` / ``identify_pm_standstill`` give a PM machine's R_s, L_d, L_q (rotor locked with
 its d, then its q axis on phase a); ``no_load_test`` / ``fit_no_load`` a cage IM's L_M at the
-flux of a no-load run; ``spin_test`` / ``fit_spin`` its magnet flux
+flux of a no-load run; ``dfim_test`` / ``identify_dfim`` a DFIM's
+rotor-side parameters from its rotor converter with the stator open and shorted;
+``spin_test`` / ``fit_spin`` its magnet flux
 from a short-circuit spin test; ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
 and Coulomb friction from speed steps of a running drive. Logs may be CSV, Parquet or .mat.
 """
@@ -74,6 +76,10 @@ __all__, __getattr__, __dir__ = namespace(
         "fit_spin": "._spin",
         "read_spin_log": "._spin",
         "write_spin_log": "._spin",
+        "DFIMIdentification": "._dfim",
+        "dfim_test": "._dfim",
+        "identify_dfim": "._dfim",
+        "dfim_identifiability": "._dfim",
         "Coverage": "._coverage",
         "coverage": "._coverage",
     },

@@ -69,13 +69,19 @@ def _rl_start(spec) -> np.ndarray:
     return np.array([max(Z[0].real, 1e-6), max(Z[-1].imag / w[-1], 1e-9)])
 
 
+def rl_model(resistance: tuple[str, str], inductance: tuple[str, str]) -> AdmittanceModel:
+    """An RL winding whose resistance and inductance are named and explained by the pairs
+    (name, meaning) given (module docstring)."""
+    fields = ((resistance[0], "ohm", resistance[1]), (inductance[0], "H", inductance[1]))
+    return AdmittanceModel(fields, rl_admittance, _rl_start, tuple)
+
+
 def axis_model(axis: str) -> AdmittanceModel:
     """The winding of one axis at standstill (module docstring)."""
     if axis not in AXIS_ANGLE:
         raise InputError("axis", f"must be 'd' or 'q', got {axis!r}")
-    fields = (("R_s", "ohm", f"stator resistance ({axis}-axis test)"),
-              (f"L_{axis}", "H", f"{axis}-axis inductance"))  # fmt: skip
-    return AdmittanceModel(fields, rl_admittance, _rl_start, tuple)
+    return rl_model(("R_s", f"stator resistance ({axis}-axis test)"),
+                    (f"L_{axis}", f"{axis}-axis inductance"))  # fmt: skip
 
 
 @dataclass(frozen=True)
