@@ -136,10 +136,9 @@ def identify_dfim(open_log: StandstillLog, shorted_log: StandstillLog, base_freq
                                                 ("shorted", shorted_log, SHORTED_MODEL)))
     }  # fmt: skip
     opened, shorted = fits["open"], fits["shorted"]
-    R_r = combined_resistance(opened.estimates[0], shorted.estimates[0], opened.draws[:, 0],
-                              shorted.draws[:, 0])  # fmt: skip
-    R_r = Estimate("R_r", "ohm", "rotor resistance (both tests, inverse-variance weighted)",
-                   R_r.value, R_r.jacobian, R_r.bootstrap)  # fmt: skip
+    R_r = combined_resistance(
+        opened, shorted, "rotor resistance (both tests, inverse-variance weighted)"
+    )
     estimates = [R_r, opened.estimates[1], *shorted.estimates[1:]]
     sum_var = shorted.cov[1, 1] + shorted.cov[3, 3] + 2.0 * shorted.cov[1, 3]
     difference = opened.estimates[1].value - (shorted.estimates[1].value

@@ -118,17 +118,17 @@ class PMStandstillIdentification:
         return next(e.value for e in self.estimates if e.name == name)
 
 
-def combined_resistance(d: Estimate, q: Estimate, d_draws, q_draws) -> Estimate:
-    """R_s of both axis tests, weighted by their inverse Jacobian variances; its bootstrap draws
-    are the same weighting of the two tests' draws (``d_draws``, ``q_draws``: the tests are
-    independent, so paired draws are draws of the combination)."""
-    inverse = np.array([1.0 / (0.5 * (e.jacobian[1] - e.jacobian[0]) / Z_95) ** 2 for e in (d, q)])
+def combined_resistance(d: ImpedanceFit, q: ImpedanceFit, meaning: str) -> Estimate:
+    """The resistance (first parameter) of two independent fits ``d`` and ``q``, weighted by
+    their inverse Jacobian variances; its bootstrap draws are the same weighting of the two
+    fits' draws (independent tests, so paired draws are draws of the combination)."""
+    inverse = np.array([1.0 / fit.cov[0, 0] for fit in (d, q)])
     weights = inverse / inverse.sum()
-    value = float(weights @ [d.value, q.value])
+    value = float(weights @ [d.estimates[0].value, q.estimates[0].value])
     std = 1.0 / math.sqrt(inverse.sum())
-    draws = weights[0] * np.asarray(d_draws) + weights[1] * np.asarray(q_draws)
-    return Estimate("R_s", "ohm", "stator resistance (both axis tests, inverse-variance weighted)",
-                    value, (value - Z_95 * std, value + Z_95 * std),
+    draws = weights[0] * d.draws[:, 0] + weights[1] * q.draws[:, 0]
+    return Estimate(d.estimates[0].name, "ohm", meaning, value,
+                    (value - Z_95 * std, value + Z_95 * std),
                     percentile_interval(draws))  # fmt: skip
 
 
@@ -153,8 +153,9 @@ def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_freq
         )
         for k, (axis, log) in enumerate((("d", d_log), ("q", q_log)))
     }
-    R_s = combined_resistance(fits["d"].estimates[0], fits["q"].estimates[0],
-                              fits["d"].draws[:, 0], fits["q"].draws[:, 0])  # fmt: skip
+    R_s = combined_resistance(
+        fits["d"], fits["q"], "stator resistance (both axis tests, inverse-variance weighted)"
+    )
     estimates = (R_s, fits["d"].estimates[1], fits["q"].estimates[1])
     return PMStandstillIdentification(fits["d"], fits["q"], dc_fit, estimates)
 

@@ -229,8 +229,7 @@ def _standstill_cov(standstill) -> np.ndarray:
     """Covariance of (R_s, L_d, L_q) from a ``PMStandstillIdentification``: R_s's combined
     variance, each inductance's own, and R_s with L_x through the axis fit's covariance (times
     that axis's weight in the combination)."""
-    r = standstill.estimates[0]
-    var_r = (0.5 * (r.jacobian[1] - r.jacobian[0]) / Z_95) ** 2
+    var_r = 1.0 / (1.0 / standstill.d.cov[0, 0] + 1.0 / standstill.q.cov[0, 0])
     cov = np.zeros((3, 3))
     cov[0, 0] = var_r
     weights = [var_r / fit.cov[0, 0] for fit in (standstill.d, standstill.q)]
