@@ -14,16 +14,11 @@ from __future__ import annotations
 
 import sys
 
-LOG_SUFFIXES = (".csv", ".parquet", ".mat")
-#: the intervals printed beside each value
-INTERVAL_HEADER = (
-    "quantity",
-    "value",
-    "unit",
-    "95% CI (Jacobian)",
-    "95% CI (bootstrap)",
-    "meaning",
-)
+from acdrive._commands._identify_table import LOG_SUFFIXES, print_table
+
+#: what ``--kind`` names: the cage IM's standstill (and no-load) tests, or those of
+#: ``_identify_kinds``
+KINDS = ("cage-im", "pm", "dfim", "mechanics")
 
 
 def register(subparsers):
@@ -57,6 +52,19 @@ def register(subparsers):
     p.add_argument("--out", default="identified-machine.toml",
                    help="machine parameter file to write (TOML) [identified-machine.toml]")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print JSON instead of the table")
+    p.add_argument("--kind", choices=KINDS, default="cage-im",
+                   help="what the measured logs identify (default cage-im; the others: "
+                   "_identify_kinds)")  # fmt: skip
+    p.add_argument("--q-log", help="pm: q-axis injection log (the source is the d-axis one)")
+    p.add_argument("--spin-log", help="pm: short-circuit spin-test log (with w [rad/s]): psi_m")
+    p.add_argument("--spin-settle-s", type=float, default=None,
+                   help="pm: time dropped at the start of each spin plateau (s) [0.2]")  # fmt: skip
+    p.add_argument("--shorted-log",
+                   help="dfim: stator-shorted injection log (the source is the stator-open one)")  # fmt: skip
+    p.add_argument("--stator-resistance-ohm", type=float, default=None,
+                   help="dfim: stator resistance measured apart (fixes M and L_s)")  # fmt: skip
+    p.add_argument("--stator-resistance-std-ohm", type=float, default=0.0,
+                   help="dfim: standard error of --stator-resistance-ohm [0]")  # fmt: skip
     p.set_defaults(handler=run)
 
 
@@ -179,6 +187,13 @@ def run(args) -> int:
     from acdrive.identify._standstill import identifiability, identify_standstill
 
     target = check_target(args.out)  # before any work
+    if args.kind != "cage-im":
+        from acdrive._commands._identify_kinds import run_kind
+
+        return run_kind(args, target)
+    from acdrive._commands._identify_kinds import refuse_other_options
+
+    refuse_other_options(args)
     from acdrive.identify._no_load import fit_no_load
 
     plan = StandstillPlan()
@@ -201,19 +216,7 @@ def run(args) -> int:
         print(strict_json(_json(result, path, no_load), indent=2))
         return 0
 
-    def interval(pair):
-        return f"[{format_value(pair[0])}, {format_value(pair[1])}]"
-
-    cells = [INTERVAL_HEADER] + [
-        (name, format_value(e.value), e.unit, interval(e.jacobian), interval(e.bootstrap),
-         e.meaning) for name, e in _rows(result, no_load)
-    ]  # fmt: skip
-    widths = [max(len(row[i]) for row in cells) for i in range(5)]
-    print(f"Standstill identification of {args.source}")
-    for row in cells:
-        print("  ".join(f"{c:<{w}}" if i != 1 else f"{c:>{w}}"
-                        for i, (c, w) in enumerate(zip(row[:5], widths, strict=True)))
-              + "  " + row[5])  # fmt: skip
+    print_table(f"Standstill identification of {args.source}", _rows(result, no_load))
     fit = result.impedance
     print(f"residual: {format_value(fit.residual_rms)} A rms over {fit.spectrum.frequency.size} "
           f"tones ({format_value(fit.residual_relative)} of the currents), {fit.dof} degrees of freedom")  # fmt: skip

@@ -155,3 +155,27 @@ def _umask() -> int:
     from acdrive._output import current_umask
 
     return current_umask()
+
+
+def estimates_text(kind: str, source: str, groups: dict[str, tuple], statement: list[str],
+                   machine_params: dict | None, note: str, facts: dict) -> str:  # fmt: skip
+    """The file's text for an identification other than the cage IM's standstill one: ``kind``
+    (what was identified), ``groups`` (table name -> estimates, each written with both
+    intervals under ``[identification.<table>]``), the ``statement`` of what the data identify,
+    ``facts`` (name -> number or text: residuals, checks) and, when the estimates make a whole
+    machine table, ``machine_params`` (field -> value) for ``[machine.params]``; ``note`` says
+    what the table is for, or why there is none."""
+    from acdrive import __version__
+
+    lines = [f"{STAMP} {source}` (acdrive {__version__})", f"# {note}", ""]
+    if machine_params is not None:
+        lines += ["[machine.params]"]
+        lines += [f"{name} = {_toml_value(value)}" for name, value in machine_params.items()]
+        lines += [""]
+    lines += ["[identification]", f"kind = {_toml_value(kind)}"]
+    lines += [f"{name} = {_toml_value(value)}" for name, value in facts.items()]
+    lines += ["statement = [", *(f"    {_toml_value(line)}," for line in statement), "]", ""]
+    for group, estimates in groups.items():
+        for estimate in estimates:
+            lines += _estimate_table(f"identification.{group}", estimate)
+    return "\n".join(lines)

@@ -105,7 +105,8 @@ def spin_test(machine, plan: SpinPlan, seed: int = 5) -> SpinTest:
     for k, speed in enumerate(plan.speeds):
         log = run_test(machine, bench, np.zeros_like, plan.hold, seed + k, "simulated spin test",
                        torque=torque, speed=speed)  # fmt: skip
-        offset = k * (plan.hold + 1.0 / plan.f_pwm)
+        # each run continues one sample after the previous one's last (a uniform log)
+        offset = parts[-1][0][-1] + 1.0 / plan.f_pwm - log.time[0] if parts else 0.0
         parts.append((log.time + offset, log.v_a, log.i_a, np.full(log.time.size, speed)))
     time, v_a, i_a, w = (np.concatenate(c) for c in zip(*parts, strict=True))
     return SpinTest(SpinLog(time, v_a, i_a, w, "simulated spin test"),
