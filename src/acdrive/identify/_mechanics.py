@@ -38,12 +38,12 @@ so the speed a parameter set predicts from the logged torque is one recursive fi
 (w_{k-1} + w_k) / 2 to second order in h. **The fit** is the output error: ``least_squares`` of
 the logged minus predicted period-mean speed over J, B, tau_c and the first speed w_0 (a
 nuisance), unconstrained (a friction estimated below zero is reported as such: its interval
-says whether that is noise). The encoder's error differences two quantisation
-errors, so it is correlated between neighbouring rows (correlation -1/2): low frequencies carry
-less of it than white noise of the same variance, and the intervals computed as for white noise
-are wider than the error they describe (conservative). Intervals as every estimator of ``identify``: the Jacobian covariance scaled by
-the residual variance with Student's t, and a seeded bootstrap of refits on the predicted speed
-plus redrawn residuals (``identify._fit``). Each bootstrap refit is one Gauss-Newton step from
+says whether that is noise). Intervals as every estimator of ``identify``: the Jacobian
+covariance scaled by the residual variance with Student's t, and a seeded bootstrap of refits on
+the predicted speed plus redrawn residuals (``identify._fit``). The encoder's error is the
+difference of two quantisation errors, so neighbouring rows are correlated (correlation -1/2):
+low frequencies carry less of it than white noise of the same variance, and intervals computed
+as for white noise are wider than the error they describe (conservative). Each bootstrap refit is one Gauss-Newton step from
 the estimate with the estimate's Jacobian: the predicted speed is linear in the torque terms
 and nearly so in J over an interval a fraction of a percent wide, and a full refit of tens of
 thousands of rows two hundred times would take seconds.
@@ -51,10 +51,10 @@ thousands of rows two hundred times would take seconds.
 **What the data identify.** The accelerations give J (the torque that is not friction over the
 speed's slope); plateaus at two speeds or more separate the viscous (proportional to the speed)
 from the Coulomb (constant) part of the torque that holds a plateau. Rules, each an
-``InputError`` naming the column or parameter: the window starts at the first sample whose speed
-follows the last one below ``MIN_SPEED`` (below it a real shaft's friction is stiction, not a
-constant), and that window must hold at least ``MIN_FRACTION`` of the log; the logging step must resolve the drive's fastest change
-(at most ``MAX_STEP`` s); J's 95 % interval within +-50 % of its value; and B, tau_c each
+``InputError`` naming the column or parameter: the window starts after the last sample below
+``MIN_SPEED`` (below it a real shaft's friction is stiction, not a constant) and must hold at
+least ``MIN_FRACTION`` of the log; the logging step must resolve the drive's fastest change (at
+most ``MAX_STEP`` s); J's 95 % interval within +-50 % of its value; and B, tau_c each
 within +-50 % of its value or, for a friction that is small, its torque's interval (B w_max,
 tau_c) within +-``FRICTION_FLOOR`` of the largest logged torque: a friction too small to matter
 at that level is identified as small, not refused.
