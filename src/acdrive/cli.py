@@ -39,7 +39,7 @@ COMMANDS = {
     "stability": "drive stability (eigenvalues, map)",
     "reproduce": "regenerate a reproduction report",
     "sweep": "run a scenario over a grid of parameter values",
-    "identify": "cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
+    "identify": "machine parameters from logged tests (cage IM, PM, DFIM, mechanics) with 95-percent intervals",
     "export": "a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil)",
     "parts": "list the built-in part kinds, or describe one (parameters, states, ports, units)",
     "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor (both "

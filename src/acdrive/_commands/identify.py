@@ -26,7 +26,7 @@ def register(subparsers):
 
     p = subparsers.add_parser(
         "identify",
-        help="cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
+        help="machine parameters from logged tests (cage IM, PM, DFIM, mechanics) with 95-percent intervals",
     )
     p.add_argument("source", metavar="TEST_FILE_OR_SCENARIO",
                    help="injection log (.csv / .parquet / .mat) or a built-in cage IM to simulate")  # fmt: skip
@@ -53,8 +53,8 @@ def register(subparsers):
                    help="machine parameter file to write (TOML) [identified-machine.toml]")  # fmt: skip
     p.add_argument("--json", action="store_true", help="print JSON instead of the table")
     p.add_argument("--kind", choices=KINDS, default="cage-im",
-                   help="what the measured logs identify (default cage-im; the others: "
-                   "_identify_kinds)")  # fmt: skip
+                   help="what the measured logs identify: cage-im [default], pm, dfim or "
+                   "mechanics (docs/guide/identification.md)")  # fmt: skip
     p.add_argument("--q-log", help="pm: q-axis injection log (the source is the d-axis one)")
     p.add_argument("--spin-log", help="pm: short-circuit spin-test log (with w [rad/s]): psi_m")
     p.add_argument("--spin-settle-s", type=float, default=None,
