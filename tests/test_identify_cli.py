@@ -72,7 +72,8 @@ def test_bad_input_is_one_line_with_exit_2(logs, tmp_path, capsys):
     one_line_error(capsys, ["identify", str(injection), "--out", out],
                    r"--pole-pairs: is required for a measured log")  # fmt: skip
     one_line_error(capsys, ["identify", "no-such-machine", "--out", out],
-                   r"TEST_FILE_OR_SCENARIO: neither a .csv / .parquet log nor a built-in cage IM")  # fmt: skip
+                   r"TEST_FILE_OR_SCENARIO: neither a .csv / .parquet / .mat log nor a built-in "
+                   "cage IM")  # fmt: skip
     one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out",
                             str(tmp_path / "m.txt")], r"--out: must name a .toml file")  # fmt: skip
     bad = tmp_path / "bad.csv"
@@ -81,6 +82,11 @@ def test_bad_input_is_one_line_with_exit_2(logs, tmp_path, capsys):
                    r"TEST_FILE_OR_SCENARIO: column 'i_a': must be in A, got 'mA'")  # fmt: skip
     one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out", out,
                             "--base-frequency-hz", "0.3"], r"base_frequency: a period")  # fmt: skip
+    one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out", out,
+                            "--no-load-log", str(injection)],
+                   r"--no-load-log: column 'w': is missing; a no-load log has")  # fmt: skip
+    one_line_error(capsys, ["identify", "delorenzo-im", "--out", out, "--no-load-log",
+                            str(injection)], r"--no-load-log: is for a measured test")  # fmt: skip
 
 
 def test_a_file_of_the_users_is_never_replaced(logs, tmp_path, capsys):

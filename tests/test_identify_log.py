@@ -13,7 +13,7 @@ T = np.arange(100) * 2e-4
 LOG = StandstillLog(T, 10.0 * np.sin(2 * np.pi * 50 * T), 0.1 * np.cos(2 * np.pi * 50 * T), "x")
 
 
-@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+@pytest.mark.parametrize("suffix", [".csv", ".parquet", ".mat"])
 def test_a_written_log_reads_back_the_same_numbers(tmp_path, suffix):
     path = write_log(LOG, tmp_path / f"log{suffix}")
     back = read_log(path)
@@ -61,7 +61,37 @@ def test_a_bad_log_is_refused_naming_the_column_and_the_rule(tmp_path, header, r
 
 
 def test_a_file_of_another_kind_or_missing_is_refused(tmp_path):
-    with pytest.raises(InputError, match=r"^TEST_FILE: must be a .csv or .parquet file"):
-        read_log(tmp_path / "log.mat")
+    with pytest.raises(InputError, match=r"^TEST_FILE: must be a .csv, .parquet, .mat file"):
+        read_log(tmp_path / "log.txt")
+    (tmp_path / "junk.mat").write_text("not a MATLAB file")
+    with pytest.raises(InputError, match=r"^TEST_FILE: '.*junk.mat' is not a readable .mat file"):
+        read_log(tmp_path / "junk.mat")
     with pytest.raises(InputError, match=r"^TEST_FILE: '.*nothing.csv' is not a readable file"):
         read_log(tmp_path / "nothing.csv")
+
+
+def write_mat(path, units, **columns):
+    from scipy.io import savemat
+
+    savemat(path, {**columns, **({} if units is None else {"units": units})})
+    return path
+
+
+@pytest.mark.parametrize(
+    ("units", "columns", "message"),
+    [
+        ({"time": "s", "v_a": "V", "i_a": "mA"}, {}, r"column 'i_a': must be in A, got 'mA'"),
+        (None, {}, r"column 'time': has no unit; give it in the struct variable 'units'"),
+        ({"time": "s", "v_a": "V"}, {"i_a": None}, r"column 'i_a': is missing"),
+        ({"time": "s", "v_a": "V", "i_a": "A", "w": "rad/s"}, {"w": T},
+         r"column 'w': unknown; a standstill log has time \[s\], v_a \[V\], i_a \[A\]"),
+    ],
+)  # fmt: skip
+def test_a_mat_log_carries_its_units_in_a_struct_and_is_checked_like_the_others(
+    tmp_path, units, columns, message
+):
+    data = {"time": LOG.time, "v_a": LOG.v_a, "i_a": LOG.i_a, **columns}
+    data = {k: v for k, v in data.items() if v is not None}
+    path = write_mat(tmp_path / "log.mat", units, **data)
+    with pytest.raises(InputError, match=r"^TEST_FILE: " + message):
+        read_log(path)

@@ -40,7 +40,7 @@ COMMANDS = {
     "reproduce": "regenerate a reproduction report",
     "sweep": "run a scenario over a grid of parameter values",
     "robustness": "robustness map of parameter errors (grid or Monte Carlo, batch engine)",
-    "identify": "cage IM parameters from standstill tests (DC steps, multisine) with 95-percent intervals",
+    "identify": "machine parameters from logged tests (cage IM, PM, DFIM, mechanics) with 95-percent intervals",
     "export": (
         "a scenario's controller chains as C99 (export c), run in acdrive's loop (export sil), "
         "their cost on a Cortex-M4F (export m4), controller and plant as FMI 2.0 FMUs "

@@ -41,6 +41,7 @@ import numpy as np
 from acdrive._frames import K_PEAK
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.machines._pmsm import PMSGParams
 
 #: the log's columns: name -> (unit, meaning); the one declaration readers and writers use
 LOG_COLUMNS = {
@@ -140,59 +141,114 @@ def measured_current(i_a: np.ndarray, sensor: CurrentSensor, rng) -> np.ndarray:
     return reading
 
 
-@functools.cache
-def _bench():
-    """The standstill bench (module docstring), compiled once per process: (compiled system,
-    parts by role). Runs swap in re-parametrised parts of the same shape."""
-    from acdrive.control._open_loop import ComplexProgram
+def machine_part(machine):
+    """The plant part of ``machine``: a cage IM (``IMParams``), a PM machine (``PMSGParams``,
+    ``identify._pm``) or a DFIM (``DFIMParams``, ``identify._dfim``), named ``machine``."""
     from acdrive.machines._cage_part import CageInductionMachine
-    from acdrive.machines._induction import DELORENZO_IM
+    from acdrive.machines._dfim import DFIMParams
+    from acdrive.machines._dfim_part import DoublyFedMachine
+    from acdrive.machines._induction import IMParams
+    from acdrive.machines._pmsm_part import PermanentMagnetMachine
+
+    if isinstance(machine, IMParams):
+        return CageInductionMachine.from_params("machine", machine)
+    if isinstance(machine, PMSGParams):
+        return PermanentMagnetMachine.from_params("machine", machine)
+    if isinstance(machine, DFIMParams):
+        return DoublyFedMachine.from_params("machine", machine)
+    raise InputError("machine", f"a standstill bench takes a cage IM, a PM machine or a DFIM, "
+                     f"got {type(machine).__name__}")  # fmt: skip
+
+
+#: the DFIM bench's stator connection -> when its relay closes [s] (open: after any test)
+STATOR_RELAY = {"open": 1e12, "shorted": 0.0}
+
+
+@functools.cache
+def _bench(kind: type):
+    """The standstill bench (module docstring) for a machine record of type ``kind``, compiled
+    once per process: (compiled system, parts by role). Runs swap in re-parametrised parts of the
+    same shape."""
+    from acdrive.control._open_loop import ComplexProgram
+    from acdrive.machines._dfim import BODSON_DFIM, DFIMParams
+    from acdrive.machines._induction import DELORENZO_IM, IMParams
+    from acdrive.machines._pmsm import PMSG_2MW
     from acdrive.plant._inverter import Inverter
     from acdrive.plant._mechanics import PrescribedSpeed
+    from acdrive.plant._network import RelayCommand
     from acdrive.plant._sources import DCSource
     from acdrive.sim._system import System
 
+    template = {IMParams: DELORENZO_IM, PMSGParams: PMSG_2MW, DFIMParams: BODSON_DFIM}[kind]
     parts = {
         "program": ComplexProgram("program"),
         "dc": DCSource("dc", V=310.0),
         "inverter": Inverter("inverter"),
-        "machine": CageInductionMachine.from_params("machine", DELORENZO_IM),
+        "machine": machine_part(template),
         "shaft": PrescribedSpeed("shaft", w=0.0),
     }
     p = parts
     wires = [
         (p["program"].out.v_ref, p["inverter"].inp.v_ref),
         (p["dc"].out.v_dc, p["inverter"].inp.v_dc),
-        (p["machine"].out.i_s, p["inverter"].inp.i_s),
-        (p["inverter"].out.v, p["machine"].inp.v_s),
         (p["shaft"].out.w, p["machine"].inp.w),
     ]
+    if kind is DFIMParams:  # the converter feeds the rotor; the stator is open or shorted
+        p["stator"] = ComplexProgram("stator")
+        p["relay"] = RelayCommand("relay", close_at=0.0)
+        wires += [
+            (p["machine"].out.i_r_rotor, p["inverter"].inp.i_s),
+            (p["inverter"].out.v, p["machine"].inp.v_r),
+            (p["stator"].out.v_ref, p["machine"].inp.v_s),
+            (p["relay"].out.closed, p["machine"].inp.connected),
+        ]
+    else:
+        wires += [
+            (p["machine"].out.i_s, p["inverter"].inp.i_s),
+            (p["inverter"].out.v, p["machine"].inp.v_s),
+        ]
     return System(list(parts.values()), wires).compile(), parts
 
 
 def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
-             source: str) -> StandstillLog:  # fmt: skip
-    """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on the cage IM
-    ``machine`` (an ``IMParams``) and return the log with the sensor's reading (seeded)."""
-    from acdrive.machines._cage_part import CageInductionMachine
-
+             source: str, initial=None, torque: list | None = None,
+             speed: float = 0.0, stator: str = "open") -> StandstillLog:  # fmt: skip
+    """Run the bench with phase-a command ``voltage(t)`` for ``duration`` seconds on ``machine``
+    (a cage IM's ``IMParams`` or a PM machine's ``PMSGParams``, its part's states from
+    ``initial``, e.g. a locked rotor's angle) and return the log with the sensor's reading
+    (seeded). A list ``torque`` receives the torque the shaft holds [N m], per sample. A complex
+    ``voltage(t)`` is a space vector over sqrt(3/2) (its real part phase a's voltage: a balanced
+    set for e^{jwt}); ``speed`` [rad/s] is the speed the shaft is driven at (a dynamometer;
+    0: locked). On a DFIM the inverter feeds the rotor, the log's v_a, i_a are the rotor's
+    phase-a voltage and current (referred to the stator, Bodson (3)) and its stator is
+    ``stator``: "open" (relay open) or "shorted" (relay closed onto zero voltage)."""
     require_positive("duration", duration)
-    compiled, parts = _bench()
+    compiled, parts = _bench(type(machine))
     T = plan.sample_time
     n = round(duration / T)
     t = np.arange(n + 1) * T
-    command = K_PEAK * voltage(t)
+    command = K_PEAK * np.asarray(voltage(t))
+    imaginary = Profile(t, command.imag) if np.iscomplexobj(command) else 0.0
     variants = [
-        parts["program"].with_params(re=Profile(t, command), im=0.0),
+        parts["program"].with_params(re=Profile(t, command.real), im=imaginary),
+        parts["shaft"].with_params(w=float(speed)),
         parts["dc"].with_params(V=plan.v_dc),
         parts["inverter"].with_params(f_pwm=plan.f_pwm, t_d=plan.t_d, v_drop=plan.v_drop),
-        CageInductionMachine.from_params("machine", machine),
+        machine_part(machine),
     ]
     inverter, motor = parts["inverter"], parts["machine"]
-    result = compiled.run(n * T, T, substeps=2, parts=variants,
-                          log=[inverter.out.v_lim, motor.out.i_s])  # fmt: skip
+    current = motor.out.i_s
+    if "relay" in parts:
+        if stator not in STATOR_RELAY:
+            raise InputError("stator", f"must be one of {', '.join(STATOR_RELAY)}")
+        variants.append(parts["relay"].with_params(close_at=STATOR_RELAY[stator]))
+        current = motor.out.i_r_rotor
+    result = compiled.run(n * T, T, substeps=2, parts=variants, initial=initial,
+                          log=[inverter.out.v_lim, current, motor.out.tau_e])  # fmt: skip
+    if torque is not None:
+        torque.append(result.signal(motor.out.tau_e).copy())
     v_a = result.signal(inverter.out.v_lim).real / K_PEAK
-    i_a = result.signal(motor.out.i_s).real / K_PEAK
+    i_a = result.signal(current).real / K_PEAK
     rng = np.random.default_rng(seed)
     return StandstillLog(result.t.copy(), v_a, measured_current(i_a, plan.sensor, rng), source)
 

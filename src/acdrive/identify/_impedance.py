@@ -42,6 +42,7 @@ interval within +-``MAX_HALF_WIDTH`` of its value.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,7 +50,6 @@ import numpy as np
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._circuit import (
     INVERSE_GAMMA,
-    NAMES,
     InverseGamma,
     sampled_admittance,
     standstill_impedance,
@@ -110,10 +110,13 @@ class ImpedanceFit:
     voltage_error: float | None
     draws: np.ndarray
     cov: np.ndarray
+    model: AdmittanceModel | None = None
 
     @property
-    def params(self) -> InverseGamma:
-        return InverseGamma.from_array([e.value for e in self.estimates])
+    def params(self):
+        """The parameter record of the model fitted (``InverseGamma`` for the cage IM)."""
+        model = INVERSE_GAMMA_MODEL if self.model is None else self.model
+        return model.record([e.value for e in self.estimates])
 
     def measured_impedance(self) -> np.ndarray:
         """V_k / I_k at the tones [ohm]: the log's own impedance, sampled-data effects included."""
@@ -181,11 +184,11 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
 _FAR = 1e6
 
 
-def _residual(theta, spec: Spectrum):
+def _residual(theta, spec: Spectrum, model: AdmittanceModel):
     with np.errstate(all="ignore"):
         params = np.exp(theta)
         try:
-            Y = sampled_admittance(params, 2.0 * np.pi * spec.frequency, spec.hold)
+            Y = model.admittance(params, 2.0 * np.pi * spec.frequency, spec.hold)
         except np.linalg.LinAlgError:
             Y = np.full(spec.frequency.size, np.nan)
     error = spec.current - Y * spec.voltage
@@ -206,10 +209,29 @@ def _start(spec: Spectrum) -> np.ndarray:
     return np.log([R_s, L_sigma, R_R, L_M])
 
 
-def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12):
+@dataclass(frozen=True)
+class AdmittanceModel:
+    """A winding at standstill as the fit sees it: its parameters ``fields`` ((name, unit,
+    meaning), in fit order), ``admittance(values, w, hold)`` its zero-order-hold sampled
+    admittance Y_d(e^{jwT}) [S], ``start(spectrum)`` a starting point (positive values) and
+    ``record(values)`` the parameter record of the values."""
+
+    fields: tuple[tuple[str, str, str], ...]
+    admittance: Callable
+    start: Callable
+    record: Callable
+
+
+#: the cage IM at standstill: the inverse-Gamma circuit (``identify._circuit``)
+INVERSE_GAMMA_MODEL = AdmittanceModel(
+    INVERSE_GAMMA, sampled_admittance, lambda spec: np.exp(_start(spec)), InverseGamma.from_array
+)
+
+
+def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12, model=INVERSE_GAMMA_MODEL):
     from scipy.optimize import least_squares
 
-    return least_squares(_residual, theta0, args=(spec,), method="lm", xtol=tolerance,
+    return least_squares(_residual, theta0, args=(spec, model), method="lm", xtol=tolerance,
                          ftol=tolerance, gtol=tolerance, max_nfev=2000)  # fmt: skip
 
 
@@ -221,20 +243,26 @@ BOOTSTRAP_TOLERANCE = 1e-8
 def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                   voltage_error: float | None = None, seed: int = 0,
                   bootstrap: int = BOOTSTRAP_COUNT, check: bool = True,
-                  voltage_error_std: float = 0.0) -> ImpedanceFit:  # fmt: skip
+                  voltage_error_std: float = 0.0,
+                  model: AdmittanceModel = INVERSE_GAMMA_MODEL) -> ImpedanceFit:  # fmt: skip
     """The inverse-Gamma parameters of an injection log with their intervals (module docstring).
     ``voltage_error_std`` [V], the standard error of ``voltage_error``, widens the intervals by
     what it carries into the fit (module docstring). ``check=False`` skips the identifiability
     rules (to show what a bad test gives, e.g. the bias of an uncompensated voltage error); the
-    intervals are returned all the same."""
+    intervals are returned all the same. ``model`` is the winding fitted (default the cage IM's
+    inverse-Gamma circuit; ``identify._pm`` fits a PM machine's axis)."""
     spec = spectrum(log, base_frequency, settle, voltage_error)
-    fit = _solve(spec, _start(spec))
-    m, n = 2 * spec.frequency.size, len(NAMES)
+    theta0 = np.log(model.start(spec))
+    fit = _solve(spec, theta0, model=model)
+    m, n = 2 * spec.frequency.size, len(model.fields)
+    if m - n < 1:
+        raise InputError("excitation", f"{spec.frequency.size} tones cannot determine "
+                         f"{n} parameters with a residual left to judge the fit")  # fmt: skip
     dof = m - n
     rms = float(np.sqrt(2.0 * fit.cost / m))
     if not fit.success or not np.all(np.isfinite(fit.x)) or fit.cost >= _FAR:
         reached = (
-            rms if fit.cost < _FAR else float(np.sqrt(np.mean(_residual(_start(spec), spec) ** 2)))
+            rms if fit.cost < _FAR else float(np.sqrt(np.mean(_residual(theta0, spec, model) ** 2)))
         )
         raise FitNotConverged(
             "impedance", fit.message, reached, "A (rms of the tones' current error)"
@@ -242,42 +270,50 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     values = np.exp(fit.x)
     s2 = 2.0 * fit.cost / dof
     cov_theta = covariance(fit.jac, s2)
-    cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
+    with np.errstate(invalid="ignore"):  # an unbounded direction stays unbounded (inf, NaN)
+        cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
     U = 0.0 if voltage_error is None else voltage_error
     spread = voltage_error_std if voltage_error is not None else 0.0
     if spread > 0.0:  # + g g^T var(U), g = dp/dU by central differences of two refits
-        up = np.exp(_solve(spec.compensated(U + spread), fit.x).x)
-        down = np.exp(_solve(spec.compensated(U - spread), fit.x).x)
+        up = np.exp(_solve(spec.compensated(U + spread), fit.x, model=model).x)
+        down = np.exp(_solve(spec.compensated(U - spread), fit.x, model=model).x)
         g = (up - down) / (2.0 * spread)
         cov = cov + np.outer(g, g) * spread**2
     q = t_quantile(dof)
     rng = np.random.default_rng(seed)
     residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]
     residual = residual * math.sqrt(m / dof)
-    model = spec.current - (fit.fun[: m // 2] + 1j * fit.fun[m // 2 :])
+    response = spec.current - (fit.fun[: m // 2] + 1j * fit.fun[m // 2 :])
     draws = np.empty((bootstrap, n))
     for b in range(bootstrap):
-        redrawn = model + rng.choice(residual, residual.size)
+        redrawn = response + rng.choice(residual, residual.size)
         resampled = spec.compensated(U + spread * rng.standard_normal(), redrawn)
-        refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE)
+        refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE, model)
         draws[b] = np.exp(refit.x) if refit.success and refit.cost < _FAR else np.nan
     estimates = tuple(
         Estimate(name, unit, meaning, float(values[j]),
                  jacobian_interval(values[j], cov[j, j], q), percentile_interval(draws[:, j]))
-        for j, (name, unit, meaning) in enumerate(INVERSE_GAMMA)
+        for j, (name, unit, meaning) in enumerate(model.fields)
     )  # fmt: skip
     current_scale = float(np.sqrt(np.mean(np.abs(spec.current) ** 2) / 2.0))
-    result = ImpedanceFit(estimates, spec, rms, rms / current_scale, dof, voltage_error, draws, cov)
+    result = ImpedanceFit(estimates, spec, rms, rms / current_scale, dof, voltage_error, draws,
+                          cov, model)  # fmt: skip
     if check:
         check_identified(result)
     return result
 
 
 def check_identified(fit: ImpedanceFit) -> None:
-    """The identifiability rules of the module docstring, on a fit."""
-    params = fit.params
-    corner = params.rotor_corner / (2.0 * math.pi)
+    """The identifiability rules of the module docstring, on a fit (the rotor-corner rule for the
+    cage IM's circuit, the interval rule for every model)."""
     low, high = fit.spectrum.frequency[0], fit.spectrum.frequency[-1]
+    if fit.model is None or fit.model is INVERSE_GAMMA_MODEL:
+        _check_rotor_corner(fit.params, low, high)
+    _check_widths(fit.estimates, f"tones {low:g} to {high:g} Hz")
+
+
+def _check_rotor_corner(params: InverseGamma, low: float, high: float) -> None:
+    corner = params.rotor_corner / (2.0 * math.pi)
     if high < corner:
         raise InputError("R_R", f"not separable from L_sigma: every tone ({low:g} to {high:g} Hz) "
                          f"lies below the rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz of the "
@@ -286,9 +322,15 @@ def check_identified(fit: ImpedanceFit) -> None:
         raise InputError("L_M", f"not seen: every tone ({low:g} to {high:g} Hz) lies above the "
                          f"rotor corner R_R / (2 pi L_M) = {corner:.3g} Hz of the fit; the tones "
                          "must bracket it")  # fmt: skip
-    for estimate in fit.estimates:
+
+
+def _check_widths(estimates, excitation: str) -> None:
+    """Every estimate's 95 % interval within +-``MAX_HALF_WIDTH`` of its value, else an
+    InputError naming the parameter (``excitation`` says what the test was)."""
+    for estimate in estimates:
         width = estimate.half_width()
         if not width <= MAX_HALF_WIDTH:
+            told = f"+-{width:.0%} of the value" if math.isfinite(width) else "unbounded"
             raise InputError(estimate.name, f"not identified by this excitation: its 95 % "
-                             f"interval is +-{width:.0%} of the value, at most "
-                             f"+-{MAX_HALF_WIDTH:.0%} accepted (tones {low:g} to {high:g} Hz)")  # fmt: skip
+                             f"interval is {told}, at most +-{MAX_HALF_WIDTH:.0%} of the value "
+                             f"accepted ({excitation})")  # fmt: skip

@@ -54,9 +54,13 @@ class StandstillIdentification:
     def params(self) -> InverseGamma:
         return self.impedance.params
 
-    def machine(self):
-        """The ``IMParams`` of the estimates under the leakage split."""
-        return t_circuit(self.params, self.n_p, self.split)
+    def machine(self, L_M: float | None = None):
+        """The ``IMParams`` of the estimates under the leakage split (with the magnetising
+        inductance ``L_M`` [H] of a no-load run instead of the injection's, if given)."""
+        params = self.params
+        if L_M is not None:
+            params = InverseGamma(params.R_s, params.L_sigma, params.R_R, float(L_M))
+        return t_circuit(params, self.n_p, self.split)
 
 
 def _t_values(values, n_p: int, split: str) -> np.ndarray:

@@ -1,0 +1,218 @@
+"""``acdrive identify --kind pm | dfim | mechanics``: the identifications other than the cage IM's,
+from the logs of a measured test (``acdrive.identify``; docs/guide/identification.md).
+
+* ``pm``: the source is the d-axis injection log, ``--q-log`` the q-axis one (rotor locked with
+  that axis on phase a), ``--dc-log`` the DC steps (optional), ``--spin-log`` the short-circuit
+  spin test (optional: psi_m), ``--pole-pairs`` required. With the spin log the file has the PM
+  scenario's ``[machine.params]`` (R_s, L_d, L_q, psi_m, n_p; J to be added from the mechanics).
+* ``dfim``: the source is the stator-open injection log from the rotor converter,
+  ``--shorted-log`` the stator-shorted one, ``--dc-log`` the stator-open DC steps (optional),
+  ``--stator-resistance-ohm`` (and its standard error) a stator resistance measured apart,
+  without which M and L_s are not identifiable. With it and ``--pole-pairs`` the file has a DFIM
+  machine table (R_s, R_r, L_s, L_r, M, n_p).
+* ``mechanics``: the source is the speed-step log (``time [s]``, ``tau_e [N m]``,
+  ``w [rad/s]``); the file has J, the viscous friction and the Coulomb friction.
+
+Every estimate is printed and written with both 95 % intervals; a fit that does not converge
+says so with its residual (exit 1); bad input is one line naming the field (exit 2).
+"""
+
+from __future__ import annotations
+
+import sys
+
+#: option -> the kinds it applies to (every other kind refuses it)
+OPTIONS = {
+    "q_log": ("pm",),
+    "spin_log": ("pm",),
+    "spin_settle_s": ("pm",),
+    "shorted_log": ("dfim",),
+    "stator_resistance_ohm": ("dfim",),
+    "no_load_log": ("cage-im",),
+    "no_load_frequency_hz": ("cage-im",),
+}
+
+
+def _flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def refuse_other_options(args) -> None:
+    """An option of another kind than ``args.kind`` given: one line naming it."""
+    from acdrive.errors import InputError
+
+    for name, kinds in OPTIONS.items():
+        if getattr(args, name, None) is not None and args.kind not in kinds:
+            raise InputError(_flag(name), f"is for --kind {' / '.join(kinds)} only")
+    if args.stator_resistance_std_ohm != 0.0 and args.kind != "dfim":
+        raise InputError("--stator-resistance-std-ohm", "is for --kind dfim only")
+
+
+def _measured(args) -> None:
+    """The source must be a log: the simulated tests of a built-in machine are the cage IM's."""
+    from pathlib import Path
+
+    from acdrive._commands._identify_table import LOG_SUFFIXES
+    from acdrive.errors import InputError
+
+    if Path(args.source).suffix not in LOG_SUFFIXES:
+        raise InputError("TEST_FILE_OR_SCENARIO", f"--kind {args.kind} reads a measured "
+                         f"{' / '.join(LOG_SUFFIXES)} log")  # fmt: skip
+    for flag in ("dead_time_s", "device_drop_v"):
+        if getattr(args, flag) != 0.0:
+            raise InputError(_flag(flag), "is for a simulated test only")
+    if args.leakage_split != "equal":
+        raise InputError("--leakage-split", "is for --kind cage-im only")
+
+
+def _required(args, name: str):
+    from acdrive.errors import InputError
+
+    value = getattr(args, name)
+    if value is None:
+        raise InputError(_flag(name), f"is required for --kind {args.kind}")
+    return value
+
+
+def _plan_window(args):
+    """(base frequency, settle) of the injections: the options or the built-in plan's."""
+    from acdrive.errors import require_nonnegative, require_positive
+    from acdrive.identify._experiment import StandstillPlan
+
+    plan = StandstillPlan()
+    base = plan.base_frequency if args.base_frequency_hz is None else args.base_frequency_hz
+    settle = plan.settle if args.settle_s is None else args.settle_s
+    return require_positive("--base-frequency-hz", base), require_nonnegative("--settle-s", settle)
+
+
+def _pole_pairs(args, required: bool):
+    from acdrive.errors import require_between
+
+    if args.pole_pairs is None:
+        return _required(args, "pole_pairs") if required else None
+    return require_between("--pole-pairs", args.pole_pairs, 1, 1000)
+
+
+def _pm(args):
+    """(rows, statement, facts, machine params or None, note, groups) of --kind pm."""
+    from acdrive.errors import require_nonnegative
+    from acdrive.identify._log import read_log
+    from acdrive.identify._pm import identify_pm_standstill, pm_identifiability
+    from acdrive.identify._spin import SpinPlan, fit_spin, read_spin_log
+
+    n_p = _pole_pairs(args, True)
+    base, settle = _plan_window(args)
+    d = read_log(args.source, "TEST_FILE_OR_SCENARIO")
+    q = read_log(_required(args, "q_log"), "--q-log")
+    dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+    spin = read_spin_log(args.spin_log, "--spin-log") if args.spin_log else None
+    spin_settle = SpinPlan().settle if args.spin_settle_s is None else args.spin_settle_s
+    require_nonnegative("--spin-settle-s", spin_settle)
+    result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed)
+    groups = {"pm_standstill": result.estimates}
+    statement = pm_identifiability(result)
+    facts = {"residual_rms_a_d": result.d.residual_rms, "residual_rms_a_q": result.q.residual_rms}
+    params, note = None, "no [machine.params]: the magnet flux needs --spin-log"
+    if spin is not None:
+        fit = fit_spin(spin, n_p, spin_settle, result, seed=args.seed + 3)
+        groups["spin"] = (fit.psi_m,)
+        facts["spin_residual"] = fit.residual
+        statement = [
+            *statement,
+            "identified: psi_m from the short-circuit spin test, with the standstill R_s, L_d, L_q",
+        ]
+        params = {name: result.value(name) for name in ("R_s", "L_d", "L_q")}
+        params |= {"psi_m": fit.psi_m.value, "n_p": n_p}
+        note = ("[machine.params] is a pm scenario's machine table less J (the mechanics' "
+                "test gives it): add J and copy it into a scenario")  # fmt: skip
+    if dc is not None:
+        groups["dc_steps"] = (result.dc.R_s, result.dc.voltage_error)
+    return groups, statement, facts, params, note
+
+
+def _dfim(args):
+    from acdrive.errors import require_nonnegative, require_positive
+    from acdrive.identify._dfim import dfim_identifiability, identify_dfim
+    from acdrive.identify._log import read_log
+
+    n_p = _pole_pairs(args, False)
+    base, settle = _plan_window(args)
+    R_s = args.stator_resistance_ohm
+    if R_s is not None:
+        require_positive("--stator-resistance-ohm", R_s)
+    R_s_std = require_nonnegative("--stator-resistance-std-ohm", args.stator_resistance_std_ohm)
+    opened = read_log(args.source, "TEST_FILE_OR_SCENARIO")
+    shorted = read_log(_required(args, "shorted_log"), "--shorted-log")
+    dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+    result = identify_dfim(opened, shorted, base, settle, dc=dc, R_s=R_s, R_s_std=R_s_std,
+                           seed=args.seed)  # fmt: skip
+    groups = {"dfim": result.estimates}
+    if dc is not None:
+        groups["dc_steps"] = (result.dc.R_s, result.dc.voltage_error)
+    facts = {"consistency_l_r_sigmas": result.consistency,
+             "residual_rms_a_open": result.open.residual_rms,
+             "residual_rms_a_shorted": result.shorted.residual_rms}  # fmt: skip
+    params, note = None, ("no [machine.params]: M and L_s need --stator-resistance-ohm, the "
+                          "table needs --pole-pairs")  # fmt: skip
+    if R_s is not None and n_p is not None:
+        params = {name: result.value(name) for name in ("R_s", "R_r", "L_s", "L_r", "M")}
+        params["n_p"] = n_p
+        note = "[machine.params] is a DFIM's electrical table (machines.DFIMParams less J)"
+    return groups, dfim_identifiability(result), facts, params, note
+
+
+def _mechanics(args):
+    from acdrive.identify._mechanics import (
+        fit_mechanics,
+        mechanics_identifiability,
+        read_mechanics_log,
+    )
+
+    for flag in ("pole_pairs", "base_frequency_hz", "settle_s", "dc_log"):
+        if getattr(args, flag) is not None:
+            from acdrive.errors import InputError
+
+            raise InputError(_flag(flag), "is not used by --kind mechanics")
+    fit = fit_mechanics(read_mechanics_log(args.source, "TEST_FILE_OR_SCENARIO"), seed=args.seed)
+    note = ("[identification.mechanics] J and B are a scenario's [machine] J and "
+            "viscous_friction; the Coulomb friction has no scenario field yet")  # fmt: skip
+    facts = {"residual_rms_rad_s": fit.residual_rms, "degrees_of_freedom": fit.dof}
+    return {"mechanics": fit.estimates}, mechanics_identifiability(fit), facts, None, note
+
+
+def run_kind(args, target) -> int:
+    """Identify ``args.kind`` from its measured logs; print the table and write the file."""
+    from acdrive._commands._identify_table import print_table
+    from acdrive.identify._fit import FitNotConverged
+    from acdrive.identify._params_file import estimates_text, write_params
+
+    refuse_other_options(args)
+    _measured(args)
+    try:
+        groups, statement, facts, params, note = {"pm": _pm, "dfim": _dfim,
+                                                  "mechanics": _mechanics}[args.kind](args)  # fmt: skip
+    except FitNotConverged as exc:
+        sys.stderr.write(f"acdrive: error: {exc}\n")
+        return 1
+    path = write_params(target, estimates_text(args.kind, args.source, groups, statement, params,
+                                               note, facts))  # fmt: skip
+    rows = [(f"{group}.{e.name}", e) for group, estimates in groups.items() for e in estimates]
+    if args.json:
+        from acdrive._output import strict_json
+
+        def entry(e):
+            return {"value": e.value, "unit": e.unit, "ci95_jacobian": list(e.jacobian),
+                    "ci95_bootstrap": list(e.bootstrap), "meaning": e.meaning}  # fmt: skip
+
+        print(strict_json({"kind": args.kind, "estimates": {q: entry(e) for q, e in rows},
+                           "statement": statement, **facts, "machine_params": params,
+                           "written": str(path)}, indent=2))  # fmt: skip
+        return 0
+    print_table(f"Identification ({args.kind}) of {args.source}", rows)
+    for name, value in facts.items():
+        print(f"  {name}: {value:.4g}" if isinstance(value, float) else f"  {name}: {value}")
+    for line in statement:
+        print(f"  {line}")
+    print(f"  {note}")
+    print(f"wrote {path}")
+    return 0
