@@ -20,7 +20,7 @@ from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import W_COULOMB, Shaft
-from acdrive.plant._network import SupplyBus, StatorRelay
+from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
 
 #: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
