@@ -141,6 +141,15 @@ def test_dfim_voltage_mode_fmus_equal_acdrive(tmp_path):
         text = text.replace(old, new)
     path = tmp_path / "bodson-ramp.toml"
     path.write_text(text)
+    from fmpy.validation import validate_fmu
+
+    from acdrive.export._fmu_check import PARTS, scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    (tmp_path / "fmus").mkdir()
+    built = scenario_fmus(load_scenario(str(path)), PARTS, tmp_path / "fmus")
+    for fmu in built.values():
+        assert validate_fmu(str(fmu)) == [], fmu.name
     report = _fmu_check(str(path))
     assert report["strict_math"] is True and report["samples"] == 1500
     signals = report["controller"]["signals"]
