@@ -47,6 +47,7 @@ def test_site_builds_without_warnings_and_runs_every_example(tmp_path):
     assert "v_ref" in api and "commanded voltage space vector" in api
     assert "plot_winding_thermal" in examples  # the gallery writes its own part
     assert "plot_pm_field_weakening" in examples  # the PM drive, MTPA and field weakening
+    assert "plot_export_m4" in examples  # ICAD design -> C -> SIL -> Cortex-M4 count
     index = (out / "index.html").read_text()
     assert "Getting started" in index and "Gallery" in index
 

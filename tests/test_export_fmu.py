@@ -125,10 +125,11 @@ def test_controller_fmu_gives_acdrives_commands_exactly(report):
         assert row["peak"] > 100.0  # the speed step drives the voltage command (V)
 
 
-def test_dfim_voltage_mode_controller_fmu_is_exact(tmp_path):
-    """Bodson's DFIM chain (voltage command (20), synchroniser (28)) as an FMU: with acdrive's
-    logged plant outputs it gives acdrive's commands exactly over bodson-ramp with its ramp
-    compressed into 0.3 s (the DFIM plant has no C yet: the controller is checked alone)."""
+def test_dfim_voltage_mode_fmus_equal_acdrive(tmp_path):
+    """Bodson's DFIM drive as two FMUs over bodson-ramp with its ramp compressed into 0.3 s: the
+    controller (voltage command (20), synchroniser (28)) gives acdrive's commands exactly; the
+    plant (grid, supply bus, DFIM (9), stator relay, shaft, averaged rotor converter) with
+    acdrive's logged commands, and the two in closed loop, within 1e-9 of each signal's peak."""
     text = builtin_text("bodson-ramp")
     for old, new in {
         "duration = 14.0": "duration = 0.3",
@@ -140,13 +141,43 @@ def test_dfim_voltage_mode_controller_fmu_is_exact(tmp_path):
         text = text.replace(old, new)
     path = tmp_path / "bodson-ramp.toml"
     path.write_text(text)
-    report = _fmu_check(str(path), "--part", "controller")
-    assert report["plant"] is None and report["closed_loop"] is None
+    from fmpy.validation import validate_fmu
+
+    from acdrive.export._fmu_check import PARTS, scenario_fmus
+    from acdrive.scenarios._loader import load_scenario
+
+    (tmp_path / "fmus").mkdir()
+    built = scenario_fmus(load_scenario(str(path)), PARTS, tmp_path / "fmus")
+    for fmu in built.values():
+        assert validate_fmu(str(fmu)) == [], fmu.name
+    report = _fmu_check(str(path))
+    assert report["strict_math"] is True and report["samples"] == 1500
     signals = report["controller"]["signals"]
     assert {"controller0.v_r.re", "controller0.v_r.im", "sync0.closed"} <= set(signals)
     for column, row in signals.items():
         assert row["max_difference"] == 0.0, (column, row)
     assert signals["controller0.v_r.re"]["peak"] > 1.0  # the rotor voltage command moved (V)
+    for check in ("plant", "closed_loop"):
+        run = report[check]
+        assert run["worst_ratio"] <= report["plant_tolerance"] == 1e-9, (check, run["worst_signal"])
+        assert run["signals"]["shaft0.w"]["peak"] > 100.0  # the ramp ran the shaft up (rad/s)
+        assert run["signals"]["dfim0.i_s.re"]["peak"] > 1.0  # stator current flowed (A)
+        assert run["signals"]["bus.v.re"]["peak"] > 10.0  # the grid's 11.1 V peak x sqrt(3/2)
+
+
+def test_dfim_relay_closing_inside_the_run_fmus_equal_acdrive():
+    """bodson-sync over 0.5 s: the stator starts open and the synchroniser closes the relay
+    (Bodson (28)). The plant's direct outputs (the relay's voltage, the DFIM's currents) read
+    the command held from the previous sample, as acdrive's loop does, so the closing sample
+    matches too: plant and closed loop within 1e-9 of each signal's peak."""
+    report = _fmu_check("bodson-sync", "--duration", "0.5")
+    assert report["samples"] == 2500
+    for check in ("plant", "closed_loop"):
+        run = report[check]
+        assert run["worst_ratio"] <= report["plant_tolerance"], (check, run["worst_signal"])
+        assert run["signals"]["relay0.closed"]["peak"] == 1.0  # it closed
+        assert run["signals"]["dfim0.v_open.re"]["peak"] > 1.0  # it was open before (V)
+    assert report["closed_loop"]["signals"]["sync0.closed"]["peak"] == 1.0
 
 
 def test_plant_fmu_open_loop_within_1e_9_of_peak(report):
@@ -309,8 +340,9 @@ def test_cli_writes_both_and_keeps_users_folder(scenario, tmp_path, capsys):
 
 
 def test_cli_plant_without_c_is_one_line_and_writes_nothing(tmp_path, capsys):
-    """The DFIM's grid source has no C yet: one line naming the part and the rule, exit 2."""
-    assert _cli("export", "fmu", "bodson-ramp", "--part", "plant", "--out", str(tmp_path)) == 2
+    """fault-phase-loss's grid (an UnbalancedSource) has no C: one line naming the part and the
+    rule, exit 2."""
+    assert _cli("export", "fmu", "fault-phase-loss", "--part", "plant", "--out", str(tmp_path)) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "grid:" in err[0] and "has no C implementation" in err[0]
     assert list(tmp_path.iterdir()) == []
@@ -326,14 +358,15 @@ def test_cli_missing_compiler_is_one_line(scenario, tmp_path, capsys, monkeypatc
     assert not (tmp_path / "out").exists()
 
 
-def test_feedthrough_across_the_boundary_is_refused():
-    """A plant part whose direct output reads a controller command at the same instant would
-    make the plant FMU feed its input through: refused, naming the part and the rule."""
+def test_direct_outputs_without_c_are_refused(monkeypatch):
+    """A plant kind with direct outputs whose C does not write them (no ``direct_outputs``
+    body) is refused, naming the part and the rule."""
     from typing import ClassVar
 
     from acdrive.core._parts import ContinuousPart, SampledPart
     from acdrive.core._signals import Layout, real
     from acdrive.errors import InputError
+    from acdrive.export import _kinds
     from acdrive.export._plant_source import to_plant_c
     from acdrive.sim._system import System
 
@@ -349,6 +382,8 @@ def test_feedthrough_across_the_boundary_is_refused():
         DIRECT_OUTPUTS: ClassVar = ("y",)
         state_outputs = rhs = direct_outputs = None
 
+    _kinds._load()
+    monkeypatch.setitem(_kinds._PLANT_REGISTRY, Through, _kinds.PlantC(source="test", rhs=""))
     command, through = Command("command"), Through("through")
     system = System.__new__(System)  # the wiring only: the kernels are never compiled here
     system.continuous, system.modulators = [through], []
@@ -356,7 +391,7 @@ def test_feedthrough_across_the_boundary_is_refused():
     with pytest.raises(InputError) as caught:
         to_plant_c(system, 1e-4, 1)
     message = str(caught.value)
-    assert "through" in message and "algebraic loop across the export boundary" in message
+    assert message.startswith("through:") and "has direct outputs, which its C does not" in message
     assert "\n" not in message
 
 

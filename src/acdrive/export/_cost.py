@@ -87,26 +87,6 @@ def _case_setup(target: str, duration: float | None):
     return case, shortened(setup, duration if duration is not None else case.duration)
 
 
-def replay_inputs(setup, drive, initial, held, export) -> tuple[list[bytes], int]:
-    """Each chain's inputs at every sample of ``setup``'s run with the C chain (double) in the
-    loop, as the double build's structs, one after another (every member a real or a complex,
-    so ``as_float32`` gives the float build's)."""
-    from acdrive.export._sil import run_in_loop
-
-    for model in export.chains:
-        for member in model.inputs:
-            if member.spec not in ("real", "complex"):
-                raise InputError(model.chain.name, f"input {member.name} is not a real or complex")
-    captured: list[list[bytes]] = [[] for _ in export.chains]
-
-    def log(chain_index, inputs):
-        captured[chain_index].append(bytes(inputs))
-
-    run_in_loop(drive.system.compile(), export, setup.duration, setup.sample_time,
-                setup.substeps, initial=initial, held=held, on_inputs=log)  # fmt: skip
-    return [b"".join(rows) for rows in captured], len(captured[0])
-
-
 def as_float32(replay: bytes) -> bytes:
     """Double inputs structs (all members real) as the float build's: each value rounded."""
     return np.frombuffer(replay, dtype=np.float64).astype(np.float32).tobytes()
@@ -125,29 +105,68 @@ def case_export(target: str, duration: float | None = None):
     return case, setup, drive, initial, held, export
 
 
-def measure_case(target: str, duration: float | None = None, folder: Path | None = None) -> dict:
-    """Instructions per step and sizes of one case (a name of CASES or a scenario of one run)
-    on the board model; the files are built in ``folder`` (default: a temporary folder)."""
+def board_cost(compiled, export, duration: float, sample_time: float, substeps: int = 4,
+               initial=None, held=None, folder: Path | None = None) -> list[dict]:  # fmt: skip
+    """Per chain of ``export``: the float build's sizes and instructions per step on the
+    Cortex-M4 board model, over the inputs each chain sees when ``compiled`` runs ``duration``
+    seconds with the C chain (double) in the loop (the arguments of ``run_in_loop``), and the
+    fraction of a 5 kHz, a 10 kHz and its own period a CORE_CLOCK_HZ core would use at one
+    instruction per cycle. Needs gcc and the cross tools (``scripts/install-cross-tools.sh``):
+    a missing one is an InputError naming it, before any work. ``folder``: where the files are
+    built (default: a temporary folder)."""
     from acdrive.export._sil import find_compiler
     from acdrive.export._target import chain_on_board, find_cross_tools
 
     find_compiler()
     tools = find_cross_tools()
-    case, setup, drive, initial, held, export = case_export(target, duration)
-    samples = round(setup.duration / setup.sample_time)
+    samples = round(duration / sample_time)
     if samples > MAX_SAMPLES:
-        raise InputError("--duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
-    replays, samples = replay_inputs(setup, drive, initial, held, export)
+        raise InputError("duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
+    replays = [[] for _ in export.chains]
+
+    def log(chain_index, inputs):
+        replays[chain_index].append(bytes(inputs))
+
+    for model in export.chains:
+        for member in model.inputs:
+            if member.spec not in ("real", "complex"):
+                raise InputError(model.chain.name, f"input {member.name} is not a real or complex")
+    from acdrive.export._sil import run_in_loop
+
+    run_in_loop(compiled, export, duration, sample_time, substeps, initial=initial, held=held,
+                on_inputs=log)  # fmt: skip
+    samples = len(replays[0])
     chains = []
     with tempfile.TemporaryDirectory(prefix="acdrive-m4-") as scratch:
         where = Path(folder) if folder is not None else Path(scratch)
-        for model, replay in zip(export.chains, replays, strict=True):
-            chains.append(chain_on_board(export, model, as_float32(replay), samples, where, tools))
-    rate = 1.0 / setup.sample_time
+        for model, rows in zip(export.chains, replays, strict=True):
+            replay = as_float32(b"".join(rows))
+            chains.append(chain_on_board(export, model, replay, samples, where, tools))
+    rate = 1.0 / sample_time
     for row in chains:
         n = row["instructions_per_step"]
         row["fraction_of_period"] = {f"{r:g}": period_fraction(n, r) for r in PAPER_RATES_HZ}
         row["fraction_of_own_period"] = period_fraction(n, rate)
+        row["samples"] = samples
+    return chains
+
+
+def measure_case(target: str, duration: float | None = None, folder: Path | None = None) -> dict:
+    """Instructions per step and sizes of one case (a name of CASES or a scenario of one run)
+    on the board model; the files are built in ``folder`` (default: a temporary folder)."""
+    from acdrive.export._sil import find_compiler
+    from acdrive.export._target import find_cross_tools
+
+    find_compiler()
+    find_cross_tools()
+    case, setup, drive, initial, held, export = case_export(target, duration)
+    if round(setup.duration / setup.sample_time) > MAX_SAMPLES:
+        samples = round(setup.duration / setup.sample_time)
+        raise InputError("--duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
+    chains = board_cost(drive.system.compile(), export, setup.duration, setup.sample_time,
+                        setup.substeps, initial, held, folder)  # fmt: skip
+    samples = chains[0]["samples"]
+    rate = 1.0 / setup.sample_time
     return {
         "case": target,
         "what": case.what,

@@ -218,11 +218,11 @@ def plant_model(export: PlantExport, system, held, sample_time: float, stop_time
         *([f"    {n}_inputs in;"] if export.inputs else []), "} acd_fmu_model;", "",
         "static void acd_fmu_defaults(acd_fmu_model *m)", "{", *defaults, "}", "",
         "static void acd_fmu_start(acd_fmu_model *m, double t0)", "{",
-        f"    {n}_reset(t0, &m->p, &m->s);", "}", "",
+        f"    {n}_reset(t0, &m->p, &m->s, {inputs});", "}", "",
         "static double acd_fmu_period(const acd_fmu_model *m) { return m->p.sample_time; }", "",
         "static void acd_fmu_advance(acd_fmu_model *m, double t, double t_next)", "{",
         f"    {n}_step(t, &m->p, &m->s, {inputs});",
-        f"    {n}_update_outputs(t_next, &m->p, &m->s);", "}", "",
+        f"    {n}_update_outputs(t_next, &m->p, &m->s, {inputs});", "}", "",
     ])  # fmt: skip
     files = {export.header_name: export.header, export.source_name: export.source}
     return FMUModel(n, description, variables, files, glue, sample_time, stop_time)

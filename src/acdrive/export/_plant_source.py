@@ -11,13 +11,24 @@ compiled loop (``sim._loop_source``) for one sample t_k:
   outputs at t_k (``modulate``), then the integration over the merged segments, ``substeps``
   Runge-Kutta steps per segment (``integrate``, ``plant_step``), the same method as the system's
   (``system.method``: rk4 written out as acdrive's, or the Butcher tableau of rk6);
-* ``<name>_update_outputs(t, p, s)``: the redundant states re-normalised (``project``), then
-  the plant outputs from the state at t (``plant_outputs``);
-* ``<name>_reset(t, p, s)``: initial states and held modulator outputs, then the outputs at t.
+* ``<name>_update_outputs(t, p, s, in)``: the redundant states re-normalised (``project``),
+  then the plant outputs from the state at t and the commands ``in`` held (``plant_outputs``);
+* ``<name>_reset(t, p, s, in)``: initial states and held modulator outputs, then the outputs at
+  t with the commands ``in`` (the values held before the first sample).
+
+A part's *direct* outputs (computed from its inputs of the same evaluation: the DFIM's currents
+from its relay input, the supply bus, the stator relay) are computed after the state outputs, in
+the system's order of direct parts (``System.direct``), as acdrive's ``plant_outputs`` does. One
+of them may read a controller command (the stator relay's, from the synchroniser): acdrive's
+loop computes the plant outputs at t_k before the sampled parts run, so they read the command
+held from sample k-1, and the command of sample k acts from t_k on, inside the integration. The
+plant FMU does the same: the outputs after a step to t_{k+1} are computed with the commands
+that step integrated, and setting an input changes no output until the next step. There is no
+same-instant feedthrough across the boundary, so nothing is refused for it.
 
 Each kind's C is written once in ``acdrive.export._kinds.plant`` (the seam of the controller
-kinds). A part with direct outputs (an output of the same instant computed from its inputs), or
-with a ``project`` kernel its C lacks, is refused, naming the part.
+kinds). A part with direct outputs or a ``project`` kernel its C lacks is refused, naming the
+part.
 """
 
 from __future__ import annotations
@@ -40,7 +51,7 @@ from acdrive.export._c_source import (
     part_params_lines,
     require_c_name,
 )
-from acdrive.export._kinds import plant_c_of
+from acdrive.export._kinds import PLANT_ROLES, plant_c_of
 from acdrive.export._prelude import HELPERS, PRELUDE
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 
@@ -74,23 +85,11 @@ class PlantExport:
 
 def _check_exportable(system) -> None:
     for part in system.continuous:
-        if part.DIRECT_OUTPUTS:
-            crosses = [
-                n
-                for n in part.DIRECT_FROM
-                if isinstance(system.source_of[(part.name, n)].part, SampledPart)
-            ]
-            if crosses:
-                raise InputError(
-                    part.name,
-                    f"its direct outputs read the controller's {crosses[0]} at the same "
-                    "instant: an algebraic loop across the export boundary (the plant FMU has "
-                    "no direct feedthrough)",
-                )
+        if part.DIRECT_OUTPUTS and plant_c_of(part).direct_outputs is None:
             raise InputError(
                 part.name,
-                f"part kind {type(part).__name__} has direct outputs, which the plant export "
-                "does not write in C yet",
+                f"part kind {type(part).__name__} has direct outputs, which its C does not "
+                "write (a direct_outputs body in acdrive.export._kinds.plant)",
             )
         if type(part).project is not None and plant_c_of(part).project is None:
             raise InputError(
@@ -129,6 +128,13 @@ def _signature(entry: KindTypes, role: str) -> str:
         args += [f"const acd_{c}_in *u"] if has["in"] else []
         args += [f"const acd_{c}_out *y", f"acd_{c}_state *dx"]
         return f"static void acd_{c}_rhs({', '.join(args)})"
+    if role == "direct_outputs":
+        args = ["ACDRIVE_REAL t"]
+        args += [f"const acd_{c}_params *p"] if has["params"] else []
+        args += [f"const acd_{c}_state *x"] if has["state"] else []
+        args += [f"const acd_{c}_in *u"] if has["in"] else []
+        args += [f"acd_{c}_out *y"]
+        return f"static void acd_{c}_direct_outputs({', '.join(args)})"
     if role == "project":
         args = [f"const acd_{c}_params *p"] if has["params"] else []
         return f"static void acd_{c}_project({', '.join([*args, f'acd_{c}_state *x'])})"
@@ -147,12 +153,13 @@ def _unused(signature: str) -> list[str]:
     return [f"    (void){n};" for n in names]
 
 
-def _kind_functions(kinds) -> list[str]:
+def _kind_functions(kinds, parts) -> list[str]:
     C = []
     for entry in kinds.values():
         c = entry.step
-        for role in ("state_outputs", "rhs", "segments", "project"):
-            body = getattr(c, role)
+        part = next(q for q in parts if type(q) is entry.cls)  # its instances' C is one
+        for role in PLANT_ROLES:
+            body = c.role(role, part)
             if body is None:
                 continue
             signature = _signature(entry, role)
@@ -183,6 +190,28 @@ def _call_args(entry: KindTypes, role: str, part, x: str, y: str, dx: str = "") 
         args += ["&u"] if has["in"] else []
         args += [f"&{y}->{part.name}", f"&{dx}->{part.name}"]
     return ", ".join(args)
+
+
+def _direct_lines(system, kinds) -> list[str]:
+    """The direct outputs of every direct part, in the system's order (``System.direct``, each
+    after the parts it reads), from the inputs it declares in ``DIRECT_FROM``: the statements
+    of ``sim._loop_source.plant_outputs`` after the state outputs."""
+    L = []
+    for part in system.direct:
+        entry = kinds[type(part)]
+        L.append(f"    {{ /* {part.name}: {type(part).__name__}, direct outputs */")
+        args = ["t"]
+        args += [f"&p->{part.name}"] if entry.members["params"] else []
+        args += [f"&x->{part.name}"] if entry.members["state"] else []
+        if entry.members["in"]:
+            L.append(f"        acd_{entry.cname}_in u;")
+            for v in part.INPUTS:
+                if v.name in part.DIRECT_FROM:
+                    L.append(f"        u.{v.name} = {_input_source(system, part, v.name, 'y->')};")
+            args.append("&u")
+        args.append(f"&y->{part.name}")
+        L += [f"        acd_{entry.cname}_direct_outputs({', '.join(args)});", "    }"]
+    return L
 
 
 def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
@@ -347,34 +376,39 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     H += [
         "/* one control period from t [s]: the commands in held, p->substeps steps per segment */",
         f"void {name}_step(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg});",
-        "/* the outputs s->y of the state s->x at t */",
-        f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s);",
+        "/* the outputs s->y of the state s->x at t, the commands in held (a direct output, such",
+        "   as the stator relay's voltage, reads them: docs/guide/fmu.md) */",
+        f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg});",
         "/* the parameter values of the exported system */",
         f"void {name}_set_params({name}_params *p);",
         "/* the initial states and held outputs of the exported system, and the outputs at t */",
-        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s);",
+        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg});",
         "", f"#endif /* {guard} */",
     ]  # fmt: skip
 
     C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
     for support in _support_order(kinds):
         C += [support.code.strip("\n"), ""]
-    C += _kind_functions(kinds)
+    C += _kind_functions(kinds, [*continuous, *modulators])
     C += [f"/* the continuous states as one array, for the integrator ({n_x} reals) */",
           f"typedef union {{ {name}_continuous x; ACDRIVE_REAL v[{n_x}]; }} {name}_vector;",
           (f"typedef char {name}_states_are_reals[(sizeof({name}_continuous) == {n_x} * "
           "sizeof(ACDRIVE_REAL)) ? 1 : -1];"), ""]  # fmt: skip
     # outputs of every continuous part from the state
     C += [(f"static void {name}_state_outputs(ACDRIVE_REAL t, const {name}_params *p, "
-          f"const {name}_continuous *x, {name}_outputs *y)"), "{", "    (void)x;"]  # fmt: skip
+          f"const {name}_continuous *x, {in_arg}, {name}_outputs *y)"), "{", "    (void)x;",
+          "    (void)in;"]  # fmt: skip
     for part in continuous:
+        if kinds[type(part)].step.role("state_outputs", part) is None:
+            continue  # every output of the part is direct
         C.append(
             f"    acd_{kinds[type(part)].cname}_state_outputs({_call_args(kinds[type(part)], 'state_outputs', part, 'x', 'y')});"
         )
+    C += _direct_lines(system, kinds)
     C += ["}", ""]
     C += [(f"static void {name}_derivatives(ACDRIVE_REAL t, const {name}_params *p, "
           f"const {name}_continuous *x, {in_arg}, {name}_outputs *y, {name}_continuous *dx)"),
-          "{", "    (void)in;", f"    {name}_state_outputs(t, p, x, y);"]  # fmt: skip
+          "{", "    (void)in;", f"    {name}_state_outputs(t, p, x, in, y);"]  # fmt: skip
     for part in continuous:
         entry = kinds[type(part)]
         if not entry.members["state"]:
@@ -408,8 +442,9 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
         if entry.step.project is not None:
             params = f"&p->{part.name}, " if entry.members["params"] else ""
             projections.append(f"    acd_{entry.cname}_project({params}&s->x.{part.name});")
-    C += [f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s)",
-          "{", *projections, f"    {name}_state_outputs(t, p, &s->x, &s->y);", "}", ""]  # fmt: skip
+    C += [(f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, "
+           f"{name}_state *s, {in_arg})"),
+          "{", *projections, f"    {name}_state_outputs(t, p, &s->x, in, &s->y);", "}", ""]  # fmt: skip
     C += [f"void {name}_set_params({name}_params *p)", "{",
           f"    p->sample_time = {literal(sample_time, 'sample_time')};",
           f"    p->substeps = {int(substeps)};"]  # fmt: skip
@@ -418,7 +453,7 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     C += [
         "}",
         "",
-        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s)",
+        f"void {name}_reset(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg})",
         "{",
     ]
     for part in continuous:
@@ -440,6 +475,6 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
                   Y0[k : k + v.width], f"held.{part.name}.{v.name}")]  # fmt: skip
         if part.EVENTS:
             C.append(f"    s->{part.name}_events = 0u;")
-    C += [f"    {name}_update_outputs(t, p, s);", "}", ""]
+    C += [f"    {name}_update_outputs(t, p, s, in);", "}", ""]
     return PlantExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, continuous,
                        modulators, inputs, outputs)  # fmt: skip

@@ -51,24 +51,36 @@ class CStep:
 @dataclass(frozen=True)
 class PlantC:
     """The C of one plant kind. A continuous part: ``state_outputs`` (writes ``y`` from ``x``),
-    ``rhs`` (writes ``dx``; may read ``u`` and its own ``y`` of the same evaluation; None for a
-    part without states), ``project`` (re-normalises redundant states ``x`` at each sample, for
-    a kind with a ``project`` kernel). A modulator: ``segments`` (writes ``*n`` segments
-    ``dt[i]``, ``v[i]``, returns the event bits). ``source``: paper and equations; ``support``:
+    ``direct_outputs`` (for a kind with direct outputs: writes them from ``x`` and the inputs
+    ``u`` it declares in ``DIRECT_FROM``), ``rhs`` (writes ``dx``; may read ``u`` and its own
+    ``y`` of the same evaluation; None for a part without states), ``project`` (re-normalises
+    redundant states ``x`` at each sample, for a kind with a ``project`` kernel). A modulator:
+    ``segments`` (writes ``*n`` segments ``dt[i]``, ``v[i]``, returns the event bits). Each
+    body is a text, or a function of the part instance giving it (a kind whose inputs are set
+    per instance, such as a bus of n machines). ``source``: paper and equations; ``support``:
     what they call."""
 
     source: str
-    state_outputs: str | None = None
-    rhs: str | None = None
-    segments: str | None = None
-    project: str | None = None
+    state_outputs: object = None
+    rhs: object = None
+    segments: object = None
+    project: object = None
+    direct_outputs: object = None
     support: tuple[CSupport, ...] = ()
 
-    @property
-    def body(self) -> str:
-        """All bodies as one text (``_c_source.kind_types`` compares the instances' C)."""
-        bodies = (self.state_outputs, self.rhs, self.segments, self.project)
-        return "\n".join(b or "" for b in bodies)
+    def role(self, name: str, part) -> str | None:
+        """The body of kernel role ``name`` for ``part`` (None: the kind has no such body)."""
+        body = getattr(self, name)
+        return body(part) if callable(body) else body
+
+    def body(self, part) -> str:
+        """All bodies of ``part`` as one text (``_c_source.kind_types`` compares the instances'
+        C)."""
+        return "\n".join(self.role(r, part) or "" for r in PLANT_ROLES)
+
+
+#: the kernel roles of a plant kind, in the order the generated file defines them
+PLANT_ROLES = ("state_outputs", "direct_outputs", "rhs", "segments", "project")
 
 
 #: modules whose import registers their kinds (imported on first look-up)

@@ -1,5 +1,6 @@
 """C of the plant kinds the plant FMU is built from (``acdrive.export._plant_source``): the DC
-source, the cage induction motor, the PM machine, the free shaft and the averaged converters,
+and three-phase sources, the cage induction motor, the PM machine, the DFIM with its supply bus
+and stator relay (Bodson (9)), the free shaft and the averaged converters,
 the switching SVPWM inverter (its segments inside one control period), and the C step of
 the PWM unit's latch (a sampled part in front of an averaged converter). Each body repeats its
 numba kernel operation for operation (complex products as (ac - bd) + j(ad + bc), quotients by
@@ -14,11 +15,13 @@ from acdrive._frames import K_3C, K_PEAK
 from acdrive.export._kinds import CStep, CSupport, PlantC, register, register_plant
 from acdrive.export._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 from acdrive.machines._cage_part import CageInductionMachine
+from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE, DoublyFedMachine
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import W_COULOMB, Shaft
-from acdrive.plant._sources import DCSource
+from acdrive.plant._network import StatorRelay, SupplyBus
+from acdrive.plant._sources import DCSource, ThreePhaseSource
 
 #: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
 TANH = CSupport(
@@ -62,6 +65,133 @@ register_plant(
     dx->i_s = acd_cdiv(sum, acd_c(sigma_L_s, ACD_R(0.0)));
     dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r / p->L_r, x->i_s),
                          acd_cmul(rotor_pole, x->psi_r));
+""",
+    ),
+)
+
+register_plant(
+    ThreePhaseSource,
+    PlantC(
+        source="balanced three-phase source: v = sqrt(3/2) V_pk(t) u_g, du_g/dt = j 2 pi f(t) "
+        "u_g (plant._sources)",
+        state_outputs=rf"""
+    y->v = acd_cscale(ACD_R({K_PEAK!r}) * acd_table_at(p->V_pk.n, p->V_pk.t, p->V_pk.v, t), x->u_g);
+""",
+        rhs=rf"""
+    ACDRIVE_REAL w_g = ACD_R({2.0 * math.pi!r}) * acd_table_at(p->f.n, p->f.t, p->f.v, t);
+    dx->theta_g = w_g;
+    dx->u_g.re = -w_g * x->u_g.im; /* j w_g u_g */
+    dx->u_g.im = w_g * x->u_g.re;
+""",
+        project=r"""
+    x->u_g.re = ACD_COS(x->theta_g); /* u_g = e^(j theta_g) */
+    x->u_g.im = ACD_SIN(x->theta_g);
+""",
+        support=(TABLE_AT,),
+    ),
+)
+
+
+def _bus_direct_outputs(part) -> str:
+    """The bus voltage of ``part``'s n machines, solved exactly (plant._network):
+    v_bus = (v_g - R sum(i_s,k) - L sum(b_k)) / (1 + L sum(a_k)), the sums in machine order."""
+    sums = []
+    for k in range(part.n_machines):
+        sums += [f"    sum_i_s = acd_cadd(sum_i_s, u->i_s{k});", f"    sum_a += u->a{k};",
+                 f"    sum_b = acd_cadd(sum_b, u->b{k});"]  # fmt: skip
+    return "\n".join([
+        "    acd_complex sum_i_s = acd_c(ACD_R(0.0), ACD_R(0.0));",
+        "    acd_complex sum_b = acd_c(ACD_R(0.0), ACD_R(0.0));",
+        "    ACDRIVE_REAL sum_a = ACD_R(0.0);",
+        *sums,
+        "    y->v = acd_cscale(ACD_R(1.0) / (ACD_R(1.0) + p->L * sum_a),",
+        "                      acd_csub(acd_csub(u->v_g, acd_cscale(p->R, sum_i_s)),",
+        "                               acd_cscale(p->L, sum_b)));",
+    ])  # fmt: skip
+
+
+register_plant(
+    SupplyBus,
+    PlantC(
+        source="supply bus behind a shared series R-L, solved exactly (plant._network)",
+        direct_outputs=_bus_direct_outputs,
+    ),
+)
+
+register_plant(
+    StatorRelay,
+    PlantC(
+        source="stator relay: the bus voltage while closed, the open stator's voltage while open "
+        "(plant._network)",
+        direct_outputs=r"""
+    int closed = u->closed != ACD_R(0.0);
+    y->v = closed ? u->v_bus : u->v_open;
+    y->closed = closed ? ACD_R(1.0) : ACD_R(0.0);
+""",
+    ),
+)
+
+register_plant(
+    DoublyFedMachine,
+    PlantC(
+        source="Bodson (9) in the stationary frame, flux linkages as states, the stator relay "
+        "and the rotor converter's loss (machines._dfim_part)",
+        direct_outputs=rf"""
+    /* (9): psi_s = L_s i_s + M i_r, psi_r = M i_s + L_r i_r, solved with a real determinant;
+       an open stator carries no current: psi_r = L_r i_r */
+    int connected = u->connected != ACD_R(0.0);
+    ACDRIVE_REAL inv_det = ACD_R(1.0) / (p->L_s * p->L_r - p->M * p->M);
+    acd_complex i_s, i_r, v_r, dpsi_r;
+    if (connected) {{
+        i_s = acd_cscale(inv_det, acd_csub(acd_cscale(p->L_r, x->psi_s), acd_cscale(p->M, x->psi_r)));
+        i_r = acd_cscale(inv_det, acd_csub(acd_cscale(p->L_s, x->psi_r), acd_cscale(p->M, x->psi_s)));
+    }} else {{
+        i_s = acd_c(ACD_R(0.0), ACD_R(0.0));
+        i_r = acd_cscale(ACD_R(1.0) / p->L_r, x->psi_r);
+    }}
+    /* dpsi_r/dt = v_r e_r - V_loss i_r / sqrt(|i_r|^2 + i_0^2) - R_r i_r + j n_p w psi_r */
+    v_r = acd_cmul(u->v_r, x->e_r);
+    if (p->V_loss > ACD_R(0.0)) {{
+        ACDRIVE_REAL squared = i_r.re * i_r.re + i_r.im * i_r.im + ACD_R({LOSS_CURRENT_SCALE**2!r});
+        v_r = acd_csub(v_r, acd_cscale(p->V_loss / ACD_SQRT(squared), i_r));
+    }}
+    dpsi_r = acd_cadd(acd_csub(v_r, acd_cscale(p->R_r, i_r)),
+                      acd_cmul(acd_c(ACD_R(0.0), p->n_p * u->w), x->psi_r));
+    y->i_s = i_s;
+    y->i_r = i_r;
+    y->i_r_rotor = acd_cmul(i_r, acd_c(x->e_r.re, -x->e_r.im));
+    /* tau_e = n_p M Im(i_s conj(i_r)) */
+    y->tau_e = p->n_p * p->M * acd_cmul(i_s, acd_conj(i_r)).im;
+    y->dpsi_r = dpsi_r;
+    if (connected) {{ /* di_s/dt = a v_s + b, the terms the supply bus sums */
+        y->bus_gain = p->L_r * inv_det;
+        y->bus_drive = acd_cscale(inv_det, acd_csub(acd_cscale(-p->L_r * p->R_s, i_s),
+                                                    acd_cscale(p->M, dpsi_r)));
+        y->v_open = acd_c(ACD_R(0.0), ACD_R(0.0));
+    }} else {{ /* the open stator's terminal voltage (M / L_r) dpsi_r/dt */
+        y->bus_gain = ACD_R(0.0);
+        y->bus_drive = acd_c(ACD_R(0.0), ACD_R(0.0));
+        y->v_open = acd_cscale(p->M / p->L_r, dpsi_r);
+    }}
+""",
+        rhs=r"""
+    /* (9): dpsi_s/dt = v_s - R_s i_s while connected, else the open stator's voltage;
+       dpsi_r/dt from the outputs; dtheta/dt = w, de_r/dt = j n_p w e_r */
+    ACDRIVE_REAL w_el = p->n_p * u->w;
+    if (u->connected != ACD_R(0.0)) {
+        dx->psi_s = acd_csub(u->v_s, acd_cscale(p->R_s, y->i_s));
+    } else {
+        dx->psi_s = y->v_open;
+    }
+    dx->psi_r = y->dpsi_r;
+    dx->theta = u->w;
+    dx->e_r.re = -w_el * x->e_r.im;
+    dx->e_r.im = w_el * x->e_r.re;
+""",
+        project=r"""
+    ACDRIVE_REAL angle = p->n_p * x->theta; /* e_r = e^(j n_p theta) */
+    x->e_r.re = ACD_COS(angle);
+    x->e_r.im = ACD_SIN(angle);
 """,
     ),
 )
