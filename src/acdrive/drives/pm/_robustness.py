@@ -92,6 +92,10 @@ def design_figures(setup) -> dict:
                 "K_I_current": cur.K_I_d, "speed_K_P": spd.K_P, "speed_K_I": spd.K_I,
                 "torque_limit_n_m": setup.torque_limit})  # fmt: skip
     out["current_loop_spectral_radius"] = linear(setup)["spectral_radius"]
+    out["controllers_design"] = (
+        "re-derived from the design machine: current PI, MTPA and field-weakening references, "
+        "torque limit, speed PI (design J); none fixed"
+    )
     return out
 
 
