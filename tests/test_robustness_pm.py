@@ -117,3 +117,8 @@ def test_a_parameter_file_designs_the_controllers_and_the_plant_stays(tmp_path):
     with pytest.raises(InputError) as exc:
         build_setup(d)
     assert exc.value.field == "design.params.L_q"
+    # MTPA needs L_q >= L_d: an estimate that breaks it names the design table, not the machine
+    d["design"] = {"params": {"L_q": 0.5 * m.L_d}}
+    with pytest.raises(InputError) as exc:
+        build_setup(d)
+    assert exc.value.field == "design.params.L_q"

@@ -162,7 +162,12 @@ def load(data: dict) -> PMDriveSetup | CurrentStepSetup:
             encoder_offset=offset, **control, **run,
         )  # fmt: skip
     except InputError as exc:
-        raise InputError(_SETUP_FIELDS.get(exc.field, exc.field), exc.rule) from None
+        fields = dict(_SETUP_FIELDS)
+        if top.has("design"):  # the controller's machine is the design table's
+            design = top.get("design")
+            where = "design.machine_file" if "machine_file" in design else "design.params.L_q"
+            fields["estimates.L_q"] = where
+        raise InputError(fields.get(exc.field, exc.field), exc.rule) from None
 
 
 def _frequencies(section: Section, key: str) -> tuple[float, ...]:
