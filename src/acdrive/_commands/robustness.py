@@ -27,8 +27,8 @@ def register(subparsers) -> None:
     p.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or TOML path")
     p.add_argument("--map", choices=KINDS, default="grid", help="grid (default) or monte-carlo")
     p.add_argument("--params", default=None,
-                   help=f"comma-separated axes (default all: {','.join((*PARAMETERS, PAPER))}; "
-                        "monte-carlo: the single parameters)")  # fmt: skip
+                   help=f"comma-separated axes of {','.join((*PARAMETERS, PAPER))} (default: every "
+                        "one the drive perturbs; monte-carlo: the single parameters)")  # fmt: skip
     p.add_argument("--points", type=int, default=DEFAULT_POINTS,
                    help=f"grid points per axis [{DEFAULT_POINTS}]")  # fmt: skip
     p.add_argument("--variants", type=int, default=DEFAULT_VARIANTS,

@@ -70,7 +70,11 @@ class DesignComparison:
             out.append(f"  {c.name}: {c.rule}: truth {'passes' if t['verdicts'][c.name] else 'BREAKS'}, "
                        f"estimates {'passes' if e['verdicts'][c.name] else 'BREAKS'}")  # fmt: skip
         for k in t["design"]:
-            out.append(f"{k:<36} {fmt(t['design'][k]):>18} {fmt(e['design'][k]):>20}")
+            a, b = t["design"][k], e["design"].get(k)
+            if isinstance(a, str) and a == b and len(a) > 18:  # a statement: once, in full
+                out.append(f"{k}: {a}")
+            else:
+                out.append(f"{k:<36} {fmt(a):>18} {fmt(b):>20}")
         return out
 
 

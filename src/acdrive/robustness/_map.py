@@ -24,6 +24,7 @@ one, by its linearised prediction of stability beside the simulated verdict.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -40,7 +41,10 @@ PAPER_PERTURBATION = {
     k: float(getattr(_ICAD_PAPER, k)) for k in ("R_s", "R_r", "L_s", "L_r", "L_m")
 }
 #: the single parameters a map varies (the map's names; ``RobustnessSeam.fields`` translates)
-PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
+PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "L_d", "L_q", "psi_m", "J")
+#: the default parameters of a map on an induction machine (a drive without some of them, as the
+#: PM drive, gets those of ``PARAMETERS`` its seam has: ``MapSpec.for_fields``)
+INDUCTION_PARAMETERS = ("R_s", "R_r", "L_s", "L_r", "L_m", "J")
 #: the combined axis of a grid
 PAPER = "paper"
 KINDS = ("grid", "monte-carlo")
@@ -67,14 +71,16 @@ class MapSpec:
     high: float = 2.0
     severity_max: float = 2.0
     seed: int = 1
+    #: True when ``params`` was not given (the drive's own parameters are then used)
+    defaulted: bool = field(default=False, init=False, compare=False)
 
     def __post_init__(self):
         if self.kind not in KINDS:
             raise InputError("--map", f"must be one of {', '.join(KINDS)}, got {self.kind!r}")
         if self.params is None:
-            object.__setattr__(
-                self, "params", (*PARAMETERS, PAPER) if self.kind == "grid" else PARAMETERS
-            )
+            object.__setattr__(self, "defaulted", True)
+            axes = INDUCTION_PARAMETERS
+            object.__setattr__(self, "params", (*axes, PAPER) if self.kind == "grid" else axes)
         if isinstance(self.params, str) or not isinstance(self.params, (tuple, list)):
             raise InputError("--params", f"must be a list of parameter names, got {self.params!r}")
         params = tuple(self.params)
@@ -112,6 +118,17 @@ class MapSpec:
                 "--points" if self.kind == "grid" else "--variants",
                 f"the map would run {self.size} variants (limit {MAX_VARIANTS})",
             )
+
+    def for_fields(self, fields) -> MapSpec:
+        """This spec for a drive whose perturbation table has ``fields`` (map names): a spec
+        whose parameters were not given takes every one of ``PARAMETERS`` the drive has (and on
+        a grid the paper axis, if the drive has all its parameters); a given one is unchanged."""
+        if not self.defaulted:
+            return self
+        axes = tuple(p for p in PARAMETERS if p in fields)
+        if self.kind == "grid" and all(k in fields for k in PAPER_PERTURBATION):
+            axes = (*axes, PAPER)
+        return dataclasses.replace(self, params=axes)
 
     @property
     def size(self) -> int:
@@ -257,6 +274,7 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
         raise InputError("scenario", "a robustness map needs a scenario (name, path or dict)")
     name = str(data.get("name", scenario if isinstance(scenario, str) else "custom"))
     seam = _seam_of(data)
+    spec = spec.for_fields(seam.fields)
     missing = [p for p in spec.params if p != PAPER and p not in seam.fields]
     if missing:
         raise InputError("--params", f"the drive has no perturbation of {missing[0]!r}")

@@ -92,14 +92,26 @@ def linear(setup) -> dict:
 def design_figures(setup) -> dict:
     """The designs of the drive as it builds them: the IFOC's estimates R_r, L_r, L_m (its slip
     law, ``control._foc`` (slip)), the speed PI's K_P, K_I (mode speed-pi), the current
-    controller by name (a built-in transfer function: designed once on the paper's nominal
-    machine, not recomputed from parameters) and the spectral radius of the sampled current loop
-    on the simulated plant (``linear``)."""
+    controller by name and whether it is re-derived from the design machine ("imc-pi",
+    ``_current_design``, with its K_P, K_I) or fixed (a built-in published transfer function such
+    as Amezquita-Brooks et al.'s (20)), and the spectral radius of the sampled current loop on the
+    simulated plant (``linear``)."""
     est = setup.estimates
     out = {f"ifoc_{k}": float(getattr(est, k)) for k in ("R_r", "L_r", "L_m")}
     if setup.mode == "speed-pi":
         out.update({"K_P": setup.speed_pi.K_P, "K_I": setup.speed_pi.K_I})
-    out["current_controller"] = setup.current_control.controller
+    cc = setup.current_control
+    out["current_controller"] = cc.controller
+    if cc.designed:
+        out["current_controller_design"] = (
+            f"re-derived from the design machine (internal-model "
+            f"PI, bandwidth {cc.bandwidth:g} rad/s)"
+        )
+        out["current_K_P"], out["current_K_I"] = cc.pi_gains
+    else:
+        out["current_controller_design"] = (
+            "fixed: a published transfer function, not re-derived from any machine"
+        )
     out["current_loop_spectral_radius"] = linear(setup)["spectral_radius"]
     return out
 

@@ -30,7 +30,9 @@ units in the key names where not SI; defaults in brackets):
     [inverter]    model ("averaged" | "switching") ["averaged"], dc_link_voltage |
                   dc_link_voltage_profile [310], pwm_frequency_hz [5000], dead_time_s and
                   device_drop_v (switching model only) [0]
-    [current_control]  controller (``control._lti.BUILTIN``) ["paper-20"], discretisation
+    [current_control]  controller (``control._lti.BUILTIN``: fixed published transfer
+                  functions; or "imc-pi": the PI designed on the design machine,
+                  ``_current_design``, with bandwidth_rad_s) ["paper-20"], discretisation
                   ("tustin" | "zoh") ["tustin"], prewarp_rad_s (Tustin only), anti_windup_gain [1]
     [reference]   mode ("current" | "speed-p" | "speed-pi" | "position"), and by mode:
                   current: waveform ("sine" | "step") ["sine"], amplitude_pk_a [1],
@@ -88,6 +90,7 @@ from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
 from acdrive.control._speed import require_feedforward_fraction
+from acdrive.drives.cage_im._current_design import DESIGNED, imc_current_pi
 from acdrive.drives.cage_im._current_loop import current_loop_radius
 from acdrive.drives.cage_im._period import check_im_control_period
 from acdrive.drives.cage_im._setup import (
@@ -206,15 +209,29 @@ def _inverter(sec: _Section, sample_time: float) -> InverterSetup:
     return InverterSetup(model=model, dc_link=dc, f_pwm=f_pwm, dead_time=dead, device_drop=drop)
 
 
-def _current_control(sec: _Section, field_name: str = "controller") -> CurrentControl:
-    name = sec.text(field_name, "paper-20", choices=tuple(BUILTIN))
+def _current_control(
+    sec: _Section, machine: IMParams, field_name: str = "controller"
+) -> CurrentControl:
+    name = sec.text(field_name, "paper-20", choices=(*BUILTIN, DESIGNED))
     method = sec.text("discretisation", "tustin", choices=("tustin", "zoh"))
     prewarp = (
         sec.number("prewarp_rad_s", None, require_positive) if sec.has("prewarp_rad_s") else None
     )
     gain = sec.number("anti_windup_gain", 1.0, require_nonnegative)
+    bandwidth = gains = None
+    if name == DESIGNED:
+        if not sec.has("bandwidth_rad_s"):
+            raise InputError(
+                sec.field("bandwidth_rad_s"), f'is required with controller = "{DESIGNED}"'
+            )
+        bandwidth = sec.number("bandwidth_rad_s", None, require_positive)
+        gains = imc_current_pi(machine, bandwidth)  # on the design machine (estimates or nominal)
+    elif sec.has("bandwidth_rad_s"):
+        raise InputError(sec.field("bandwidth_rad_s"), f'applies to controller = "{DESIGNED}" only '
+                         "(a built-in controller is a fixed transfer function)")  # fmt: skip
     sec.done()
-    return CurrentControl(controller=name, method=method, prewarp=prewarp, aw_gain=gain)
+    return CurrentControl(controller=name, method=method, prewarp=prewarp, aw_gain=gain,
+                          bandwidth=bandwidth, pi_gains=gains)  # fmt: skip
 
 
 def _current_reference(sec: _Section) -> CurrentReference:
@@ -437,7 +454,7 @@ def build_im_setup(data: dict) -> IMDriveSetup:
         raise InputError(
             "current_control.controller", "give either it or compare_controllers, not both"
         )
-    current_control = _current_control(ccsec)
+    current_control = _current_control(ccsec, nominal)
     if compare:
         current_control = dataclasses.replace(current_control, controller=compare[0][1])
 

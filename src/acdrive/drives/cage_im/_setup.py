@@ -118,16 +118,30 @@ class InverterSetup:
 @dataclass(frozen=True)
 class CurrentControl:
     """The stationary-frame current controller: a built-in LTI controller by name
-    (``control._lti.BUILTIN``), its discretisation ("tustin" or "zoh"), an optional Tustin
-    pre-warping frequency [rad/s] and the anti-windup gain (``control._current``)."""
+    (``control._lti.BUILTIN``, fixed published transfer functions) or "imc-pi", the PI designed
+    from the design machine (``_current_design.imc_current_pi``: ``bandwidth`` [rad/s], its gains
+    ``pi_gains`` = (K_P, K_I) computed by the scenario loader), its discretisation ("tustin" or
+    "zoh"), an optional Tustin pre-warping frequency [rad/s] and the anti-windup gain
+    (``control._current``)."""
 
     controller: str = "paper-20"
     method: str = "tustin"
     prewarp: float | None = None
     aw_gain: float = 1.0
+    bandwidth: float | None = None
+    pi_gains: tuple[float, float] | None = None
+
+    @property
+    def designed(self) -> bool:
+        """True if the controller is designed from the machine's parameters (not a fixed one)."""
+        return self.pi_gains is not None
 
     @property
     def lti(self):
+        if self.pi_gains is not None:
+            from acdrive.control._lti import LTI
+
+            return LTI.pi(*self.pi_gains, name=self.controller)
         return builtin(self.controller)
 
 

@@ -59,7 +59,7 @@ def controller_parts(setup: PMDriveSetup) -> dict:
     (``_design.CurrentPIGains.design``, ``control.SpeedPIGains.design``)."""
     est, lim = _estimates(setup), _limits(setup)
     cur = CurrentPIGains.design(est["R_s"], est["L_d"], est["L_q"], setup.current_bandwidth)
-    spd = SpeedPIGains.design(setup.J, setup.speed_bandwidth, K_F=setup.K_F)
+    spd = SpeedPIGains.design(setup.speed_design_J, setup.speed_bandwidth, K_F=setup.K_F)
     return {
         "speed_pi": PMSpeedPI(
             "speed_pi",

@@ -73,6 +73,11 @@ class PMDriveKind(Drive):
             return []  # not a batch variant (``build``)
         return pm_reducers(setup)
 
+    def robustness(self):
+        from acdrive.drives.pm._robustness import SEAM
+
+        return SEAM
+
     def params_fields(self, machine) -> tuple[str, ...] | None:
         from acdrive.drives.pm._schema import MACHINE_FIELDS
 

@@ -9,6 +9,12 @@ broken rule raises ``InputError("<table>.<key>", "<rule>")`` (one line, before a
                   n_p, J: ``machines.PMSGParams``, psi_m the peak flux per phase), not both;
                   J (rotor and load) [the machine's J], viscous_friction [0],
                   load_torque | load_torque_profile (N m) [0]
+    [machine.perturbation]  R_s, L_d, L_q, psi_m, J: factors on the simulated machine and shaft
+                  only [1] (the controllers keep the scenario's machine and J)
+    [design]      machine_file (a machine parameter file: its [machine.params]) or
+                  [design.params] (R_s, L_d, L_q, psi_m, n_p, J): the machine the controllers are
+                  designed on (the current PI, the MTPA and field-weakening references, the
+                  speed PI from its J); fields not given keep the scenario's, which stays the plant
     [converter]   model ("averaged" | "switching") ["averaged"], dc_link_voltage,
                   pwm_frequency_hz (switching only)
     [control]     current_limit_pk_a (phase peak), current_bandwidth_rad_s,
@@ -38,7 +44,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from acdrive._toml import Section, parse_toml
+from acdrive._toml import Section, design_machine, parse_toml, perturbed_plant
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._machines import BLY171D, IPMSM_2KW2
 from acdrive.drives.pm._setup import CONVERTERS, PMDriveSetup
@@ -50,6 +56,8 @@ DRIVE = "pm"
 #: machines a scenario may name (``drives.pm._machines`` and seed 001's PMSG)
 MACHINES = {"bly171d": BLY171D, "ipmsm-2.2kw": IPMSM_2KW2, "pmsg-2mw": PMSG_2MW}
 MACHINE_FIELDS = (*electrical_fields(PMSGParams), "J")
+#: the factors of ``[machine.perturbation]`` on the simulated machine (J: on the simulated shaft)
+PERTURBATION_FIELDS = ("R_s", "L_d", "L_q", "psi_m")
 SCENARIO_DIR = Path(__file__).with_name("scenarios")
 #: the scenario kinds (top-level ``kind``): the speed drive and the current-step run
 KINDS = ("speed", "current-step")
@@ -98,7 +106,18 @@ def load(data: dict) -> PMDriveSetup | CurrentStepSetup:
     J = mech.number("J", None, require_positive) if mech.has("J") else machine.J
     B = mech.number("viscous_friction", 0.0, require_nonnegative)
     load_torque = _profile_points(mech, "load_torque", 0.0)
+    plant, factors = perturbed_plant(mech, machine, PERTURBATION_FIELDS, apart=("J",))
     mech.done()
+    estimates, design_J = (machine if factors else None), None
+    if top.has("design"):  # the controllers designed on estimates, the plant the truth
+        dsec = Section(top.get("design"), "design")
+        estimates, taken = design_machine(dsec, machine, MACHINE_FIELDS)
+        dsec.done()
+        if "J" in taken:
+            design_J = estimates.J
+    if factors.get("J", 1.0) != 1.0:
+        design_J = J if design_J is None else design_J
+        J = J * factors["J"]
     conv = Section(top.get("converter", {}), "converter")
     model = conv.text("model", "averaged", choices=CONVERTERS)
     V_dc = conv.number("dc_link_voltage", None, require_positive)
@@ -137,12 +156,18 @@ def load(data: dict) -> PMDriveSetup | CurrentStepSetup:
     top.done()
     try:
         return PMDriveSetup(
-            machine=machine, V_dc=V_dc, speed_reference=speed, name=name, J=J, B=B,
+            machine=plant, estimates=estimates, design_J=design_J, V_dc=V_dc,
+            speed_reference=speed, name=name, J=J, B=B,
             load=load_torque, converter=model, f_pwm=f_pwm, encoder_counts=counts,
             encoder_offset=offset, **control, **run,
         )  # fmt: skip
     except InputError as exc:
-        raise InputError(_SETUP_FIELDS.get(exc.field, exc.field), exc.rule) from None
+        fields = dict(_SETUP_FIELDS)
+        if top.has("design"):  # the controller's machine is the design table's
+            design = top.get("design")
+            where = "design.machine_file" if "machine_file" in design else "design.params.L_q"
+            fields["estimates.L_q"] = where
+        raise InputError(fields.get(exc.field, exc.field), exc.rule) from None
 
 
 def _frequencies(section: Section, key: str) -> tuple[float, ...]:
@@ -200,6 +225,7 @@ def _current_step(top: Section) -> CurrentStepSetup:
 #: setup field -> scenario field, for rules checked by ``PMDriveSetup`` itself
 _SETUP_FIELDS = {
     "J": "machine.J",
+    "design_J": "design.params.J",
     "B": "machine.viscous_friction",
     "load": "machine.load_torque_profile",
     "V_dc": "converter.dc_link_voltage",

@@ -38,7 +38,9 @@ class PMDriveSetup:
     current_bandwidth, speed_bandwidth [rad/s]: the design bandwidths (``_design``); K_F: the
     speed PI's reference weight (Bodson (25)); speed_reference [rad/s] and load [N m]: profiles
     (a number, or a list of [time_s, value] points); encoder_counts (0: ideal), encoder_offset
-    [rad]; duration, sample_time [s], substeps per segment, log_every.
+    [rad]; duration, sample_time [s], substeps per segment, log_every; design_J: the inertia the
+    speed PI is designed on (``control.SpeedPIGains.design``) [kg m^2] (default J: the design
+    on the simulated shaft; a ``[design]`` table's or a perturbed shaft's nominal J otherwise).
     """
 
     machine: PMSGParams
@@ -63,6 +65,7 @@ class PMDriveSetup:
     encoder_offset: float = 0.0
     substeps: int = 4
     log_every: int = 1
+    design_J: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.machine, PMSGParams):
@@ -79,6 +82,8 @@ class PMDriveSetup:
             raise InputError("J", "must be given (the machine record has no J)")
         object.__setattr__(self, "J", require_positive("J", J))
         object.__setattr__(self, "B", require_nonnegative("B", self.B))
+        if self.design_J is not None:
+            object.__setattr__(self, "design_J", require_positive("design_J", self.design_J))
         if self.converter not in CONVERTERS:
             raise InputError("converter", f"must be one of {', '.join(CONVERTERS)}")
         if self.converter == "switching":
@@ -114,6 +119,11 @@ class PMDriveSetup:
     def controller_machine(self) -> PMSGParams:
         """The machine the controller is designed for (``estimates``, else the plant)."""
         return self.estimates if self.estimates is not None else self.machine
+
+    @property
+    def speed_design_J(self) -> float:
+        """The inertia the speed PI is designed on [kg m^2]: design_J, else J."""
+        return self.design_J if self.design_J is not None else self.J
 
     @property
     def i_max(self) -> float:
