@@ -201,7 +201,8 @@ def run(args) -> int:
     no_load_log, frequency, no_load_settle = _no_load(args, machine)
     try:
         result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
-                                     split=args.leakage_split, seed=args.seed)  # fmt: skip
+                                     split=args.leakage_split, seed=args.seed,
+                                     dead_time=args.dead_time_s)  # fmt: skip
         no_load = None
         if no_load_log is not None:
             no_load = fit_no_load(no_load_log, frequency, no_load_settle, n_p, result.impedance,
