@@ -6,7 +6,11 @@ intervals checked against the machine's own value; prints JSON.
 
 Per kind and parameter: the fraction of repetitions whose Jacobian and bootstrap intervals hold
 the truth, the mean relative error (the bias) and the mean relative half-width of the Jacobian
-interval. The cage IM's standstill study is ``acdrive.identify.coverage``. Kinds:
+interval. Kinds:
+
+* ``standstill``: the cage IM's standstill tests (``acdrive.identify.coverage``) on the DeLorenzo
+  and Ugalde-Loo IMs with a 2 us dead time and 1 V device drops, fitted with the compensation
+  (DC-step U_err and the programmed dead time) and without it (the injection alone);
 
 * ``pm``: BLY171D, d- and q-axis injection with DC steps, then the short-circuit spin test;
 * ``no_load``: the DeLorenzo IM's no-load run at 2 % slip on its standstill estimates;
@@ -121,7 +125,32 @@ def mechanics(seed: int, bootstrap: int, table: dict) -> None:
         _record(table, e.name, e, truth)
 
 
-KINDS = {"pm": pm, "no_load": no_load, "dfim": dfim, "mechanics": mechanics}
+#: the inverter of the standstill study: 2 us dead time, 1 V per device (U_err = 5.47 V at 5 kHz)
+DEAD_TIME, DEVICE_DROP = 2e-6, 1.0
+
+
+def standstill(repetitions: int, bootstrap: int) -> dict:
+    from acdrive.identify import StandstillPlan, coverage
+    from acdrive.machines import DELORENZO_IM, UGALDE_IM_300W
+
+    plan = StandstillPlan(t_d=DEAD_TIME, v_drop=DEVICE_DROP)
+    out = {}
+    for label, machine in (("delorenzo", DELORENZO_IM), ("ugalde", UGALDE_IM_300W)):
+        for compensate in (True, False):
+            study = coverage(machine, plan, repetitions, bootstrap=bootstrap,
+                             compensate=compensate)  # fmt: skip
+            key = f"{label}_{'compensated' if compensate else 'uncompensated'}"
+            out[key] = {
+                name: {"coverage_jacobian": study.jacobian[name],
+                       "coverage_bootstrap": study.bootstrap[name],
+                       "mean_relative_error": study.bias[name],
+                       "mean_relative_half_width": study.half_width[name]}
+                for name in study.jacobian
+            }  # fmt: skip
+    return out
+
+
+KINDS = {"standstill": None, "pm": pm, "no_load": no_load, "dfim": dfim, "mechanics": mechanics}
 
 
 def main(argv=None) -> int:
@@ -134,6 +163,9 @@ def main(argv=None) -> int:
            "kinds": {}}  # fmt: skip
     for kind, study in KINDS.items():
         if args.only not in (None, kind):
+            continue
+        if study is None:
+            out["kinds"].update(standstill(args.repetitions, args.bootstrap))
             continue
         table: dict = {}
         for seed in range(args.repetitions):

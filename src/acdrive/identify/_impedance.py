@@ -34,7 +34,8 @@ the next, and no smoothing of the reading recovers that pattern. The estimator t
 the sign the inverter itself saw: that of the current the fitted circuit draws from the logged
 command with the voltage error fed back sample by sample (``identify._polarity``). It fits
 first with the reading's sign, then ``POLARITY_ROUNDS`` times with the sign of the current
-simulated from the previous fit.
+simulated from the previous fit. The estimate's own noise then moves the sign it is compensated
+with; its intervals include that feedback (``_polarity.feedback_gain``).
 
 **Dead time also moves the sample instant.** The voltage error is what dead time does to a
 period's mean voltage; it also shifts every switching pulse t_d / 2 later, so the current is
@@ -77,7 +78,7 @@ from acdrive.identify._circuit import (
     standstill_impedance,
 )
 from acdrive.identify._experiment import StandstillLog
-from acdrive.identify._polarity import simulated_polarity
+from acdrive.identify._polarity import feedback_gain, simulated_polarity
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
     Estimate,
@@ -94,6 +95,8 @@ SAMPLES_PER_TONE = 10
 MAX_HALF_WIDTH = 0.5
 #: refits with the sign of the current simulated from the previous fit (module docstring)
 POLARITY_ROUNDS = 2
+#: the polarity's feedback is measured by secants of this many noise deviations of each parameter
+FEEDBACK_STEP_SIGMAS = 2.0
 #: a period is a whole number of samples to this relative tolerance
 _WHOLE_RTOL = 1e-6
 
@@ -312,14 +315,18 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     spec = spectrum(log, base_frequency, settle, voltage_error)
     theta0 = np.log(model.start(spec))
     fit = _solve(spec, theta0, model=model)
-    if voltage_error is not None and model.fields is INVERSE_GAMMA:
+    simulated = voltage_error is not None and model.fields is INVERSE_GAMMA
+
+    def polarity(theta):
+        signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
+                                   model.dead_time)  # fmt: skip
+        return _tone_coefficients(signs, spec, base_frequency)
+
+    if simulated:
         for _ in range(POLARITY_ROUNDS):  # the inverter's own sign (module docstring)
             if not (fit.success and np.all(np.isfinite(fit.x))):
                 break
-            signs = simulated_polarity(np.exp(fit.x), log.v_a, spec.hold, voltage_error,
-                                       model.dead_time)  # fmt: skip
-            spec = replace(spec, polarity=_tone_coefficients(signs, spec, base_frequency))
-            spec = spec.compensated(voltage_error)
+            spec = replace(spec, polarity=polarity(fit.x)).compensated(voltage_error)
             fit = _solve(spec, fit.x, model=model)
     m, n = 2 * spec.frequency.size, len(model.fields)
     if m - n < 1:
@@ -337,6 +344,13 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     values = np.exp(fit.x)
     s2 = 2.0 * fit.cost / dof
     cov_theta = covariance(fit.jac, s2)
+    gain = np.eye(n)
+    if simulated and np.all(np.isfinite(cov_theta)):  # the polarity's feedback (_polarity)
+        sensitivity = voltage_error * model.admittance(values, 2.0 * np.pi * spec.frequency,
+                                                       spec.hold)  # fmt: skip
+        steps = np.maximum(FEEDBACK_STEP_SIGMAS * np.sqrt(np.diag(cov_theta)), 1e-6)
+        gain = feedback_gain(fit.jac, fit.x, steps, polarity, sensitivity)
+        cov_theta = gain @ cov_theta @ gain.T
     with np.errstate(invalid="ignore"):  # an unbounded direction stays unbounded (inf, NaN)
         cov = np.diag(values) @ cov_theta @ np.diag(values)  # d p = p d theta
     U = 0.0 if voltage_error is None else voltage_error
@@ -356,7 +370,8 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         redrawn = response + rng.choice(residual, residual.size)
         resampled = spec.compensated(U + spread * rng.standard_normal(), redrawn)
         refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE, model)
-        draws[b] = np.exp(refit.x) if refit.success and refit.cost < _FAR else np.nan
+        moved = fit.x + gain @ (refit.x - fit.x)  # the feedback, to first order
+        draws[b] = np.exp(moved) if refit.success and refit.cost < _FAR else np.nan
     estimates = tuple(
         Estimate(name, unit, meaning, float(values[j]),
                  jacobian_interval(values[j], cov[j, j], q), percentile_interval(draws[:, j]))
