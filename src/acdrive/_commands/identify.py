@@ -44,7 +44,9 @@ def register(subparsers):
     p.add_argument("--leakage-split", choices=tuple(LEAKAGE_SPLITS), default="equal",
                    help="assumed split of the leakage for the T-circuit written (default equal)")  # fmt: skip
     p.add_argument("--dead-time-s", type=float, default=0.0,
-                   help="simulated test: the inverter's dead time (s) [0]")  # fmt: skip
+                   help="the inverter's dead time (s): simulated on a built-in machine; for a "
+                   "measured cage-IM log the PWM unit's setting, whose shift of the sample "
+                   "instant the fit includes [0]")  # fmt: skip
     p.add_argument("--device-drop-v", type=float, default=0.0,
                    help="simulated test: the inverter's device drop (V) [0]")  # fmt: skip
     p.add_argument("--seed", type=int, default=0,
@@ -106,9 +108,9 @@ def _logs(args, plan):
     if args.pole_pairs is not None:
         require_between("--pole-pairs", args.pole_pairs, 1, 1000)
     if Path(args.source).suffix in LOG_SUFFIXES:
-        for flag in ("dead_time_s", "device_drop_v"):
-            if getattr(args, flag) != 0.0:
-                raise InputError(f"--{flag.replace('_', '-')}", "is for a simulated test only")
+        if args.device_drop_v != 0.0:
+            raise InputError("--device-drop-v", "is for a simulated test only")
+        require_nonnegative("--dead-time-s", args.dead_time_s)  # the PWM unit's setting
         if args.pole_pairs is None:
             raise InputError("--pole-pairs", "is required for a measured log (a standstill test "
                              "cannot tell it)")  # fmt: skip

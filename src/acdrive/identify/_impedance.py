@@ -78,7 +78,6 @@ from acdrive.identify._circuit import (
     standstill_impedance,
 )
 from acdrive.identify._experiment import StandstillLog
-from acdrive.identify._polarity import feedback_gain, simulated_polarity
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
     Estimate,
@@ -88,6 +87,7 @@ from acdrive.identify._fit import (
     percentile_interval,
     t_quantile,
 )
+from acdrive.identify._polarity import feedback_gain, simulated_polarity
 
 EXCITED_FRACTION = 1e-2
 MIN_TONES = 3

@@ -39,8 +39,12 @@ standstill parameters drawn from them.
 **How far the intervals hold.** A 50-repetition study on the 5 kHz bench
 (``benchmarks/coverage_identify.py``; docs/guide/identification.md) found the Jacobian interval
 holding the truth in 60 % of the runs: the estimate is about 0.03 % high, which the noise
-intervals do not contain (at 20 kHz the error falls to about -0.005 %: the switching ripple at
-the sample instants is the likely cause, not modelled here).
+intervals do not contain. Without noise and with the true standstill parameters the error is
+2.5e-4 at 5 kHz, 6.2e-5 at 10 kHz and 1.6e-5 at 20 kHz (as T^2), the same with four times the
+integrator's substeps, and 4.7e-4 at 100 V instead of 150 V: the second-order term of the
+switching pattern, whose centred pulses match the held voltage's mean and first moment but not
+its second moment about the period's centre. Modelling it needs the link voltage and the three
+duties, which the log does not hold; not done.
 
 **Rules**, each an ``InputError`` naming the column or parameter: at least one whole period
 after ``settle``; ``SAMPLES_PER_PERIOD`` samples per period of f; the voltage a single frequency

@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._jit import jit
-
 from acdrive.identify._circuit import _expm_2x2, standstill_state_space
 
 
