@@ -196,7 +196,7 @@ def run(args) -> int:
     from acdrive._commands._identify_kinds import refuse_other_options
 
     refuse_other_options(args)
-    from acdrive.identify._no_load import fit_no_load
+    from acdrive.identify._no_load import NoLoadPlan, fit_no_load
 
     plan = StandstillPlan()
     injection, dc, n_p, base, settle, machine = _logs(args, plan)
@@ -207,8 +207,10 @@ def run(args) -> int:
                                      dead_time=args.dead_time_s)  # fmt: skip
         no_load = None
         if no_load_log is not None:
+            # a simulated run's link voltage is known: the pulses' second-order term is modelled
+            v_dc = NoLoadPlan().v_dc if machine is not None else None
             no_load = fit_no_load(no_load_log, frequency, no_load_settle, n_p, result.impedance,
-                                  seed=args.seed + 2)  # fmt: skip
+                                  seed=args.seed + 2, v_dc=v_dc)  # fmt: skip
     except FitNotConverged as exc:
         sys.stderr.write(f"acdrive: error: {exc}\n")
         return 1
