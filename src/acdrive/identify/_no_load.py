@@ -267,7 +267,7 @@ def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, stand
     if not fit.success or not np.isfinite(fit.x[0]):
         raise FitNotConverged("no-load run", fit.message, residual, "A (current error at f)")
     L_M = math.exp(fit.x[0])
-    J = fit.jac[:, 0] * L_M  # d residual / d L_M
+    J = fit.jac[:, 0] / L_M  # d residual / d L_M = (d residual / d log L_M) / L_M
     var = 1.0 / float(J @ J)
     g = np.empty(3)
     for j in range(3):
