@@ -52,6 +52,11 @@ def cases(bootstrap: int) -> dict:
     # injections of 1 s settling and one 1 Hz period: 2 s
     plan = dataclasses.replace(StandstillPlan(), settle=1.0, periods=1)
     im = injection_test(DELORENZO_IM, plan)
+    # the same with a 2 us dead time and 1 V device drops, compensated by their U_err and the
+    # dead time (the inverter's own current sign simulated, the sample's shift modelled)
+    dead = dataclasses.replace(plan, t_d=2e-6, v_drop=1.0)
+    im_dead = injection_test(DELORENZO_IM, dead)
+    u_err = 4.0 / 3.0 * (dead.t_d * dead.f_pwm * dead.v_dc + dead.v_drop)
     bly_plan = dataclasses.replace(plan, base_frequency=2.0, periods=2, tone_amplitude=0.15,
                                    v_dc=24.0)  # fmt: skip
     d = axis_test(BLY171D, bly_plan, "d").log
@@ -76,6 +81,9 @@ def cases(bootstrap: int) -> dict:
     return {
         "cage_im_injection": (im.time.size, lambda: fit_impedance(
             im, plan.base_frequency, plan.settle, bootstrap=bootstrap)),
+        "cage_im_injection_dead_time_compensated": (im_dead.time.size, lambda: fit_impedance(
+            im_dead, dead.base_frequency, dead.settle, voltage_error=u_err,
+            voltage_error_std=0.002, bootstrap=bootstrap, dead_time=dead.t_d)),
         "pm_d_axis_injection": (d.time.size, lambda: fit_impedance(
             d, bly_plan.base_frequency, bly_plan.settle, bootstrap=bootstrap,
             model=axis_model("d"))),

@@ -6,10 +6,15 @@ intervals checked against the machine's own value; prints JSON.
 
 Per kind and parameter: the fraction of repetitions whose Jacobian and bootstrap intervals hold
 the truth, the mean relative error (the bias) and the mean relative half-width of the Jacobian
-interval. The cage IM's standstill study is ``acdrive.identify.coverage``. Kinds:
+interval. Kinds:
+
+* ``standstill``: the cage IM's standstill tests (``acdrive.identify.coverage``) on the DeLorenzo
+  and Ugalde-Loo IMs with a 2 us dead time and 1 V device drops, fitted with the compensation
+  (DC-step U_err and the programmed dead time) and without it (the injection alone);
 
 * ``pm``: BLY171D, d- and q-axis injection with DC steps, then the short-circuit spin test;
-* ``no_load``: the DeLorenzo IM's no-load run at 2 % slip on its standstill estimates;
+* ``no_load``: the DeLorenzo IM's no-load run at 2 % slip on its standstill estimates, with the
+  switching pattern's second-order term (the link voltage given) and without it;
 * ``dfim``: Bodson's DFIM from its rotor converter, R_s given with a 1 % standard error;
 * ``mechanics``: the BLY171D speed drive's speed steps with 2 mN m Coulomb friction.
 
@@ -59,8 +64,17 @@ def pm(seed: int, bootstrap: int, table: dict) -> None:
     _record(table, "psi_m", fit.psi_m, m.psi_m)
 
 
+_QUIET: dict = {}
+
+
 def no_load(seed: int, bootstrap: int, table: dict) -> None:
+    import dataclasses
+
+    import numpy as np
+
     from acdrive.identify import (
+        CurrentSensor,
+        NoLoadLog,
         NoLoadPlan,
         StandstillPlan,
         dc_test,
@@ -70,17 +84,29 @@ def no_load(seed: int, bootstrap: int, table: dict) -> None:
         inverse_gamma,
         no_load_test,
     )
+    from acdrive.identify._coverage import reading
+    from acdrive.identify._experiment import measured_current
     from acdrive.machines import DELORENZO_IM as m
 
     plan = StandstillPlan()
-    standstill = identify_standstill(
-        injection_test(m, plan, seed=3 * seed + 1), plan.base_frequency, plan.settle,
-        dc=dc_test(m, plan, seed=3 * seed), n_p=m.n_p, seed=seed, bootstrap=bootstrap,
-    )  # fmt: skip
     run = NoLoadPlan(slip=0.02)
-    fit = fit_no_load(no_load_test(m, run, seed=3 * seed + 2), run.frequency, run.settle, m.n_p,
-                      standstill.impedance, seed=seed, bootstrap=bootstrap)  # fmt: skip
-    _record(table, "L_M", fit.L_M, inverse_gamma(m).L_M)
+    if not _QUIET:  # the bench is deterministic: simulate once, draw each seed's noise on it
+        off = CurrentSensor(noise_std=0.0, offset=0.0, lsb=0.0)
+        quiet = dataclasses.replace(plan, sensor=off)
+        _QUIET.update(dc=dc_test(m, quiet), injection=injection_test(m, quiet),
+                      no_load=no_load_test(m, dataclasses.replace(run, sensor=off)))  # fmt: skip
+    standstill = identify_standstill(
+        reading(_QUIET["injection"], plan.sensor, 3 * seed + 1), plan.base_frequency,
+        plan.settle, dc=reading(_QUIET["dc"], plan.sensor, 3 * seed), n_p=m.n_p, seed=seed,
+        bootstrap=bootstrap,
+    )  # fmt: skip
+    q = _QUIET["no_load"]
+    current = measured_current(q.i_a, run.sensor, np.random.default_rng(3 * seed + 2))
+    log = NoLoadLog(q.time, q.v_a, current, q.w, q.source)
+    for name, v_dc in (("L_M", run.v_dc), ("L_M_without_pulse_moment", None)):
+        fit = fit_no_load(log, run.frequency, run.settle, m.n_p, standstill.impedance,
+                          seed=seed, bootstrap=bootstrap, v_dc=v_dc)  # fmt: skip
+        _record(table, name, fit.L_M, inverse_gamma(m).L_M)
 
 
 def dfim(seed: int, bootstrap: int, table: dict) -> None:
@@ -121,7 +147,32 @@ def mechanics(seed: int, bootstrap: int, table: dict) -> None:
         _record(table, e.name, e, truth)
 
 
-KINDS = {"pm": pm, "no_load": no_load, "dfim": dfim, "mechanics": mechanics}
+#: the inverter of the standstill study: 2 us dead time, 1 V per device (U_err = 5.47 V at 5 kHz)
+DEAD_TIME, DEVICE_DROP = 2e-6, 1.0
+
+
+def standstill(repetitions: int, bootstrap: int) -> dict:
+    from acdrive.identify import StandstillPlan, coverage
+    from acdrive.machines import DELORENZO_IM, UGALDE_IM_300W
+
+    plan = StandstillPlan(t_d=DEAD_TIME, v_drop=DEVICE_DROP)
+    out = {}
+    for label, machine in (("delorenzo", DELORENZO_IM), ("ugalde", UGALDE_IM_300W)):
+        for compensate in (True, False):
+            study = coverage(machine, plan, repetitions, bootstrap=bootstrap,
+                             compensate=compensate)  # fmt: skip
+            key = f"{label}_{'compensated' if compensate else 'uncompensated'}"
+            out[key] = {
+                name: {"coverage_jacobian": study.jacobian[name],
+                       "coverage_bootstrap": study.bootstrap[name],
+                       "mean_relative_error": study.bias[name],
+                       "mean_relative_half_width": study.half_width[name]}
+                for name in study.jacobian
+            }  # fmt: skip
+    return out
+
+
+KINDS = {"standstill": None, "pm": pm, "no_load": no_load, "dfim": dfim, "mechanics": mechanics}
 
 
 def main(argv=None) -> int:
@@ -134,6 +185,9 @@ def main(argv=None) -> int:
            "kinds": {}}  # fmt: skip
     for kind, study in KINDS.items():
         if args.only not in (None, kind):
+            continue
+        if study is None:
+            out["kinds"].update(standstill(args.repetitions, args.bootstrap))
             continue
         table: dict = {}
         for seed in range(args.repetitions):

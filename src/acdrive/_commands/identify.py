@@ -44,7 +44,9 @@ def register(subparsers):
     p.add_argument("--leakage-split", choices=tuple(LEAKAGE_SPLITS), default="equal",
                    help="assumed split of the leakage for the T-circuit written (default equal)")  # fmt: skip
     p.add_argument("--dead-time-s", type=float, default=0.0,
-                   help="simulated test: the inverter's dead time (s) [0]")  # fmt: skip
+                   help="the inverter's dead time (s): simulated on a built-in machine; for a "
+                   "measured cage-IM log the PWM unit's setting, whose shift of the sample "
+                   "instant the fit includes [0]")  # fmt: skip
     p.add_argument("--device-drop-v", type=float, default=0.0,
                    help="simulated test: the inverter's device drop (V) [0]")  # fmt: skip
     p.add_argument("--seed", type=int, default=0,
@@ -106,9 +108,9 @@ def _logs(args, plan):
     if args.pole_pairs is not None:
         require_between("--pole-pairs", args.pole_pairs, 1, 1000)
     if Path(args.source).suffix in LOG_SUFFIXES:
-        for flag in ("dead_time_s", "device_drop_v"):
-            if getattr(args, flag) != 0.0:
-                raise InputError(f"--{flag.replace('_', '-')}", "is for a simulated test only")
+        if args.device_drop_v != 0.0:
+            raise InputError("--device-drop-v", "is for a simulated test only")
+        require_nonnegative("--dead-time-s", args.dead_time_s)  # the PWM unit's setting
         if args.pole_pairs is None:
             raise InputError("--pole-pairs", "is required for a measured log (a standstill test "
                              "cannot tell it)")  # fmt: skip
@@ -194,18 +196,21 @@ def run(args) -> int:
     from acdrive._commands._identify_kinds import refuse_other_options
 
     refuse_other_options(args)
-    from acdrive.identify._no_load import fit_no_load
+    from acdrive.identify._no_load import NoLoadPlan, fit_no_load
 
     plan = StandstillPlan()
     injection, dc, n_p, base, settle, machine = _logs(args, plan)
     no_load_log, frequency, no_load_settle = _no_load(args, machine)
     try:
         result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
-                                     split=args.leakage_split, seed=args.seed)  # fmt: skip
+                                     split=args.leakage_split, seed=args.seed,
+                                     dead_time=args.dead_time_s)  # fmt: skip
         no_load = None
         if no_load_log is not None:
+            # a simulated run's link voltage is known: the pulses' second-order term is modelled
+            v_dc = NoLoadPlan().v_dc if machine is not None else None
             no_load = fit_no_load(no_load_log, frequency, no_load_settle, n_p, result.impedance,
-                                  seed=args.seed + 2)  # fmt: skip
+                                  seed=args.seed + 2, v_dc=v_dc)  # fmt: skip
     except FitNotConverged as exc:
         sys.stderr.write(f"acdrive: error: {exc}\n")
         return 1

@@ -36,11 +36,18 @@ intervals: the Jacobian variance plus what the standstill parameters' covariance
 of refits on I redrawn with the noise and, if the standstill fit gave bootstrap draws, the
 standstill parameters drawn from them.
 
-**How far the intervals hold.** A 50-repetition study on the 5 kHz bench
-(``benchmarks/coverage_identify.py``; docs/guide/identification.md) found the Jacobian interval
-holding the truth in 60 % of the runs: the estimate is about 0.03 % high, which the noise
-intervals do not contain (at 20 kHz the error falls to about -0.005 %: the switching ripple at
-the sample instants is the likely cause, not modelled here).
+**The switching pattern's second-order term.** The model holds the voltage constant over each
+period; the inverter's centred pulses have the same mean and the same first moment about the
+period's centre, but not the same second moment. Over one period
+x(T) = e^{AT/2} int e^{-As} B v(s) ds (s from the centre), so the pattern adds
+e^{AT/2} A^2 B W_k / 2 to the state, W_k the space vector of the legs' second moments
+int s^2 (e_x - d_x v_dc) ds = v_dc T^3 (d_x^3 - d_x) / 12. Measured on the noise-free 5 kHz
+bench (DeLorenzo IM, 150 V, 2 % slip, true standstill parameters): left out, L_M came out
+2.5e-4 high (6.2e-5 at 10 kHz, 1.6e-5 at 20 kHz: as T^2; the same with four times the
+integrator's substeps); the current's residual at f was this term's prediction to 1e-4 of
+itself at 5 and 20 kHz. With the link voltage ``v_dc`` given, the model adds
+W ripple_admittance, W the fundamental of W_k for the balanced command of the fitted phasor V
+and the min-max zero sequence of the SVPWM (``pulse_moment``).
 
 **Rules**, each an ``InputError`` naming the column or parameter: at least one whole period
 after ``settle``; ``SAMPLES_PER_PERIOD`` samples per period of f; the voltage a single frequency
@@ -196,32 +203,71 @@ def _phasors(log: NoLoadLog, frequency: float, settle: float):
     return V, I, variance, hold, speed
 
 
-def _solve_L_M(V, I, variance, known, w_r, w, hold, start):
+def pulse_moment(V, frequency: float, hold: float, v_dc: float, n: int) -> complex:
+    """The fundamental coefficient W of the switching pattern's second moment (module
+    docstring): the balanced command of phasor ``V`` [V] at ``frequency`` [Hz], its min-max
+    zero sequence and duties d_x over ``n`` periods ``hold`` [s] from a link of ``v_dc`` [V];
+    per leg int s^2 (e_x - d_x v_dc) ds = v_dc T^3 (d_x^3 - d_x) / 12 about the period's
+    centre, their space vector's coefficient at +frequency."""
+    phase = 2.0 * math.pi * frequency * hold * np.arange(n)
+    legs = np.array([(V * np.exp(1j * (phase - k * 2.0 * math.pi / 3.0))).real for k in range(3)])
+    offset = -0.5 * (legs.max(axis=0) + legs.min(axis=0))
+    duty = np.clip(0.5 + (legs + offset) / v_dc, 0.0, 1.0)
+    moment = v_dc * hold**3 * (duty**3 - duty) / 12.0
+    a = np.exp(2j * math.pi / 3.0)
+    vector = (2.0 / 3.0) * (moment[0] + a * moment[1] + a * a * moment[2])
+    return complex(np.mean(vector * np.exp(-1j * phase)))
+
+
+def ripple_admittance(params, w_r: float, w: float, hold: float) -> complex:
+    """I / W [S / s^2]: how the second moment W enters the sampled current, C (zI - Phi)^-1 E
+    with E = e^{AT/2} A^2 B / 2 (module docstring; A, B those of ``running_admittance``)."""
+    R_s, L_sigma, R_R, L_M = (float(v) for v in params)
+    rotor = R_R / L_M - 1j * w_r
+    A = np.array([[-(R_s + R_R) / L_sigma, rotor / L_sigma], [R_R, -rotor]], dtype=complex)
+    B = np.array([1.0 / L_sigma, 0.0], dtype=complex)
+    E = _expm_2x2(A, 0.5 * hold) @ (A @ A @ B) / 2.0
+    z = np.exp(1j * w * hold)
+    return complex(np.linalg.solve(z * np.eye(2) - _expm_2x2(A, hold), E)[0])
+
+
+def _solve_L_M(V, I, variance, known, w_r, w, hold, start, moment=0.0):
     from scipy.optimize import least_squares
 
     def residual(theta):
-        Y = running_admittance((*known, math.exp(theta[0])), w_r, w, hold)
-        error = (I - Y * V) / math.sqrt(variance)
+        params = (*known, math.exp(theta[0]))
+        Y = running_admittance(params, w_r, w, hold)
+        model = Y * V
+        if moment != 0.0:
+            model = model + ripple_admittance(params, w_r, w, hold) * moment
+        error = (I - model) / math.sqrt(variance)
         return np.array([error.real, error.imag])
 
     return least_squares(residual, [math.log(start)], method="lm", xtol=1e-12, ftol=1e-12)
 
 
 def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, standstill,
-                seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> NoLoadFit:  # fmt: skip
+                seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
+                v_dc: float | None = None) -> NoLoadFit:  # fmt: skip
     """L_M of a no-load run (module docstring), with R_s, L_sigma, R_R and their covariance from
-    ``standstill`` (an ``ImpedanceFit`` of the standstill injection)."""
+    ``standstill`` (an ``ImpedanceFit`` of the standstill injection). ``v_dc`` [V], the link
+    voltage of the run, adds the switching pattern's second-order term to the model (module
+    docstring); None leaves it out."""
     V, I, variance, hold, speed = _phasors(log, frequency, settle)
+    moment = 0.0
+    if v_dc is not None:
+        require_positive("v_dc", v_dc)
+        moment = pulse_moment(V, frequency, hold, float(v_dc), round(1.0 / (frequency * hold)))
     w = 2.0 * math.pi * frequency
     w_r = n_p * speed
     values = standstill.params.as_array()
     known = values[:3]
-    fit = _solve_L_M(V, I, variance, known, w_r, w, hold, values[3])
+    fit = _solve_L_M(V, I, variance, known, w_r, w, hold, values[3], moment)
     residual = float(math.sqrt(2.0 * fit.cost * variance))
     if not fit.success or not np.isfinite(fit.x[0]):
         raise FitNotConverged("no-load run", fit.message, residual, "A (current error at f)")
     L_M = math.exp(fit.x[0])
-    J = fit.jac[:, 0] * L_M  # d residual / d L_M
+    J = fit.jac[:, 0] / L_M  # d residual / d L_M = (d residual / d log L_M) / L_M
     var = 1.0 / float(J @ J)
     g = np.empty(3)
     for j in range(3):
@@ -229,17 +275,18 @@ def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, stand
         up, down = known.copy(), known.copy()
         up[j] += step
         down[j] -= step
-        g[j] = (math.exp(_solve_L_M(V, I, variance, up, w_r, w, hold, L_M).x[0])
-                - math.exp(_solve_L_M(V, I, variance, down, w_r, w, hold, L_M).x[0])) / (2 * step)  # fmt: skip
+        g[j] = (math.exp(_solve_L_M(V, I, variance, up, w_r, w, hold, L_M, moment).x[0])
+                - math.exp(_solve_L_M(V, I, variance, down, w_r, w, hold, L_M, moment).x[0])) / (2 * step)  # fmt: skip
     var += float(g @ standstill.cov[:3, :3] @ g)
     rng = np.random.default_rng(seed)
     Y = running_admittance((*known, L_M), w_r, w, hold)
+    response = Y * V + ripple_admittance((*known, L_M), w_r, w, hold) * moment
     draws = np.empty(bootstrap)
     sources = standstill.draws[np.all(np.isfinite(standstill.draws), axis=1)]
     for b in range(bootstrap):
         noise = math.sqrt(variance) * (rng.standard_normal() + 1j * rng.standard_normal())
         drawn = sources[rng.integers(sources.shape[0]), :3] if sources.size else known
-        refit = _solve_L_M(V, Y * V + noise, variance, drawn, w_r, w, hold, L_M)
+        refit = _solve_L_M(V, response + noise, variance, drawn, w_r, w, hold, L_M, moment)
         draws[b] = math.exp(refit.x[0]) if refit.success else math.nan
     half = Z_95 * math.sqrt(var)
     estimate = Estimate("L_M", "H", "magnetising inductance of the inverse-Gamma circuit at the "

@@ -70,14 +70,18 @@ def _t_values(values, n_p: int, split: str) -> np.ndarray:
 
 def identify_standstill(injection: StandstillLog, base_frequency: float, settle: float,
                         dc: StandstillLog | None = None, n_p: int = 1, split: str = "equal",
-                        seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> StandstillIdentification:  # fmt: skip
-    """Identify a cage IM from its standstill logs (module docstring)."""
+                        seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
+                        dead_time: float = 0.0) -> StandstillIdentification:  # fmt: skip
+    """Identify a cage IM from its standstill logs (module docstring); ``dead_time`` [s] is the
+    inverter's programmed dead time, whose shift of the sample instant the injection's model
+    includes (``identify._impedance``)."""
     t_circuit(InverseGamma(1.0, 1.0, 1.0, 1.0), n_p, split)  # the split and n_p, checked first
     dc_fit = fit_dc_steps(dc, seed=seed, bootstrap=bootstrap) if dc is not None else None
     error = dc_fit.voltage_error.value if dc_fit is not None else None
     error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
     fit = fit_impedance(injection, base_frequency, settle, voltage_error=error, seed=seed + 1,
-                        bootstrap=bootstrap, voltage_error_std=error_std)  # fmt: skip
+                        bootstrap=bootstrap, voltage_error_std=error_std,
+                        dead_time=dead_time)  # fmt: skip
     values = fit.params.as_array()
     t_values = _t_values(values, n_p, split)
     cov = propagate(lambda v: _t_values(v, n_p, split), values, fit.cov)
