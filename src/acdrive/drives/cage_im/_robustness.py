@@ -93,7 +93,8 @@ def design_figures(setup) -> dict:
     """The designs of the drive as it builds them: the IFOC's estimates R_r, L_r, L_m (its slip
     law, ``control._foc`` (slip)), the speed PI's K_P, K_I (mode speed-pi), the current
     controller by name and whether it is re-derived from the design machine ("imc-pi",
-    ``_current_design``, with its K_P, K_I) or fixed (a built-in published transfer function such
+    ``_current_design``, with its K_P, K_I; "icad-proposed", with the specifications its ICAD
+    check meets, its gain and PI zero) or fixed (a built-in published transfer function such
     as Amezquita-Brooks et al.'s (20)), and the spectral radius of the sampled current loop on the
     simulated plant (``linear``)."""
     est = setup.estimates
@@ -102,7 +103,18 @@ def design_figures(setup) -> dict:
         out.update({"K_P": setup.speed_pi.K_P, "K_I": setup.speed_pi.K_I})
     cc = setup.current_control
     out["current_controller"] = cc.controller
-    if cc.designed:
+    if cc.proposal is not None:
+        check = cc.proposal.check
+        out["current_controller_design"] = (
+            f"re-derived from the design machine (ICAD propose_controller, "
+            f"{cc.proposal.candidate.structure})"
+        )
+        out["current_icad_specs_met"] = (
+            "all" if check.met_all else "unmet: " + ", ".join(check.unmet)
+        )
+        out["current_icad_gain"] = cc.proposal.candidate.gain
+        out["current_icad_pi_zero_rad_s"] = cc.proposal.candidate.pi_zero
+    elif cc.designed:
         out["current_controller_design"] = (
             f"re-derived from the design machine (internal-model "
             f"PI, bandwidth {cc.bandwidth:g} rad/s)"

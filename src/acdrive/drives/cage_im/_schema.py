@@ -32,7 +32,10 @@ units in the key names where not SI; defaults in brackets):
                   device_drop_v (switching model only) [0]
     [current_control]  controller (``control._lti.BUILTIN``: fixed published transfer
                   functions; or "imc-pi": the PI designed on the design machine,
-                  ``_current_design``, with bandwidth_rad_s) ["paper-20"], discretisation
+                  ``_current_design``, with bandwidth_rad_s; or "icad-proposed": the PI or PI x lag
+                  ``analysis.propose_controller`` finds on the design machine's ICAD plant, with
+                  [current_control.specs] the fields of ``analysis._design.Specifications``
+                  [``PAPER_SPECS``]) ["paper-20"], discretisation
                   ("tustin" | "zoh") ["tustin"], prewarp_rad_s (Tustin only), anti_windup_gain [1]
     [reference]   mode ("current" | "speed-p" | "speed-pi" | "position"), and by mode:
                   current: waveform ("sine" | "step") ["sine"], amplitude_pk_a [1],
@@ -90,7 +93,13 @@ from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import PositionP, SaturatedSpeedP, SpeedPI
 from acdrive.control._lti import BUILTIN
 from acdrive.control._speed import require_feedforward_fraction
-from acdrive.drives.cage_im._current_design import DESIGNED, imc_current_pi
+from acdrive.drives.cage_im._current_design import (
+    DESIGNED,
+    PROPOSED,
+    icad_proposal,
+    imc_current_pi,
+    specifications,
+)
 from acdrive.drives.cage_im._current_loop import current_loop_radius
 from acdrive.drives.cage_im._period import check_im_control_period
 from acdrive.drives.cage_im._setup import (
@@ -212,13 +221,21 @@ def _inverter(sec: _Section, sample_time: float) -> InverterSetup:
 def _current_control(
     sec: _Section, machine: IMParams, field_name: str = "controller"
 ) -> CurrentControl:
-    name = sec.text(field_name, "paper-20", choices=(*BUILTIN, DESIGNED))
+    name = sec.text(field_name, "paper-20", choices=(*BUILTIN, DESIGNED, PROPOSED))
     method = sec.text("discretisation", "tustin", choices=("tustin", "zoh"))
     prewarp = (
         sec.number("prewarp_rad_s", None, require_positive) if sec.has("prewarp_rad_s") else None
     )
     gain = sec.number("anti_windup_gain", 1.0, require_nonnegative)
-    bandwidth = gains = None
+    bandwidth = gains = proposal = None
+    if sec.has("specs") and name != PROPOSED:
+        raise InputError(sec.field("specs"), f'applies to controller = "{PROPOSED}" only')
+    if name == PROPOSED:
+        table = sec.get("specs", {})
+        if not isinstance(table, dict):
+            raise InputError(sec.field("specs"), "must be a table of ICAD specifications")
+        specs = specifications(table, sec.field("specs"))
+        proposal = icad_proposal(machine, specs)  # on the design machine (estimates or nominal)
     if name == DESIGNED:
         if not sec.has("bandwidth_rad_s"):
             raise InputError(
@@ -228,10 +245,11 @@ def _current_control(
         gains = imc_current_pi(machine, bandwidth)  # on the design machine (estimates or nominal)
     elif sec.has("bandwidth_rad_s"):
         raise InputError(sec.field("bandwidth_rad_s"), f'applies to controller = "{DESIGNED}" only '
-                         "(a built-in controller is a fixed transfer function)")  # fmt: skip
+                         "(a built-in controller is a fixed transfer function; the ICAD "
+                         "proposal's bandwidth is specs.bandwidth_rad_s)")  # fmt: skip
     sec.done()
     return CurrentControl(controller=name, method=method, prewarp=prewarp, aw_gain=gain,
-                          bandwidth=bandwidth, pi_gains=gains)  # fmt: skip
+                          bandwidth=bandwidth, pi_gains=gains, proposal=proposal)  # fmt: skip
 
 
 def _current_reference(sec: _Section) -> CurrentReference:

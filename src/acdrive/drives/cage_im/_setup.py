@@ -122,7 +122,9 @@ class CurrentControl:
     from the design machine (``_current_design.imc_current_pi``: ``bandwidth`` [rad/s], its gains
     ``pi_gains`` = (K_P, K_I) computed by the scenario loader), its discretisation ("tustin" or
     "zoh"), an optional Tustin pre-warping frequency [rad/s] and the anti-windup gain
-    (``control._current``)."""
+    (``control._current``); or "icad-proposed", ``proposal`` the ``analysis._design.Proposal``
+    found on the design machine (``_current_design.icad_proposal``: its controller and ICAD
+    check)."""
 
     controller: str = "paper-20"
     method: str = "tustin"
@@ -130,14 +132,17 @@ class CurrentControl:
     aw_gain: float = 1.0
     bandwidth: float | None = None
     pi_gains: tuple[float, float] | None = None
+    proposal: object | None = field(default=None, compare=False)
 
     @property
     def designed(self) -> bool:
         """True if the controller is designed from the machine's parameters (not a fixed one)."""
-        return self.pi_gains is not None
+        return self.pi_gains is not None or self.proposal is not None
 
     @property
     def lti(self):
+        if self.proposal is not None:
+            return self.proposal.controller
         if self.pi_gains is not None:
             from acdrive.control._lti import LTI
 
