@@ -13,9 +13,9 @@ from acdrive._lazy import namespace
 __all__, __getattr__, __dir__ = namespace(
     __name__,
     {
-        "Criterion": "._criteria",
-        "RobustnessSeam": "._criteria",
-        "Tolerances": "._criteria",
+        "Criterion": "acdrive.drives._robustness_seam",
+        "RobustnessSeam": "acdrive.drives._robustness_seam",
+        "Tolerances": "acdrive.drives._robustness_seam",
         "DesignComparison": "._design",
         "design_comparison": "._design",
         "MapSpec": "._map",

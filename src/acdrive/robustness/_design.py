@@ -20,8 +20,8 @@ import copy
 import os
 from dataclasses import dataclass
 
+from acdrive.drives._robustness_seam import Tolerances
 from acdrive.errors import InputError
-from acdrive.robustness._criteria import Tolerances
 
 
 @dataclass

@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.analysis._robustness import PAPER_PERTURBATION as _ICAD_PAPER
+from acdrive.drives._robustness_seam import CRITERIA, Tolerances
 from acdrive.errors import InputError, require_positive
-from acdrive.robustness._criteria import CRITERIA, Tolerances
 
 #: Amezquita-Brooks et al. sec. VIII: the perturbed plant of Figs. 21-23 (factors on the plant),
 #: the ICAD robustness study's ``analysis._robustness.PAPER_PERTURBATION`` as a dict

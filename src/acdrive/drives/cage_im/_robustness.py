@@ -19,15 +19,18 @@ design) at the run's top speed; stable if < 1.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.batch import Reducer
+from acdrive.drives._robustness_seam import (
+    FINITE_RUN,
+    Criterion,
+    RobustnessSeam,
+    finished_finite,
+)
 from acdrive.drives.cage_im._reducers import im_reducers
 from acdrive.drives.cage_im._schema import PARAMS_FIELDS
-from acdrive.robustness._criteria import Criterion, RobustnessSeam
 
 FIELDS = {"R_s": "R_s", "R_r": "R_r", "L_s": "L_s", "L_r": "L_r", "L_m": "L_m", "J": "J"}
 #: default tracking tolerance of imposed currents (fraction of the reference amplitude): the
@@ -65,15 +68,13 @@ def criteria(setup, tolerances) -> list[Criterion]:
         Criterion("current_limit", "peak_stator_current_a", (1 + tolerances.current) * i_max, "A",
                   f"peak |i_s| over the run <= {1 + tolerances.current:g} x the FOC current "
                   f"limit ({i_max:.4g} A, space vector)"),
-        Criterion("stability", "stable", 0.0, "", "the run finished with a finite state"),
+        FINITE_RUN,
     ]  # fmt: skip
 
 
 def derived(setup, row: dict) -> dict:
     """The stability flag of a finished row (the drive has no late-oscillation verdict)."""
-    return {"stable": row.get("status") == "ok" and all(
-        math.isfinite(v) for k, v in row.items()
-        if isinstance(v, float) and k.startswith(("current_error", "peak_stator")))}  # fmt: skip
+    return finished_finite(row, ("current_error", "peak_stator"))
 
 
 def linear(setup) -> dict:

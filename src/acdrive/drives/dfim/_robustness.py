@@ -21,9 +21,9 @@ import math
 
 import numpy as np
 
+from acdrive.drives._robustness_seam import Criterion, RobustnessSeam
 from acdrive.drives.dfim._reducers import dfim_reducers
 from acdrive.drives.dfim._schema import DESIGN_ALIASES, PARAMS_FIELDS
-from acdrive.robustness._criteria import Criterion, RobustnessSeam
 from acdrive.sim._metrics import OSCILLATION_FINDING_RPM, RPM_PER_RAD_S
 
 #: default tracking tolerance: RMS speed error over the tracking window / largest |reference|

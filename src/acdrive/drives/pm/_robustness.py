@@ -18,13 +18,16 @@ Prediction: the larger spectral radius of the two sampled current-loop axes
 
 from __future__ import annotations
 
-import math
-
 from acdrive.batch import Reducer
 from acdrive.core._signals import pack_table
+from acdrive.drives._robustness_seam import (
+    FINITE_RUN,
+    Criterion,
+    RobustnessSeam,
+    finished_finite,
+)
 from acdrive.drives.pm._reducers import pm_reducers
 from acdrive.drives.pm._schema import MACHINE_FIELDS
-from acdrive.robustness._criteria import Criterion, RobustnessSeam
 
 #: the map's parameter names -> the keys of ``[machine.perturbation]``
 FIELDS = {"R_s": "R_s", "L_d": "L_d", "L_q": "L_q", "psi_m": "psi_m", "J": "J"}
@@ -58,15 +61,13 @@ def criteria(setup, tolerances) -> list[Criterion]:
         Criterion("current_limit", "current_peak_a", limit, "A",
                   f"peak phase current over the run <= {1 + tolerances.current:g} x the "
                   f"controller's limit ({setup.i_max_peak:.4g} A peak)"),
-        Criterion("stability", "stable", 0.0, "", "the run finished with a finite state"),
+        FINITE_RUN,
     ]  # fmt: skip
 
 
 def derived(setup, row: dict) -> dict:
     """The stability flag of a finished row (the drive has no late-oscillation verdict)."""
-    return {"stable": row.get("status") == "ok" and all(
-        math.isfinite(v) for k, v in row.items()
-        if isinstance(v, float) and k.startswith(("speed_error", "current_peak")))}  # fmt: skip
+    return finished_finite(row, ("speed_error", "current_peak"))
 
 
 def linear(setup) -> dict:

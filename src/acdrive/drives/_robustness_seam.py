@@ -42,6 +42,19 @@ class Criterion:
         return bool(value <= self.limit)
 
 
+#: the stability criterion of a drive without a late-oscillation verdict: the run finished
+#: with a finite state (``finished_finite``)
+FINITE_RUN = Criterion("stability", "stable", 0.0, "", "the run finished with a finite state")
+
+
+def finished_finite(row: dict, prefixes: tuple[str, ...]) -> dict:
+    """The ``stable`` flag of ``FINITE_RUN`` for a batch row: the run finished and every float
+    figure whose name starts with one of ``prefixes`` is finite."""
+    return {"stable": row.get("status") == "ok" and all(
+        math.isfinite(v) for k, v in row.items()
+        if isinstance(v, float) and k.startswith(prefixes))}  # fmt: skip
+
+
 @dataclass(frozen=True)
 class RobustnessSeam:
     """A drive's answers to a robustness map.
