@@ -109,7 +109,8 @@ def run_sil(args) -> int:
               f"{report['bounded_worst_ratio']:.3e} of its peak (modulators' switched outputs "
               f"left out: {left_out}), within its bound {report['float_bound']:.3e} "
               f"({report['float_margin']:g} x {report['input_rounding_ratio']:.3e}, the double "
-              f"build with float32-rounded inputs, worst {report['input_rounding_signal']}): yes")  # fmt: skip
+              f"build with float32-rounded inputs, worst {report['input_rounding_signal']}): "
+              f"{'yes' if report['within_float_bound'] else 'no'}")  # fmt: skip
     return 0
 
 
