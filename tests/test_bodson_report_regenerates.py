@@ -4,7 +4,7 @@ docs/reproduction/bodson.md byte for byte.
 The report is written into a temporary folder and compared with the committed one: the Markdown
 byte for byte, the figures by the set of files written (their pixels depend on the plotting
 library; the numbers they show are the report's). Quantities of limit-cycling runs are printed
-to the precision their spread allows (``acdrive._report.spread``), so the comparison also holds
+to the precision their spread allows (``acdrive._spread``), so the comparison also holds
 on another x86-64 machine.
 """
 

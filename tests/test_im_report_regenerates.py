@@ -2,7 +2,7 @@
 for byte, and the same set of figure files (compared by name: their pixels depend on the plotting
 library and fonts; the numbers they show are the report's). The report's simulations run on the
 switching inverter and are not chaotic, so their printed digits do not depend on the machine;
-round-off-level differences are printed as their bound (``_report.verdicts.ROUNDOFF_FLOOR``).
+round-off-level differences are printed as their bound (``acdrive._verdicts.ROUNDOFF_FLOOR``).
 """
 
 from __future__ import annotations

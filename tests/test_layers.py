@@ -296,7 +296,7 @@ ONE_DRIVE_MODULES = {
     "acdrive._report.bodson.discussion": "Bodson reproduction",
     "acdrive._report.bodson.experiments": "Bodson reproduction",
     "acdrive._report.bodson.verdicts": "Bodson reproduction",
-    "acdrive._report.converter_effect": "Bodson reproduction",
+    "acdrive._report.bodson.numbers": "Bodson reproduction",
     "acdrive._report.limit_cycle_summary": "Bodson reproduction",
     "acdrive._report.speed_overshoot": "Bodson reproduction",
     "acdrive._report.im.figures": "cage-IM paper reproduction",

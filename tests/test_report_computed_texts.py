@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from acdrive import _verdicts as V
 from acdrive._report import icad_targets as targets
-from acdrive._report import verdicts as V
 from acdrive._report.icad.rounding import matrix_entries, rounding_reach, rounding_rows
 from acdrive._report.icad.ugalde_im import c_of_80_row
 from acdrive._report.im import settings as im_settings

@@ -7,9 +7,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from acdrive._figures import DPI, ENVELOPE_BINS, envelope, new_figure, save_figure
 from acdrive._frames import K_PEAK
-from acdrive._report.markdown import DPI, save_figure
-from acdrive._report.plotting import ENVELOPE_BINS, envelope, new_figure
 from acdrive.drives.dfim import _figures as dfim_figures
 from acdrive.drives.dfim._figures import current_limits, drive_figures
 from acdrive.drives.dfim._result import LOG_NAMES, N_LOG, DriveResult

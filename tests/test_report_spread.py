@@ -6,16 +6,16 @@ import math
 import numpy as np
 import pytest
 
-from acdrive._report.converter_effect import SideEffect, steady_settling, steady_stretches
 from acdrive._report.limit_cycle_summary import Shown
-from acdrive._report.spread import (
+from acdrive._spread import (
     mean_and_spread,
     order_of_magnitude,
     peak_spread,
     round_to_spread,
     rounding_step,
 )
-from acdrive._report.verdicts import judge_settling
+from acdrive._verdicts import judge_settling
+from acdrive.drives.dfim._converter_effect import SideEffect, steady_settling, steady_stretches
 
 
 @pytest.mark.parametrize(
@@ -114,7 +114,7 @@ def test_steady_settling_over_stretches():
 
 
 def test_spread_over_stretches_ignores_the_change_of_operating_point():
-    from acdrive._report.spread import mean_and_spread_over_stretches
+    from acdrive._spread import mean_and_spread_over_stretches
 
     x = np.r_[np.full(800, 5.0), np.full(800, -20.0)]
     stretches = [slice(0, 800), slice(800, 1600)]
@@ -128,7 +128,7 @@ def test_spread_over_stretches_ignores_the_change_of_operating_point():
 
 
 def test_a_comparison_finer_than_the_limit_cycle_is_not_decidable():
-    from acdrive._report.converter_effect import judged
+    from acdrive.drives.dfim._converter_effect import judged
 
     base = _effect(True)
     cycling = SideEffect(**{**base.__dict__, "q_s": 10.0, "q_spread": 5.0})  # step 10 > 3.74

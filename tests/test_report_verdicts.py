@@ -10,15 +10,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from acdrive._report import converter_effect as C
-from acdrive._report import verdicts as V
+from acdrive import _verdicts as V
 from acdrive._report.bodson import verdicts as B
 from acdrive._report.icad.delorenzo import gm_min_note
 from acdrive._report.icad.design_models import MODEL_GAIN_TOL_DB, design_model_verdict
 from acdrive._report.icad.pi_comparison import pi_family_trend
+from acdrive.drives.dfim import _converter_effect as C
 
 # ---------------------------------------------------------------------------------------------
-# generic helpers (acdrive._report.verdicts)
+# generic helpers (acdrive._verdicts)
 
 
 def test_within_abs_flips_at_the_tolerance_and_states_it():
@@ -201,7 +201,7 @@ def test_transient_and_oscillation_verdicts_flip():
 
 
 # ---------------------------------------------------------------------------------------------
-# bench converter side effect (acdrive._report.converter_effect)
+# bench converter side effect (acdrive.drives.dfim._converter_effect)
 
 
 def _effect(q_s=0.0, tau_com=0.01, tau_e=0.01, oscillation=0.0):
@@ -331,7 +331,7 @@ speed_bandwidth = 100.0
 
 
 # ---------------------------------------------------------------------------------------------
-# steady state and headlines (acdrive._report.verdicts)
+# steady state and headlines (acdrive._verdicts)
 
 
 def _first_order(t_end, final=375.0, tau=0.1, samples_per_s=10_000):

@@ -234,7 +234,9 @@ def design_machine(section: Section, truth, fields: tuple[str, ...], aliases: di
         if path.stat().st_size > _MAX_DESIGN_FILE_BYTES:
             raise InputError(name, f"'{path}' is larger than a machine parameter file can be")
         doc = parse_toml(path.read_text(encoding="utf-8", errors="replace"), f"'{path}'", name)
-        table = doc.get("machine", {}).get("params") if isinstance(doc.get("machine"), dict) else None
+        table = (
+            doc.get("machine", {}).get("params") if isinstance(doc.get("machine"), dict) else None
+        )
         if not isinstance(table, dict):
             raise InputError(name, f"'{path}' has no [machine.params] table")
         where = f"{name} [machine.params]"
@@ -244,20 +246,28 @@ def design_machine(section: Section, truth, fields: tuple[str, ...], aliases: di
             raise InputError(section.field("params"), "must be a table of machine parameters")
         where = section.field("params")
     else:
-        raise InputError(section.field("machine_file"), "is required in a [design] table (or [params])")
+        raise InputError(
+            section.field("machine_file"), "is required in a [design] table (or [params])"
+        )
     section.used.add("params")
     values, taken = {}, []
     for key in fields:
         for name in (key, aliases.get(key)):
             if name is not None and name in table:
-                value = require_positive(f"{where}.{name}", table[name]) if key != "n_p" else table[name]
+                value = (
+                    require_positive(f"{where}.{name}", table[name])
+                    if key != "n_p"
+                    else table[name]
+                )
                 values[key] = value
                 taken.append(key)
                 break
     known = set(fields) | {aliases[k] for k in fields if k in aliases}
     unknown = sorted(set(table) - known)
     if unknown:
-        raise InputError(f"{where}.{unknown[0]}", f"unknown machine parameter (known: {', '.join(fields)})")
+        raise InputError(
+            f"{where}.{unknown[0]}", f"unknown machine parameter (known: {', '.join(fields)})"
+        )
     try:
         design = dataclasses.replace(truth, **values)
     except InputError as exc:

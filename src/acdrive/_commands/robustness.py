@@ -57,6 +57,7 @@ def register(subparsers) -> None:
 
 def _params(text: str | None, kind: str) -> tuple:
     from acdrive.errors import InputError
+
     if text is None:
         return None  # MapSpec's default: every parameter, and on a grid the paper axis
     names = tuple(t.strip() for t in text.split(","))

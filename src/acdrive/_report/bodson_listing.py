@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from acdrive._report.verdicts import ROUNDOFF_FLOOR, Verdict, below_floor, num, within_rel
+from acdrive._verdicts import ROUNDOFF_FLOOR, Verdict, below_floor, num, within_rel
 from acdrive.machines._dfim import (
     DFIMParams,
     electromagnetic_torque,

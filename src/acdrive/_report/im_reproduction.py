@@ -9,11 +9,11 @@ motor drives in the time domain"). The paper prints few numbers for these experi
 prints one (a gain, a reference, a perturbation factor), acdrive's value is compared with it;
 where it only shows a figure, the report states what the figure shows and the quantity acdrive
 measures for it, with a verdict computed against a stated tolerance (``TOLERANCES`` of
-``_report.im.settings``; helpers of ``_report.verdicts``). A steady-state claim (a final speed or position, a torque balance, a
+``_report.im.settings``; helpers of ``acdrive._verdicts``). A steady-state claim (a final speed or position, a torque balance, a
 steady-state error) is judged on the summary's steady window only if the signal is settled there
-(``_report.verdicts.settling``), else its verdict says "not settled". Checks of settings taken
+(``acdrive._verdicts.settling``), else its verdict says "not settled". Checks of settings taken
 from the paper (the DC link, printed gains, reference values) are input checks
-(``_report.verdicts.transcription``), counted apart from the result checks in the headline.
+(``acdrive._verdicts.transcription``), counted apart from the result checks in the headline.
 
 Flow (the pieces live in ``_report/im/``): ``numbers.run_experiments`` (the outcomes) and
 ``numbers.measure_couplings`` -> ``numbers.compute_numbers`` (a flat dict of every number the
@@ -32,7 +32,7 @@ from acdrive._report.im.numbers import compute_numbers, measure_couplings, run_e
 from acdrive._report.im.sections import build_sections
 from acdrive._report.im.verdicts import compute_verdicts
 from acdrive._report.markdown import Section, render_section
-from acdrive._report.verdicts import INPUT, Verdict, headline
+from acdrive._verdicts import INPUT, Verdict, headline
 
 STEM = "im-current-control"
 

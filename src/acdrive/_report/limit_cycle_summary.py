@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from acdrive._report.spread import (
+from acdrive._spread import (
     mean_and_spread,
     order_of_magnitude,
     round_to_spread,

@@ -3,20 +3,15 @@ and figure files.
 
 A report is a list of ``Section``s, each with an introductory paragraph, a comparison table of
 ``Row``s (the paper's value beside acdrive's, with the verdict or the reason in the note), text
-after the table and figures with their captions; ``render_section`` writes one as Markdown and
-``save_figure`` writes the PNG a section links to. The verdict sentences themselves come from
-``acdrive._report.verdicts``.
+after the table and figures with their captions; ``render_section`` writes one as Markdown (the PNG a section
+links to is written by ``acdrive._figures.save_figure``). The verdict sentences themselves come from
+``acdrive._verdicts``.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
-from pathlib import Path
-
-#: Resolution of the report figures [dots per inch].
-DPI = 90
 
 
 @dataclass(frozen=True)
@@ -58,22 +53,6 @@ def fmt(x, digits: int = 4) -> str:
 def db(x: float) -> float:
     """A gain in decibels, 20 log10 x."""
     return 20.0 * math.log10(x)
-
-
-def save_figure(path: Path, fig) -> None:
-    """Write ``fig`` to ``path`` at ``DPI`` and close it.
-
-    A figure without a layout engine (``pyplot.subplots``, ``_report.plotting.new_figure``) gets the
-    tight layout, after which its engine is dropped: ``savefig`` would otherwise draw it once more
-    (without rendering) to lay it out again, and that pass costs as much as the layout itself. A
-    figure made with an engine (e.g. ``layout="constrained"``) is laid out by ``savefig``."""
-    if fig.get_layout_engine() is None:
-        fig.tight_layout()
-        fig.set_layout_engine(None)
-    fig.savefig(path, dpi=DPI)
-    pyplot = sys.modules.get("matplotlib.pyplot")  # only pyplot's figures need closing
-    if pyplot is not None:
-        pyplot.close(fig)
 
 
 def render_section(section: Section, fig_rel: str) -> list[str]:

@@ -15,9 +15,9 @@ import dataclasses
 
 import numpy as np
 
-from acdrive._report.converter_effect import ideal_converter
-from acdrive._report.verdicts import Verdict
+from acdrive._verdicts import Verdict
 from acdrive.core._profile import Profile
+from acdrive.drives.dfim._converter_effect import ideal_converter
 from acdrive.drives.dfim._outcome import run_scenario
 from acdrive.scenarios._loader import load_scenario
 

@@ -112,7 +112,9 @@ class Drive:
     def robustness(self):
         """The drive's ``acdrive.robustness.RobustnessSeam`` (its plant-only perturbation table,
         criteria and linearised prediction); a drive without one refuses a map."""
-        raise InputError("drive", f"drive {self.kind!r} has no plant perturbation for a robustness map")
+        raise InputError(
+            "drive", f"drive {self.kind!r} has no plant perturbation for a robustness map"
+        )
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} kind={self.kind!r}>"

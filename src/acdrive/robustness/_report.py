@@ -113,8 +113,7 @@ def report_lines(m: RobustnessMap) -> list[str]:
 
 def draw_map(m: RobustnessMap, path: Path) -> None:
     """``map.png`` (module docstring)."""
-    from acdrive._report.markdown import save_figure
-    from acdrive._report.plotting import new_figure
+    from acdrive._figures import new_figure, save_figure
 
     numeric = [c for c in m.criteria if c.column != "stable"]
     fig, axes = new_figure((6.5, 3.0 * len(numeric)), len(numeric), 1, squeeze=False)

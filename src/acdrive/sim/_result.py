@@ -284,7 +284,7 @@ class Result:
         per unit, in order of first appearance). A signal longer than ``2 bins`` samples is
         drawn as its min/max envelope per time bin (``envelope``). Returns the Figure: a
         ``pyplot`` figure (shown in a notebook), or with ``pyplot=False`` one on the Agg canvas
-        that pyplot does not know (``_report.plotting.new_figure``: for writing a file)."""
+        that pyplot does not know (``_figures.new_figure``: for writing a file)."""
         if signals is None:
             signals = self.plot_signals or list(self._declared())
         groups: dict[str, list[tuple[str, np.ndarray]]] = {}
@@ -295,7 +295,7 @@ class Result:
             if pyplot:
                 from matplotlib.pyplot import subplots
             else:
-                from acdrive._report.plotting import new_figure as subplots
+                from acdrive._figures import new_figure as subplots
             fig, axes = subplots(nrows=len(groups), ncols=1, sharex=True, squeeze=False,
                                  figsize=(8, 1.2 + 2.0 * len(groups)))  # fmt: skip
             axes = axes[:, 0]

@@ -9,7 +9,9 @@ import numpy as np
 
 from acdrive._report.bodson.numbers import A_VEL
 from acdrive._report.bodson.verdicts import limit_verdict, oscillation_verdict, time_scale_verdict
-from acdrive._report.converter_effect import (
+from acdrive._spread import SUBWINDOWS, peak_spread, round_to_spread
+from acdrive._verdicts import at_least
+from acdrive.drives.dfim._converter_effect import (
     Q_TOLERANCE_FRACTION,
     SETTLING_FRACTION,
     STEADY_SETTLE_S,
@@ -19,8 +21,6 @@ from acdrive._report.converter_effect import (
     measure,
     uses_bench_converter,
 )
-from acdrive._report.spread import SUBWINDOWS, peak_spread, round_to_spread
-from acdrive._report.verdicts import at_least
 from acdrive.drives.dfim._linearisation._stability import DriveModel
 from acdrive.drives.dfim._linearisation._studies import (
     default_grid,

@@ -20,7 +20,8 @@ from acdrive._report.bodson.verdicts import (
     sequence_verdict,
     transient_verdict,
 )
-from acdrive._report.converter_effect import (
+from acdrive._verdicts import Verdict, settling, when_settled, within_abs
+from acdrive.drives.dfim._converter_effect import (
     SETTLING_FRACTION,
     TORQUE_TOLERANCE_NM,
     describe,
@@ -28,7 +29,6 @@ from acdrive._report.converter_effect import (
     measure,
     uses_bench_converter,
 )
-from acdrive._report.verdicts import Verdict, settling, when_settled, within_abs
 from acdrive.drives.dfim._outcome import run_scenario, synchronous_rpm
 from acdrive.drives.dfim._outputs import write_outcome
 from acdrive.machines._dfim import BODSON_DFIM

@@ -14,11 +14,11 @@ from acdrive._frames import K_PEAK
 from acdrive._report.bodson.experiments import EXPERIMENTS
 from acdrive._report.bodson.verdicts import Q_GRID_POINTS, determinant_verdict, time_scale_verdict
 from acdrive._report.bodson_listing import listing_rows
-from acdrive._report.converter_effect import magnetising_reactive_power
 from acdrive._report.speed_overshoot import overshoot_rows
-from acdrive._report.verdicts import printed_digits, within_abs
+from acdrive._verdicts import printed_digits, within_abs
 from acdrive.control._dfim import current_loop_gains
 from acdrive.control._speed import SpeedPIGains
+from acdrive.drives.dfim._converter_effect import magnetising_reactive_power
 from acdrive.machines._dfim import (
     BODSON_DFIM,
     electrical_poles,

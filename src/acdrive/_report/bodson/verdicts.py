@@ -1,13 +1,13 @@
 """The verdicts of the Bodson reproduction report (``acdrive reproduce bodson``): the tolerances,
 each printed in the sentence that uses it, and one function per claim of the paper that turns
-computed numbers into a ``_report.verdicts.Verdict``.
+computed numbers into a ``acdrive._verdicts.Verdict``.
 """
 
 from __future__ import annotations
 
 import math
 
-from acdrive._report.verdicts import Verdict, num, ratio_at_least, within_abs, within_rel
+from acdrive._verdicts import Verdict, num, ratio_at_least, within_abs, within_rel
 from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
 from acdrive.drives.dfim._result import OSCILLATION_BAND_HZ
 

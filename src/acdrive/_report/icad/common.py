@@ -15,9 +15,9 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from acdrive import _verdicts as verdicts
 from acdrive._report import icad_targets as targets
-from acdrive._report import verdicts
-from acdrive._report.verdicts import ROUNDOFF_FLOOR, Verdict, below_floor
+from acdrive._verdicts import ROUNDOFF_FLOOR, Verdict, below_floor
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad_frequency import icad_quantities
 

@@ -20,6 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
     EXACT_REL_TOL,
@@ -34,8 +35,8 @@ from acdrive._report.icad.common import (
 from acdrive._report.icad.rounding import rounding_reach, rounding_rows
 from acdrive._report.icad.stator_matrix import entries_with_verdict, matrix_entry_rows
 from acdrive._report.icad_figures import nyquist_family
-from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import at_most, relative_difference, within_abs
+from acdrive._report.markdown import Row, Section, db, fmt
+from acdrive._verdicts import at_most, relative_difference, within_abs
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad_closed_forms import (
     gm_min,

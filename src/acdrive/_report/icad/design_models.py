@@ -17,10 +17,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import ROOT_REL_TOL, error_within
-from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import Verdict, within_abs
+from acdrive._report.markdown import Row, Section, db, fmt
+from acdrive._verdicts import Verdict, within_abs
 from acdrive.analysis._design_models import compare_design_models
 from acdrive.analysis._icad_roots import invariant_zeros
 from acdrive.machines._induction import DELORENZO_IM_13

@@ -18,6 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
     GM_TOL_DB,
@@ -30,8 +31,8 @@ from acdrive._report.icad.common import (
     within_rel,
 )
 from acdrive._report.icad_figures import nyquist_family
-from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import at_least, within_abs
+from acdrive._report.markdown import Row, Section, db, fmt
+from acdrive._verdicts import at_least, within_abs
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._icad import analyse
 from acdrive.analysis._icad_closed_forms import gm_min

@@ -25,6 +25,7 @@ import scipy.linalg
 import scipy.signal
 from scipy.optimize import brentq
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
     APPROX_GAIN_TOL_DB,
@@ -35,8 +36,8 @@ from acdrive._report.icad.common import (
     fmt_rel,
     within_rel,
 )
-from acdrive._report.markdown import Row, Section, db, fmt, save_figure
-from acdrive._report.verdicts import Verdict, at_least, at_most, within_abs
+from acdrive._report.markdown import Row, Section, db, fmt
+from acdrive._verdicts import Verdict, at_least, at_most, within_abs
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._icad import analyse
 from acdrive.analysis._plants import plant_from_params

@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import scipy.signal
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
     EXACT_REL_TOL,
@@ -31,8 +32,8 @@ from acdrive._report.icad.common import (
     within_rel,
 )
 from acdrive._report.icad_figures import nyquist_family
-from acdrive._report.markdown import Row, Section, fmt, save_figure
-from acdrive._report.verdicts import at_most
+from acdrive._report.markdown import Row, Section, fmt
+from acdrive._verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad_closed_forms import pmsg_msf
 from acdrive.analysis._icad_conditions import structure_conditions

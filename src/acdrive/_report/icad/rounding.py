@@ -3,7 +3,7 @@ machine parameters: Amezquita-Brooks et al. (13) from the Appendix parameters, U
 (80) from the parameters of their sec. 4.5.
 
 Each printed parameter p_i may lie anywhere in its rounding interval [p_i - h_i, p_i + h_i],
-h_i half a unit of its last printed digit (``_report.verdicts.half_unit``); each printed entry
+h_i half a unit of its last printed digit (``acdrive._verdicts.half_unit``); each printed entry
 y_k of the matrix stands for [y_k - e_k, y_k + e_k] likewise. The matrix is *reachable* if one
 parameter set in the box gives all six entries of (1) / (41) (``stator_current_ss``) inside
 their intervals, i.e. if
@@ -35,7 +35,7 @@ from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import printed_digits
 from acdrive._report.icad.stator_matrix import ENTRY_NAMES
 from acdrive._report.markdown import Row, fmt
-from acdrive._report.verdicts import Verdict, half_unit
+from acdrive._verdicts import Verdict, half_unit
 from acdrive.machines._induction import IMParams, stator_current_ss
 
 #: The five electrical parameters varied within their rounding, in IMParams order.

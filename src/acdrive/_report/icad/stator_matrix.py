@@ -12,7 +12,7 @@ from __future__ import annotations
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import printed_digits
 from acdrive._report.markdown import Row, fmt
-from acdrive._report.verdicts import Verdict
+from acdrive._verdicts import Verdict
 from acdrive.machines._induction import IMParams, stator_current_ss
 
 

@@ -22,6 +22,7 @@ import numpy as np
 import scipy.signal
 from scipy.optimize import brentq
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
     EXACT_REL_TOL,
@@ -37,8 +38,8 @@ from acdrive._report.icad.common import (
 from acdrive._report.icad.rounding import rounding_reach, rounding_rows
 from acdrive._report.icad.stator_matrix import entries_with_verdict, matrix_entry_rows
 from acdrive._report.icad_figures import nyquist_family
-from acdrive._report.markdown import Row, Section, fmt, save_figure
-from acdrive._report.verdicts import at_most
+from acdrive._report.markdown import Row, Section, fmt
+from acdrive._verdicts import at_most
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad_closed_forms import im_dgamma_re_im, im_msf_closed_form
 from acdrive.analysis._icad_conditions import structure_conditions

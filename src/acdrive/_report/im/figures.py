@@ -17,8 +17,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
-from acdrive._report.markdown import fmt, save_figure
+from acdrive._report.markdown import fmt
 from acdrive.analysis._coupling import CouplingResult, icad_coupling
 from acdrive.drives.cage_im._outcome import IMOutcome
 from acdrive.drives.cage_im._outputs import (

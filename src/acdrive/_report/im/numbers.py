@@ -21,7 +21,7 @@ from acdrive._report.im.settings import (
     RINGING_FROM,
     TOLERANCES,
 )
-from acdrive._report.verdicts import window_drift
+from acdrive._verdicts import window_drift
 from acdrive.analysis._coupling import (
     CouplingResult,
     CouplingSetup,
@@ -99,7 +99,7 @@ def _peak_modulation(outcome: IMOutcome) -> float:
 def _steady_drift(result: IMDriveResult, signal: str) -> tuple[float, float, float]:
     """(mean, drift, window [s]) of a logged signal over the summary's steady window
     (``drives.cage_im._result._steady_mask``, the window of its final values): the numbers of the
-    settling test (``_report.verdicts.window_drift``)."""
+    settling test (``acdrive._verdicts.window_drift``)."""
     mask = _steady_mask(result.t)
     return window_drift(result.t[mask], result.signal(signal)[mask])
 

@@ -8,7 +8,7 @@ from acdrive._report import icad_targets as targets
 from acdrive._report.im.settings import PMSG_BANDWIDTH, PRINTED, RINGING_FROM, TOLERANCES, pct
 from acdrive._report.im.verdicts import coupling_delay_text, hold_explanation
 from acdrive._report.markdown import Row, Section, fmt
-from acdrive._report.verdicts import Verdict
+from acdrive._verdicts import Verdict
 
 
 def _coupling_table(rows: list[dict], delayed: bool) -> str:

@@ -81,7 +81,7 @@ TOLERANCES = {
     "setting_rel": 1e-9,
     # a steady-state claim is judged on the summary's steady window (the last 10 % of the run,
     # at least 50 ms) only if the signal is settled there: it drifts (least-squares slope times
-    # the window length, ``_report.verdicts.settling``) by at most [rad/s] / [rad]
+    # the window length, ``acdrive._verdicts.settling``) by at most [rad/s] / [rad]
     "settled_speed_abs": 0.02,
     "settled_position_abs": 0.001,
     # a steady-state speed error is "large" (sec. VII, Fig. 16) from this fraction of the

@@ -8,7 +8,7 @@ from __future__ import annotations
 from acdrive._report import icad_targets as targets
 from acdrive._report.im.settings import PRINTED, TOLERANCES, pct
 from acdrive._report.markdown import fmt
-from acdrive._report.verdicts import (
+from acdrive._verdicts import (
     Verdict,
     at_most,
     error_within,

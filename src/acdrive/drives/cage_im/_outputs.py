@@ -10,7 +10,7 @@ ramp and the superimposed alpha currents (16(a), (b)), step responses (18, 20). 
 labels are built from the scenario and the computed numbers. Space vectors are drawn in the
 paper's amplitude-invariant alpha-beta scaling (peak phase amperes: acdrive's power-invariant
 vector over sqrt(3/2), Bodson (8)). Time traces are drawn as their min/max envelope, every peak
-kept (``_report.plotting``).
+kept (``_figures``).
 """
 
 from __future__ import annotations
@@ -20,9 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive._figures import new_figure, plot_trace, save_figure
 from acdrive._output import strict_json
-from acdrive._report.markdown import save_figure
-from acdrive._report.plotting import new_figure, plot_trace
 from acdrive.analysis._plants import plant_from_params
 from acdrive.drives.cage_im._outcome import IMOutcome
 from acdrive.drives.cage_im._result import IMDriveResult, ideal_ramp

@@ -1,7 +1,7 @@
 """Figures of a DFIM drive run, matching Bodson Figs. 4-7 (and 12-13 for several motors).
 
 Long traces are drawn as their min/max envelope and the figures are made without pyplot
-(``_report.plotting``); the current limits drawn are the scenario's (``current_limits``)."""
+(``_figures``); the current limits drawn are the scenario's (``current_limits``)."""
 
 from __future__ import annotations
 
@@ -9,8 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._report.markdown import save_figure
-from acdrive._report.plotting import new_figure, plot_trace
+from acdrive._figures import new_figure, plot_trace, save_figure
 from acdrive.drives.dfim._result import DriveResult
 
 #: Colours of the stator and rotor curves of the current figures, and of their limit lines.

@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from acdrive._output import strict_json
-from acdrive._report import converter_effect
 from acdrive.columns import DEFAULT_FORMAT
+from acdrive.drives.dfim import _converter_effect as converter_effect
 from acdrive.drives.dfim._outcome import ScenarioOutcome, synchronous_rpm
 
 
@@ -20,7 +20,7 @@ def write_outcome(
 
     summary.json is the outcome's summary plus, where a rotor converter has dead time or device
     drops, ``converter_side_effect``: the steady-state stator reactive power and torque-command
-    offset that converter causes (``acdrive._report.converter_effect``)."""
+    offset that converter causes (``acdrive.drives.dfim._converter_effect``)."""
     folder = Path(folder)
     setup = outcome.setup
     if figures:

@@ -22,13 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive._frames import K_PEAK
-from acdrive._report.spread import (
+from acdrive._spread import (
     SUBWINDOWS,
     mean_and_spread_over_stretches,
     round_to_spread,
     rounding_step,
 )
-from acdrive._report.verdicts import (
+from acdrive._verdicts import (
     Settling,
     Verdict,
     judge_settling,

@@ -1,9 +1,9 @@
-"""Helpers of the report figures: figures made without ``matplotlib.pyplot`` (its import and
+"""Helpers of every figure acdrive writes (a drive's figures, the reports', the robustness maps): figures made without ``matplotlib.pyplot`` (its import and
 figure manager cost time and nothing here needs them) and a min/max envelope of long time traces
 so a figure draws a few thousand points instead of every sample.
 
 ``new_figure`` gives a ``matplotlib.figure.Figure`` on the Agg canvas, as ``pyplot.subplots``
-would; ``_report.markdown.save_figure`` gives it the tight layout and draws it once.
+would; ``save_figure`` gives it the tight layout and draws it once.
 ``plot_trace`` draws ``envelope(t, y)``: the trace cut into ``ENVELOPE_BINS`` runs of consecutive
 samples, of which each keeps its first, smallest, largest and last sample in time order. Every
 extreme of every run is a sample of the drawn line, so no peak or trough is lost or moved, and
@@ -14,7 +14,13 @@ column, and at most 6000 samples are drawn).
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
+
+#: Resolution of the figures acdrive writes [dots per inch].
+DPI = 90
 
 #: Runs of samples a long trace is cut into by ``envelope`` (each keeps at most four samples).
 ENVELOPE_BINS = 1500
@@ -56,7 +62,7 @@ def plot_trace(ax, t, y, *style, **kwargs):
 
 def new_figure(figsize, nrows: int = 1, ncols: int = 1, **subplots_kwargs):
     """(figure, axes) as ``pyplot.subplots`` gives them, without pyplot: a figure of ``figsize``
-    inches on the Agg canvas, laid out by ``_report.markdown.save_figure``. matplotlib is
+    inches on the Agg canvas, laid out by ``save_figure``. matplotlib is
     imported here, when a figure is drawn (0.4 CPU-s): not by a run without figures."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -64,3 +70,19 @@ def new_figure(figsize, nrows: int = 1, ncols: int = 1, **subplots_kwargs):
     fig = Figure(figsize=figsize)
     FigureCanvasAgg(fig)
     return fig, fig.subplots(nrows, ncols, **subplots_kwargs)
+
+
+def save_figure(path: Path, fig) -> None:
+    """Write ``fig`` to ``path`` at ``DPI`` and close it.
+
+    A figure without a layout engine (``pyplot.subplots``, ``new_figure``) gets the
+    tight layout, after which its engine is dropped: ``savefig`` would otherwise draw it once more
+    (without rendering) to lay it out again, and that pass costs as much as the layout itself. A
+    figure made with an engine (e.g. ``layout="constrained"``) is laid out by ``savefig``."""
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
+        fig.set_layout_engine(None)
+    fig.savefig(path, dpi=DPI)
+    pyplot = sys.modules.get("matplotlib.pyplot")  # only pyplot's figures need closing
+    if pyplot is not None:
+        pyplot.close(fig)
