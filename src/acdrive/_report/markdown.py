@@ -3,15 +3,17 @@ and figure files.
 
 A report is a list of ``Section``s, each with an introductory paragraph, a comparison table of
 ``Row``s (the paper's value beside acdrive's, with the verdict or the reason in the note), text
-after the table and figures with their captions; ``render_section`` writes one as Markdown (the PNG a section
-links to is written by ``acdrive._figures.save_figure``). The verdict sentences themselves come from
-``acdrive._verdicts``.
+after the table and figures with their captions; ``render_section`` writes one as Markdown (the
+PNG a section links to is written by ``acdrive._figures.save_figure``). The verdict sentences
+come from ``acdrive._verdicts``.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+
+from acdrive._verdicts import num
 
 
 @dataclass(frozen=True)
@@ -42,12 +44,7 @@ def fmt(x, digits: int = 4) -> str:
     spelled out)."""
     if isinstance(x, complex):
         return f"{fmt(x.real, digits)} {'+' if x.imag >= 0 else '-'} j{fmt(abs(x.imag), digits)}"
-    x = float(x)
-    if math.isnan(x):
-        return "n/a"
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return f"{x:.{digits}g}"
+    return num(x, digits)
 
 
 def db(x: float) -> float:
