@@ -1,19 +1,126 @@
-"""The one compilation setting of acdrive's compiled code.
+"""The one compilation setting of acdrive's compiled code, and numba loaded only when used.
 
 ``error_model="numpy"``: floating-point division by zero gives inf/NaN instead of raising (and
 costs no check per division); the engine checks the state for non-finite values every sample, so
 nothing non-finite goes unnoticed. ``cache=True``: a second run does not pay the compile time.
+
+**Lazy kernels.** Importing numba costs about 0.35 CPU-s and its first use (even a load from the
+cache) another 0.4 s; a run in the native tier (``export._native``) needs neither. So the
+decorators here do not import numba: they wrap the function in a :class:`LazyKernel`, which
+keeps the Python function (``py_func``, what the code generators read) and creates numba's
+dispatcher on first need: a call from Python, or any attribute of a dispatcher asked for. numba
+compiling a kernel that names another as a global sees the dispatcher behind it: acdrive
+registers with numba (``register_with_numba``, the ``numba_extensions`` entry point numba runs
+before it compiles anything) that a LazyKernel types as its dispatcher.
 """
 
-import os
+from __future__ import annotations
 
-from numba import njit
+import functools
+import os
+import threading
 
 #: ACDRIVE_STRICT_MATH=1 compiles the fast-math functions with strict IEEE arithmetic instead: the
 #: results then depend only on the order of operations written in the source, not on the
 #: compiler's choice of contractions, which is how two implementations are compared bit for bit
 #: (benchmarks/compare_engines.py). It has its own cache folder (acdrive/__init__.py).
 STRICT_MATH = os.environ.get("ACDRIVE_STRICT_MATH") == "1"
+
+_registered = False
+#: how deep this thread is inside a Python call of a ``python_from_python`` kernel: the kernels
+#: it calls run as Python too
+_python_calls = threading.local()
+
+
+def register_with_numba() -> None:
+    """Teach numba that a :class:`LazyKernel` is typed as its dispatcher (run by numba through
+    the ``numba_extensions`` entry point before it compiles anything, and by
+    :meth:`LazyKernel.dispatcher`)."""
+    global _registered
+    if _registered:
+        return
+    from numba.core.typing.typeof import typeof_impl
+
+    @typeof_impl.register(LazyKernel)
+    def _typeof_lazy(value, context):
+        return typeof_impl(value.dispatcher, context)
+
+    _registered = True
+
+
+class LazyKernel:
+    """A function numba compiles with ``options`` when it is first needed (module docstring).
+
+    ``py_func`` is the Python function; calling the kernel, or asking for any attribute of a
+    numba dispatcher (``overloads``, ``targetoptions``, ``stats`` ...), creates the dispatcher.
+    """
+
+    def __init__(self, py_func, options: dict):
+        self.py_func = py_func
+        self._options = dict(options)
+        self._dispatcher = None
+        #: a call from Python runs ``py_func`` (``python_from_python``)
+        self.python_from_python = False
+        functools.update_wrapper(self, py_func)
+
+    @property
+    def dispatcher(self):
+        """numba's dispatcher of this kernel (numba is imported here, once)."""
+        if self._dispatcher is None:
+            import numba
+
+            register_with_numba()
+            names = self.py_func.__globals__
+            if names.get("prange") is prange:  # the stand-in below: numba's own from now on
+                names["prange"] = numba.prange
+            self._dispatcher = numba.njit(**self._options)(self.py_func)
+        return self._dispatcher
+
+    def __call__(self, *args, **kwargs):
+        depth = getattr(_python_calls, "depth", 0)
+        if self.python_from_python or depth:
+            _python_calls.depth = depth + 1
+            try:
+                return self.py_func(*args, **kwargs)
+            finally:
+                _python_calls.depth = depth
+        return self.dispatcher(*args, **kwargs)
+
+    def __getattr__(self, name: str):
+        if name.startswith("__") or name in ("py_func", "_options", "_dispatcher",
+                                             "python_from_python"):  # fmt: skip
+            raise AttributeError(name)
+        return getattr(self.dispatcher, name)
+
+    def __repr__(self) -> str:
+        return f"<acdrive kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+
+def prange(*args):
+    """numba's ``prange`` before numba is imported: ``range`` when Python runs the loop; a module
+    that imports this name has it replaced by ``numba.prange`` when its first kernel is
+    compiled (``LazyKernel.dispatcher``), which is the object numba parallelises a loop over."""
+    return range(*args)
+
+
+def python_from_python(kernel: LazyKernel) -> LazyKernel:
+    """Mark ``kernel`` (a scalar formula that setup or summary code also calls a few times) so
+    that a call from Python runs its Python function: loading numba for it would cost about
+    0.4 CPU-s where the formula costs microseconds. Inside compiled code it is compiled as
+    before; the kernels it calls run as Python inside such a call. Only for kernels compiled
+    without fast-math or whose expression leaves the compiler nothing to reorder, so that both
+    give the same IEEE result."""
+    kernel.python_from_python = True
+    return kernel
+
+
+def njit(function=None, **options):
+    """numba's ``njit`` with numba imported on first use (:class:`LazyKernel`): ``@njit``,
+    ``@njit(**options)`` and ``njit(**options)(function)``."""
+    if function is not None:
+        return LazyKernel(function, options)
+    return lambda f: LazyKernel(f, options)
+
 
 jit = njit(cache=True, error_model="numpy")
 

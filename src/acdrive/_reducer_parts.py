@@ -11,9 +11,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-from acdrive._jit import jit
+from acdrive._jit import jit, njit
 from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, cplx, real
 from acdrive.sim._metrics import NO_CLOSING, SPEED_ERROR_STATES, speed_error_update

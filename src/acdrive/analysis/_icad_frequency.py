@@ -19,8 +19,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
 
+from acdrive._jit import njit, prange
 from acdrive.analysis._freqresp import LTI, check_frequency_grid, evaluate_ss
 from acdrive.analysis._plants import Plant2x2, as_plant
 from acdrive.control._lti import as_lti

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.control._ss_frequency import check_frequency_grid, evaluate_ss
 from acdrive.errors import InputError, require_finite
 
 # ---------------------------------------------------------------------------------------------
@@ -231,10 +230,14 @@ class LTI:
 
     def freqresp(self, w) -> np.ndarray:
         """k(j w) on a validated frequency grid w [rad/s]."""
+        from acdrive.control._ss_frequency import check_frequency_grid  # numba: when used
+
         return self.evaluate(1j * check_frequency_grid(w))
 
     def evaluate(self, s) -> np.ndarray:
         """k(s) at complex points s (shape (k,))."""
+        from acdrive.control._ss_frequency import evaluate_ss  # numba: when used
+
         return evaluate_ss(self.A, self.B, self.C, self.D, s)[:, 0, 0]
 
     @property

@@ -21,9 +21,8 @@ from __future__ import annotations
 import types
 
 import numpy as np
-import scipy.linalg
-from numba import njit, prange
 
+from acdrive._jit import njit, prange
 from acdrive.errors import InputError, call_interruptible
 
 #: Models whose eigenvector matrix has a larger condition number use the Hessenberg path.
@@ -127,6 +126,8 @@ def _hessenberg_solve(s, H, QB, CQ, D, out):
 
 def _hessenberg_points(A, B, C, D, s) -> np.ndarray:
     """G(s) of one model at points s by the Hessenberg path, shape (k, p, m)."""
+    import scipy.linalg  # only when a model needs the Hessenberg path
+
     H, Q = scipy.linalg.hessenberg(A, calc_q=True)
     out = np.empty((1, s.size) + D.shape, dtype=complex)
     _hessenberg_solve(

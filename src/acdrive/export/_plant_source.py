@@ -265,7 +265,11 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
     (``sim._loop_source``: ``modulate`` and ``integrate``, same rule and order)."""
     L = ["    const ACDRIVE_REAL T_s = p->sample_time;", "    ACDRIVE_REAL h, tk = t;",
          "    int j;"]  # fmt: skip
+    # a hook between the modulators and the integration, where acdrive's loop records a sample
+    # (undefined in an export; the native tier defines it, acdrive.export._native)
+    hook = ["#ifdef ACD_AFTER_MODULATE", "    ACD_AFTER_MODULATE(t, s);", "#endif"]
     if not modulators:
+        L += hook
         L += ["    h = T_s / (ACDRIVE_REAL)p->substeps;",
               "    for (j = 0; j < p->substeps; ++j) {",
               f"        {name}_plant_step(t + (ACDRIVE_REAL)j * h, h, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
@@ -297,6 +301,7 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
         )
         L.append(f"        s->y.{part.name} = v{k}[0];")
         L.append("    }")
+    L += hook
     for k in range(len(modulators)):
         L.append(f"    left{k} = n{k} > 0 ? dt{k}[0] : ACD_INF;")
     L.append(f"    for (pass = 0; pass <= {total}; ++pass) {{ /* each pass ends >= 1 segment */")

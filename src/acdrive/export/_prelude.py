@@ -18,6 +18,8 @@ is Smith's algorithm as in CPython's ``_Py_c_quot``, a magnitude is ``hypot``, a
 FLOAT_NO_LIMIT = 1e38
 
 PRELUDE = r"""
+#ifndef ACDRIVE_PRELUDE_H /* once per translation unit, whichever generated headers it includes */
+#define ACDRIVE_PRELUDE_H
 #ifdef ACDRIVE_FLOAT
 #define ACDRIVE_REAL float
 #define ACD_SQRT sqrtf
@@ -58,6 +60,7 @@ typedef struct {
     ACDRIVE_REAL re;
     ACDRIVE_REAL im;
 } acd_complex;
+#endif /* ACDRIVE_PRELUDE_H */
 """
 
 PRELUDE = PRELUDE.replace("@FLOAT_NO_LIMIT@", repr(FLOAT_NO_LIMIT))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive._jit import jit
+from acdrive._jit import jit, python_from_python
 from acdrive.machines._dfim_part import (  # noqa: F401 (the model's, here for its users)
     L_R,
     L_S,
@@ -122,6 +122,7 @@ def _torque_at_stator_current(p, w_e, v_s, i_d):
     return p[N_P] / w_e * (v_s * i_d - p[R_S] * i_d * i_d)
 
 
+@python_from_python
 @jit
 def torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max):
     """Torque limits with Q = 0 (Bodson case 1, (29)-(37)), for motoring and generating torque.
@@ -156,6 +157,7 @@ def torque_limits_case1(p, w_e, v_s, i_s_max, i_r_max):
     return tau_max_1, tau_max_2, tau_max_3, tau_min_2, tau_min_3, True
 
 
+@python_from_python
 @jit
 def torque_window(p, w_e, v_s, i_s_max, i_r_max):
     """Admissible torque interval [tau_lo, tau_hi] with Q = 0, the tightest of case 1 limits.

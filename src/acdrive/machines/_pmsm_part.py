@@ -48,7 +48,7 @@ from typing import ClassVar
 import numpy as np
 
 from acdrive._frames import K_PEAK
-from acdrive._jit import jit_fast, jit_inline
+from acdrive._jit import jit_fast, jit_inline, python_from_python
 from acdrive.core._signals import Layout, Relation, cplx, real
 from acdrive.machines._record import MachinePart
 
@@ -93,6 +93,7 @@ _Y_I_S, _Y_I_DQ, _Y_PSI_S, _Y_TAU, _Y_THETA = (
 )
 
 
+@python_from_python
 @jit_inline
 def magnet_flux(p):
     """psi_pm = sqrt(3/2) psi_m: the magnet's flux linkage as a power-invariant space vector."""

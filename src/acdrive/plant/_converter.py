@@ -17,11 +17,12 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._frames import clip_magnitude
-from acdrive._jit import jit
+from acdrive._jit import jit, python_from_python
 from acdrive.core._parts import Modulator
 from acdrive.core._signals import Layout, cplx, real
 
 
+@python_from_python
 @jit
 def max_voltage_magnitude(v_dc):
     """Largest space-vector magnitude the converter applies from DC-link voltage ``v_dc``."""

@@ -90,7 +90,7 @@ from typing import ClassVar
 import numpy as np
 
 from acdrive._frames import K_3C
-from acdrive._jit import jit, jit_inline
+from acdrive._jit import jit, jit_inline, python_from_python
 from acdrive.core._parts import Modulator, SampledPart
 from acdrive.core._signals import Layout, cplx, real
 from acdrive.errors import InputError
@@ -134,6 +134,7 @@ _INV_SQRT2 = 1.0 / math.sqrt(2.0)
 _N_TOLERANCE = 1e-9
 
 
+@python_from_python
 @jit_inline
 def carrier_samples(f_pwm, T_s):
     """Control samples per carrier period, N = max(1, round(1 / (f_pwm T_s)))."""

@@ -8,11 +8,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from acdrive._jit import jit
+from acdrive._jit import jit, python_from_python
 from acdrive.core._parts import SampledPart
 from acdrive.core._signals import Layout, cplx, real
 
 
+@python_from_python
 @jit
 def encoder_angle(theta, offset, counts_per_rev):
     """Incremental-encoder reading: the shaft angle plus an unknown ``offset``, truncated to whole

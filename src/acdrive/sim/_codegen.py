@@ -28,8 +28,6 @@ import time
 import warnings
 from pathlib import Path
 
-import numba
-
 from acdrive.errors import Notice
 
 _LOADED: dict[str, object] = {}
@@ -41,8 +39,19 @@ _COMPILE_RECORD = "compile-times.json"
 _RECORDS_KEPT = 20
 
 
+def _cache_dir() -> str:
+    """numba's cache folder (acdrive/__init__.py hands it over as NUMBA_CACHE_DIR before numba
+    is imported; read from there while numba is not imported, so that this costs no import)."""
+    import sys
+
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        return numba.config.CACHE_DIR
+    return os.environ.get("NUMBA_CACHE_DIR", "")
+
+
 def _folder() -> Path:
-    base = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else None
+    base = Path(_cache_dir()) if _cache_dir() else None
     for candidate in (base, Path(tempfile.gettempdir()) / "acdrive-systems"):
         if candidate is None:
             continue
@@ -136,7 +145,7 @@ def _drop_damaged(dispatcher) -> int:
     how many files were removed."""
     index = Path(dispatcher._cache._cache_file._index_path)
     module = index.name.split(".")[0]
-    root = Path(numba.config.CACHE_DIR) if numba.config.CACHE_DIR else index.parent
+    root = Path(_cache_dir()) if _cache_dir() else index.parent
     doomed = set(index.parent.glob(f"{module}.*.nbi")) | set(_unreadable_indexes(root))
     removed = 0
     for path in sorted({f for i in doomed for f in _cache_files(i)}):

@@ -11,14 +11,11 @@ from __future__ import annotations
 
 import time
 
-import numba
 import numpy as np
 
 from acdrive.errors import InputError, SimulationDiverged, call_interruptible
 from acdrive.sim import _codegen as codegen
-from acdrive.sim import _kernels as kernels
 from acdrive.sim import _tier
-from acdrive.sim._lockstep_source import lockstep_broken, lockstep_plan
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._result import SystemResult
 
@@ -32,7 +29,8 @@ MAX_WORK = 1e9
 class CompiledSystem:
     """A system with its compiled loop: run once or over a batch of variants.
 
-    ``tier`` is the loop that runs it (``"specialised"`` or ``"generic"``, ``sim._tier``);
+    ``tier`` is the loop that runs it (``"native"``, ``"specialised"`` or ``"generic"``,
+    ``sim._tier``);
     ``compile_time`` the seconds spent compiling or loading it that no run has reported yet
     (``compiled_now``: whether that was a compile rather than a load from the cache).
     """
@@ -67,6 +65,10 @@ class CompiledSystem:
     def _choose(self) -> None:
         """Compile or load the loop ``sim._tier`` describes for this system now."""
         asked = _tier.chosen()
+        self._native = None
+        self._native_obstacle = None
+        if asked in ("auto", "native") and self._nativise(required=asked == "native"):
+            return
         if asked == "specialised":
             self._specialise("ACDRIVE_LOOP_TIER=specialised")
             return
@@ -79,8 +81,10 @@ class CompiledSystem:
 
             names = ", ".join(sorted({kind.__name__ for kind, _ in missing}))
             why = "; ".join(sorted({reason for _, reason in missing}))
+            native = (f"the native loop cannot run it ({self._native_obstacle}); "
+                      if self._native_obstacle else "")  # fmt: skip
             self._specialise(
-                f"the generic loop cannot run it: no compiled kernels for the part kind(s) "
+                f"{native}the generic loop cannot run it: no compiled kernels for the part kind(s) "
                 f"{names} ({why}); they compile in the background for the next new topology"
             )
             self._background = _tier.start_background(
@@ -89,8 +93,31 @@ class CompiledSystem:
             return
         self._generalise()
 
-    def _specialise(self, why: str | None) -> None:
-        """Compile (notice: ``why``) or load the specialised loop's ``run`` now."""
+    def _nativise(self, required: bool) -> bool:
+        """Build or load the native loop (``export._native``) if it can run this system; else
+        keep the reason (``required``: ACDRIVE_LOOP_TIER=native, an error naming it)."""
+        from acdrive.export import _native
+
+        obstacle = _native.native_obstacle(self.system)
+        if obstacle is None:
+            try:
+                self._native, seconds, compiled = _native.build(
+                    _native.native_source(self.system), notice=codegen.notice
+                )
+            except RuntimeError as error:  # the compiler refused: numba's tiers still run it
+                obstacle = str(error)
+        if obstacle is not None:
+            if required:
+                raise InputError("ACDRIVE_LOOP_TIER", f"native cannot run this system: {obstacle}")
+            self._native_obstacle = obstacle
+            return False
+        self._spent(seconds, compiled)
+        self.tier = "native"
+        return True
+
+    def _specialise(self, why: str | None, switch: bool = True) -> None:
+        """Compile (notice: ``why``) or load the specialised loop's ``run`` now (``switch``:
+        it becomes the tier of the single runs)."""
         run = self.module.run
         if why is not None and not codegen.is_cached(run):
             codegen.notice(_tier.describe_compile(self.system, why))
@@ -98,11 +125,13 @@ class CompiledSystem:
         if compiled:
             codegen.record_time("specialised", len(self.system.parts), seconds)
         self._spent(seconds, compiled)
-        self.tier = "specialised"
+        if switch:
+            self.tier = "specialised"
 
     def _generalise(self) -> None:
         """Load (or compile) the part kinds' kernels and the generic loop; build the tables."""
         from acdrive.sim import _generic, _tables
+        from acdrive.sim import _kernels as kernels
 
         start = time.perf_counter()
         addresses, kernel_seconds = {}, 0.0
@@ -141,7 +170,16 @@ class CompiledSystem:
             from acdrive.sim import _generic
 
             return _generic.run, self._tables
+        if self.tier == "native":
+            return self._native_run, ()
         return self.module.run, ()
+
+    def _native_run(self, X, P, PO, S, Y, U, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
+                    ECOUNT):  # fmt: skip
+        """The native loop with the numba loops' arguments (its parameters are compiled in: P
+        must be the system's own, ``run`` checks)."""
+        return self._native.run(X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
+                                ECOUNT)  # fmt: skip
 
     def _announce_generic(self, n_steps: int, substeps: int) -> None:
         """The first generic run of this system: say so, with its expected time, and start the
@@ -235,14 +273,21 @@ class CompiledSystem:
         ELOG = np.zeros((rows, n_ev), dtype=np.int64)
         ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
-        loop, tables = self._loop_for(n_steps, substeps)
-        if self.tier == "generic" and self._background is None:
+        tier = self.tier
+        if parts and tier == "native":
+            # re-parametrised parts: the native library holds the system's own parameters
+            self._specialise("a run with re-parametrised parts runs the specialised loop", False)
+            loop, tables, tier = self.module.run, (), "specialised"
+        else:
+            loop, tables = self._loop_for(n_steps, substeps)
+            tier = self.tier
+        if tier == "generic" and self._background is None:
             self._announce_generic(n_steps, substeps)
         start = time.perf_counter()
         done, status = loop(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
                             log_every, idx, LOG, ELOG, ECOUNT, *tables)  # fmt: skip
         wall = time.perf_counter() - start
-        if self.tier == "generic":
+        if tier == "generic":
             _tier.record_generic_run(self.system, n_steps, substeps, wall)
         if status != STATUS_OK:
             bad = [
@@ -258,6 +303,7 @@ class CompiledSystem:
         result = self._result(
             t0, sample_time, log_every, rows, columns, LOG, ELOG, ECOUNT, X, wall, n_steps
         )
+        result.tier = tier
         result.compile_time, result.compiled_now = self._reported()
         return result
 
@@ -396,6 +442,10 @@ class CompiledSystem:
         logs, event counts, samples done and status of every variant, and the wall time. The
         variants run in lockstep where ``lockstep_plan`` chooses it (``sim._lockstep_source``);
         ``self.last_batch_loop`` names the loop that ran."""
+        import numba
+
+        from acdrive.sim._lockstep_source import lockstep_broken, lockstep_plan
+
         B = X.shape[0]
         U = np.zeros((B, self.system.sizes["u"]))
         n_ev = len(self.system.event_names())
@@ -424,7 +474,9 @@ class CompiledSystem:
         self.last_batch_loop = "per-variant"
         args = (X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps, log_every,
                 idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
-        if self.tier != "specialised":
+        if self.tier == "native":  # single runs stay native; the batch loads its own loop
+            self._specialise("batches run the specialised loop", switch=False)
+        elif self.tier != "specialised":
             self._specialise("batches run the specialised loop")
         seconds, compiled = codegen.compile_for(
             self.module.run_batch, tuple(numba.typeof(a) for a in args)

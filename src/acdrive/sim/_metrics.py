@@ -29,9 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
-
-from acdrive._jit import jit
+from acdrive._jit import jit, njit
 
 RPM_PER_RAD_S = 30.0 / math.pi
 #: band [Hz] in which a speed-error oscillation counts as a limit cycle, not a tracking lag
@@ -174,8 +172,46 @@ def _speed_errors_offline(t, w, w_ref, closed, slew, settle, windows, s, mask, u
 
 
 def speed_error_state(t, w, w_ref, closed, rule: TrackingRule):
-    """(state, tracked mask, window end after the latest closing per sample) of the logged
-    samples, by the kernel the batch runs on line."""
+    """(state, tracked mask, window end after the latest relay closing per sample) of the logged
+    samples: the final state ``speed_error_update`` (the kernel the batch runs on line) leaves
+    after taking them in order, computed with array operations that round alike (the running
+    sums are sequential, ``np.cumsum``; a peak is the first largest |e|), so that a summary
+    needs no compiled code (``tests/test_metrics.py`` checks equality with the kernel)."""
+    t = np.ascontiguousarray(t, dtype=float)
+    e = np.ascontiguousarray(w_ref, dtype=float) - np.ascontiguousarray(w, dtype=float)
+    if closed is None or not rule.relay:
+        closed = np.ones(t.size)
+    closed = np.ascontiguousarray(closed, dtype=float)
+    s = np.zeros(len(SPEED_ERROR_STATES))
+    s[_UNTIL] = NO_CLOSING
+    if t.size == 0:
+        return s, np.zeros(0, dtype=np.bool_), np.zeros(0)
+    a = np.abs(e)
+    shut = closed > 0.5
+    closing = np.zeros(t.size, dtype=np.bool_)
+    closing[1:] = shut[1:] & (closed[:-1] <= 0.5)
+    ends = np.where(closing, t + rule.slew_s_per_rad_s * a + rule.settle_s, NO_CLOSING)
+    until = np.maximum.accumulate(ends)
+    mask = shut & (t >= until)
+    windows = rule.window_array()
+    for j in range(windows.size // 2):
+        mask &= ~((windows[2 * j] <= t) & (t < windows[2 * j + 1]))
+    squares = e * e
+    k = int(np.argmax(a))
+    s[_STARTED], s[_CLOSED], s[_UNTIL] = 1.0, closed[-1], until[-1]
+    s[_N_ALL], s[_SQ_ALL], s[_PK_ALL], s[_T_ALL] = t.size, np.cumsum(squares)[-1], a[k], t[k]
+    s[_LAST] = e[-1]
+    tracked = np.flatnonzero(mask)
+    if tracked.size:
+        k = int(tracked[np.argmax(a[tracked])])
+        s[_N_TR], s[_SQ_TR] = tracked.size, np.cumsum(squares[tracked])[-1]
+        s[_PK_TR], s[_T_TR] = a[k], t[k]
+    return s, mask, until
+
+
+def speed_error_state_by_kernel(t, w, w_ref, closed, rule: TrackingRule):
+    """``speed_error_state`` by the compiled kernel itself, sample by sample (the reference the
+    array version is tested against)."""
     s = np.zeros(len(SPEED_ERROR_STATES))
     s[_UNTIL] = NO_CLOSING
     mask = np.zeros(t.size, dtype=np.bool_)

@@ -1,5 +1,10 @@
-"""Which loop runs a system, and what it costs to get it: the two tiers of the compiled loop.
+"""Which loop runs a system, and what it costs to get it: the tiers of the compiled loop.
 
+* **native**: the whole loop as C (``export._native``: the parts' C from their export, one
+  generated driver), compiled by the machine's C compiler in well under a second for a new
+  topology, loaded without numba's dispatcher; as fast per step as the specialised loop and,
+  under strict math, bit-identical to it. Single runs take it when every part kind has C and a
+  C compiler is present.
 * **specialised**: the generated loop of one topology (``sim._loop_source``), kernels inlined
   and offsets literal: the fastest per step, but numba compiles it for every new topology
   (seconds to a quarter of a minute), once per machine.
@@ -8,15 +13,20 @@
   compiled once per kind) through their addresses: no compile for a new topology built from
   part kinds this machine has compiled before; several times slower per step.
 
-``choose`` picks, at ``System.compile()``: the specialised loop when it is in the cache (a load);
+``choose`` picks, at ``System.compile()``: the native loop when it can run the system; else
+the specialised loop when it is in the cache (a load);
 else the generic loop when every part kind's kernels are (a new topology runs at once, and the
 specialised loop compiles in a background process for the runs after); else the specialised
 loop, compiled now, with a notice that names the kinds without kernels (they compile in the
 background, so the next new topology need not wait). A run long enough that the compile pays
 (``pays_to_specialise``), a batch, or ``ACDRIVE_LOOP_TIER=specialised`` compiles the
-specialised loop in the foreground; ``ACDRIVE_LOOP_TIER=generic`` insists on the generic one.
-Both tiers give bit-identical results (the same statements with the same compile flags;
-``tests/test_tiers.py``).
+specialised loop in the foreground; ``ACDRIVE_LOOP_TIER=generic`` insists on the generic one,
+``ACDRIVE_LOOP_TIER=native`` on the native one. Batches always run numba's loops (one variant per
+core, or the lockstep loop across SIMD lanes).
+Under ACDRIVE_STRICT_MATH=1 the tiers give bit-identical results (the same operations in the
+same order: ``tests/test_tiers.py``, ``tests/test_native_tier.py``); numba's default fast-math
+lets LLVM reorder and fuse, so the numba loops then differ from the native one by rounding, which
+a closed loop carries on (docs/design.md states the measured size).
 """
 
 from __future__ import annotations
@@ -26,21 +36,32 @@ import os
 import subprocess
 import sys
 
-from numba import types
-
 from acdrive.errors import InputError
 from acdrive.sim import _codegen as codegen
-from acdrive.sim import _kernels as kernels
 
-TIERS = ("auto", "generic", "specialised")
+TIERS = ("auto", "native", "generic", "specialised")
 
-_F1, _F2 = types.float64[::1], types.float64[:, ::1]
-_I1, _I2 = types.int64[::1], types.int64[:, ::1]
-#: argument types of the loops' ``run`` (as ``CompiledSystem.run`` calls it)
-RUN_ARGS = (_F1, _F1, _I1, _F1, _F1, _F1, types.float64, types.float64, types.int64, types.int64,
-            types.int64, _I1, _F2, _I2, _I2)  # fmt: skip
-#: the generic loop's ``run`` takes the topology's tables after them (``sim._tables``)
-GENERIC_RUN_ARGS = (*RUN_ARGS, *([_I2] * 8), _I1)
+
+def _run_args() -> tuple:
+    from numba import types
+
+    F1, F2 = types.float64[::1], types.float64[:, ::1]
+    I1, I2 = types.int64[::1], types.int64[:, ::1]
+    return (F1, F1, I1, F1, F1, F1, types.float64, types.float64, types.int64, types.int64,
+            types.int64, I1, F2, I2, I2)  # fmt: skip
+
+
+def __getattr__(name: str):
+    """``RUN_ARGS``: argument types of the loops' ``run`` (as ``CompiledSystem.run`` calls it);
+    ``GENERIC_RUN_ARGS``: the generic loop's, the topology's tables after them (``sim._tables``).
+    Built on first use, so that importing this module does not import numba."""
+    if name == "RUN_ARGS":
+        return _run_args()
+    if name == "GENERIC_RUN_ARGS":
+        from numba import types
+
+        return (*_run_args(), *([types.int64[:, ::1]] * 8), types.int64[::1])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 #: seconds per (sample x substep x part) of the generic loop when none was measured here yet:
 #: thread CPU of its run, 1.1e-7 (bodson-ramp), 1.2e-7 (im-foc-speed), 1.4e-7 (a 4-part IM), on
@@ -67,6 +88,8 @@ def kinds_of(system) -> list[type]:
 def kinds_without_kernels(system) -> list[tuple[type, str]]:
     """(kind, why) for every part kind of ``system`` whose kernels the generic loop cannot call
     without compiling them now."""
+    from acdrive.sim import _kernels as kernels
+
     missing = []
     for kind in kinds_of(system):
         try:
@@ -123,11 +146,12 @@ def compile_generic_tier(system) -> float:
     background compile does after a fallback, for a caller that must not leave a process
     behind (a benchmark). Returns the seconds spent compiling."""
     from acdrive.sim import _generic
+    from acdrive.sim import _kernels as kernels
 
     total = 0.0
     for kind in kinds_of(system):
         total += kernels.addresses(kind)[1]
-    seconds, compiled = codegen.compile_for(_generic.run, GENERIC_RUN_ARGS)
+    seconds, compiled = codegen.compile_for(_generic.run, __getattr__("GENERIC_RUN_ARGS"))
     return total + (seconds if compiled else 0.0)
 
 

@@ -62,13 +62,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive._frames import K_PEAK
-from acdrive._jit import jit
+from acdrive._jit import jit, python_from_python
 from acdrive.errors import InputError, require_positive
 
 #: bisection steps: the interval shrinks by 2^-60, below a double's resolution of any start value
 BISECTION_STEPS = 60
 
 
+@python_from_python
 @jit
 def magnet_flux(psi_m):
     """psi_f = sqrt(3/2) psi_m: the magnet flux linkage as a power-invariant space vector, from the
@@ -89,6 +90,7 @@ def mtpa_d_current(psi_f, L_d, L_q, i_s):
     return -2.0 * dL * i_s * i_s / (psi_f + np.sqrt(psi_f * psi_f + 8.0 * dL * dL * i_s * i_s))
 
 
+@python_from_python
 @jit
 def mtpa_point(psi_f, L_d, L_q, i_s):
     """(i_d, i_q >= 0) of the MTPA point of current magnitude ``i_s``."""
@@ -96,6 +98,7 @@ def mtpa_point(psi_f, L_d, L_q, i_s):
     return i_d, np.sqrt(max(i_s * i_s - i_d * i_d, 0.0))
 
 
+@python_from_python
 @jit
 def mtpa_torque(n_p, psi_f, L_d, L_q, i_s):
     """Torque of the MTPA point of current magnitude ``i_s``."""
@@ -119,6 +122,7 @@ def mtpa_current(n_p, psi_f, L_d, L_q, tau, i_max):
     return 0.5 * (lo + hi)
 
 
+@python_from_python
 @jit
 def flux_magnitude(psi_f, L_d, L_q, i_d, i_q):
     """|psi_dq| = |(L_d i_d + psi_f) + j L_q i_q|."""

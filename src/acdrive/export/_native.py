@@ -1,0 +1,464 @@
+"""The native tier of the simulation loop: a system's whole sampled-data loop as C, compiled by the
+machine's C compiler into a shared library in well under a second, loaded with ctypes.
+
+The C is the export's (``export._c_source.to_c`` for the controller chains,
+``export._plant_source.to_plant_c`` for the plant: the same generated text the FMUs and the
+software-in-the-loop runs use), plus one generated driver that repeats the compiled loop of
+``sim._loop_source`` sample by sample:
+
+1. at t_k = t0 + k T_s: the plant's redundant states re-normalised and its outputs computed with
+   the commands of sample k-1 held (``<plant>_update_outputs``: ``project``, ``plant_outputs``);
+2. each controller chain reads the plant outputs and steps (``<chain>_step``: the sampled parts in
+   the system's order); the commands are handed to the plant;
+3. the plant's step (``<plant>_step``): the modulators' segments, then, through the hook
+   ``ACD_AFTER_MODULATE``, the sample is recorded exactly where the numba loop records it (event
+   bits counted, the selected outputs logged every ``log_every`` samples), then the integration
+   over the merged segments with the system's Runge-Kutta method;
+4. the continuous state is checked finite; a non-finite state ends the run with its status.
+
+The library does not depend on the sample time or the substeps (both are set per run), nor on
+the initial state (loaded from acdrive's packed arrays), so ``System.compile()`` builds it once
+per topology and parameter set; it is kept in a cache folder keyed by the hash of its source and
+compiler flags, written under a temporary name and renamed into place (an interrupted build leaves
+nothing), and a library that cannot be loaded is built again with a one-line notice.
+
+Arithmetic: compiled with ``-O2 -ffp-contract=off`` (``export._sil.CFLAGS``), the C repeats the
+kernels' operations in their order, so under ``ACDRIVE_STRICT_MATH=1`` (strict IEEE in numba too)
+the native tier equals the specialised loop bit for bit (``tests/test_native_tier.py``); under
+numba's default fast-math the two differ by rounding only (stated in docs/design.md).
+
+A system the native tier cannot run is named with the reason (``native_obstacle``): a part kind
+without C (a user's own kernel), an integrator without C, no C compiler on the machine.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from acdrive.core._parts import ContinuousPart, SampledPart
+from acdrive.errors import InputError
+
+#: compiler flags of the native library: the SIL build's (no contraction into fused
+#: multiply-adds, so the double build rounds as the kernels do), as a shared library
+NATIVE_CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
+#: the C names of the generated pieces
+_CTL, _PLANT = "acdn_ctl", "acdn_plant"
+#: the status codes (as ``sim._loop_source``)
+STATUS_OK, STATUS_NONFINITE = 0, 1
+
+
+def compiler() -> str | None:
+    """The C compiler the native tier uses (``$CC``, else cc, else gcc), or None."""
+    named = os.environ.get("CC")
+    for name in ([named] if named else []) + ["cc", "gcc"]:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def native_obstacle(system) -> str | None:
+    """Why the native tier cannot run ``system`` (None: it can)."""
+    from acdrive.export._kinds import c_step_of, plant_c_of
+
+    if compiler() is None:
+        return "no C compiler found (cc, gcc or $CC)"
+    if system.method not in ("rk4", "rk6"):
+        return f"the integrator {system.method} has no C"
+    if not system.continuous:
+        return "the system has no continuous part"
+    missing = []
+    for part in system.parts:
+        lookup = c_step_of if isinstance(part, SampledPart) else plant_c_of
+        try:
+            lookup(part)
+        except InputError:
+            missing.append(type(part).__name__)
+    if missing:
+        return f"no C for the part kind(s) {', '.join(sorted(set(missing)))}"
+    return None
+
+
+def _folder() -> Path:
+    """The native libraries' folder: beside the numba cache acdrive keys by its own sources
+    (``acdrive/__init__.py`` sets NUMBA_CACHE_DIR before numba is imported), else a temporary
+    folder."""
+    from acdrive.sim._codegen import _cache_dir
+
+    base = _cache_dir()
+    for candidate in ([Path(base)] if base else []) + [Path(tempfile.gettempdir()) / "acdrive"]:
+        folder = candidate / "native"
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            return folder
+        except OSError:
+            continue
+    raise OSError("no writable folder for the native library")
+
+
+def _value(target: str, var) -> list[str]:
+    """The C lvalues of a quantity (a complex one is two reals)."""
+    return [f"{target}.re", f"{target}.im"] if var.kind == "complex" else [target]
+
+
+@dataclass
+class NativeSource:
+    """The three C files of one system's native loop and the key they are cached by."""
+
+    controller_header: str
+    controller_source: str
+    plant_header: str
+    plant_source: str
+    driver: str
+
+    @property
+    def key(self) -> str:
+        digest = hashlib.sha256()
+        for text in (self.controller_header, self.controller_source, self.plant_header,
+                     self.plant_source, self.driver, " ".join(NATIVE_CFLAGS)):  # fmt: skip
+            digest.update(text.encode())
+            digest.update(b"\0")
+        return digest.hexdigest()[:24]
+
+
+def native_source(system) -> NativeSource:
+    """The C of ``system``'s native loop (module docstring)."""
+    from acdrive.export._c_source import to_c
+    from acdrive.export._plant_source import to_plant_c
+
+    # the sample time and substeps are overwritten per run (acdn_run); 1.0 and 1 are stand-ins
+    plant = to_plant_c(system, 1.0, 1, name=_PLANT, description="acdrive native loop")
+    has_chains = bool(system.sampled)
+    if has_chains:
+        ctl = to_c(system, 1.0, name=_CTL, description="acdrive native loop")
+        models = ctl.chains
+    else:
+        ctl, models = None, []
+
+    plant_kinds = plant.kinds
+    chain_of = {p.name: m for m in models for p in m.chain.parts}
+    ctl_kinds = ctl.kinds if ctl else {}
+
+    def plant_has(part, role: str) -> bool:
+        return bool(plant_kinds[type(part)].members.get(role))
+
+    def chain_has(part, role: str) -> bool:
+        return bool(ctl_kinds[type(part)].members.get(role))
+
+    def chain_var(part) -> str:
+        return f"c_{chain_of[part.name].chain.name}"
+
+    def output_lvalue(port) -> str:
+        """Where an output lives in the driver: a plant part's in the plant's outputs, a sampled
+        part's in its chain's held outputs."""
+        part = port.part
+        if isinstance(part, SampledPart):
+            return f"{chain_var(part)}.s.{part.name}_out.{port.var.name}"
+        return f"ps.y.{part.name}.{port.var.name}"
+
+    def held_rvalue(part, var) -> str:
+        """An output inside the record hook (the chains through the context)."""
+        if isinstance(part, SampledPart):
+            return f"ctx->{chain_var(part)}->s.{part.name}_out.{var.name}"
+        return f"s->y.{part.name}.{var.name}"
+
+    D: list[str] = []
+    emit = D.append
+    emit("/* Generated by acdrive.export._native: the native tier's loop; do not edit. */")
+    emit("#include <stdint.h>")
+    emit("#include <math.h>")
+    emit(f'#include "{_PLANT}.h"')
+    if has_chains:
+        emit(f'#include "{_CTL}.h"')
+    emit("")
+    for m in models:
+        c = m.chain.name
+        outs = f"    {c}_outputs o;" if m.outputs else ""
+        emit(f"typedef struct {{ {c}_params p; {c}_state s; {c}_inputs i;{outs} }} acdn_{c};")
+    emit("typedef struct {")
+    for m in models:
+        emit(f"    acdn_{m.chain.name} *c_{m.chain.name};")
+    emit("    int64_t k, log_every, n_log, n_events;")
+    emit("    const int64_t *log_idx;")
+    emit("    double *log, *y;")
+    emit("    int64_t *elog, *ecount, *e;")
+    emit("} acdn_context;")
+    emit("static __thread acdn_context *ctx;")
+    emit("")
+    # every output into the flat Y of acdrive's layout (for the log), from the plant state s
+    emit(f"static void acdn_fill_y(const {_PLANT}_state *s)")
+    emit("{")
+    emit("    double *Y = ctx->y;")
+    emit("    (void)s;")
+    for part in system.parts:
+        a, _ = system.slots[part.name].y
+        for v in part.OUTPUTS:
+            k = a + part.OUTPUTS.slot(v.name)
+            for j, value in enumerate(_value(held_rvalue(part, v), v)):
+                emit(f"    Y[{k + j}] = {value};")
+    emit("}")
+    emit("")
+    # the event bits of this sample (sampled parts in the system's order, then the modulators)
+    emit(f"static void acdn_events(const {_PLANT}_state *s)")
+    emit("{")
+    emit("    int64_t *E = ctx->e;")
+    emit("    (void)s;")
+    n_sampled = len(system.sampled)
+    for i, part in enumerate(system.sampled):
+        if part.EVENTS:
+            emit(f"    E[{i}] = (int64_t)ctx->{chain_var(part)}->o.{part.name}_events;")
+        else:
+            emit(f"    E[{i}] = 0;")
+    for m, part in enumerate(system.modulators):
+        value = f"(int64_t)s->{part.name}_events" if part.EVENTS else "0"
+        emit(f"    E[{n_sampled + m}] = {value};")
+    emit("}")
+    emit("")
+    # the hook the plant's step calls after its modulators: record sample k (sim._loop_source.record)
+    emit("void acdn_after_modulate(const void *state)")
+    emit("{")
+    emit(f"    const {_PLANT}_state *s = (const {_PLANT}_state *)state;")
+    emit("    int64_t i, j, row;")
+    emit("    acdn_events(s);")
+    emit("    for (i = 0; i < ctx->n_events; ++i) {")
+    emit("        int64_t bits = ctx->e[i], b = 0;")
+    emit("        while (bits) {")
+    emit("            if (bits & 1) {")
+    emit("                ctx->ecount[i * 64 + b] += 1;")
+    emit("            }")
+    emit("            bits >>= 1;")
+    emit("            b += 1;")
+    emit("        }")
+    emit("    }")
+    emit("    if (ctx->k % ctx->log_every == 0) {")
+    emit("        row = ctx->k / ctx->log_every;")
+    emit("        acdn_fill_y(s);")
+    emit("        for (j = 0; j < ctx->n_log; ++j) {")
+    emit("            ctx->log[row * ctx->n_log + j] = ctx->y[ctx->log_idx[j]];")
+    emit("        }")
+    emit("        for (i = 0; i < ctx->n_events; ++i) {")
+    emit("            ctx->elog[row * ctx->n_events + i] = ctx->e[i];")
+    emit("        }")
+    emit("    }")
+    emit("}")
+    emit("")
+
+    # load / store the packed arrays (X continuous states, S discrete states, Y held outputs)
+    def transfer(direction: str) -> list[str]:
+        L = []
+
+        def pair(lvalue, array, k):
+            L.append(f"    {lvalue} = {array}[{k}];" if direction == "in" else
+                     f"    {array}[{k}] = {lvalue};")  # fmt: skip
+
+        for part in system.parts:
+            sl = system.slots[part.name]
+            if isinstance(part, ContinuousPart):
+                if plant_has(part, "state"):
+                    for v in part.STATES:
+                        k = sl.x[0] + part.STATES.slot(v.name)
+                        for j, lv in enumerate(_value(f"ps.x.{part.name}.{v.name}", v)):
+                            pair(lv, "X", k + j)
+                continue
+            if isinstance(part, SampledPart):
+                prefix = f"{chain_var(part)}.s.{part.name}"
+                has_state, has_out = chain_has(part, "state"), chain_has(part, "out")
+            else:  # a modulator
+                prefix, has_state, has_out = f"ps.s.{part.name}", plant_has(part, "state"), True
+            if has_state:
+                for v in part.STATES:
+                    k = sl.s[0] + part.STATES.slot(v.name)
+                    for j, lv in enumerate(_value(f"{prefix}.{v.name}", v)):
+                        pair(lv, "S", k + j)
+            if has_out:
+                out = (f"{chain_var(part)}.s.{part.name}_out" if isinstance(part, SampledPart)
+                       else f"ps.y.{part.name}")  # fmt: skip
+                for v in part.OUTPUTS:
+                    k = sl.y[0] + part.OUTPUTS.slot(v.name)
+                    for j, lv in enumerate(_value(f"{out}.{v.name}", v)):
+                        pair(lv, "Y", k + j)
+        return L
+
+    emit("/* one run of n_steps samples from the packed arrays (X, S, Y: updated in place); returns")
+    emit("   the samples done, *status 0 (finished) or 1 (a state stopped being finite) */")
+    emit("int64_t acdn_run(double *X, double *S, double *Y, double t0, double T_s, int64_t n_sub,")
+    emit("                 int64_t n_steps, int64_t log_every, const int64_t *log_idx, int64_t n_log,")
+    emit("                 double *LOG, int64_t *ELOG, int64_t *ECOUNT, double *Yscratch,")
+    emit("                 int64_t *E, int64_t *status)")
+    emit("{")
+    emit(f"    {_PLANT}_params pp;")
+    emit(f"    {_PLANT}_state ps;")
+    plant_inputs = bool(plant.inputs)
+    if plant_inputs:
+        emit(f"    {_PLANT}_inputs pin;")
+    pin = "&pin" if plant_inputs else "(const void *)0"
+    for m in models:
+        emit(f"    acdn_{m.chain.name} c_{m.chain.name};")
+    emit("    acdn_context context;")
+    emit("    int64_t k, i, done = n_steps;")
+    emit("    acdn_context *saved = ctx;")
+    emit(f"    {_PLANT}_set_params(&pp);")
+    emit("    pp.sample_time = T_s;")
+    emit("    pp.substeps = (int)n_sub;")
+    for m in models:
+        c = m.chain.name
+        emit(f"    {c}_set_params(&c_{c}.p);")
+        emit(f"    c_{c}.p.sample_time = T_s;")
+    for part in system.modulators:
+        if part.EVENTS:
+            emit(f"    ps.{part.name}_events = 0u;")
+    D.extend(transfer("in"))
+    # the commands held before the first sample: the plant's inputs from the held outputs
+    if plant_inputs:
+        for q in plant.inputs:
+            k = system.output_slot(q)
+            for j, lv in enumerate(_value(f"pin.{q.part.name}_{q.var.name}", q.var)):
+                emit(f"    {lv} = Y[{k + j}];")
+    for m in models:
+        emit(f"    context.c_{m.chain.name} = &c_{m.chain.name};")
+    emit("    context.log_every = log_every;")
+    emit("    context.log_idx = log_idx;")
+    emit("    context.n_log = n_log;")
+    emit(f"    context.n_events = {len(system.sampled) + len(system.modulators)};")
+    emit("    context.log = LOG;")
+    emit("    context.elog = ELOG;")
+    emit("    context.ecount = ECOUNT;")
+    emit("    context.y = Yscratch;")
+    emit("    context.e = E;")
+    emit("    ctx = &context;")
+    emit("    *status = 0;")
+    emit("    for (k = 0; k < n_steps; ++k) {")
+    emit("        const double t = t0 + (double)k * T_s;")
+    emit("        int finite = 1;")
+    emit("        context.k = k;")
+    emit(f"        {_PLANT}_update_outputs(t, &pp, &ps, {pin});")
+    for m in models:
+        c = m.chain.name
+        for port in m.chain.inputs:
+            for lv, rv in zip(_value(f"c_{c}.i.{port.part.name}_{port.var.name}", port.var),
+                              _value(output_lvalue(port), port.var), strict=True):  # fmt: skip
+                emit(f"        {lv} = {rv};")
+        out = f", &c_{c}.o" if m.outputs else ""
+        emit(f"        {c}_step(t, &c_{c}.p, &c_{c}.s, &c_{c}.i{out});")
+    if plant_inputs:
+        for q in plant.inputs:
+            for lv, rv in zip(_value(f"pin.{q.part.name}_{q.var.name}", q.var),
+                              _value(output_lvalue(q), q.var), strict=True):  # fmt: skip
+                emit(f"        {lv} = {rv};")
+    emit(f"        {_PLANT}_step(t, &pp, &ps, {pin});")
+    emit(f"        for (i = 0; i < {system.sizes['x']}; ++i) {{")
+    emit(f"            if (!isfinite(((const double *)(const void *)&ps.x)[i])) {{")
+    emit("                finite = 0;")
+    emit("            }")
+    emit("        }")
+    emit("        if (!finite) {")
+    emit("            done = k + 1;")
+    emit(f"            *status = {STATUS_NONFINITE};")
+    emit("            break;")
+    emit("        }")
+    emit("    }")
+    D.extend(transfer("out"))
+    emit("    ctx = saved;")
+    emit("    return done;")
+    emit("}")
+    hook = ["/* the native loop records each sample after the modulators (acdrive.export._native) */",
+            "void acdn_after_modulate(const void *state);",
+            "#define ACD_AFTER_MODULATE(t, s) acdn_after_modulate((const void *)(s))", ""]  # fmt: skip
+    return NativeSource(
+        controller_header=ctl.header if ctl else "",
+        controller_source=ctl.source if ctl else "",
+        plant_header=plant.header,
+        plant_source="\n".join(hook) + plant.source,
+        driver="\n".join(D) + "\n",
+    )
+
+
+@dataclass
+class NativeLoop:
+    """A loaded native library: ``run`` as ``CompiledSystem.run`` calls its loops."""
+
+    path: Path
+    library: object
+
+    def run(self, X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG, ECOUNT):
+        """Run in place; returns (samples done, status)."""
+        f = self.library.acdn_run
+        status = np.zeros(1, dtype=np.int64)
+        scratch = np.zeros(max(Y.size, 1))
+        E = np.zeros(max(ECOUNT.shape[0], 1), dtype=np.int64)
+        arrays = [np.ascontiguousarray(a) for a in (X, S, Y)]
+        for a, b in zip(arrays, (X, S, Y), strict=True):
+            if a is not b:
+                raise ValueError("the packed arrays must be contiguous")
+        ptr = ctypes.c_void_p
+        done = f(ptr(X.ctypes.data), ptr(S.ctypes.data), ptr(Y.ctypes.data), ctypes.c_double(t0),
+                 ctypes.c_double(T_s), ctypes.c_int64(n_sub), ctypes.c_int64(n_steps),
+                 ctypes.c_int64(log_every), ptr(idx.ctypes.data), ctypes.c_int64(idx.size),
+                 ptr(LOG.ctypes.data), ptr(ELOG.ctypes.data), ptr(ECOUNT.ctypes.data),
+                 ptr(scratch.ctypes.data), ptr(E.ctypes.data), ptr(status.ctypes.data))  # fmt: skip
+        return int(done), int(status[0])
+
+
+def _configure(library) -> None:
+    f = library.acdn_run
+    f.restype = ctypes.c_int64
+    p = ctypes.c_void_p
+    f.argtypes = [p, p, p, ctypes.c_double, ctypes.c_double, ctypes.c_int64, ctypes.c_int64,
+                  ctypes.c_int64, p, ctypes.c_int64, p, p, p, p, p, p]  # fmt: skip
+
+
+def build(source: NativeSource, notice=None) -> tuple[NativeLoop, float, bool]:
+    """(loaded library, seconds spent, compiled now) of ``source``: loaded from the cache, or
+    compiled into it first. ``notice(message)`` receives the one-line notices (a damaged library
+    rebuilt)."""
+    start = time.perf_counter()
+    path = _folder() / f"acdn_{source.key}.so"
+    compiled = False
+    if path.exists():
+        try:
+            library = ctypes.CDLL(str(path))
+            _configure(library)
+            return NativeLoop(path, library), time.perf_counter() - start, False
+        except (OSError, AttributeError) as error:
+            if notice is not None:
+                notice(f"the native library {path.name} could not be loaded ({error}); built again")
+            path.unlink(missing_ok=True)
+    _compile(source, path)
+    compiled = True
+    library = ctypes.CDLL(str(path))
+    _configure(library)
+    return NativeLoop(path, library), time.perf_counter() - start, compiled
+
+
+def _compile(source: NativeSource, path: Path) -> None:
+    cc = compiler()
+    if cc is None:
+        raise InputError("compiler", "no C compiler found (cc, gcc or $CC): the native tier needs one")
+    with tempfile.TemporaryDirectory(prefix="acdrive-native-", dir=path.parent) as scratch:
+        folder = Path(scratch)
+        files = [("acdn_driver.c", source.driver), (f"{_PLANT}.c", source.plant_source)]
+        (folder / f"{_PLANT}.h").write_text(source.plant_header)
+        if source.controller_source:
+            (folder / f"{_CTL}.h").write_text(source.controller_header)
+            files.append((f"{_CTL}.c", source.controller_source))
+        for name, text in files:
+            (folder / name).write_text(text)
+        out = folder / "library.so"
+        done = subprocess.run(
+            [cc, *NATIVE_CFLAGS, "-o", str(out), *(str(folder / n) for n, _ in files), "-lm"],
+            capture_output=True, text=True, check=False,
+        )  # fmt: skip
+        if done.returncode != 0:
+            first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
+            raise RuntimeError(f"{cc} could not compile the native loop: {first}")
+        os.replace(out, path)
