@@ -4,7 +4,8 @@
 or ``.mat``, columns ``time [s]``, ``v_a [V]``, ``i_a [A]``; ``--dc-log`` adds the DC-step log)
 or the name of a built-in cage IM, whose standstill tests are then simulated on acdrive's
 inverter-fed, locked-rotor bench (``identify._experiment``) with sensor noise and the dead time
-and device drop given. A no-load run (``--no-load-log`` for a measured one; always for a
+and device drop given. ``--kind pm | dfim | mechanics`` does the same for the other tests
+(``_identify_kinds``; a built-in PM machine, DFIM or speed drive of ``identify._builtin``). A no-load run (``--no-load-log`` for a measured one; always for a
 built-in machine, ``identify._no_load``) adds the magnetising inductance at the run's flux, which
 the parameter file then uses. Prints the table (quantity, value, unit, the two 95 % intervals,
 meaning) and what the data do and do not identify; writes the machine parameter file (``--out``).
@@ -29,7 +30,8 @@ def register(subparsers):
         help="machine parameters from logged tests (cage IM, PM, DFIM, mechanics) with 95-percent intervals",
     )
     p.add_argument("source", metavar="TEST_FILE_OR_SCENARIO",
-                   help="injection log (.csv / .parquet / .mat) or a built-in cage IM to simulate")  # fmt: skip
+                   help="injection log (.csv / .parquet / .mat) or a built-in machine whose tests "
+                   "of --kind are simulated")  # fmt: skip
     p.add_argument("--dc-log", help="DC-step log (.csv / .parquet / .mat) of a measured test")
     p.add_argument("--no-load-log", help="no-load run log (.csv / .parquet / .mat, with w [rad/s]) "
                    "of a measured test: L_M at the run's flux")  # fmt: skip
