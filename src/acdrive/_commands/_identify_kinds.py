@@ -32,6 +32,7 @@ OPTIONS = {
     "stator_resistance_ohm": ("dfim",),
     "no_load_log": ("cage-im",),
     "no_load_frequency_hz": ("cage-im",),
+    "link_voltage_v": ("cage-im",),
 }
 
 
