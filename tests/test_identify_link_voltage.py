@@ -136,5 +136,5 @@ def test_without_the_link_voltage_the_bias_is_larger_and_grows_as_the_period_squ
         assert abs(error(log, 1.05 * run.v_dc) - modelled[f_pwm]) < 0.25 * held[f_pwm]
     assert held[5000.0] > 0.0 and held[10000.0] > 0.0  # the held model reads L_M high
     assert held[5000.0] / held[10000.0] == pytest.approx(4.0, rel=0.1)  # as T^2
-    for f_pwm in held:
-        assert abs(modelled[f_pwm]) < 0.01 * held[f_pwm]
+    for f_pwm, bias in held.items():
+        assert abs(modelled[f_pwm]) < 0.01 * bias

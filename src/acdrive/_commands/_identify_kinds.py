@@ -244,8 +244,14 @@ def _dfim(args, bench):
     facts = {"consistency_l_r_sigmas": result.consistency,
              "residual_rms_a_open": result.open.residual_rms,
              "residual_rms_a_shorted": result.shorted.residual_rms}  # fmt: skip
-    missing = [what for what, given in (("M and L_s need --stator-resistance-ohm", R_s),
-                                        ("the table needs --pole-pairs", n_p)) if given is None]
+    missing = [
+        what
+        for what, given in (
+            ("M and L_s need --stator-resistance-ohm", R_s),
+            ("the table needs --pole-pairs", n_p),
+        )
+        if given is None
+    ]
     params, note = None, f"no [machine.params]: {', '.join(missing)}"  # fmt: skip
     if R_s is not None and n_p is not None:
         params = {name: result.value(name) for name in ("R_s", "R_r", "L_s", "L_r", "M")}

@@ -231,7 +231,7 @@ def run(args) -> int:
     from acdrive._commands._identify_kinds import refuse_other_options
 
     refuse_other_options(args)
-    from acdrive.identify._no_load import NoLoadPlan, fit_no_load
+    from acdrive.identify._no_load import fit_no_load
 
     _check_link_voltage_option(args)
     plan = StandstillPlan()

@@ -93,27 +93,36 @@ def _benches() -> dict[str, dict[str, object]]:
                          tone_amplitude=2.0, settle=0.5, v_dc=IPMSM_2KW2_V_DC)  # fmt: skip
     return {
         "pm": {
-            "bly171d": PMBench(BLY171D, bly, SpinPlan(speeds=(20.0, 40.0, 60.0),
-                                                      v_dc=BLY171D_V_DC)),
-            "ipmsm-2.2kw": PMBench(IPMSM_2KW2, ipm, SpinPlan(speeds=(5.0, 10.0, 15.0), hold=3.0,
-                                                             v_dc=IPMSM_2KW2_V_DC)),
-        },  # fmt: skip
+            "bly171d": PMBench(
+                BLY171D, bly, SpinPlan(speeds=(20.0, 40.0, 60.0), v_dc=BLY171D_V_DC)
+            ),
+            "ipmsm-2.2kw": PMBench(
+                IPMSM_2KW2, ipm, SpinPlan(speeds=(5.0, 10.0, 15.0), hold=3.0, v_dc=IPMSM_2KW2_V_DC)
+            ),
+        },
         "dfim": {
-            "bodson-dfim": DFIMBench(BODSON_DFIM, StandstillPlan(dc_levels=(1.0, 2.0, 3.0),
-                                                                 tone_amplitude=0.3, v_dc=30.0)),
-        },  # fmt: skip
+            "bodson-dfim": DFIMBench(
+                BODSON_DFIM,
+                StandstillPlan(dc_levels=(1.0, 2.0, 3.0), tone_amplitude=0.3, v_dc=30.0),
+            ),
+        },
         "mechanics": {
             "bly171d": MechanicsBench(
                 BLY171D,
                 BLY171D_B,
                 MechanicsPlan(tau_c=2e-3),
-                converter={"model": "switching", "pwm_frequency_hz": 20000.0,
-                           "dc_link_voltage": BLY171D_V_DC},
-                control={"current_limit_pk_a": BLY171D_I_RATED_PEAK,
-                         "current_bandwidth_rad_s": 2 * math.pi * 400,
-                         "speed_bandwidth_rad_s": 200.0},
+                converter={
+                    "model": "switching",
+                    "pwm_frequency_hz": 20000.0,
+                    "dc_link_voltage": BLY171D_V_DC,
+                },
+                control={
+                    "current_limit_pk_a": BLY171D_I_RATED_PEAK,
+                    "current_bandwidth_rad_s": 2 * math.pi * 400,
+                    "speed_bandwidth_rad_s": 200.0,
+                },
             ),
-        },  # fmt: skip
+        },
     }
 
 

@@ -100,7 +100,7 @@ MAX_HALF_WIDTH = 0.5
 @dataclass(frozen=True)
 class NoLoadLog:
     """A no-load run: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s] and, if
-logged, ``v_dc`` [V] (the DC-link voltage; None: not logged)."""
+    logged, ``v_dc`` [V] (the DC-link voltage; None: not logged)."""
 
     time: np.ndarray
     v_a: np.ndarray
