@@ -1,5 +1,7 @@
 """``acdrive identify --kind pm | dfim | mechanics``: the identifications other than the cage IM's,
-from the logs of a measured test (``acdrive.identify``; docs/guide/identification.md).
+from the logs of a measured test or, given a built-in machine's name instead of a log, from that
+kind's tests simulated on its bench (``identify._builtin``: the same parts, sensors and plans as
+the Python API; the seeds from ``--seed``) (``acdrive.identify``; docs/guide/identification.md).
 
 * ``pm``: the source is the d-axis injection log, ``--q-log`` the q-axis one (rotor locked with
   that axis on phase a), ``--dc-log`` the DC steps (optional), ``--spin-log`` the short-circuit
@@ -30,6 +32,7 @@ OPTIONS = {
     "stator_resistance_ohm": ("dfim",),
     "no_load_log": ("cage-im",),
     "no_load_frequency_hz": ("cage-im",),
+    "link_voltage_v": ("cage-im",),
 }
 
 
@@ -48,21 +51,64 @@ def refuse_other_options(args) -> None:
         raise InputError("--stator-resistance-std-ohm", "is for --kind dfim only")
 
 
+#: options that name a measured log (a simulated test makes its own)
+MEASURED_ONLY = ("dc_log", "q_log", "spin_log", "shorted_log")
+
+
 def _measured(args) -> None:
-    """The source must be a log: the simulated tests of a built-in machine are the cage IM's."""
+    """Options a measured log cannot take: the simulated inverter's dead time and drop."""
+    from acdrive.errors import InputError
+
+    for flag in ("dead_time_s", "device_drop_v"):
+        if getattr(args, flag) != 0.0:
+            raise InputError(_flag(flag), "is for a simulated test only")
+
+
+def _source(args):
+    """The bench (``identify._builtin``) of the built-in machine the source names, or None for
+    a measured log; every check of the options that says which, before any work."""
     from pathlib import Path
 
     from acdrive._commands._identify_table import LOG_SUFFIXES
     from acdrive.errors import InputError
+    from acdrive.identify._builtin import KIND_NOUN, builtin_bench, builtin_names
 
-    if Path(args.source).suffix not in LOG_SUFFIXES:
-        raise InputError("TEST_FILE_OR_SCENARIO", f"--kind {args.kind} reads a measured "
-                         f"{' / '.join(LOG_SUFFIXES)} log")  # fmt: skip
-    for flag in ("dead_time_s", "device_drop_v"):
-        if getattr(args, flag) != 0.0:
-            raise InputError(_flag(flag), "is for a simulated test only")
     if args.leakage_split != "equal":
         raise InputError("--leakage-split", "is for --kind cage-im only")
+    if Path(args.source).suffix in LOG_SUFFIXES:
+        _measured(args)
+        return None
+    known = builtin_names(args.kind)
+    if args.source not in known:
+        raise InputError("TEST_FILE_OR_SCENARIO", f"neither a {' / '.join(LOG_SUFFIXES)} log nor "
+                         f"a built-in {KIND_NOUN[args.kind]} (known for --kind {args.kind}: "
+                         f"{', '.join(known)})")  # fmt: skip
+    for flag in MEASURED_ONLY:
+        if getattr(args, flag):
+            raise InputError(_flag(flag), "is for a measured test; a simulated test makes its own")
+    return builtin_bench(args.kind, args.source)
+
+
+def _bench_plan(args, plan):
+    """The standstill ``plan`` of a built-in bench with the command's dead time, device drop,
+    base frequency and settling time, each checked (as the cage IM's simulated tests)."""
+    import dataclasses
+
+    from acdrive.errors import InputError, require_nonnegative
+    from acdrive.plant._inverter import Inverter
+
+    base, settle = _plan_window(args, plan)
+    t_d = require_nonnegative("--dead-time-s", args.dead_time_s)
+    v_drop = require_nonnegative("--device-drop-v", args.device_drop_v)
+    try:
+        Inverter("inverter", f_pwm=plan.f_pwm, t_d=t_d)
+    except InputError as exc:
+        raise InputError("--dead-time-s", exc.rule) from None
+    try:
+        return dataclasses.replace(plan, t_d=t_d, v_drop=v_drop, base_frequency=base,
+                                   settle=settle)  # fmt: skip
+    except InputError as exc:  # e.g. a settling time the plan cannot hold
+        raise InputError(f"{args.source}: {exc.field}", exc.rule) from None
 
 
 def _required(args, name: str):
@@ -74,12 +120,13 @@ def _required(args, name: str):
     return value
 
 
-def _plan_window(args):
-    """(base frequency, settle) of the injections: the options or the built-in plan's."""
+def _plan_window(args, plan=None):
+    """(base frequency, settle) of the injections: the options or those of ``plan`` (the
+    built-in bench's, or the cage IM's default plan for a measured log)."""
     from acdrive.errors import require_nonnegative, require_positive
     from acdrive.identify._experiment import StandstillPlan
 
-    plan = StandstillPlan()
+    plan = StandstillPlan() if plan is None else plan
     base = plan.base_frequency if args.base_frequency_hz is None else args.base_frequency_hz
     settle = plan.settle if args.settle_s is None else args.settle_s
     return require_positive("--base-frequency-hz", base), require_nonnegative("--settle-s", settle)
@@ -93,25 +140,60 @@ def _pole_pairs(args, required: bool):
     return require_between("--pole-pairs", args.pole_pairs, 1, 1000)
 
 
-def _pm(args):
-    """(rows, statement, facts, machine params or None, note, groups) of --kind pm."""
+def _spin_settle(args, bench):
+    """The time dropped at the start of each spin plateau: the option or the bench's (the
+    default plan's for a measured log), checked."""
     from acdrive.errors import require_nonnegative
-    from acdrive.identify._log import read_log
-    from acdrive.identify._pm import identify_pm_standstill, pm_identifiability
-    from acdrive.identify._spin import SpinPlan, fit_spin, read_spin_log
+    from acdrive.identify._spin import SpinPlan
 
-    n_p = _pole_pairs(args, True)
-    base, settle = _plan_window(args)
-    d = read_log(args.source, "TEST_FILE_OR_SCENARIO")
-    q = read_log(_required(args, "q_log"), "--q-log")
-    dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
-    spin = read_spin_log(args.spin_log, "--spin-log") if args.spin_log else None
-    spin_settle = SpinPlan().settle if args.spin_settle_s is None else args.spin_settle_s
-    require_nonnegative("--spin-settle-s", spin_settle)
+    plan = SpinPlan() if bench is None else bench.spin
+    settle = plan.settle if args.spin_settle_s is None else args.spin_settle_s
+    require_nonnegative("--spin-settle-s", settle)
+    if bench is not None and not settle < plan.hold:
+        from acdrive.errors import InputError
+
+        raise InputError("--spin-settle-s", f"must be shorter than the built-in spin test's "
+                         f"{plan.hold:g} s plateaus")  # fmt: skip
+    return settle
+
+
+def _pm(args, bench):
+    """(groups, statement, facts, machine params or None, note) of --kind pm: from the measured
+    logs, or from the tests simulated on ``bench`` (a built-in PM machine)."""
+    import dataclasses
+
+    from acdrive.identify._experiment import dc_test
+    from acdrive.identify._log import read_log
+    from acdrive.identify._pm import axis_test, identify_pm_standstill, pm_identifiability
+    from acdrive.identify._spin import fit_spin, read_spin_log, spin_test
+
+    spin_settle = _spin_settle(args, bench)
+    facts = {}
+    if bench is None:
+        n_p = _pole_pairs(args, True)
+        base, settle = _plan_window(args)
+        d = read_log(args.source, "TEST_FILE_OR_SCENARIO")
+        q = read_log(_required(args, "q_log"), "--q-log")
+        dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+        spin = read_spin_log(args.spin_log, "--spin-log") if args.spin_log else None
+    else:
+        n_p = _pole_pairs(args, False) or bench.machine.n_p
+        plan = _bench_plan(args, bench.standstill)
+        base, settle = plan.base_frequency, plan.settle
+        spin_plan = dataclasses.replace(bench.spin, t_d=plan.t_d, v_drop=plan.v_drop,
+                                        settle=spin_settle)  # fmt: skip
+        m, seed = bench.machine, 4 * args.seed
+        dc = dc_test(m, plan, seed=seed)
+        d_test, q_test = axis_test(m, plan, "d", seed + 1), axis_test(m, plan, "q", seed + 2)
+        spinning = spin_test(m, spin_plan, seed=seed + 3)
+        d, q, spin = d_test.log, q_test.log, spinning.log
+        facts |= {"q_test_lock_torque_nm": q_test.holding_torque,
+                  "spin_test_braking_torque_nm": spinning.braking_torque}  # fmt: skip
     result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed)
     groups = {"pm_standstill": result.estimates}
     statement = pm_identifiability(result)
-    facts = {"residual_rms_a_d": result.d.residual_rms, "residual_rms_a_q": result.q.residual_rms}
+    facts = {"residual_rms_a_d": result.d.residual_rms, "residual_rms_a_q": result.q.residual_rms,
+             **facts}  # fmt: skip
     params, note = None, "no [machine.params]: the magnet flux needs --spin-log"
     if spin is not None:
         fit = fit_spin(spin, n_p, spin_settle, result, seed=args.seed + 3)
@@ -130,20 +212,30 @@ def _pm(args):
     return groups, statement, facts, params, note
 
 
-def _dfim(args):
+def _dfim(args, bench):
+    """As ``_pm`` for --kind dfim: the rotor-converter tests, stator open and shorted."""
     from acdrive.errors import require_nonnegative, require_positive
-    from acdrive.identify._dfim import dfim_identifiability, identify_dfim
+    from acdrive.identify._dfim import dfim_identifiability, dfim_test, identify_dfim
     from acdrive.identify._log import read_log
 
-    n_p = _pole_pairs(args, False)
-    base, settle = _plan_window(args)
     R_s = args.stator_resistance_ohm
     if R_s is not None:
         require_positive("--stator-resistance-ohm", R_s)
     R_s_std = require_nonnegative("--stator-resistance-std-ohm", args.stator_resistance_std_ohm)
-    opened = read_log(args.source, "TEST_FILE_OR_SCENARIO")
-    shorted = read_log(_required(args, "shorted_log"), "--shorted-log")
-    dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+    if bench is None:
+        n_p = _pole_pairs(args, False)
+        base, settle = _plan_window(args)
+        opened = read_log(args.source, "TEST_FILE_OR_SCENARIO")
+        shorted = read_log(_required(args, "shorted_log"), "--shorted-log")
+        dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+    else:
+        n_p = _pole_pairs(args, False) or bench.machine.n_p
+        plan = _bench_plan(args, bench.standstill)
+        base, settle = plan.base_frequency, plan.settle
+        m, seed = bench.machine, 3 * args.seed
+        dc = dfim_test(m, plan, "open", "dc", seed=seed)
+        opened = dfim_test(m, plan, "open", "injection", seed=seed + 1)
+        shorted = dfim_test(m, plan, "shorted", "injection", seed=seed + 2)
     result = identify_dfim(opened, shorted, base, settle, dc=dc, R_s=R_s, R_s_std=R_s_std,
                            seed=args.seed)  # fmt: skip
     groups = {"dfim": result.estimates}
@@ -152,8 +244,15 @@ def _dfim(args):
     facts = {"consistency_l_r_sigmas": result.consistency,
              "residual_rms_a_open": result.open.residual_rms,
              "residual_rms_a_shorted": result.shorted.residual_rms}  # fmt: skip
-    params, note = None, ("no [machine.params]: M and L_s need --stator-resistance-ohm, the "
-                          "table needs --pole-pairs")  # fmt: skip
+    missing = [
+        what
+        for what, given in (
+            ("M and L_s need --stator-resistance-ohm", R_s),
+            ("the table needs --pole-pairs", n_p),
+        )
+        if given is None
+    ]
+    params, note = None, f"no [machine.params]: {', '.join(missing)}"  # fmt: skip
     if R_s is not None and n_p is not None:
         params = {name: result.value(name) for name in ("R_s", "R_r", "L_s", "L_r", "M")}
         params["n_p"] = n_p
@@ -161,19 +260,28 @@ def _dfim(args):
     return groups, dfim_identifiability(result), facts, params, note
 
 
-def _mechanics(args):
+def _mechanics(args, bench):
+    """As ``_pm`` for --kind mechanics: the speed staircase of a PM speed drive."""
+    from acdrive.errors import InputError
     from acdrive.identify._mechanics import (
         fit_mechanics,
         mechanics_identifiability,
         read_mechanics_log,
+        speed_step_test,
     )
 
     for flag in ("pole_pairs", "base_frequency_hz", "settle_s", "dc_log"):
         if getattr(args, flag) is not None:
-            from acdrive.errors import InputError
-
             raise InputError(_flag(flag), "is not used by --kind mechanics")
-    fit = fit_mechanics(read_mechanics_log(args.source, "TEST_FILE_OR_SCENARIO"), seed=args.seed)
+    if bench is None:
+        log = read_mechanics_log(args.source, "TEST_FILE_OR_SCENARIO")
+    else:
+        for flag in ("dead_time_s", "device_drop_v"):
+            if getattr(args, flag) != 0.0:
+                raise InputError(_flag(flag), "is not used by --kind mechanics (the built-in "
+                                 "speed drive's scenario declares its converter)")  # fmt: skip
+        log = speed_step_test(bench.scenario(args.source), bench.plan, seed=args.seed)
+    fit = fit_mechanics(log, seed=args.seed)
     note = ("[identification.mechanics] J and B are a scenario's [machine] J and "
             "viscous_friction; the Coulomb friction has no scenario field yet")  # fmt: skip
     facts = {"residual_rms_rad_s": fit.residual_rms, "degrees_of_freedom": fit.dof}
@@ -181,16 +289,17 @@ def _mechanics(args):
 
 
 def run_kind(args, target) -> int:
-    """Identify ``args.kind`` from its measured logs; print the table and write the file."""
+    """Identify ``args.kind`` from its measured logs or a built-in machine's simulated tests;
+    print the table and write the file."""
     from acdrive._commands._identify_table import print_table
     from acdrive.identify._fit import FitNotConverged
     from acdrive.identify._params_file import estimates_text, write_params
 
     refuse_other_options(args)
-    _measured(args)
+    bench = _source(args)
     try:
         groups, statement, facts, params, note = {"pm": _pm, "dfim": _dfim,
-                                                  "mechanics": _mechanics}[args.kind](args)  # fmt: skip
+                                                  "mechanics": _mechanics}[args.kind](args, bench)  # fmt: skip
     except FitNotConverged as exc:
         sys.stderr.write(f"acdrive: error: {exc}\n")
         return 1

@@ -4,9 +4,11 @@
 or ``.mat``, columns ``time [s]``, ``v_a [V]``, ``i_a [A]``; ``--dc-log`` adds the DC-step log)
 or the name of a built-in cage IM, whose standstill tests are then simulated on acdrive's
 inverter-fed, locked-rotor bench (``identify._experiment``) with sensor noise and the dead time
-and device drop given. A no-load run (``--no-load-log`` for a measured one; always for a
+and device drop given. ``--kind pm | dfim | mechanics`` does the same for the other tests
+(``_identify_kinds``; a built-in PM machine, DFIM or speed drive of ``identify._builtin``). A no-load run (``--no-load-log`` for a measured one; always for a
 built-in machine, ``identify._no_load``) adds the magnetising inductance at the run's flux, which
-the parameter file then uses. Prints the table (quantity, value, unit, the two 95 % intervals,
+the parameter file then uses; its link voltage (``--link-voltage-v`` or the log's ``v_dc [V]``
+column) adds the PWM pulses' second-order term to that fit. Prints the table (quantity, value, unit, the two 95 % intervals,
 meaning) and what the data do and do not identify; writes the machine parameter file (``--out``).
 """
 
@@ -29,12 +31,16 @@ def register(subparsers):
         help="machine parameters from logged tests (cage IM, PM, DFIM, mechanics) with 95-percent intervals",
     )
     p.add_argument("source", metavar="TEST_FILE_OR_SCENARIO",
-                   help="injection log (.csv / .parquet / .mat) or a built-in cage IM to simulate")  # fmt: skip
+                   help="injection log (.csv / .parquet / .mat) or a built-in machine whose tests "
+                   "of --kind are simulated")  # fmt: skip
     p.add_argument("--dc-log", help="DC-step log (.csv / .parquet / .mat) of a measured test")
     p.add_argument("--no-load-log", help="no-load run log (.csv / .parquet / .mat, with w [rad/s]) "
                    "of a measured test: L_M at the run's flux")  # fmt: skip
     p.add_argument("--no-load-frequency-hz", type=float, default=None,
                    help="frequency of the no-load run (Hz; default that of the built-in run)")  # fmt: skip
+    p.add_argument("--link-voltage-v", type=float, default=None,
+                   help="DC-link voltage of a measured no-load run (V): models the PWM pulses' "
+                   "second-order term (else a v_dc [V] column of the log, else left out)")  # fmt: skip
     p.add_argument("--base-frequency-hz", type=float, default=None,
                    help="step between the injected tones (Hz; default that of the built-in test)")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=None,
@@ -88,6 +94,34 @@ def _no_load(args, machine=None):
     if args.no_load_log:
         return read_no_load_log(args.no_load_log, "--no-load-log"), plan.frequency, plan.settle
     return None, plan.frequency, plan.settle
+
+
+def _link_voltage(args, no_load_log, machine) -> float | None:
+    """The link voltage [V] whose pulses the no-load model includes: the simulated run's, or of a
+    measured log ``--link-voltage-v`` and the log's ``v_dc`` column, which must agree
+    (``identify._no_load.link_voltage``); None for the held-voltage model."""
+    from acdrive.identify._no_load import NoLoadPlan, link_voltage
+
+    if no_load_log is None:
+        return None
+    if machine is not None:  # a simulated run's link voltage is known
+        return NoLoadPlan().v_dc
+    return link_voltage(no_load_log, args.link_voltage_v, "--link-voltage-v")
+
+
+def _check_link_voltage_option(args) -> None:
+    """--link-voltage-v belongs to a measured no-load log: one line otherwise."""
+    from pathlib import Path
+
+    from acdrive.errors import InputError
+
+    if args.link_voltage_v is None:
+        return
+    if Path(args.source).suffix not in LOG_SUFFIXES:
+        raise InputError("--link-voltage-v", "is for a measured no-load log; the simulated run's "
+                         "link voltage is the bench's")  # fmt: skip
+    if not args.no_load_log:
+        raise InputError("--link-voltage-v", "needs --no-load-log (it is the no-load run's link)")
 
 
 def _logs(args, plan):
@@ -177,7 +211,8 @@ def _json(result, path, no_load=None) -> dict:
         out["dc_steps"] = {e.name: entry(e) for e in (dc.R_s, dc.voltage_error, dc.single_level)}
     if no_load is not None:
         out["no_load"] = {"L_M": entry(no_load.L_M), "frequency_hz": no_load.frequency,
-                          "slip": no_load.slip, "residual_a": no_load.residual}  # fmt: skip
+                          "slip": no_load.slip, "residual_a": no_load.residual,
+                          "link_voltage_v": no_load.link_voltage}  # fmt: skip
     return out
 
 
@@ -196,19 +231,19 @@ def run(args) -> int:
     from acdrive._commands._identify_kinds import refuse_other_options
 
     refuse_other_options(args)
-    from acdrive.identify._no_load import NoLoadPlan, fit_no_load
+    from acdrive.identify._no_load import fit_no_load
 
+    _check_link_voltage_option(args)
     plan = StandstillPlan()
     injection, dc, n_p, base, settle, machine = _logs(args, plan)
     no_load_log, frequency, no_load_settle = _no_load(args, machine)
+    v_dc = _link_voltage(args, no_load_log, machine)
     try:
         result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
                                      split=args.leakage_split, seed=args.seed,
                                      dead_time=args.dead_time_s)  # fmt: skip
         no_load = None
         if no_load_log is not None:
-            # a simulated run's link voltage is known: the pulses' second-order term is modelled
-            v_dc = NoLoadPlan().v_dc if machine is not None else None
             no_load = fit_no_load(no_load_log, frequency, no_load_settle, n_p, result.impedance,
                                   seed=args.seed + 2, v_dc=v_dc)  # fmt: skip
     except FitNotConverged as exc:
@@ -230,5 +265,11 @@ def run(args) -> int:
     if no_load is not None:
         print(f"  no-load run at {no_load.frequency:g} Hz, slip {no_load.slip:.3g}: its L_M "
               "(at the run's flux) is the one the parameter file uses")  # fmt: skip
+        if no_load.link_voltage is None:
+            print("  no-load model: voltage held over each PWM period (no link voltage: "
+                  "--link-voltage-v or a v_dc [V] column adds the pulses' second-order term)")  # fmt: skip
+        else:
+            print(f"  no-load model: the PWM pulses' second-order term from a "
+                  f"{no_load.link_voltage:.6g} V link")  # fmt: skip
     print(f"wrote {path}")
     return 0

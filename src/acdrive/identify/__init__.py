@@ -13,7 +13,9 @@ flux of a no-load run; ``dfim_test`` / ``identify_dfim`` a DFIM's
 rotor-side parameters from its rotor converter with the stator open and shorted;
 ``spin_test`` / ``fit_spin`` its magnet flux
 from a short-circuit spin test; ``speed_step_test`` / ``fit_mechanics`` the inertia, viscous
-and Coulomb friction from speed steps of a running drive. Logs may be CSV, Parquet or .mat.
+and Coulomb friction from speed steps of a running drive. Logs may be CSV, Parquet or .mat; a
+no-load log may add its DC-link voltage (``link_voltage``). ``builtin_names`` / ``builtin_bench``
+give the benches ``acdrive identify NAME --kind`` simulates for the built-in machines.
 """
 
 from acdrive._lazy import namespace
@@ -66,6 +68,10 @@ __all__, __getattr__, __dir__ = namespace(
         "fit_no_load": "._no_load",
         "read_no_load_log": "._no_load",
         "write_no_load_log": "._no_load",
+        "NO_LOAD_OPTIONAL": "._no_load",
+        "link_voltage": "._no_load",
+        "builtin_names": "._builtin",
+        "builtin_bench": "._builtin",
         "SPIN_COLUMNS": "._spin",
         "SpinPlan": "._spin",
         "SpinLog": "._spin",

@@ -11,6 +11,9 @@ name and the units in a struct variable ``units`` with one text field per column
 (``units.time = 's'``), since a MATLAB variable name cannot carry brackets; a column without a
 field in ``units`` has no unit.
 
+A log kind may also declare optional columns (the no-load run's DC-link voltage ``v_dc [V]``,
+``identify._no_load.NO_LOAD_OPTIONAL``), checked by the same rules when present.
+
 Checked on reading, before any fit, each as one line naming the column and the rule
 (``InputError``): a missing, unknown or repeated column, a column without a unit or in another
 unit, a value that is not a finite number, fewer than ``MIN_ROWS`` rows, and a time that is not
@@ -37,9 +40,12 @@ MAT_UNITS = "units"
 _HEADER = re.compile(r"^\s*([^\[\]]*?)\s*\[([^\[\]]*)\]\s*$")
 
 
-def expected(spec: dict, kind: str) -> str:
-    """'a <kind> log has name [unit], ...' for messages."""
-    return f"a {kind} log has " + ", ".join(f"{n} [{u}]" for n, (u, _) in spec.items())
+def expected(spec: dict, kind: str, optional: dict | None = None) -> str:
+    """'a <kind> log has name [unit], ... (optional: name [unit], ...)' for messages."""
+    text = f"a {kind} log has " + ", ".join(f"{n} [{u}]" for n, (u, _) in spec.items())
+    if optional:
+        text += " (optional: " + ", ".join(f"{n} [{u}]" for n, (u, _) in optional.items()) + ")"
+    return text
 
 
 _EXPECTED = expected(LOG_COLUMNS, "standstill")
@@ -65,14 +71,16 @@ def check_columns(columns: dict[str, tuple[str, np.ndarray]], field: str) -> Sta
 
 
 def checked_values(columns: dict[str, tuple[str, np.ndarray]], field: str, spec: dict,
-                   kind: str) -> dict[str, np.ndarray]:  # fmt: skip
-    """Column name -> values of a log of ``kind`` whose columns ``spec`` declares, from header
-    name -> (unit, values), every rule of the module docstring."""
-    listing = expected(spec, kind)
+                   kind: str, optional: dict | None = None) -> dict[str, np.ndarray]:  # fmt: skip
+    """Column name -> values of a log of ``kind`` whose columns ``spec`` declares (and may add
+    those of ``optional``, checked alike when present), from header name -> (unit, values),
+    every rule of the module docstring."""
+    listing = expected(spec, kind, optional)
+    allowed = {**spec, **(optional or {})}
     for name, (unit, _) in columns.items():
-        if name not in spec:
+        if name not in allowed:
             raise InputError(f"{field}: column '{name}'", f"unknown; {listing}")
-        unit_expected = spec[name][0]
+        unit_expected = allowed[name][0]
         if unit != unit_expected:
             raise InputError(f"{field}: column '{name}'",
                              f"must be in {unit_expected}, got '{unit}'")  # fmt: skip
@@ -80,7 +88,7 @@ def checked_values(columns: dict[str, tuple[str, np.ndarray]], field: str, spec:
         if name not in columns:
             raise InputError(f"{field}: column '{name}'", f"is missing; {listing}")
     values = {}
-    for name in spec:
+    for name in (n for n in allowed if n in columns):
         data = columns[name][1]
         try:
             data = np.asarray(data, dtype=float)
@@ -143,9 +151,10 @@ def _mat_columns(path: Path, field: str) -> list[tuple[str, np.ndarray, str | No
     return pairs
 
 
-def read_columns(path, spec: dict, kind: str, field: str = "TEST_FILE") -> dict[str, np.ndarray]:
-    """Column name -> values of the ``kind`` log in ``path`` whose columns ``spec`` declares,
-    checked (module docstring)."""
+def read_columns(path, spec: dict, kind: str, field: str = "TEST_FILE",
+                 optional: dict | None = None) -> dict[str, np.ndarray]:  # fmt: skip
+    """Column name -> values of the ``kind`` log in ``path`` whose columns ``spec`` declares
+    (and ``optional`` may add), checked (module docstring)."""
     path = Path(path)
     if path.suffix not in FORMATS:
         raise InputError(field, f"must be a {', '.join(FORMATS)} file, got '{path.name}'")
@@ -175,7 +184,7 @@ def read_columns(path, spec: dict, kind: str, field: str = "TEST_FILE") -> dict[
             unit = (f.metadata or {}).get(b"unit")
             pairs.append((f.name, table.column(f.name).to_numpy(),
                           None if unit is None else unit.decode()))  # fmt: skip
-    listing = expected(spec, kind)
+    listing = expected(spec, kind, optional)
     for header, data, metadata_unit in pairs:
         if path.suffix == ".mat":  # the header is a plain variable name
             name, unit = header, metadata_unit
@@ -187,7 +196,7 @@ def read_columns(path, spec: dict, kind: str, field: str = "TEST_FILE") -> dict[
         if name in columns:
             raise InputError(f"{field}: column '{name}'", "appears twice")
         columns[name] = (unit, data)
-    return checked_values(columns, field, spec, kind)
+    return checked_values(columns, field, spec, kind, optional)
 
 
 def write_log(log: StandstillLog, path) -> Path:

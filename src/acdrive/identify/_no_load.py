@@ -49,6 +49,16 @@ itself at 5 and 20 kHz. With the link voltage ``v_dc`` given, the model adds
 W ripple_admittance, W the fundamental of W_k for the balanced command of the fitted phasor V
 and the min-max zero sequence of the SVPWM (``pulse_moment``).
 
+**The link voltage** comes from the caller (``fit_no_load(..., v_dc=)``, ``--link-voltage-v``)
+or from the log's optional column ``v_dc`` [V] (``NO_LOAD_OPTIONAL``: what a drive's DC-link
+sensor reads at each sample instant), as ``link_voltage`` decides: the column's mean over the
+log is used, so the column must stay within ``LINK_RTOL`` of its mean (the term is a correction
+of a few 1e-4 of L_M and varies about as the link voltage does, so a link within +-5 % changes
+the estimate by a few 1e-5 of L_M, far inside its interval; a link that varies more is not the
+one-voltage pattern the model describes). Given both ways, they must agree within ``LINK_RTOL``
+and the column's mean is used (measured during the run). Without either, the model holds the
+voltage over each period and the estimate carries the bias above.
+
 **Rules**, each an ``InputError`` naming the column or parameter: at least one whole period
 after ``settle``; ``SAMPLES_PER_PERIOD`` samples per period of f; the voltage a single frequency
 (the tone at f carries at least ``TONE_SHARE`` of the window's AC voltage power); the speed
@@ -74,6 +84,13 @@ NO_LOAD_COLUMNS = {
     "i_a": ("A", "phase-a current measured at the sample instant"),
     "w": ("rad/s", "mechanical speed of the rotor"),
 }
+#: columns a no-load log may add (module docstring): name -> (unit, meaning)
+NO_LOAD_OPTIONAL = {
+    "v_dc": ("V", "DC-link voltage of the inverter at the sample instant"),
+}
+#: the largest relative deviation of the link voltage from its mean, and the largest relative
+#: difference between a link voltage given and the log's (module docstring)
+LINK_RTOL = 0.05
 SAMPLES_PER_PERIOD = 20
 TONE_SHARE = 0.95
 SPEED_RTOL = 0.01
@@ -82,13 +99,15 @@ MAX_HALF_WIDTH = 0.5
 
 @dataclass(frozen=True)
 class NoLoadLog:
-    """A no-load run: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s]."""
+    """A no-load run: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s] and, if
+    logged, ``v_dc`` [V] (the DC-link voltage; None: not logged)."""
 
     time: np.ndarray
     v_a: np.ndarray
     i_a: np.ndarray
     w: np.ndarray
     source: str = "log"
+    v_dc: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -158,13 +177,15 @@ def _expm_2x2(A: np.ndarray, T: float) -> np.ndarray:
 @dataclass(frozen=True)
 class NoLoadFit:
     """L_M of the no-load run with its intervals, the run's frequency [Hz], mean speed [rad/s]
-    and slip, and the residual (rms of the current's error at f [A])."""
+    and slip, the residual (rms of the current's error at f [A]) and the link voltage used."""
 
     L_M: Estimate
     frequency: float
     speed: float
     slip: float
     residual: float
+    #: the link voltage whose pulses' second-order term the model includes [V] (None: held)
+    link_voltage: float | None = None
 
 
 def _phasors(log: NoLoadLog, frequency: float, settle: float):
@@ -246,17 +267,43 @@ def _solve_L_M(V, I, variance, known, w_r, w, hold, start, moment=0.0):
     return least_squares(residual, [math.log(start)], method="lm", xtol=1e-12, ftol=1e-12)
 
 
+def link_voltage(log: NoLoadLog, given: float | None = None,
+                 given_field: str = "v_dc") -> float | None:  # fmt: skip
+    """The link voltage [V] of the run (module docstring): the mean of the log's ``v_dc``
+    column, checked to stay within ``LINK_RTOL`` of it and, if a voltage is ``given`` (named
+    ``given_field`` in messages), to agree with it within ``LINK_RTOL``; else ``given``
+    (checked > 0); None if neither."""
+    if given is not None:
+        require_positive(given_field, given)
+    if log.v_dc is None:
+        return None if given is None else float(given)
+    where = f"{log.source}: column 'v_dc'"
+    column = np.asarray(log.v_dc, dtype=float)
+    mean = float(np.mean(column))
+    if not mean > 0.0:
+        raise InputError(where, f"the DC-link voltage must be > 0, its mean is {mean:g} V")
+    worst = float(np.max(np.abs(column - mean))) / mean
+    if worst > LINK_RTOL:
+        raise InputError(where, f"must stay within {LINK_RTOL:.0%} of its mean {mean:.6g} V (the "
+                         f"model takes one link voltage), it deviates by {worst:.2%}")  # fmt: skip
+    if given is not None and abs(given - mean) > LINK_RTOL * mean:
+        raise InputError(f"{given_field} and {where}", f"must agree within {LINK_RTOL:.0%}: "
+                         f"{given:g} V given, the column's mean is {mean:.6g} V (give one, or "
+                         "correct the other)")  # fmt: skip
+    return mean
+
+
 def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, standstill,
                 seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
                 v_dc: float | None = None) -> NoLoadFit:  # fmt: skip
     """L_M of a no-load run (module docstring), with R_s, L_sigma, R_R and their covariance from
-    ``standstill`` (an ``ImpedanceFit`` of the standstill injection). ``v_dc`` [V], the link
-    voltage of the run, adds the switching pattern's second-order term to the model (module
-    docstring); None leaves it out."""
+    ``standstill`` (an ``ImpedanceFit`` of the standstill injection). The link voltage of the
+    run, ``v_dc`` [V] or the log's ``v_dc`` column (``link_voltage``), adds the switching
+    pattern's second-order term to the model (module docstring); neither leaves it out."""
+    v_dc = link_voltage(log, v_dc)
     V, I, variance, hold, speed = _phasors(log, frequency, settle)
     moment = 0.0
     if v_dc is not None:
-        require_positive("v_dc", v_dc)
         moment = pulse_moment(V, frequency, hold, float(v_dc), round(1.0 / (frequency * hold)))
     w = 2.0 * math.pi * frequency
     w_r = n_p * speed
@@ -296,20 +343,27 @@ def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, stand
         raise InputError("L_M", f"not identified by this run: its 95 % interval is "
                          f"+-{half / L_M:.0%} of the value, at most +-{MAX_HALF_WIDTH:.0%}")  # fmt: skip
     slip = 1.0 - w_r / w
-    return NoLoadFit(estimate, frequency, speed, slip, residual)
+    return NoLoadFit(estimate, frequency, speed, slip, residual, v_dc)
 
 
 def read_no_load_log(path, field: str = "TEST_FILE") -> NoLoadLog:
-    """The no-load log in ``path`` (CSV, Parquet or .mat), every rule of ``identify._log``."""
+    """The no-load log in ``path`` (CSV, Parquet or .mat), every rule of ``identify._log``; the
+    column ``v_dc`` [V] may be added (``NO_LOAD_OPTIONAL``)."""
     from acdrive.identify._log import read_columns
 
-    values = read_columns(path, NO_LOAD_COLUMNS, "no-load", field)
-    return NoLoadLog(values["time"], values["v_a"], values["i_a"], values["w"], field)
+    values = read_columns(path, NO_LOAD_COLUMNS, "no-load", field, optional=NO_LOAD_OPTIONAL)
+    return NoLoadLog(values["time"], values["v_a"], values["i_a"], values["w"], field,
+                     values.get("v_dc"))  # fmt: skip
 
 
 def write_no_load_log(log: NoLoadLog, path):
-    """Write a no-load log as CSV, Parquet or .mat (by the suffix of ``path``)."""
+    """Write a no-load log as CSV, Parquet or .mat (by the suffix of ``path``), with its
+    ``v_dc`` column if it has one."""
     from acdrive.identify._log import write_columns
 
     columns = {"time": log.time, "v_a": log.v_a, "i_a": log.i_a, "w": log.w}
-    return write_columns(columns, NO_LOAD_COLUMNS, path)
+    spec = dict(NO_LOAD_COLUMNS)
+    if log.v_dc is not None:
+        columns["v_dc"] = log.v_dc
+        spec |= NO_LOAD_OPTIONAL
+    return write_columns(columns, spec, path)

@@ -1,0 +1,147 @@
+"""The simulated benches of the built-in machines for the tests other than the cage IM's, by name:
+what ``acdrive identify NAME --kind pm | dfim | mechanics`` runs (docs/guide/identification.md).
+
+Each bench is the plan the estimator's own tests validate on that machine, so a name simulates
+the same parts and sensors as the Python API (``identify._pm``, ``_spin``, ``_dfim``,
+``_mechanics``): the SVPWM inverter on its DC source, the machine part, the seeded noisy and
+quantised current reading (``identify._experiment.CurrentSensor``) and, for the mechanics, the
+PM speed drive with its 4096-count encoder.
+
+- **pm**: the PM machines of the PM drive's catalog (``drives.pm._schema.MACHINES``) that have a
+  validated bench. ``bly171d`` (the 24 V BLY171D servo motor): tones 2 to 320 Hz around its
+  119 Hz corner R_s / (2 pi L), 0.15 V each, about its rated 1.8 A peak at the lowest tones; spin
+  test at 20, 40, 60 rad/s. ``ipmsm-2.2kw`` (motulator's 2.2 kW interior PMSM from 540 V): tones
+  1 to 160 Hz around its 16 Hz (d) and 11 Hz (q) corners, 2 V each; spin test at 5, 10, 15 rad/s,
+  3 s each (five electrical periods at the lowest speed), whose short-circuit current stays
+  below the nominal 6.1 A peak. The catalog's ``pmsg-2mw`` has none: its kiloampere currents
+  need another current sensor and a megawatt dynamometer, a bench no test of acdrive validates.
+- **dfim**: ``bodson-dfim``, from its rotor converter on Bodson's 30 V link, tones of 0.3 V
+  (about 3 A at the lowest tones), DC steps of 1, 2, 3 V.
+- **mechanics**: ``bly171d``, the BLY171D speed drive of the scenario ``pm-bly171d-speed``
+  (its table's viscous friction, rated current limit, 400 Hz current and 200 rad/s speed
+  bandwidths) on the switching converter at 20 kHz, with a Coulomb friction of 2 mN m on the
+  shaft (3.5 % of the rated torque; the table gives none, so it is assumed, and the scenario
+  has no field for it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from acdrive.errors import InputError
+from acdrive.identify._experiment import StandstillPlan
+from acdrive.identify._mechanics import MechanicsPlan
+from acdrive.identify._spin import SpinPlan
+
+
+@dataclass(frozen=True)
+class PMBench:
+    """A PM machine's standstill plan (DC steps, d- and q-axis injection) and spin test."""
+
+    machine: object
+    standstill: StandstillPlan
+    spin: SpinPlan
+
+
+@dataclass(frozen=True)
+class DFIMBench:
+    """A DFIM's rotor-converter plan (DC steps and injection, stator open and shorted)."""
+
+    machine: object
+    standstill: StandstillPlan
+
+
+@dataclass(frozen=True)
+class MechanicsBench:
+    """A PM speed-drive scenario table and the staircase run on it; ``viscous_friction`` the
+    scenario's [N m s/rad]."""
+
+    machine: object
+    viscous_friction: float
+    plan: MechanicsPlan
+    converter: dict = field(default_factory=dict)
+    control: dict = field(default_factory=dict)
+    sample_time: float = 5e-5
+
+    def scenario(self, name: str) -> dict:
+        """The scenario table ``speed_step_test`` runs (a fresh copy)."""
+        return {
+            "drive": "pm",
+            "name": f"{name}-speed-steps",
+            "machine": {"machine": name, "viscous_friction": self.viscous_friction},
+            "converter": dict(self.converter),
+            "control": dict(self.control),
+            "simulation": {"sample_time": self.sample_time},
+        }
+
+
+def _benches() -> dict[str, dict[str, object]]:
+    from acdrive.drives.pm._machines import (
+        BLY171D,
+        BLY171D_B,
+        BLY171D_I_RATED_PEAK,
+        BLY171D_V_DC,
+        IPMSM_2KW2,
+        IPMSM_2KW2_V_DC,
+    )
+    from acdrive.machines._dfim import BODSON_DFIM
+
+    bly = StandstillPlan(dc_levels=(0.3, 0.6, 0.9), dc_step=0.5, base_frequency=2.0,
+                         tone_amplitude=0.15, settle=0.5, v_dc=BLY171D_V_DC)  # fmt: skip
+    ipm = StandstillPlan(dc_levels=(6.0, 12.0, 18.0), dc_step=0.5, base_frequency=1.0,
+                         tone_amplitude=2.0, settle=0.5, v_dc=IPMSM_2KW2_V_DC)  # fmt: skip
+    return {
+        "pm": {
+            "bly171d": PMBench(
+                BLY171D, bly, SpinPlan(speeds=(20.0, 40.0, 60.0), v_dc=BLY171D_V_DC)
+            ),
+            "ipmsm-2.2kw": PMBench(
+                IPMSM_2KW2, ipm, SpinPlan(speeds=(5.0, 10.0, 15.0), hold=3.0, v_dc=IPMSM_2KW2_V_DC)
+            ),
+        },
+        "dfim": {
+            "bodson-dfim": DFIMBench(
+                BODSON_DFIM,
+                StandstillPlan(dc_levels=(1.0, 2.0, 3.0), tone_amplitude=0.3, v_dc=30.0),
+            ),
+        },
+        "mechanics": {
+            "bly171d": MechanicsBench(
+                BLY171D,
+                BLY171D_B,
+                MechanicsPlan(tau_c=2e-3),
+                converter={
+                    "model": "switching",
+                    "pwm_frequency_hz": 20000.0,
+                    "dc_link_voltage": BLY171D_V_DC,
+                },
+                control={
+                    "current_limit_pk_a": BLY171D_I_RATED_PEAK,
+                    "current_bandwidth_rad_s": 2 * math.pi * 400,
+                    "speed_bandwidth_rad_s": 200.0,
+                },
+            ),
+        },
+    }
+
+
+#: what each kind calls its built-in names in messages
+KIND_NOUN = {"pm": "PM machine", "dfim": "DFIM", "mechanics": "speed drive (mechanics)"}
+
+
+def builtin_names(kind: str) -> tuple[str, ...]:
+    """The names ``acdrive identify NAME --kind KIND`` simulates."""
+    return tuple(_benches().get(kind, {}))
+
+
+def builtin_bench(kind: str, name: str, field: str = "TEST_FILE_OR_SCENARIO"):
+    """The bench of the built-in ``name`` of ``kind``, or an InputError naming ``field`` and
+    listing the names of that kind."""
+    benches = _benches().get(kind)
+    if benches is None:
+        raise InputError("kind", f"must be one of {', '.join(KIND_NOUN)}, got {kind!r}")
+    if name not in benches:
+        raise InputError(field, f"unknown built-in {KIND_NOUN[kind]} '{name}' (known for --kind "
+                         f"{kind}: {', '.join(benches)})")  # fmt: skip
+    return benches[name]
