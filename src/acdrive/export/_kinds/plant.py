@@ -19,7 +19,7 @@ from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE, DoublyFedMachine
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch, Inverter
-from acdrive.plant._mechanics import W_COULOMB, Shaft
+from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
 
@@ -253,6 +253,16 @@ register_plant(
     dx->theta = x->w;
 """,
         support=(TABLE_AT, TANH),
+    ),
+)
+
+register_plant(
+    PrescribedSpeed,
+    PlantC(
+        source="a shaft held at a speed profile (plant._mechanics.speed_state_outputs, speed_rhs)",
+        state_outputs="    y->w = acd_table_at(p->w.n, p->w.t, p->w.v, t);\n    y->theta = x->theta;",
+        rhs="    dx->theta = acd_table_at(p->w.n, p->w.t, p->w.v, t);",
+        support=(TABLE_AT,),
     ),
 )
 
