@@ -74,8 +74,8 @@ from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.identify._circuit import (
     INVERSE_GAMMA,
     InverseGamma,
-    sampled_admittance,
     standstill_impedance,
+    standstill_state_space,
 )
 from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
@@ -88,6 +88,7 @@ from acdrive.identify._fit import (
     t_quantile,
 )
 from acdrive.identify._polarity import feedback_gain, simulated_polarity
+from acdrive.identify._winding import sampled_response
 
 EXCITED_FRACTION = 1e-2
 MIN_TONES = 3
@@ -251,37 +252,52 @@ class AdmittanceModel:
     """A winding at standstill as the fit sees it: its parameters ``fields`` ((name, unit,
     meaning), in fit order), ``admittance(values, w, hold)`` its zero-order-hold sampled
     admittance Y_d(e^{jwT}) [S], ``start(spectrum)`` a starting point (positive values) and
-    ``record(values)`` the parameter record of the values; ``dead_time`` [s] the inverter dead
-    time its sample instant includes (``with_dead_time``)."""
+    ``record(values)`` the parameter record of the values; ``state_space(values)`` its (A, B)
+    (``identify._winding``: what the dead-time compensation simulates and shifts; None: a model
+    without one is fitted as given); ``dead_time`` [s] the inverter dead time its sample instant
+    includes (``with_dead_time``)."""
 
     fields: tuple[tuple[str, str, str], ...]
     admittance: Callable
     start: Callable
     record: Callable
     dead_time: float = field(default=0.0)
+    state_space: Callable | None = field(default=None)
+
+
+def winding_model(fields, state_space: Callable, start: Callable, record: Callable):
+    """The ``AdmittanceModel`` of a winding given by its state space (``identify._winding``):
+    its admittance is the exact sampled one of that state space, so the fit and the dead-time
+    compensation use one model."""
+
+    def admittance(values, w, hold):
+        return sampled_response(*state_space(values), w, hold)
+
+    return AdmittanceModel(fields, admittance, start, record, state_space=state_space)
 
 
 #: the cage IM at standstill: the inverse-Gamma circuit (``identify._circuit``)
-INVERSE_GAMMA_MODEL = AdmittanceModel(
-    INVERSE_GAMMA, sampled_admittance, lambda spec: np.exp(_start(spec)), InverseGamma.from_array
-)
+INVERSE_GAMMA_MODEL = winding_model(
+    INVERSE_GAMMA, standstill_state_space, lambda spec: np.exp(_start(spec)),
+    InverseGamma.from_array,
+)  # fmt: skip
 
 
 def with_dead_time(model: AdmittanceModel, dead_time: float) -> AdmittanceModel:
-    """The cage IM's ``model`` with its current sampled t_d / 2 off the ripple's symmetric point
-    by the inverter's dead time ``dead_time`` [s] (``_circuit.sampled_admittance``); 0: as is."""
+    """``model`` with its current sampled t_d / 2 off the ripple's symmetric point by the
+    inverter's dead time ``dead_time`` [s] (``identify._winding``); 0: as is. The shift is the
+    winding's free response, so the model must have a state space."""
     if dead_time == 0.0:
         return model
-    if model.fields is not INVERSE_GAMMA:
-        raise InputError("dead_time", "the sample-offset model is the cage IM's; give 0 for "
-                         "another winding")  # fmt: skip
-    return AdmittanceModel(
-        model.fields,
-        lambda values, w, hold: sampled_admittance(values, w, hold, dead_time),
-        model.start,
-        model.record,
-        dead_time,
-    )
+    state_space = model.state_space
+    if state_space is None:
+        raise InputError("dead_time", "the sample-offset model needs the winding's state space; "
+                         "give 0 for a model without one")  # fmt: skip
+
+    def admittance(values, w, hold):
+        return sampled_response(*state_space(values), w, hold, dead_time)
+
+    return replace(model, admittance=admittance, dead_time=dead_time)
 
 
 def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12, model=INVERSE_GAMMA_MODEL):
@@ -315,11 +331,11 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     spec = spectrum(log, base_frequency, settle, voltage_error)
     theta0 = np.log(model.start(spec))
     fit = _solve(spec, theta0, model=model)
-    simulated = voltage_error is not None and model.fields is INVERSE_GAMMA
+    simulated = voltage_error is not None and model.state_space is not None
 
     def polarity(theta):
         signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
-                                   model.dead_time)  # fmt: skip
+                                   model.dead_time, model.state_space)  # fmt: skip
         return _tone_coefficients(signs, spec, base_frequency)
 
     if simulated:
