@@ -1,6 +1,10 @@
 """``acdrive identify --kind pm | dfim | mechanics``: the identifications other than the cage IM's,
 from the logs of a measured test (``acdrive.identify``; docs/guide/identification.md).
 
+``--dead-time-s`` (pm, dfim) is the PWM unit's programmed dead time, as for the cage IM: with
+``--dc-log`` the fits compensate the voltage error with the sign the inverter saw and shift their
+sample by half of it (``identify._impedance``).
+
 * ``pm``: the source is the d-axis injection log, ``--q-log`` the q-axis one (rotor locked with
   that axis on phase a), ``--dc-log`` the DC steps (optional), ``--spin-log`` the short-circuit
   spin test (optional: psi_m), ``--pole-pairs`` required. With the spin log the file has the PM
@@ -53,14 +57,17 @@ def _measured(args) -> None:
     from pathlib import Path
 
     from acdrive._commands._identify_table import LOG_SUFFIXES
-    from acdrive.errors import InputError
+    from acdrive.errors import InputError, require_nonnegative
 
     if Path(args.source).suffix not in LOG_SUFFIXES:
         raise InputError("TEST_FILE_OR_SCENARIO", f"--kind {args.kind} reads a measured "
                          f"{' / '.join(LOG_SUFFIXES)} log")  # fmt: skip
-    for flag in ("dead_time_s", "device_drop_v"):
-        if getattr(args, flag) != 0.0:
-            raise InputError(_flag(flag), "is for a simulated test only")
+    if args.device_drop_v != 0.0:
+        raise InputError("--device-drop-v", "is for a simulated test only")
+    # the PWM unit's programmed dead time: the PM and DFIM fits shift their sample by half of it
+    require_nonnegative("--dead-time-s", args.dead_time_s)
+    if args.kind == "mechanics" and args.dead_time_s != 0.0:
+        raise InputError("--dead-time-s", "is not used by --kind mechanics")
     if args.leakage_split != "equal":
         raise InputError("--leakage-split", "is for --kind cage-im only")
 
@@ -108,7 +115,8 @@ def _pm(args):
     spin = read_spin_log(args.spin_log, "--spin-log") if args.spin_log else None
     spin_settle = SpinPlan().settle if args.spin_settle_s is None else args.spin_settle_s
     require_nonnegative("--spin-settle-s", spin_settle)
-    result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed)
+    result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed,
+                                    dead_time=args.dead_time_s)  # fmt: skip
     groups = {"pm_standstill": result.estimates}
     statement = pm_identifiability(result)
     facts = {"residual_rms_a_d": result.d.residual_rms, "residual_rms_a_q": result.q.residual_rms}
@@ -145,7 +153,7 @@ def _dfim(args):
     shorted = read_log(_required(args, "shorted_log"), "--shorted-log")
     dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
     result = identify_dfim(opened, shorted, base, settle, dc=dc, R_s=R_s, R_s_std=R_s_std,
-                           seed=args.seed)  # fmt: skip
+                           seed=args.seed, dead_time=args.dead_time_s)  # fmt: skip
     groups = {"dfim": result.estimates}
     if dc is not None:
         groups["dc_steps"] = (result.dc.R_s, result.dc.voltage_error)

@@ -334,15 +334,21 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     simulated = voltage_error is not None and model.state_space is not None
 
     def polarity(theta):
-        signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
-                                   model.dead_time, model.state_space)  # fmt: skip
+        try:
+            signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
+                                       model.dead_time, model.state_space)  # fmt: skip
+        except np.linalg.LinAlgError:  # a parameter off any physical range: no sign to tell
+            return np.full(spec.frequency.size, np.nan + 0j)
         return _tone_coefficients(signs, spec, base_frequency)
 
     if simulated:
         for _ in range(POLARITY_ROUNDS):  # the inverter's own sign (module docstring)
             if not (fit.success and np.all(np.isfinite(fit.x))):
                 break
-            spec = replace(spec, polarity=polarity(fit.x)).compensated(voltage_error)
+            coefficients = polarity(fit.x)
+            if not np.all(np.isfinite(coefficients)):
+                break
+            spec = replace(spec, polarity=coefficients).compensated(voltage_error)
             fit = _solve(spec, fit.x, model=model)
     m, n = 2 * spec.frequency.size, len(model.fields)
     if m - n < 1:

@@ -81,4 +81,6 @@ def feedback_gain(jacobian: np.ndarray, theta: np.ndarray, steps: np.ndarray,
         column = sensitivity * (polarity(up) - polarity(down)) / (2.0 * step)
         H[:, j] = np.concatenate((column.real, column.imag))
     JTJ = jacobian.T @ jacobian
+    if not np.all(np.isfinite(H)):  # a secant left the physical range: the feedback is unknown
+        return np.full_like(JTJ, np.nan)
     return np.linalg.solve(JTJ + jacobian.T @ H, JTJ)
