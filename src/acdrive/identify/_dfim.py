@@ -19,6 +19,10 @@ rotor quantity), twice:
 
    fitted by the same estimator (``identify._impedance``) with these four names.
 
+Both models declare their state space (``identify._winding``), so a DC-step log and the
+converter's programmed dead time compensate the injections as for the cage IM: the simulated
+sign and the sample t_d / 2 early (``identify_dfim``'s ``dead_time``).
+
 **What is identifiable.** R_r (both tests; combined by inverse variance), L_r, L_M' = M^2 / L_s
 and R_S' = R_s (M/L_s)^2; the open test's L_r and the shorted test's L_sigma_r + L_M' must agree
 (``consistency``, a check of the data). M, L_s and R_s separately are not: the stator is reached

@@ -16,8 +16,9 @@ period start; the exact discrete model of the RL branch) is
     Y_d(z) = (1 - a) / (R_s (z - a)),   a = exp(-R_s T / L_x),   z = e^{jwT},
 
 fitted by the frequency-domain least squares of ``identify._impedance`` (same window, tones,
-voltage-error compensation, Jacobian and bootstrap intervals, the rule that every interval be
-within +-50 %).
+voltage-error compensation with the sign the inverter saw and the dead time's sample shift,
+Jacobian and bootstrap intervals, the rule that every interval be within +-50 %): the RL branch
+declares its state space (``rl_state_space``), the model ``identify._winding`` samples.
 
 **Torque and the lock.** With the d axis on phase a the current is i_d only and the torque
 n_p (psi_pm i_q + (L_d - L_q) i_d i_q) (Ugalde-Loo et al. (8)) is zero: the d test needs no lock
