@@ -35,7 +35,12 @@ the sign the inverter itself saw: that of the current the fitted circuit draws f
 command with the voltage error fed back sample by sample (``identify._polarity``). It fits
 first with the reading's sign, then ``POLARITY_ROUNDS`` times with the sign of the current
 simulated from the previous fit. The estimate's own noise then moves the sign it is compensated
-with; its intervals include that feedback (``_polarity.feedback_gain``).
+with; its intervals include that feedback (``_polarity.feedback_gain``). This applies to every
+model that declares its winding's state space (``AdmittanceModel.state_space``: the cage IM's
+circuit, a PM axis, the DFIM's rotor open or shorted). A failure mode, measured on the BLY171D
+with tones of about half the voltage error (docs/guide/identification.md): where the current is
+clamped near zero much of the time, the iteration can settle on a self-consistent sign away from
+the truth (L_d 2 % low), with intervals wide enough to hold the truth.
 
 **Dead time also moves the sample instant.** The voltage error is what dead time does to a
 period's mean voltage; it also shifts every switching pulse t_d / 2 later, so the current is
@@ -43,7 +48,7 @@ sampled on the ripple's slope instead of at its symmetric point. Measured on the
 bench (t_d = 2 us, no device drop, the true U compensated), that alone leaves R_s, L_sigma, R_R,
 L_M low by 1.4e-4, 3.1e-4, 4.3e-4, 2.6e-4, while a device drop of the same U leaves the ideal
 inverter's few 1e-5. Given the programmed dead time, the model reads its current t_d / 2 early
-(``_circuit.sampled_admittance``).
+(``identify._winding``, for any model with a state space).
 
 **The fit.** ``least_squares`` of the current residuals I_k - Y_d(w_k; p) V_k (real and
 imaginary parts) over log-parameters (positive by construction); their maximum-likelihood
