@@ -12,6 +12,10 @@ interval. Kinds:
   and Ugalde-Loo IMs with a 2 us dead time and 1 V device drops, fitted with the compensation
   (DC-step U_err and the programmed dead time) and without it (the injection alone);
 
+* ``dead_time``: the PM (BLY171D) d- and q-axis standstill tests and the DFIM's rotor-side
+  tests with the same inverter (2 us, 1 V per device), compensated (DC-step U_err, the simulated
+  sign and the programmed dead time, as for the cage IM) and uncompensated, at the ideal plan's
+  tone amplitude and larger ones (``PM_DEAD_TIME_TONES``, ``DFIM_DEAD_TIME_TONES``);
 * ``pm``: BLY171D, d- and q-axis injection with DC steps, then the short-circuit spin test;
 * ``no_load``: the DeLorenzo IM's no-load run at 2 % slip on its standstill estimates, with the
   switching pattern's second-order term (the link voltage given) and without it;
@@ -172,7 +176,136 @@ def standstill(repetitions: int, bootstrap: int) -> dict:
     return out
 
 
-KINDS = {"standstill": None, "pm": pm, "no_load": no_load, "dfim": dfim, "mechanics": mechanics}
+def _voltage_error(plan) -> float:
+    """U_err = 4/3 (t_d f_pwm v_dc + v_drop) on phase a (``identify._dc``, ``plant._inverter``)."""
+    return 4.0 / 3.0 * (plan.t_d * plan.f_pwm * plan.v_dc + plan.v_drop)
+
+
+def _dead_time_setups():
+    """(label, machine, plan with the standstill study's inverter, identify(logs, compensate,
+    seed, bootstrap), tests, truth) of the PM and DFIM studies, one per tone amplitude: the
+    ideal-inverter plan's (``pm``, ``dfim`` above) and larger ones. The DC levels are the ideal
+    plan's raised by U_err, so the plateaus carry the same currents."""
+    import dataclasses
+
+    from acdrive.drives.pm import BLY171D
+    from acdrive.identify import StandstillPlan, identify_dfim, identify_pm_standstill
+    from acdrive.machines import BODSON_DFIM as D
+
+    pm_plan = StandstillPlan(dc_levels=(0.3, 0.6, 0.9), dc_step=0.5, base_frequency=2.0,
+                             tone_amplitude=0.15, settle=0.5, v_dc=24.0, t_d=DEAD_TIME,
+                             v_drop=DEVICE_DROP)  # fmt: skip
+    dfim_plan = StandstillPlan(dc_levels=(1.0, 2.0, 3.0), tone_amplitude=0.3, v_dc=30.0,
+                               t_d=DEAD_TIME, v_drop=DEVICE_DROP)  # fmt: skip
+
+    def raised(plan, amplitude):
+        U = _voltage_error(plan)
+        return dataclasses.replace(plan, tone_amplitude=amplitude,
+                                   dc_levels=tuple(v + U for v in plan.dc_levels))  # fmt: skip
+
+    def pm_identify(plan):
+        def run(logs, compensate, seed, bootstrap):
+            return identify_pm_standstill(
+                logs["d"], logs["q"], plan.base_frequency, plan.settle,
+                dc=logs["dc"] if compensate else None, seed=seed, bootstrap=bootstrap,
+                dead_time=plan.t_d if compensate else 0.0, check=compensate,
+            ).estimates  # fmt: skip
+
+        return run
+
+    def dfim_identify(plan):
+        def run(logs, compensate, seed, bootstrap):
+            return identify_dfim(
+                logs["open"], logs["shorted"], plan.base_frequency, plan.settle,
+                dc=logs["dc"] if compensate else None, seed=seed, bootstrap=bootstrap,
+                dead_time=plan.t_d if compensate else 0.0, check=compensate,
+            ).estimates  # fmt: skip
+
+        return run
+
+    pm_truth = {"R_s": BLY171D.R_s, "L_d": BLY171D.L_d, "L_q": BLY171D.L_q}
+    dfim_truth = {"R_r": D.R_r, "L_r": D.L_r, "L_sigma_r": D.L_r - D.M**2 / D.L_s,
+                  "R_S": D.R_s * (D.M / D.L_s) ** 2, "L_M": D.M**2 / D.L_s}  # fmt: skip
+    for amplitude in PM_DEAD_TIME_TONES:
+        plan = raised(pm_plan, amplitude)
+        yield f"pm_bly171d_{amplitude:g}V", BLY171D, plan, pm_identify(plan), "pm", pm_truth
+    for amplitude in DFIM_DEAD_TIME_TONES:
+        plan = raised(dfim_plan, amplitude)
+        yield f"dfim_bodson_{amplitude:g}V", D, plan, dfim_identify(plan), "dfim", dfim_truth
+
+
+#: tone amplitudes [V] of the dead-time studies: the ideal-inverter plan's and larger ones, up to
+#: where the injection dominates U_err (1.65 V on the 24 V BLY171D bench, 1.73 V on the DFIM's)
+PM_DEAD_TIME_TONES = (0.15, 0.9, 1.8)
+DFIM_DEAD_TIME_TONES = (0.3, 1.5, 2.5)
+
+
+def _quiet_logs(machine, plan, tests: str) -> dict:
+    """The tests' noise-free logs (the bench is deterministic: each repetition draws its own
+    sensor noise on them, ``identify._coverage.reading``)."""
+    import dataclasses
+
+    from acdrive.identify import CurrentSensor, axis_test, dc_test, dfim_test
+
+    quiet = dataclasses.replace(plan, sensor=CurrentSensor(noise_std=0.0, offset=0.0, lsb=0.0))
+    if tests == "pm":
+        return {"d": axis_test(machine, quiet, "d").log, "q": axis_test(machine, quiet, "q").log,
+                "dc": dc_test(machine, quiet)}  # fmt: skip
+    return {"open": dfim_test(machine, quiet, "open", "injection"),
+            "shorted": dfim_test(machine, quiet, "shorted", "injection"),
+            "dc": dfim_test(machine, quiet, "open", "dc")}  # fmt: skip
+
+
+def dead_time(repetitions: int, bootstrap: int) -> dict:
+    """The PM standstill and DFIM rotor-side tests with the standstill study's inverter (2 us dead
+    time, 1 V per device), fitted with the compensation (the DC steps' U_err, the simulated sign
+    and the programmed dead time) and without it (the injections alone, as if the inverter were
+    ideal, identifiability rules off so the bias shows). A repetition whose compensated fit is
+    refused (an interval wider than +-50 %, or no convergence) is counted under ``refused`` and
+    left out of the fractions."""
+    from acdrive.errors import InputError
+    from acdrive.identify import FitNotConverged
+    from acdrive.identify._coverage import reading
+
+    out = {}
+    for label, machine, plan, identify, tests, truth in _dead_time_setups():
+        logs = _quiet_logs(machine, plan, tests)
+        for compensate in (True, False):
+            table: dict = {}
+            refused = 0
+            for seed in range(repetitions):
+                noisy = {name: reading(log, plan.sensor, len(logs) * seed + j)
+                         for j, (name, log) in enumerate(logs.items())}  # fmt: skip
+                try:
+                    estimates = identify(noisy, compensate, seed, bootstrap)
+                except (InputError, FitNotConverged):
+                    refused += 1
+                    continue
+                for e in estimates:
+                    _record(table, e.name, e, truth[e.name])
+            n = repetitions - refused
+            key = f"{label}_{'compensated' if compensate else 'uncompensated'}"
+            out[key] = {"voltage_error_v": _voltage_error(plan), "dc_levels_v": plan.dc_levels,
+                        "peak_current_a": max(float(abs(logs[k].i_a).max()) for k in logs),
+                        "refused": refused}  # fmt: skip
+            out[key] |= {
+                name: {"coverage_jacobian": row["jacobian"] / n,
+                       "coverage_bootstrap": row["bootstrap"] / n,
+                       "mean_relative_error": row["error"] / n,
+                       "mean_relative_half_width": row["width"] / n}
+                for name, row in table.items()
+            }  # fmt: skip
+    return out
+
+
+KINDS = {
+    "standstill": None,
+    "dead_time": None,
+    "pm": pm,
+    "no_load": no_load,
+    "dfim": dfim,
+    "mechanics": mechanics,
+}
 
 
 def main(argv=None) -> int:
@@ -187,7 +320,8 @@ def main(argv=None) -> int:
         if args.only not in (None, kind):
             continue
         if study is None:
-            out["kinds"].update(standstill(args.repetitions, args.bootstrap))
+            run = standstill if kind == "standstill" else dead_time
+            out["kinds"].update(run(args.repetitions, args.bootstrap))
             continue
         table: dict = {}
         for seed in range(args.repetitions):

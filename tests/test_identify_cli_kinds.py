@@ -64,6 +64,28 @@ def test_pm_logs_give_r_s_l_d_l_q_psi_m_and_a_pm_machine_table(tmp_path, capsys)
     assert re.search(r"--q-log: is required for --kind pm", capsys.readouterr().err)
 
 
+def test_pm_logs_with_dead_time_are_compensated_given_the_pwm_units_dead_time(tmp_path):
+    """A 2 us dead time and 1 V device drops (U_err = 1.65 V): with --dc-log and --dead-time-s
+    the standstill estimates hold the machine's values (identify._impedance); the tones of 0.9 V
+    and the DC levels raised by U_err so the injection is not drowned by it."""
+    import dataclasses
+
+    U = 4.0 / 3.0 * (2e-6 * 5000.0 * 24.0 + 1.0)
+    plan = dataclasses.replace(BLY_PLAN, t_d=2e-6, v_drop=1.0, tone_amplitude=0.9,
+                               dc_levels=tuple(v + U for v in BLY_PLAN.dc_levels))  # fmt: skip
+    d = write_log(axis_test(BLY171D, plan, "d").log, tmp_path / "d.csv")
+    q = write_log(axis_test(BLY171D, plan, "q", seed=2).log, tmp_path / "q.csv")
+    dc = write_log(dc_test(BLY171D, plan, seed=0), tmp_path / "dc.csv")
+    out = tmp_path / "pm.toml"
+    assert main(["identify", str(d), "--kind", "pm", "--q-log", str(q), "--dc-log", str(dc),
+                 "--dead-time-s", "2e-6", "--pole-pairs", "4", "--base-frequency-hz", "2",
+                 "--settle-s", "0.5", "--out", str(out)]) == 0  # fmt: skip
+    found = tomllib.loads(out.read_text())["identification"]
+    for name in ("R_s", "L_d", "L_q"):
+        assert covered(found["pm_standstill"][name], getattr(BLY171D, name)), name
+    assert found["dc_steps"]["U_err"]["value"] == pytest.approx(U, rel=0.02)
+
+
 def test_dfim_logs_with_a_stator_resistance_give_a_dfim_machine_table(tmp_path):
     m = BODSON_DFIM
     opened = write_log(dfim_test(m, DFIM_PLAN, "open", "injection"), tmp_path / "open.csv")
@@ -105,6 +127,9 @@ def test_a_speed_step_log_gives_j_b_and_tau_c(tmp_path):
         (["--kind", "pm", "--shorted-log", "s.csv"], r"--shorted-log: is for --kind dfim only"),
         (["--no-load-log", "n.csv", "--kind", "dfim"], r"--no-load-log: is for --kind cage-im only"),
         (["--kind", "mechanics", "--pole-pairs", "2"], r"--pole-pairs: is not used by --kind mechanics"),
+        (["--kind", "mechanics", "--dead-time-s", "2e-6"], r"--dead-time-s: is not used by --kind mechanics"),
+        (["--kind", "pm", "--dead-time-s", "-1e-6"], r"^acdrive: error: --dead-time-s: "),
+        (["--kind", "dfim", "--device-drop-v", "1"], r"--device-drop-v: is for a simulated test only"),
     ],
 )  # fmt: skip
 def test_an_option_of_another_kind_is_refused_in_one_line(tmp_path, capsys, extra, message):

@@ -113,12 +113,18 @@ def test_dead_time_bias_uncompensated_and_removed(machine):
         assert error < raw_error
 
 
-def test_a_dead_time_is_for_the_cage_ims_model_and_nonnegative():
+def test_a_dead_time_needs_the_windings_state_space():
+    """The sample shift is the winding's free response e^{-A t_d / 2}: every built-in winding
+    (the cage IM's, a PM axis, the DFIM's rotor open or shorted) has one, a model without it is
+    refused by name."""
     from acdrive.errors import InputError
+    from acdrive.identify._dfim import OPEN_MODEL, SHORTED_MODEL
     from acdrive.identify._impedance import INVERSE_GAMMA_MODEL, with_dead_time
+    from acdrive.identify._pm import axis_model
 
     assert with_dead_time(INVERSE_GAMMA_MODEL, 0.0) is INVERSE_GAMMA_MODEL
-    assert with_dead_time(INVERSE_GAMMA_MODEL, T_D).dead_time == T_D
-    other = dataclasses.replace(INVERSE_GAMMA_MODEL, fields=INVERSE_GAMMA_MODEL.fields[:2])
+    for model in (INVERSE_GAMMA_MODEL, axis_model("d"), OPEN_MODEL, SHORTED_MODEL):
+        assert with_dead_time(model, T_D).dead_time == T_D
+    other = dataclasses.replace(INVERSE_GAMMA_MODEL, state_space=None)
     with pytest.raises(InputError, match="dead_time"):
         with_dead_time(other, T_D)

@@ -3,6 +3,10 @@ from the logs of a measured test or, given a built-in machine's name instead of 
 kind's tests simulated on its bench (``identify._builtin``: the same parts, sensors and plans as
 the Python API; the seeds from ``--seed``) (``acdrive.identify``; docs/guide/identification.md).
 
+``--dead-time-s`` (pm, dfim) is the PWM unit's programmed dead time, as for the cage IM: with
+``--dc-log`` the fits compensate the voltage error with the sign the inverter saw and shift their
+sample by half of it (``identify._impedance``).
+
 * ``pm``: the source is the d-axis injection log, ``--q-log`` the q-axis one (rotor locked with
   that axis on phase a), ``--dc-log`` the DC steps (optional), ``--spin-log`` the short-circuit
   spin test (optional: psi_m), ``--pole-pairs`` required. With the spin log the file has the PM
@@ -56,12 +60,16 @@ MEASURED_ONLY = ("dc_log", "q_log", "spin_log", "shorted_log")
 
 
 def _measured(args) -> None:
-    """Options a measured log cannot take: the simulated inverter's dead time and drop."""
-    from acdrive.errors import InputError
+    """Options of a measured log: the simulated inverter's device drop is refused; the PWM
+    unit's programmed dead time is taken by the PM and DFIM fits (they shift their sample by
+    half of it), not by --kind mechanics."""
+    from acdrive.errors import InputError, require_nonnegative
 
-    for flag in ("dead_time_s", "device_drop_v"):
-        if getattr(args, flag) != 0.0:
-            raise InputError(_flag(flag), "is for a simulated test only")
+    if args.device_drop_v != 0.0:
+        raise InputError("--device-drop-v", "is for a simulated test only")
+    require_nonnegative("--dead-time-s", args.dead_time_s)
+    if args.kind == "mechanics" and args.dead_time_s != 0.0:
+        raise InputError("--dead-time-s", "is not used by --kind mechanics")
 
 
 def _source(args):
@@ -189,7 +197,8 @@ def _pm(args, bench):
         d, q, spin = d_test.log, q_test.log, spinning.log
         facts |= {"q_test_lock_torque_nm": q_test.holding_torque,
                   "spin_test_braking_torque_nm": spinning.braking_torque}  # fmt: skip
-    result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed)
+    result = identify_pm_standstill(d, q, base, settle, dc=dc, seed=args.seed,
+                                    dead_time=args.dead_time_s)  # fmt: skip
     groups = {"pm_standstill": result.estimates}
     statement = pm_identifiability(result)
     facts = {"residual_rms_a_d": result.d.residual_rms, "residual_rms_a_q": result.q.residual_rms,
@@ -237,7 +246,7 @@ def _dfim(args, bench):
         opened = dfim_test(m, plan, "open", "injection", seed=seed + 1)
         shorted = dfim_test(m, plan, "shorted", "injection", seed=seed + 2)
     result = identify_dfim(opened, shorted, base, settle, dc=dc, R_s=R_s, R_s_std=R_s_std,
-                           seed=args.seed)  # fmt: skip
+                           seed=args.seed, dead_time=args.dead_time_s)  # fmt: skip
     groups = {"dfim": result.estimates}
     if dc is not None:
         groups["dc_steps"] = (result.dc.R_s, result.dc.voltage_error)

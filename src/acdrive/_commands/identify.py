@@ -51,8 +51,8 @@ def register(subparsers):
                    help="assumed split of the leakage for the T-circuit written (default equal)")  # fmt: skip
     p.add_argument("--dead-time-s", type=float, default=0.0,
                    help="the inverter's dead time (s): simulated on a built-in machine; for a "
-                   "measured cage-IM log the PWM unit's setting, whose shift of the sample "
-                   "instant the fit includes [0]")  # fmt: skip
+                   "measured cage-IM, PM or DFIM log the PWM unit's setting, whose shift of "
+                   "the sample instant the fit includes [0]")  # fmt: skip
     p.add_argument("--device-drop-v", type=float, default=0.0,
                    help="simulated test: the inverter's device drop (V) [0]")  # fmt: skip
     p.add_argument("--seed", type=int, default=0,

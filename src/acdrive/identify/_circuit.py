@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive.errors import InputError, require_positive
+from acdrive.identify._winding import sampled_response
 
 #: the inverse-Gamma parameters in the order every fit and table uses, with unit and meaning
 INVERSE_GAMMA = (
@@ -139,45 +140,10 @@ def standstill_state_space(params) -> tuple[np.ndarray, np.ndarray]:
 def sampled_admittance(params, w, hold: float, dead_time: float = 0.0) -> np.ndarray:
     """Y_d(e^{jwT}) = i_k / v_k [S] of the standstill circuit driven by a voltage held over each
     period ``hold`` = T (zero-order hold, the inverter's latched command) and its current sampled
-    at the period starts: the exact discrete model x_{k+1} = Phi x_k + Gamma v_k, i_k = x_k[0],
-    Phi = e^{AT}, Gamma = A^{-1} (Phi - I) B, evaluated at z = e^{jwT} (a periodic steady state
-    sampled this way has exactly these Fourier coefficients).
-
-    **Dead time moves the sample off the ripple's symmetric point.** The period start is the
-    middle of the zero vector of centred PWM, where the switched current equals the held-voltage
-    model's. A dead time ``dead_time`` = t_d delays the rising edge of a leg carrying positive
-    current and the falling edge of one carrying negative current (``plant._inverter``): either
-    way every switching pulse's centre moves t_d / 2 later, so the sample is taken t_d / 2 before
-    the middle of the (now shifted) zero vector, on the ripple's slope. In the zero vector the
-    winding is shorted, so the current there follows the free response x' = A x: the sample reads
-    C e^{-A t_d / 2} x instead of C x, and the admittance becomes
-    C e^{-A t_d / 2} (zI - Phi)^{-1} Gamma. At DC this reads the current high by
+    at the period starts, t_d / 2 early by the inverter's dead time ``dead_time`` = t_d: the
+    exact discrete model of ``identify._winding`` for the state space of
+    :func:`standstill_state_space`. At DC the dead time's shift reads the current high by
     R_s t_d / (2 L_sigma) relative (1.6e-4 on the built-in IMs at t_d = 2 us), which biases
-    R_s, R_R, L_sigma and L_M by a few 1e-4 when left out. The device drops in the zero vector
-    (a voltage of at most U_err over t_d / 2) are left out: a current error of the order
-    U_err t_d / (2 L_sigma), below 1e-4 A on the built-in machines."""
+    R_s, R_R, L_sigma and L_M by a few 1e-4 when left out."""
     A, B = standstill_state_space(params)
-    Phi = _expm_2x2(A, hold)
-    Gamma = np.linalg.solve(A, (Phi - np.eye(2)) @ B)
-    z = np.exp(1j * np.asarray(w, dtype=float) * hold)
-    # (zI - Phi)^-1 Gamma for the 2x2 case, by the adjugate
-    det = (z - Phi[0, 0]) * (z - Phi[1, 1]) - Phi[0, 1] * Phi[1, 0]
-    first = (z - Phi[1, 1]) * Gamma[0] + Phi[0, 1] * Gamma[1]
-    if dead_time == 0.0:
-        return first / det  # C = (1, 0)
-    C = _expm_2x2(A, -0.5 * dead_time)[0]
-    second = Phi[1, 0] * Gamma[0] + (z - Phi[0, 0]) * Gamma[1]
-    return (C[0] * first + C[1] * second) / det
-
-
-def _expm_2x2(A: np.ndarray, T: float) -> np.ndarray:
-    """e^{AT} of the standstill matrix by Sylvester's formula: its eigenvalues are real, negative
-    and distinct (a passive RL network with two time constants; the discriminant
-    ((a11 - a22)^2 + 4 a12 a21) is positive since a12 a21 = R_R^2 / (L_M L_sigma) > 0)."""
-    trace = A[0, 0] + A[1, 1]
-    root = np.sqrt((A[0, 0] - A[1, 1]) ** 2 + 4.0 * A[0, 1] * A[1, 0])
-    l1, l2 = 0.5 * (trace + root), 0.5 * (trace - root)
-    # e^{l2 T} I + (e^{l1 T} - e^{l2 T}) / (l1 - l2) (A - l2 I), with l1 > l2 and the difference
-    # written as -e^{l1 T} expm1(-(l1 - l2) T): accurate for close eigenvalues, never overflowing
-    slope = -np.exp(l1 * T) * np.expm1(-(l1 - l2) * T) / (l1 - l2)
-    return np.exp(l2 * T) * np.eye(2) + slope * (A - l2 * np.eye(2))
+    return sampled_response(A, B, w, hold, dead_time)

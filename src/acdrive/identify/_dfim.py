@@ -19,6 +19,10 @@ rotor quantity), twice:
 
    fitted by the same estimator (``identify._impedance``) with these four names.
 
+Both models declare their state space (``identify._winding``), so a DC-step log and the
+converter's programmed dead time compensate the injections as for the cage IM: the simulated
+sign and the sample t_d / 2 early (``identify_dfim``'s ``dead_time``).
+
 **What is identifiable.** R_r (both tests; combined by inverse variance), L_r, L_M' = M^2 / L_s
 and R_S' = R_s (M/L_s)^2; the open test's L_r and the shorted test's L_sigma_r + L_M' must agree
 (``consistency``, a check of the data). M, L_s and R_s separately are not: the stator is reached
@@ -38,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive.errors import InputError, require_positive
-from acdrive.identify._circuit import sampled_admittance
+from acdrive.identify._circuit import standstill_state_space
 from acdrive.identify._dc import Z_95, DCStepFit, fit_dc_steps
 from acdrive.identify._experiment import (
     StandstillLog,
@@ -56,9 +60,9 @@ from acdrive.identify._fit import (
 )
 from acdrive.identify._impedance import (
     INVERSE_GAMMA_MODEL,
-    AdmittanceModel,
     ImpedanceFit,
     fit_impedance,
+    winding_model,
 )
 from acdrive.identify._pm import combined_resistance, rl_model
 
@@ -66,14 +70,14 @@ from acdrive.identify._pm import combined_resistance, rl_model
 OPEN_MODEL = rl_model(("R_r", "rotor resistance (stator open)"),
                       ("L_r", "rotor self inductance (stator open)"))  # fmt: skip
 #: the shorted-stator test: the rotor-side inverse-Gamma circuit (module docstring)
-SHORTED_MODEL = AdmittanceModel(
+SHORTED_MODEL = winding_model(
     (
         ("R_r", "ohm", "rotor resistance (stator shorted)"),
         ("L_sigma_r", "H", "rotor transient inductance L_r - M^2/L_s"),
         ("R_S", "ohm", "stator resistance seen from the rotor, R_s (M/L_s)^2"),
         ("L_M", "H", "magnetising inductance seen from the rotor, M^2/L_s"),
     ),
-    sampled_admittance,
+    standstill_state_space,
     INVERSE_GAMMA_MODEL.start,
     tuple,
 )
@@ -117,11 +121,14 @@ def _stator_side(values) -> np.ndarray:
 
 def identify_dfim(open_log: StandstillLog, shorted_log: StandstillLog, base_frequency: float,
                   settle: float, dc: StandstillLog | None = None, R_s: float | None = None,
-                  R_s_std: float = 0.0, seed: int = 0,
-                  bootstrap: int = BOOTSTRAP_COUNT) -> DFIMIdentification:  # fmt: skip
+                  R_s_std: float = 0.0, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
+                  dead_time: float = 0.0, check: bool = True) -> DFIMIdentification:  # fmt: skip
     """The DFIM's parameters from its rotor-converter logs (module docstring); ``dc`` the
-    open-stator DC-step log, whose voltage error compensates both injections; ``R_s`` [ohm] a
-    stator resistance measured apart (with its standard error ``R_s_std``)."""
+    open-stator DC-step log, whose voltage error compensates both injections with the sign the
+    converter saw; ``dead_time`` [s] the converter's programmed dead time (the models' sample
+    t_d / 2 early, ``identify._impedance``, as for the cage IM); ``R_s`` [ohm] a stator
+    resistance measured apart (with its standard error ``R_s_std``); ``check=False`` skips the
+    identifiability rules (to show what a bad test gives)."""
     if R_s is not None:
         require_positive("R_s", R_s)
         if not (math.isfinite(R_s_std) and R_s_std >= 0.0):
@@ -131,7 +138,8 @@ def identify_dfim(open_log: StandstillLog, shorted_log: StandstillLog, base_freq
     error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
     fits = {
         name: fit_impedance(log, base_frequency, settle, voltage_error=error, seed=seed + k + 1,
-                            bootstrap=bootstrap, voltage_error_std=error_std, model=model)
+                            bootstrap=bootstrap, voltage_error_std=error_std, model=model,
+                            dead_time=dead_time, check=check)
         for k, (name, log, model) in enumerate((("open", open_log, OPEN_MODEL),
                                                 ("shorted", shorted_log, SHORTED_MODEL)))
     }  # fmt: skip

@@ -35,7 +35,12 @@ the sign the inverter itself saw: that of the current the fitted circuit draws f
 command with the voltage error fed back sample by sample (``identify._polarity``). It fits
 first with the reading's sign, then ``POLARITY_ROUNDS`` times with the sign of the current
 simulated from the previous fit. The estimate's own noise then moves the sign it is compensated
-with; its intervals include that feedback (``_polarity.feedback_gain``).
+with; its intervals include that feedback (``_polarity.feedback_gain``). This applies to every
+model that declares its winding's state space (``AdmittanceModel.state_space``: the cage IM's
+circuit, a PM axis, the DFIM's rotor open or shorted). A failure mode, measured on the BLY171D
+with tones of about half the voltage error (docs/guide/identification.md): where the current is
+clamped near zero much of the time, the iteration can settle on a self-consistent sign away from
+the truth (L_d 2 % low), with intervals wide enough to hold the truth.
 
 **Dead time also moves the sample instant.** The voltage error is what dead time does to a
 period's mean voltage; it also shifts every switching pulse t_d / 2 later, so the current is
@@ -43,7 +48,7 @@ sampled on the ripple's slope instead of at its symmetric point. Measured on the
 bench (t_d = 2 us, no device drop, the true U compensated), that alone leaves R_s, L_sigma, R_R,
 L_M low by 1.4e-4, 3.1e-4, 4.3e-4, 2.6e-4, while a device drop of the same U leaves the ideal
 inverter's few 1e-5. Given the programmed dead time, the model reads its current t_d / 2 early
-(``_circuit.sampled_admittance``).
+(``identify._winding``, for any model with a state space).
 
 **The fit.** ``least_squares`` of the current residuals I_k - Y_d(w_k; p) V_k (real and
 imaginary parts) over log-parameters (positive by construction); their maximum-likelihood
@@ -74,8 +79,8 @@ from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.identify._circuit import (
     INVERSE_GAMMA,
     InverseGamma,
-    sampled_admittance,
     standstill_impedance,
+    standstill_state_space,
 )
 from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
@@ -88,6 +93,7 @@ from acdrive.identify._fit import (
     t_quantile,
 )
 from acdrive.identify._polarity import feedback_gain, simulated_polarity
+from acdrive.identify._winding import sampled_response
 
 EXCITED_FRACTION = 1e-2
 MIN_TONES = 3
@@ -251,37 +257,52 @@ class AdmittanceModel:
     """A winding at standstill as the fit sees it: its parameters ``fields`` ((name, unit,
     meaning), in fit order), ``admittance(values, w, hold)`` its zero-order-hold sampled
     admittance Y_d(e^{jwT}) [S], ``start(spectrum)`` a starting point (positive values) and
-    ``record(values)`` the parameter record of the values; ``dead_time`` [s] the inverter dead
-    time its sample instant includes (``with_dead_time``)."""
+    ``record(values)`` the parameter record of the values; ``state_space(values)`` its (A, B)
+    (``identify._winding``: what the dead-time compensation simulates and shifts; None: a model
+    without one is fitted as given); ``dead_time`` [s] the inverter dead time its sample instant
+    includes (``with_dead_time``)."""
 
     fields: tuple[tuple[str, str, str], ...]
     admittance: Callable
     start: Callable
     record: Callable
     dead_time: float = field(default=0.0)
+    state_space: Callable | None = field(default=None)
+
+
+def winding_model(fields, state_space: Callable, start: Callable, record: Callable):
+    """The ``AdmittanceModel`` of a winding given by its state space (``identify._winding``):
+    its admittance is the exact sampled one of that state space, so the fit and the dead-time
+    compensation use one model."""
+
+    def admittance(values, w, hold):
+        return sampled_response(*state_space(values), w, hold)
+
+    return AdmittanceModel(fields, admittance, start, record, state_space=state_space)
 
 
 #: the cage IM at standstill: the inverse-Gamma circuit (``identify._circuit``)
-INVERSE_GAMMA_MODEL = AdmittanceModel(
-    INVERSE_GAMMA, sampled_admittance, lambda spec: np.exp(_start(spec)), InverseGamma.from_array
-)
+INVERSE_GAMMA_MODEL = winding_model(
+    INVERSE_GAMMA, standstill_state_space, lambda spec: np.exp(_start(spec)),
+    InverseGamma.from_array,
+)  # fmt: skip
 
 
 def with_dead_time(model: AdmittanceModel, dead_time: float) -> AdmittanceModel:
-    """The cage IM's ``model`` with its current sampled t_d / 2 off the ripple's symmetric point
-    by the inverter's dead time ``dead_time`` [s] (``_circuit.sampled_admittance``); 0: as is."""
+    """``model`` with its current sampled t_d / 2 off the ripple's symmetric point by the
+    inverter's dead time ``dead_time`` [s] (``identify._winding``); 0: as is. The shift is the
+    winding's free response, so the model must have a state space."""
     if dead_time == 0.0:
         return model
-    if model.fields is not INVERSE_GAMMA:
-        raise InputError("dead_time", "the sample-offset model is the cage IM's; give 0 for "
-                         "another winding")  # fmt: skip
-    return AdmittanceModel(
-        model.fields,
-        lambda values, w, hold: sampled_admittance(values, w, hold, dead_time),
-        model.start,
-        model.record,
-        dead_time,
-    )
+    state_space = model.state_space
+    if state_space is None:
+        raise InputError("dead_time", "the sample-offset model needs the winding's state space; "
+                         "give 0 for a model without one")  # fmt: skip
+
+    def admittance(values, w, hold):
+        return sampled_response(*state_space(values), w, hold, dead_time)
+
+    return replace(model, admittance=admittance, dead_time=dead_time)
 
 
 def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12, model=INVERSE_GAMMA_MODEL):
@@ -315,18 +336,24 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     spec = spectrum(log, base_frequency, settle, voltage_error)
     theta0 = np.log(model.start(spec))
     fit = _solve(spec, theta0, model=model)
-    simulated = voltage_error is not None and model.fields is INVERSE_GAMMA
+    simulated = voltage_error is not None and model.state_space is not None
 
     def polarity(theta):
-        signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
-                                   model.dead_time)  # fmt: skip
+        try:
+            signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
+                                       model.dead_time, model.state_space)  # fmt: skip
+        except np.linalg.LinAlgError:  # a parameter off any physical range: no sign to tell
+            return np.full(spec.frequency.size, np.nan + 0j)
         return _tone_coefficients(signs, spec, base_frequency)
 
     if simulated:
         for _ in range(POLARITY_ROUNDS):  # the inverter's own sign (module docstring)
             if not (fit.success and np.all(np.isfinite(fit.x))):
                 break
-            spec = replace(spec, polarity=polarity(fit.x)).compensated(voltage_error)
+            coefficients = polarity(fit.x)
+            if not np.all(np.isfinite(coefficients)):
+                break
+            spec = replace(spec, polarity=coefficients).compensated(voltage_error)
             fit = _solve(spec, fit.x, model=model)
     m, n = 2 * spec.frequency.size, len(model.fields)
     if m - n < 1:

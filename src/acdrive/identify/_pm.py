@@ -16,8 +16,9 @@ period start; the exact discrete model of the RL branch) is
     Y_d(z) = (1 - a) / (R_s (z - a)),   a = exp(-R_s T / L_x),   z = e^{jwT},
 
 fitted by the frequency-domain least squares of ``identify._impedance`` (same window, tones,
-voltage-error compensation, Jacobian and bootstrap intervals, the rule that every interval be
-within +-50 %).
+voltage-error compensation with the sign the inverter saw and the dead time's sample shift,
+Jacobian and bootstrap intervals, the rule that every interval be within +-50 %): the RL branch
+declares its state space (``rl_state_space``), the model ``identify._winding`` samples.
 
 **Torque and the lock.** With the d axis on phase a the current is i_d only and the torque
 n_p (psi_pm i_q + (L_d - L_q) i_d i_q) (Ugalde-Loo et al. (8)) is zero: the d test needs no lock
@@ -46,20 +47,30 @@ from acdrive.errors import InputError
 from acdrive.identify._dc import Z_95, DCStepFit, fit_dc_steps
 from acdrive.identify._experiment import StandstillLog, StandstillPlan, multisine, run_test
 from acdrive.identify._fit import BOOTSTRAP_COUNT, Estimate, percentile_interval
-from acdrive.identify._impedance import AdmittanceModel, ImpedanceFit, fit_impedance
+from acdrive.identify._impedance import (
+    AdmittanceModel,
+    ImpedanceFit,
+    fit_impedance,
+    winding_model,
+)
+from acdrive.identify._winding import sampled_response
 
 #: the rotor's electrical angle n_p theta that puts each axis on phase a
 AXIS_ANGLE = {"d": 0.0, "q": 0.5 * math.pi}
 
 
-def rl_admittance(values, w, hold: float) -> np.ndarray:
+def rl_state_space(values) -> tuple[np.ndarray, np.ndarray]:
+    """(A, B) of the RL branch L di/dt = v - R i, ``values`` = (R, L): one state, the current."""
+    R, L = (float(v) for v in values)
+    return np.array([[-R / L]]), np.array([1.0 / L])
+
+
+def rl_admittance(values, w, hold: float, dead_time: float = 0.0) -> np.ndarray:
     """Y_d(e^{jwT}) = (1 - a) / (R (z - a)), a = exp(-R T / L) [S]: the RL branch driven by a
     voltage held over each period T = ``hold`` and its current sampled at the period starts
-    (module docstring); ``values`` = (R, L)."""
-    R, L = (float(v) for v in values)
-    a = math.exp(-R * hold / L)
-    z = np.exp(1j * np.asarray(w, dtype=float) * hold)
-    return (1.0 - a) / (R * (z - a))
+    (module docstring), t_d / 2 early by the inverter's dead time ``dead_time`` = t_d, which
+    multiplies it by e^{R t_d / (2 L)} (``identify._winding``); ``values`` = (R, L)."""
+    return sampled_response(*rl_state_space(values), w, hold, dead_time)
 
 
 def _rl_start(spec) -> np.ndarray:
@@ -73,7 +84,7 @@ def rl_model(resistance: tuple[str, str], inductance: tuple[str, str]) -> Admitt
     """An RL winding whose resistance and inductance are named and explained by the pairs
     (name, meaning) given (module docstring)."""
     fields = ((resistance[0], "ohm", resistance[1]), (inductance[0], "H", inductance[1]))
-    return AdmittanceModel(fields, rl_admittance, _rl_start, tuple)
+    return winding_model(fields, rl_state_space, _rl_start, tuple)
 
 
 def axis_model(axis: str) -> AdmittanceModel:
@@ -134,9 +145,14 @@ def combined_resistance(d: ImpedanceFit, q: ImpedanceFit, meaning: str) -> Estim
 
 def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_frequency: float,
                            settle: float, dc: StandstillLog | None = None, seed: int = 0,
-                           bootstrap: int = BOOTSTRAP_COUNT) -> PMStandstillIdentification:  # fmt: skip
+                           bootstrap: int = BOOTSTRAP_COUNT,
+                           dead_time: float = 0.0,
+                           check: bool = True) -> PMStandstillIdentification:  # fmt: skip
     """R_s, L_d, L_q from the two axis logs (and a DC-step log, whose voltage error then
-    compensates both; module docstring)."""
+    compensates both with the sign the inverter saw; module docstring); ``dead_time`` [s], the
+    inverter's programmed dead time, moves each model's sample t_d / 2 early
+    (``identify._impedance``, as for the cage IM). ``check=False`` skips the identifiability rules
+    (to show what a bad test gives, e.g. the bias of an uncompensated dead time)."""
     dc_fit = fit_dc_steps(dc, seed=seed, bootstrap=bootstrap) if dc is not None else None
     error = dc_fit.voltage_error.value if dc_fit is not None else None
     error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
@@ -150,6 +166,8 @@ def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_freq
             bootstrap=bootstrap,
             voltage_error_std=error_std,
             model=axis_model(axis),
+            dead_time=dead_time,
+            check=check,
         )
         for k, (axis, log) in enumerate((("d", d_log), ("q", q_log)))
     }

@@ -5,13 +5,13 @@ current at the period's sample instant (``plant._inverter``; ``identify._dc``). 
 needs that sign. The sign of the logged reading is wrong wherever the current lies within a few
 noise deviations of zero, and near a zero crossing the dead time clamps the current there: the
 inverter's polarity flips between neighbouring samples, a pattern no filtering of the noisy
-reading recovers. The fitted circuit does recover it: the exact sampled model of the winding at
-standstill (``identify._circuit``),
+reading recovers. The fitted winding does recover it: its exact sampled model at standstill
+(``identify._winding``: the inverse-Gamma circuit of ``identify._circuit`` or an RL branch),
 
     x_{k+1} = Phi x_k + Gamma (v_k - U s_k),   i_k = C x_k,   s_k = sign(i_k),
 
 run over the logged command v_k from rest (the settling time lets the log's own start be
-forgotten), with C the sampling row of ``_circuit.sampled_admittance`` (dead time included).
+forgotten), with C the sampling row of ``_winding.discrete_winding`` (dead time included).
 Its s_k is the inverter's polarity as far as the fitted parameters are right; it carries no
 sensor noise.
 """
@@ -21,19 +21,23 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._jit import jit
-from acdrive.identify._circuit import _expm_2x2, standstill_state_space
+from acdrive.identify._circuit import standstill_state_space
+from acdrive.identify._winding import discrete_winding
 
 
 def simulated_polarity(values, v: np.ndarray, hold: float, voltage_error: float,
-                       dead_time: float = 0.0) -> np.ndarray:  # fmt: skip
-    """s_k = sign(i_k) of the inverse-Gamma circuit ``values`` (R_s, L_sigma, R_R, L_M) fed the
-    command ``v`` [V] held over periods ``hold`` [s] less ``voltage_error`` [V] times the sign
-    (module docstring), from rest; the inverter's dead time ``dead_time`` [s] moves the sample
-    t_d / 2 early (``_circuit.sampled_admittance``)."""
-    A, B = standstill_state_space(values)
-    Phi = _expm_2x2(A, hold)
-    Gamma = np.linalg.solve(A, (Phi - np.eye(2)) @ B)
-    C = _expm_2x2(A, -0.5 * dead_time)[0] if dead_time > 0.0 else np.array([1.0, 0.0])
+                       dead_time: float = 0.0,
+                       state_space=standstill_state_space) -> np.ndarray:  # fmt: skip
+    """s_k = sign(i_k) of the winding ``state_space(values)`` (default the inverse-Gamma circuit,
+    values R_s, L_sigma, R_R, L_M; an RL branch for ``identify._pm``) fed the command ``v`` [V]
+    held over periods ``hold`` [s] less ``voltage_error`` [V] times the sign (module docstring),
+    from rest; the inverter's dead time ``dead_time`` [s] moves the sample t_d / 2 early
+    (``identify._winding``)."""
+    A, B = state_space(values)
+    Phi, Gamma, C = discrete_winding(A, B, hold, dead_time)
+    if A.shape == (1, 1):  # one state: a second one that stays at rest
+        Phi = np.array([[Phi[0, 0], 0.0], [0.0, 0.0]])
+        Gamma, C = np.array([Gamma[0], 0.0]), np.array([C[0], 0.0])
     return _signs(np.ascontiguousarray(v, dtype=float), Phi, Gamma, C, float(voltage_error))
 
 
@@ -77,4 +81,6 @@ def feedback_gain(jacobian: np.ndarray, theta: np.ndarray, steps: np.ndarray,
         column = sensitivity * (polarity(up) - polarity(down)) / (2.0 * step)
         H[:, j] = np.concatenate((column.real, column.imag))
     JTJ = jacobian.T @ jacobian
+    if not np.all(np.isfinite(H)):  # a secant left the physical range: the feedback is unknown
+        return np.full_like(JTJ, np.nan)
     return np.linalg.solve(JTJ + jacobian.T @ H, JTJ)
