@@ -157,7 +157,8 @@ def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_C
     single_draws = V[top] / (I[top] + np.array(
         [rng.choice(found[top].deviations, found[top].deviations.size).mean()
          for _ in range(bootstrap)]))  # fmt: skip
-    R_s = Estimate("R_s", "ohm", "resistance of the driven winding (slope of the DC steps: the stator's, or the rotor's from a DFIM's rotor converter)", float(fit.x[0]),
+    R_s = Estimate("R_s", "ohm", "resistance of the driven winding (slope of the DC steps: the "
+                   "stator's, or the rotor's from a DFIM's rotor converter)", float(fit.x[0]),
                    jacobian_interval(fit.x[0], cov[0, 0], Z_95),
                    percentile_interval(draws[:, 0]))  # fmt: skip
     U = Estimate("U_err", "V", "inverter voltage error on phase a (intercept of the DC steps)",
