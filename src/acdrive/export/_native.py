@@ -140,7 +140,7 @@ def native_source(system) -> NativeSource:
     plant = to_plant_c(system, 1.0, 1, name=_PLANT, description="acdrive native loop")
     has_chains = bool(system.sampled)
     if has_chains:
-        ctl = to_c(system, 1.0, name=_CTL, description="acdrive native loop")
+        ctl = to_c(system, 1.0, name=_CTL, description="acdrive native loop", open_loop=True)
         models = ctl.chains
     else:
         ctl, models = None, []
@@ -289,10 +289,14 @@ def native_source(system) -> NativeSource:
                         pair(lv, "Y", k + j)
         return L
 
-    emit("/* one run of n_steps samples from the packed arrays (X, S, Y: updated in place); returns")
+    emit(
+        "/* one run of n_steps samples from the packed arrays (X, S, Y: updated in place); returns"
+    )
     emit("   the samples done, *status 0 (finished) or 1 (a state stopped being finite) */")
     emit("int64_t acdn_run(double *X, double *S, double *Y, double t0, double T_s, int64_t n_sub,")
-    emit("                 int64_t n_steps, int64_t log_every, const int64_t *log_idx, int64_t n_log,")
+    emit(
+        "                 int64_t n_steps, int64_t log_every, const int64_t *log_idx, int64_t n_log,"
+    )
     emit("                 double *LOG, int64_t *ELOG, int64_t *ECOUNT, double *Yscratch,")
     emit("                 int64_t *E, int64_t *status)")
     emit("{")
@@ -357,7 +361,7 @@ def native_source(system) -> NativeSource:
                 emit(f"        {lv} = {rv};")
     emit(f"        {_PLANT}_step(t, &pp, &ps, {pin});")
     emit(f"        for (i = 0; i < {system.sizes['x']}; ++i) {{")
-    emit(f"            if (!isfinite(((const double *)(const void *)&ps.x)[i])) {{")
+    emit("            if (!isfinite(((const double *)(const void *)&ps.x)[i])) {")
     emit("                finite = 0;")
     emit("            }")
     emit("        }")
@@ -417,12 +421,19 @@ def _configure(library) -> None:
                   ctypes.c_int64, p, ctypes.c_int64, p, p, p, p, p, p]  # fmt: skip
 
 
-def build(source: NativeSource, notice=None) -> tuple[NativeLoop, float, bool]:
-    """(loaded library, seconds spent, compiled now) of ``source``: loaded from the cache, or
-    compiled into it first. ``notice(message)`` receives the one-line notices (a damaged library
-    rebuilt)."""
+def library_path(source: NativeSource, folder: Path | None = None) -> Path:
+    """Where the library of ``source`` is kept (``folder``: default the cache's)."""
+    return (folder or _folder()) / f"acdn_{source.key}.so"
+
+
+def build(
+    source: NativeSource, notice=None, folder: Path | None = None
+) -> tuple[NativeLoop, float, bool]:
+    """(loaded library, seconds spent, compiled now) of ``source``: loaded from the cache folder
+    (``folder``: default the cache's), or compiled into it first. ``notice(message)`` receives
+    the one-line notices (a damaged library rebuilt)."""
     start = time.perf_counter()
-    path = _folder() / f"acdn_{source.key}.so"
+    path = library_path(source, folder)
     compiled = False
     if path.exists():
         try:
@@ -443,7 +454,9 @@ def build(source: NativeSource, notice=None) -> tuple[NativeLoop, float, bool]:
 def _compile(source: NativeSource, path: Path) -> None:
     cc = compiler()
     if cc is None:
-        raise InputError("compiler", "no C compiler found (cc, gcc or $CC): the native tier needs one")
+        raise InputError(
+            "compiler", "no C compiler found (cc, gcc or $CC): the native tier needs one"
+        )
     with tempfile.TemporaryDirectory(prefix="acdrive-native-", dir=path.parent) as scratch:
         folder = Path(scratch)
         files = [("acdn_driver.c", source.driver), (f"{_PLANT}.c", source.plant_source)]

@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from acdrive._jit import jit, njit
 
 RPM_PER_RAD_S = 30.0 / math.pi

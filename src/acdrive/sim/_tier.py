@@ -63,6 +63,7 @@ def __getattr__(name: str):
         return (*_run_args(), *([types.int64[:, ::1]] * 8), types.int64[::1])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
+
 #: seconds per (sample x substep x part) of the generic loop when none was measured here yet:
 #: thread CPU of its run, 1.1e-7 (bodson-ramp), 1.2e-7 (im-foc-speed), 1.4e-7 (a 4-part IM), on
 #: the 2-core machine (``benchmarks/compile_profile.py``, docs/design.md)

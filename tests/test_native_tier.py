@@ -1,0 +1,234 @@
+"""The native tier of the loop (``acdrive.export._native``): the whole sampled-data loop as C from
+the parts' export, compiled by the machine's C compiler. Under strict IEEE arithmetic it gives the
+specialised loop's numbers bit for bit (the same operations in the same order); under numba's
+default fast-math the two differ by rounding only; a system it cannot run falls back to numba's
+tiers and says why; a damaged or half-built library is never used."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from acdrive.errors import InputError, SimulationDiverged
+from acdrive.export import _native
+from acdrive.sim._system import System
+
+needs_cc = pytest.mark.skipif(_native.compiler() is None, reason="no C compiler on this machine")
+
+
+def _compiled(system, tier, monkeypatch):
+    monkeypatch.setenv("ACDRIVE_LOOP_TIER", tier)
+    compiled = system.compile()
+    assert compiled.tier == tier
+    return compiled
+
+
+def _relative_gap(a, b) -> float:
+    peak = np.abs(b.data).max(axis=0)
+    gap = np.abs(a.data - b.data).max(axis=0)
+    return float((gap / np.where(peak > 0.0, peak, 1.0)).max())
+
+
+def _open_loop_im(method="rk4", J_factor=1.0):
+    """A cage IM fed by an open-loop V/f program through an averaged converter (every kind has C;
+    the program's table and the shaft's load step make the run move)."""
+    from acdrive.control._open_loop import VoltageProgram
+    from acdrive.machines._cage_part import CageInductionMachine
+    from acdrive.machines._induction import UGALDE_IM_300W
+    from acdrive.plant._converter import AveragedConverter
+    from acdrive.plant._mechanics import Shaft
+
+    im = CageInductionMachine.from_params("im", UGALDE_IM_300W)
+    shaft = Shaft("shaft", J=J_factor * UGALDE_IM_300W.J, B=1e-5, load=[[0.0, 0.0], [0.02, 0.05]])
+    program = VoltageProgram(
+        "program", V_pk=[[0.0, 20.0], [0.05, 100.0]], f=[[0.0, 10.0], [0.05, 50.0]]
+    )
+    inverter = AveragedConverter("inverter", V_dc=310.0)
+    wires = [(program.out.v_ref, inverter.inp.v_ref), (inverter.out.v, im.inp.v_s),
+             (shaft.out.w, im.inp.w), (im.out.tau_e, shaft.inp.tau_e)]  # fmt: skip
+    return System([im, shaft, program, inverter], wires, method=method), im, shaft
+
+
+@needs_cc
+@pytest.mark.parametrize("method", ["rk4", "rk6"])
+def test_native_equals_specialised_to_rounding(method, monkeypatch):
+    """Default (fast-math) numba against the strict C: the same run to rounding, the events and
+    the run's length exactly."""
+    system, im, shaft = _open_loop_im(method)
+    run = {"duration": 0.08, "sample_time": 1e-4, "substeps": 2, "log": [im.out.i_s, shaft.out.w]}
+    native = _compiled(system, "native", monkeypatch).run(**run)
+    specialised = _compiled(system, "specialised", monkeypatch).run(**run)
+    assert native.tier == "native" and specialised.tier == "specialised"
+    assert native.columns == specialised.columns and native.steps == specialised.steps
+    assert np.ptp(specialised.data, axis=0).min() > 0.0  # the run moves every logged signal
+    assert _relative_gap(native, specialised) <= 1e-9
+    assert native.events == specialised.events
+
+
+@needs_cc
+@pytest.mark.slow
+def test_native_equals_specialised_bit_for_bit_under_strict_math(tmp_path):
+    """With ACDRIVE_STRICT_MATH=1 (numba without fast-math) the native loop repeats the
+    specialised loop's operations in the same order: every logged value, event bit and final
+    state is equal, on the DFIM drive (relay, supply bus, averaged converter), the cage IM with
+    the switching SVPWM inverter (segments inside a sample) and the PM drive."""
+    script = textwrap.dedent(
+        """
+        import json, os, sys
+        import numpy as np
+        from acdrive.scenarios import load_scenario
+        from acdrive.drives import for_setup
+
+        out = {}
+        for name, duration in (("bodson-sync", 1.0), ("im-foc-speed", 0.05),
+                               ("pm-bly171d-svpwm", 0.05)):
+            setup = load_scenario(name)
+            runs = setup.runs() if hasattr(setup, "runs") and callable(setup.runs) else []
+            setup = runs[0][1] if runs else setup
+            results = {}
+            for tier in ("native", "specialised"):
+                os.environ["ACDRIVE_LOOP_TIER"] = tier
+                drive = for_setup(setup).build(setup)
+                initial, held = drive.initial()
+                compiled = drive.system.compile()
+                r = compiled.run(duration, setup.sample_time, setup.substeps, initial=initial,
+                                 held=held)
+                results[tier] = r
+            a, b = results["native"], results["specialised"]
+            out[name] = {
+                "tiers": [a.tier, b.tier],
+                "data_equal": bool(np.array_equal(a.data, b.data)),
+                "events_equal": bool(np.array_equal(a.event_log, b.event_log)),
+                "state_equal": bool(np.array_equal(a.final_state, b.final_state)),
+                "moved": float(np.ptp(b.data, axis=0).max()),
+            }
+        print(json.dumps(out))
+        """
+    )
+    env = dict(os.environ, ACDRIVE_STRICT_MATH="1", ACDRIVE_COMPILE_NOTICE="0",
+               ACDRIVE_BACKGROUND_COMPILE="0")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", script], env=env, check=False,
+                          capture_output=True, text=True, timeout=1800, cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    found = json.loads(done.stdout.strip().splitlines()[-1])
+    for name, row in found.items():
+        assert row["tiers"] == ["native", "specialised"], name
+        assert row["moved"] > 0.0, name
+        assert row["data_equal"] and row["events_equal"] and row["state_equal"], (name, row)
+
+
+@needs_cc
+def test_native_reports_a_diverging_run_as_the_specialised_loop_does(monkeypatch):
+    """A step far too long for the machine's electrical time constant: both tiers stop at the
+    same sample with the same one-line error (never NaN in a result)."""
+    system, im, _ = _open_loop_im()
+    run = {"duration": 0.5, "sample_time": 0.05, "substeps": 1, "log": [im.out.i_s]}
+    errors = []
+    for tier in ("native", "specialised"):
+        with pytest.raises(SimulationDiverged) as caught:
+            _compiled(system, tier, monkeypatch).run(**run)
+        errors.append(str(caught.value))
+    assert errors[0] == errors[1]
+
+
+@needs_cc
+def test_a_damaged_library_is_built_again_with_a_notice(tmp_path):
+    """A cached library that does not load (truncated, overwritten) is removed and built again,
+    with one line; never a crash."""
+    system, _, _ = _open_loop_im()
+    source = _native.native_source(system)
+    path = _native.library_path(source, tmp_path)
+    path.write_bytes(b"not a shared library")
+    said = []
+    loop, _, compiled = _native.build(source, notice=said.append, folder=tmp_path)
+    assert compiled and loop.path == path
+    assert len(said) == 1 and "built again" in said[0] and path.name in said[0]
+    assert path.read_bytes()[:4] == b"\x7fELF"
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith("acdrive-native-")]
+
+
+@needs_cc
+def test_a_failed_compile_leaves_nothing_and_the_numba_tiers_run(monkeypatch, tmp_path):
+    """A compiler that fails (or is interrupted) leaves no library in the cache; the auto tier
+    then runs numba's loop, and ACDRIVE_LOOP_TIER=native names the cause."""
+    failing = tmp_path / "cc"
+    failing.write_text("#!/bin/sh\necho 'cc: interrupted' >&2\nexit 1\n")
+    failing.chmod(0o755)
+    monkeypatch.setenv("CC", str(failing))
+    # a parameter no other test uses: a library nobody built
+    system, _, _ = _open_loop_im(J_factor=1.0 + int(tmp_path.stat().st_ino % 997) / 1e4)
+    path = _native.library_path(_native.native_source(system))
+    assert not path.exists()
+    with pytest.raises(InputError) as caught:
+        _compiled(system, "native", monkeypatch)
+    assert caught.value.field == "ACDRIVE_LOOP_TIER" and "interrupted" in str(caught.value)
+    assert not path.exists()
+    assert not [p for p in path.parent.iterdir() if p.name.startswith("acdrive-native-")]
+    monkeypatch.setenv("ACDRIVE_LOOP_TIER", "auto")
+    assert system.compile().tier in ("specialised", "generic")
+
+
+def test_a_part_without_c_is_named_and_numba_runs_it(monkeypatch):
+    """A user's part kind has no C: the native tier names it and the auto tier runs numba."""
+    from acdrive.core._parts import SampledPart
+    from acdrive.core._signals import Layout, cplx
+
+    system, im, shaft = _open_loop_im()
+    assert _native.native_obstacle(system) in (None, "no C compiler found (cc, gcc or $CC)")
+
+    class MyProgram(SampledPart):
+        OUTPUTS = Layout(cplx("v_ref", "V", "commanded voltage"))
+        step = type(system.part("program")).step
+
+    mine = MyProgram("mine")
+    user = System([im, shaft, mine, system.part("inverter")],
+                  [(mine.out.v_ref, system.part("inverter").inp.v_ref),
+                   (system.part("inverter").out.v, im.inp.v_s), (shaft.out.w, im.inp.w),
+                   (im.out.tau_e, shaft.inp.tau_e)])  # fmt: skip
+    reason = _native.native_obstacle(user)
+    assert reason is not None and ("MyProgram" in reason or "compiler" in reason)
+    monkeypatch.setenv("ACDRIVE_LOOP_TIER", "native")
+    with pytest.raises(InputError, match="native cannot run this system"):
+        user.compile()
+
+
+@needs_cc
+def test_the_native_library_does_not_depend_on_the_period_or_the_start(monkeypatch):
+    """One library per topology and parameters: the sample time, substeps and initial state are
+    arguments of each run (a second period or start loads, never compiles)."""
+    system, _, shaft = _open_loop_im()
+    compiled = _compiled(system, "native", monkeypatch)
+    first = compiled.run(0.02, 1e-4, 2, log=[shaft.out.w])
+    second = compiled.run(0.02, 2e-4, 3, initial={"shaft": {"w": 10.0}}, log=[shaft.out.w])
+    assert compiled.tier == "native" and second.compile_time == 0.0
+    assert second.data[0, 0] == 10.0 and first.data[0, 0] == 0.0
+    assert first.steps == 200 and second.steps == 100
+
+
+def test_importing_and_running_natively_needs_no_numba(tmp_path):
+    """A warm run of the native tier never imports numba (nor scipy): the import and the first
+    use of numba would cost more than the whole run (issue 21)."""
+    if _native.compiler() is None:
+        pytest.skip("no C compiler on this machine")
+    script = textwrap.dedent(
+        """
+        import sys
+        from acdrive._bench.motulator_im import SUBSTEPS, T_S, log_ports, matched_acdrive_system
+        system, parts = matched_acdrive_system("averaged")
+        compiled = system.compile()
+        result = compiled.run(0.05, T_S, substeps=SUBSTEPS, log=log_ports(parts))
+        print(compiled.tier, "numba" in sys.modules, "scipy" in sys.modules)
+        """
+    )
+    env = dict(os.environ, ACDRIVE_LOOP_TIER="auto", ACDRIVE_COMPILE_NOTICE="0",
+               ACDRIVE_BACKGROUND_COMPILE="0")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", script], env=env, check=False,
+                          capture_output=True, text=True, timeout=600, cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == ["native", "False", "False"]
