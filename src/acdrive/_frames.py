@@ -21,8 +21,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from acdrive._jit import njit
 
+from acdrive._jit import njit
 from acdrive.errors import InputError
 
 #: sqrt(2/3): leading coefficient of the power-invariant 3-c transformation (Bodson (1)).
