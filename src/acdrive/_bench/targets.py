@@ -172,6 +172,10 @@ def whole_command(rounds: int, log=None, scenario: str = SCENARIO) -> dict:
         "output to a fresh folder; the empty-cache run first (its cache then serves the warm "
         f"runs), then {rounds} rounds alternating warm with and without figures"
     )
+    # with PYTHONDONTWRITEBYTECODE set, an editable install compiles every imported module of
+    # acdrive from source in every process (about 0.1 CPU-s of this command); a wheel's modules
+    # are compiled by pip at install, and an editable install's on first import otherwise
+    out["python_writes_bytecode"] = not os.environ.get("PYTHONDONTWRITEBYTECODE")
     return out
 
 

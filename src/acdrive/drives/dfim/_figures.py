@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._figures import new_figure, plot_trace, save_figure
+from acdrive._figures import TIME_PLOT_MARGINS_IN, new_figure, plot_trace, save_figure
 from acdrive.drives.dfim._result import DriveResult
 
 #: Colours of the stator and rotor curves of the current figures, and of their limit lines.
@@ -53,7 +53,7 @@ def line_figure(curves, ylabel: str, title: str, limits=(), marker: float | None
     """One time plot, not yet saved: ``curves`` is a list of (t, y, label[, style]) drawn as their
     envelopes; ``limits`` (value, label, colour) horizontal lines (``limit_lines``); an optional
     vertical marker at synchronous speed."""
-    fig, ax = new_figure((7, 3.5))
+    fig, ax = new_figure((7, 3.5), margins_in=TIME_PLOT_MARGINS_IN)
     for t, y, label, *style in curves:
         plot_trace(ax, t, y, *style, lw=1, label=label)
     for value, label, colour in limits:
