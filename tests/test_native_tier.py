@@ -35,7 +35,7 @@ def _relative_gap(a, b) -> float:
     return float((gap / np.where(peak > 0.0, peak, 1.0)).max())
 
 
-def _open_loop_im(method="rk4", J_factor=1.0):
+def _open_loop_im(method="rk4", load_points=2):
     """A cage IM fed by an open-loop V/f program through an averaged converter (every kind has C;
     the program's table and the shaft's load step make the run move)."""
     from acdrive.control._open_loop import VoltageProgram
@@ -45,7 +45,8 @@ def _open_loop_im(method="rk4", J_factor=1.0):
     from acdrive.plant._mechanics import Shaft
 
     im = CageInductionMachine.from_params("im", UGALDE_IM_300W)
-    shaft = Shaft("shaft", J=J_factor * UGALDE_IM_300W.J, B=1e-5, load=[[0.0, 0.0], [0.02, 0.05]])
+    load = [[0.0, 0.0]] + [[0.02 + 1e-3 * k, 0.05] for k in range(load_points - 1)]
+    shaft = Shaft("shaft", J=UGALDE_IM_300W.J, B=1e-5, load=load)
     program = VoltageProgram(
         "program", V_pk=[[0.0, 20.0], [0.05, 100.0]], f=[[0.0, 10.0], [0.05, 50.0]]
     )
@@ -161,8 +162,8 @@ def test_a_failed_compile_leaves_nothing_and_the_numba_tiers_run(monkeypatch, tm
     failing.write_text("#!/bin/sh\necho 'cc: interrupted' >&2\nexit 1\n")
     failing.chmod(0o755)
     monkeypatch.setenv("CC", str(failing))
-    # a parameter no other test uses: a library nobody built
-    system, _, _ = _open_loop_im(J_factor=1.0 + int(tmp_path.stat().st_ino % 997) / 1e4)
+    # a table length no other test uses: a library nobody built (the struct's size is in its C)
+    system, _, _ = _open_loop_im(load_points=3 + int(tmp_path.stat().st_ino % 9973))
     path = _native.library_path(_native.native_source(system))
     assert not path.exists()
     with pytest.raises(InputError) as caught:
@@ -199,9 +200,28 @@ def test_a_part_without_c_is_named_and_numba_runs_it(monkeypatch):
 
 
 @needs_cc
+def test_one_library_serves_every_parameter_set(monkeypatch):
+    """The library names no parameter value: re-parametrised parts (``run(parts=...)``) run in
+    it without a compile and give the specialised loop's run with the same parts; tables of
+    other lengths than its structs hold run in the specialised loop."""
+    system, im, shaft = _open_loop_im()
+    heavier = [shaft.with_params(J=3.0 * shaft.values["J"])]
+    run = {"duration": 0.05, "sample_time": 1e-4, "substeps": 2, "log": [shaft.out.w]}
+    native = _compiled(system, "native", monkeypatch)
+    light, heavy = native.run(**run), native.run(**run, parts=heavier)
+    assert heavy.tier == "native" and heavy.compile_time == 0.0
+    assert light.data[-1, 0] > 1.5 * heavy.data[-1, 0] > 0.0  # three times the inertia: slower
+    reference = _compiled(system, "specialised", monkeypatch).run(**run, parts=heavier)
+    assert _relative_gap(heavy, reference) <= 1e-9
+    longer = [system.part("program").with_params(V_pk=[[0.0, 20.0], [0.02, 60.0], [0.05, 100.0]])]
+    other = native.run(**run, parts=longer)
+    assert other.tier == "specialised" and native.tier == "native"
+
+
+@needs_cc
 def test_the_native_library_does_not_depend_on_the_period_or_the_start(monkeypatch):
-    """One library per topology and parameters: the sample time, substeps and initial state are
-    arguments of each run (a second period or start loads, never compiles)."""
+    """One library per topology: the sample time, substeps and initial state are arguments of
+    each run (a second period or start loads, never compiles)."""
     system, _, shaft = _open_loop_im()
     compiled = _compiled(system, "native", monkeypatch)
     first = compiled.run(0.02, 1e-4, 2, log=[shaft.out.w])

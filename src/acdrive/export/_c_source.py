@@ -380,7 +380,7 @@ def require_c_name(field_name: str, name: str) -> str:
 
 
 def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdrive_chain",
-         description: str = "", open_loop: bool = False) -> CExport:  # fmt: skip
+         description: str = "", open_loop: bool = False, values: bool = True) -> CExport:  # fmt: skip
     """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
     ``initial`` and ``held`` as for ``CompiledSystem.run`` give the values ``<chain>_reset``
     writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
@@ -388,7 +388,9 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     ``System``: a list of parts has no wiring, and the wiring is what says which plant outputs a
     chain reads and which commands it gives (build the System from the parts first).
     ``open_loop``: a chain that reads no plant output is kept (``chain_model``; the native loop's
-    use), where an export refuses it."""
+    use), where an export refuses it. ``values=False`` leaves out the definitions of
+    ``<chain>_set_params`` and ``<chain>_reset`` (the native loop loads both from acdrive's packed
+    arrays, so its C names no parameter value and one library serves every parameter set)."""
     from acdrive.sim._system import System
 
     if not isinstance(system, System):
@@ -455,7 +457,10 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         C.append(_step_prototype(model))
         C.append("{")
         C += ["    " + line for line in _chain_step_lines(model, kinds, system.source_of)]
-        C += ["}", "", f"void {c}_set_params({c}_params *p)", "{"]
+        C += ["}", ""]
+        if not values:
+            continue
+        C += [f"void {c}_set_params({c}_params *p)", "{"]
         C += ["    " + line for line in _set_params_lines(model, sample_time)]
         C += ["}", "", f"void {c}_reset({c}_state *s)", "{"]
         C += ["    " + line for line in _reset_lines(system, model, S, Y)]

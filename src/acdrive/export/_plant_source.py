@@ -326,10 +326,13 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
 
 
 def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=None,
-               name: str = "acdrive_plant", description: str = "") -> PlantExport:  # fmt: skip
+               name: str = "acdrive_plant", description: str = "",
+               values: bool = True) -> PlantExport:  # fmt: skip
     """C99 header and source of the plant of ``system`` (module docstring); ``initial`` and
-    ``held`` as for ``CompiledSystem.run`` give what ``<name>_reset`` writes. Raises
-    ``InputError`` naming a part without C or with direct feedthrough from the controller."""
+    ``held`` as for ``CompiledSystem.run`` give what ``<name>_reset`` writes; ``values=False``
+    leaves out the definitions of ``<name>_set_params`` and ``<name>_reset`` (the native loop
+    loads both from acdrive's packed arrays). Raises ``InputError`` naming a part without C or
+    with direct feedthrough from the controller."""
     name = require_c_name("name", name)
     _check_exportable(system)
     continuous, modulators = list(system.continuous), list(system.modulators)
@@ -450,6 +453,9 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     C += [(f"void {name}_update_outputs(ACDRIVE_REAL t, const {name}_params *p, "
            f"{name}_state *s, {in_arg})"),
           "{", *projections, f"    {name}_state_outputs(t, p, &s->x, in, &s->y);", "}", ""]  # fmt: skip
+    if not values:
+        return PlantExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, continuous,
+                           modulators, inputs, outputs)  # fmt: skip
     C += [f"void {name}_set_params({name}_params *p)", "{",
           f"    p->sample_time = {literal(sample_time, 'sample_time')};",
           f"    p->substeps = {int(substeps)};"]  # fmt: skip

@@ -112,6 +112,7 @@ class CompiledSystem:
             self._native_obstacle = obstacle
             return False
         self._spent(seconds, compiled)
+        self._native_offsets = self.system.pack_params()[1]
         self.tier = "native"
         return True
 
@@ -176,10 +177,9 @@ class CompiledSystem:
 
     def _native_run(self, X, P, PO, S, Y, U, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
                     ECOUNT):  # fmt: skip
-        """The native loop with the numba loops' arguments (its parameters are compiled in: P
-        must be the system's own, ``run`` checks)."""
-        return self._native.run(X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
-                                ECOUNT)  # fmt: skip
+        """The native loop with the numba loops' arguments (``U`` is the loop's own inside)."""
+        return self._native.run(P, PO, X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG,
+                                ELOG, ECOUNT)  # fmt: skip
 
     def _announce_generic(self, n_steps: int, substeps: int) -> None:
         """The first generic run of this system: say so, with its expected time, and start the
@@ -274,9 +274,9 @@ class CompiledSystem:
         ECOUNT = np.zeros((n_ev, 64), dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
         tier = self.tier
-        if parts and tier == "native":
-            # re-parametrised parts: the native library holds the system's own parameters
-            self._specialise("a run with re-parametrised parts runs the specialised loop", False)
+        if tier == "native" and not np.array_equal(PO, self._native_offsets):
+            # tables of other lengths than the library's structs hold
+            self._specialise("a run with tables of other lengths runs the specialised loop", False)
             loop, tables, tier = self.module.run, (), "specialised"
         else:
             loop, tables = self._loop_for(n_steps, substeps)
