@@ -204,7 +204,7 @@ def test_one_library_serves_every_parameter_set(monkeypatch):
     """The library names no parameter value: re-parametrised parts (``run(parts=...)``) run in
     it without a compile and give the specialised loop's run with the same parts; tables of
     other lengths than its structs hold run in the specialised loop."""
-    system, im, shaft = _open_loop_im()
+    system, _, shaft = _open_loop_im()
     heavier = [shaft.with_params(J=3.0 * shaft.values["J"])]
     run = {"duration": 0.05, "sample_time": 1e-4, "substeps": 2, "log": [shaft.out.w]}
     native = _compiled(system, "native", monkeypatch)

@@ -320,7 +320,7 @@ def native_source(system) -> NativeSource:
             P_lines.append(f"    o = PO[{i}] + {part.PARAMS.table_start};")
         for v in part.PARAMS.tables:
             tab = f"{target}.{v.name}"
-            P_lines += [f"    n = (int)P[o];", f"    {tab}.n = n;",
+            P_lines += ["    n = (int)P[o];", f"    {tab}.n = n;",
                         "    for (j = 0; j < n; ++j) {",
                         f"        {tab}.t[j] = P[o + 1 + j];",
                         f"        {tab}.v[j] = P[o + 1 + n + j];", "    }",
