@@ -379,6 +379,10 @@ def require_c_name(field_name: str, name: str) -> str:
     return name
 
 
+#: what ``to_c`` reads of a ``System`` (acdrive.sim.System)
+_SYSTEM_READS = ("parts", "sampled", "slots", "source_of", "part", "pack_initial", "pack_held")
+
+
 def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdrive_chain",
          description: str = "", open_loop: bool = False, values: bool = True) -> CExport:  # fmt: skip
     """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
@@ -391,9 +395,10 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     use), where an export refuses it. ``values=False`` leaves out the definitions of
     ``<chain>_set_params`` and ``<chain>_reset`` (the native loop loads both from acdrive's packed
     arrays, so its C names no parameter value and one library serves every parameter set)."""
-    from acdrive.sim._system import System
-
-    if not isinstance(system, System):
+    # a System by what the export reads of it (its parts, chains, slots and wiring), not by
+    # importing acdrive.sim._system: the engine imports the export's C for its native loop
+    # (export._native), so the class check here would close an import cycle
+    if not all(hasattr(system, attr) for attr in _SYSTEM_READS):
         what = "a list of parts" if isinstance(system, (list, tuple)) else type(system).__name__
         raise InputError(
             "system",
