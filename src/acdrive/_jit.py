@@ -20,6 +20,8 @@ import functools
 import os
 import threading
 
+import numpy as np
+
 #: ACDRIVE_STRICT_MATH=1 compiles the fast-math functions with strict IEEE arithmetic instead: the
 #: results then depend only on the order of operations written in the source, not on the
 #: compiler's choice of contractions, which is how two implementations are compared bit for bit
@@ -81,9 +83,12 @@ class LazyKernel:
         if self.python_from_python or depth:
             _python_calls.depth = depth + 1
             try:
-                return self.py_func(*args, **kwargs)
+                result = self.py_func(*args, **kwargs)
             finally:
                 _python_calls.depth = depth
+            # the caller gets what numba's dispatcher returns: Python scalars, not NumPy's (a
+            # kernel called by this one keeps NumPy's, as its compiled callee would see them)
+            return result if depth else _as_numba_returns(result)
         return self.dispatcher(*args, **kwargs)
 
     def __getattr__(self, name: str):
@@ -94,6 +99,17 @@ class LazyKernel:
 
     def __repr__(self) -> str:
         return f"<acdrive kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+
+def _as_numba_returns(value):
+    """``value`` as numba's dispatcher returns it to Python: a NumPy scalar (float64, int64,
+    bool_, complex128 ...) as the Python float, int, bool or complex of the same value, inside
+    tuples too; arrays and anything else as they are."""
+    if isinstance(value, (np.number, np.bool_)):
+        return value.item()
+    if type(value) is tuple:
+        return tuple(_as_numba_returns(v) for v in value)
+    return value
 
 
 def prange(*args):
