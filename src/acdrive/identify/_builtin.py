@@ -77,7 +77,8 @@ class MechanicsBench:
 
 
 def _benches() -> dict[str, dict[str, object]]:
-    from acdrive.drives.pm._machines import (
+    from acdrive.machines._dfim import BODSON_DFIM
+    from acdrive.machines._pm_catalog import (
         BLY171D,
         BLY171D_B,
         BLY171D_I_RATED_PEAK,
@@ -85,7 +86,6 @@ def _benches() -> dict[str, dict[str, object]]:
         IPMSM_2KW2,
         IPMSM_2KW2_V_DC,
     )
-    from acdrive.machines._dfim import BODSON_DFIM
 
     bly = StandstillPlan(dc_levels=(0.3, 0.6, 0.9), dc_step=0.5, base_frequency=2.0,
                          tone_amplitude=0.15, settle=0.5, v_dc=BLY171D_V_DC)  # fmt: skip
