@@ -98,17 +98,9 @@ def _folder() -> Path:
     """The native libraries' folder: beside the numba cache acdrive keys by its own sources
     (``acdrive/__init__.py`` sets NUMBA_CACHE_DIR before numba is imported), else a temporary
     folder."""
-    from acdrive.sim._codegen import _cache_dir
+    from acdrive.sim._codegen import cache_folder
 
-    base = _cache_dir()
-    for candidate in ([Path(base)] if base else []) + [Path(tempfile.gettempdir()) / "acdrive"]:
-        folder = candidate / "native"
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            return folder
-        except OSError:
-            continue
-    raise OSError("no writable folder for the native library")
+    return cache_folder("native", "acdrive")
 
 
 def _value(target: str, var) -> list[str]:

@@ -50,18 +50,24 @@ def _cache_dir() -> str:
     return os.environ.get("NUMBA_CACHE_DIR", "")
 
 
-def _folder() -> Path:
+def cache_folder(name: str, fallback: str) -> Path:
+    """The folder ``name`` of acdrive's compiled code in numba's cache folder (keyed by acdrive's
+    own sources), else ``fallback/name`` in the temporary folder; made if missing."""
     base = Path(_cache_dir()) if _cache_dir() else None
-    for candidate in (base, Path(tempfile.gettempdir()) / "acdrive-systems"):
+    for candidate in (base, Path(tempfile.gettempdir()) / fallback):
         if candidate is None:
             continue
-        folder = candidate / "systems"
+        folder = candidate / name
         try:
             folder.mkdir(parents=True, exist_ok=True)
             return folder
         except OSError:
             continue
-    raise OSError("no writable folder for the compiled system")
+    raise OSError(f"no writable folder for acdrive's compiled code ({name})")
+
+
+def _folder() -> Path:
+    return cache_folder("systems", "acdrive-systems")
 
 
 def notice(message: str) -> None:
