@@ -9,9 +9,11 @@ cache) another 0.4 s; a run in the native tier (``export._native``) needs neithe
 decorators here do not import numba: they wrap the function in a :class:`LazyKernel`, which
 keeps the Python function (``py_func``, what the code generators read) and creates numba's
 dispatcher on first need: a call from Python, or any attribute of a dispatcher asked for. numba
-compiling a kernel that names another as a global sees the dispatcher behind it: acdrive
-registers with numba (``register_with_numba``, the ``numba_extensions`` entry point numba runs
-before it compiles anything) that a LazyKernel types as its dispatcher.
+compiling a kernel that names another as a global sees the dispatcher behind it: typing a global
+asks for its ``_numba_type_``, which the LazyKernel hands over from its dispatcher (created
+then), and ``register_with_numba`` (run when the first dispatcher is made) registers the same
+answer with numba's ``typeof``. A kernel pickles by reference (its module and name), as numba's
+dispatchers do.
 """
 
 from __future__ import annotations
@@ -35,9 +37,8 @@ _python_calls = threading.local()
 
 
 def register_with_numba() -> None:
-    """Teach numba that a :class:`LazyKernel` is typed as its dispatcher (run by numba through
-    the ``numba_extensions`` entry point before it compiles anything, and by
-    :meth:`LazyKernel.dispatcher`)."""
+    """Teach numba's ``typeof`` that a :class:`LazyKernel` is typed as its dispatcher (run by
+    :meth:`LazyKernel.dispatcher` when the first dispatcher is made)."""
     global _registered
     if _registered:
         return
@@ -99,6 +100,19 @@ class LazyKernel:
 
     def __repr__(self) -> str:
         return f"<acdrive kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+    def __reduce__(self):
+        return _kernel_named, (self.py_func.__module__, self.py_func.__qualname__)
+
+
+def _kernel_named(module: str, qualname: str):
+    """The kernel ``module.qualname`` (a LazyKernel unpickled: the one its module holds)."""
+    import importlib
+
+    found = importlib.import_module(module)
+    for name in qualname.split("."):
+        found = getattr(found, name)
+    return found
 
 
 def _as_numba_returns(value):
