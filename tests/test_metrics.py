@@ -42,14 +42,3 @@ def test_array_state_equals_the_kernel(n, seed, relay, windows, quantised):
     assert np.array_equal(mask_array, mask_kernel)
     assert np.array_equal(until_array, until_kernel)
 
-
-def test_a_kernel_pickles_by_reference():
-    """A kernel (numba compiled on first use, ``acdrive._jit.LazyKernel``) pickles by its module
-    and name, as numba's dispatchers do: a sweep's workers get the same kernel."""
-    import pickle
-
-    from acdrive.machines._dfim import torque_limits_case1
-    from acdrive.sim._metrics import speed_error_update
-
-    for kernel in (torque_limits_case1, speed_error_update):
-        assert pickle.loads(pickle.dumps(kernel)) is kernel
