@@ -572,3 +572,43 @@ def test_the_serial_modal_sum_has_its_own_cache_entry_and_the_same_result():
         lost = np.zeros((1, s.size), dtype=np.bool_)
         kernel(s, lam, R, D, 1e6, out, lost)
         np.testing.assert_allclose(out[0], expected, rtol=1e-12)
+
+
+def test_a_discretisation_is_kept_on_disk_bit_for_bit(tmp_path, monkeypatch):
+    """The closed form's matrices are kept on disk, keyed by every bit of the inputs: a second
+    process reads exactly what the first computed (no scipy import), another period computes
+    anew, and a damaged memo is computed and written again."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from acdrive.control._discretise import discretise\n"
+        "from acdrive.control._lti_matrix import LTIMatrix\n"
+        "A = np.array([[0.0, 1.0], [-4.0e4, -30.0]]); B = np.array([[0.0], [1.0]])\n"
+        "C = np.array([[9000.0, 360.0]]); D = np.array([[0.5]])\n"
+        "d = discretise(LTIMatrix(A, B, C, D), float(sys.argv[1]))\n"
+        "print('scipy' in sys.modules, *(m.tobytes().hex() for m in (d.Ad, d.Bd, d.Cd, d.Dd)))\n"
+    )
+    # a cache folder of the user's choice (acdrive's own would be keyed by its sources)
+    env = {k: v for k, v in __import__("os").environ.items() if k != "ACDRIVE_NUMBA_CACHE_DIR"}
+    env["NUMBA_CACHE_DIR"] = str(tmp_path)
+
+    def run(T_s):
+        done = subprocess.run([sys.executable, "-c", code, repr(T_s)], env=env, check=True,
+                              capture_output=True, text=True, timeout=300)  # fmt: skip
+        first, *matrices = done.stdout.split()
+        return first == "True", matrices
+
+    imported, computed = run(1e-4)
+    assert imported
+    imported, read = run(1e-4)
+    assert not imported and read == computed
+    imported, other = run(2e-4)
+    assert imported and other != computed
+    memos = sorted((tmp_path / "discretised").glob("*.npz"))
+    assert len(memos) == 2
+    for memo in memos:
+        memo.write_bytes(b"damaged")
+    imported, again = run(1e-4)
+    assert imported and again == computed

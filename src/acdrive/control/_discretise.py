@@ -83,6 +83,97 @@ def tustin_constant(T_s: float, prewarp: float | None = None) -> float:
     return prewarp / math.tan(0.5 * prewarp * T_s)
 
 
+def _closed_form(A, B, C, D, T_s: float, method: str, prewarp):
+    """(A_d, B_d, C_d, D_d) by the closed forms of ``discretise`` (its InputErrors included)."""
+    n, m = B.shape
+    if method == "zoh":
+        M = np.zeros((n + m, n + m))
+        M[:n, :n] = A * T_s
+        M[:n, n:] = B * T_s
+        with np.errstate(all="ignore"):
+            import scipy.linalg  # imported where used: a run that discretises nothing skips it
+
+            E = scipy.linalg.expm(M)
+        Ad, Bd, Cd, Dd = E[:n, :n], E[:n, n:], C.copy(), D.copy()
+        if not (np.all(np.isfinite(Ad)) and np.all(np.isfinite(Bd))):
+            raise InputError(
+                "T_s",
+                "the ZOH closed form e^{A T_s} overflows: the controller has a pole with "
+                "Re(p) T_s far above 1",
+            )
+    else:
+        c = tustin_constant(T_s, prewarp)
+        h = 2.0 / c
+        eye = np.eye(n)
+        Msys = eye - (0.5 * h) * A
+        if n and (
+            not np.all(np.isfinite(Msys)) or np.linalg.cond(Msys) > 1.0 / np.finfo(float).eps
+        ):
+            raise InputError(
+                "T_s",
+                f"the Tustin closed form fails: I - A/c is singular (c = {c:.6g} 1/s), the "
+                "controller has a pole at s = c; change T_s or prewarp",
+            )
+        # scipy's LU, imported here (0.2 CPU-s) and not by a run that discretises nothing: numpy's
+        # solve (another LAPACK build, and a transposed factorisation for Cd) differs in the last
+        # bits on some matrices, which a closed loop with switching carries to 1e-9 of a peak
+        import scipy.linalg
+
+        lu = scipy.linalg.lu_factor(Msys) if n else None
+        Ad = scipy.linalg.lu_solve(lu, eye + (0.5 * h) * A) if n else np.zeros((0, 0))
+        Bd = h * scipy.linalg.lu_solve(lu, B) if n else np.zeros((0, m))
+        Cd = scipy.linalg.lu_solve(lu, C.T, trans=1).T if n else np.zeros((C.shape[0], 0))
+        Dd = D + 0.5 * (C @ Bd)
+    return Ad, Bd, Cd, Dd
+
+
+#: the memo of ``_closed_form``'s results on disk (``_cached_closed_form``); the version names
+#: the algorithm: a change of it starts a new memo
+_MEMO = "discretised"
+_MEMO_VERSION = b"closed forms v1: scipy expm (zoh), scipy LU (tustin)"
+
+
+def _cached_closed_form(A, B, C, D, T_s: float, method: str, prewarp):
+    """``_closed_form``, its result kept on disk keyed by every bit of its inputs, so that a
+    later process reads the same matrices without importing scipy (0.2 to 0.45 CPU-s, most of a
+    warm run of a drive whose controllers are discretised; acdrive's cache folder is keyed by its
+    sources, ``acdrive._cache``). A memo that cannot be read is computed and written again."""
+    import hashlib
+
+    digest = hashlib.sha256(_MEMO_VERSION)
+    for a in (A, B, C, D):
+        a = np.ascontiguousarray(a, dtype=float)
+        digest.update(repr(a.shape).encode() + a.tobytes())
+    digest.update(repr((float(T_s), method, prewarp)).encode())
+    try:
+        from acdrive._cache import cache_folder
+
+        path = cache_folder(_MEMO, "acdrive") / f"{digest.hexdigest()[:32]}.npz"
+    except OSError:
+        return _closed_form(A, B, C, D, T_s, method, prewarp)
+    try:
+        with np.load(path) as found:
+            return tuple(np.array(found[k]) for k in ("Ad", "Bd", "Cd", "Dd"))
+    except (OSError, ValueError, KeyError, EOFError):
+        pass  # not there yet, or damaged: computed and written (again)
+    result = _closed_form(A, B, C, D, T_s, method, prewarp)
+    _write_memo(path, result)
+    return result
+
+
+def _write_memo(path, result) -> None:
+    import os
+    import tempfile
+
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+        with os.fdopen(fd, "wb") as handle:
+            np.savez(handle, **dict(zip(("Ad", "Bd", "Cd", "Dd"), result, strict=True)))
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a memo is an optimisation: a read-only cache folder computes every time
+
+
 def discretise(controller, T_s: float, method: str = "tustin", prewarp=None) -> DiscreteLTI:
     """Discrete state space of ``controller`` (an ``LTI`` or ``LTIMatrix``) at period ``T_s``.
 
@@ -123,45 +214,8 @@ def discretise(controller, T_s: float, method: str = "tustin", prewarp=None) -> 
                 f"must lie in (0, pi/T_s) = (0, {nyquist:.6g}) rad/s, got {prewarp:g}",
             )
     A, B, C, D = K.A, K.B, K.C, K.D
-    n, m = B.shape
-    if method == "zoh":
-        M = np.zeros((n + m, n + m))
-        M[:n, :n] = A * T_s
-        M[:n, n:] = B * T_s
-        with np.errstate(all="ignore"):
-            import scipy.linalg  # imported where used: a run that discretises nothing skips it
-
-            E = scipy.linalg.expm(M)
-        Ad, Bd, Cd, Dd = E[:n, :n], E[:n, n:], C.copy(), D.copy()
-        if not (np.all(np.isfinite(Ad)) and np.all(np.isfinite(Bd))):
-            raise InputError(
-                "T_s",
-                "the ZOH closed form e^{A T_s} overflows: the controller has a pole with "
-                "Re(p) T_s far above 1",
-            )
-    else:
-        c = tustin_constant(T_s, prewarp)
-        h = 2.0 / c
-        eye = np.eye(n)
-        Msys = eye - (0.5 * h) * A
-        if n and (
-            not np.all(np.isfinite(Msys)) or np.linalg.cond(Msys) > 1.0 / np.finfo(float).eps
-        ):
-            raise InputError(
-                "T_s",
-                f"the Tustin closed form fails: I - A/c is singular (c = {c:.6g} 1/s), the "
-                "controller has a pole at s = c; change T_s or prewarp",
-            )
-        # scipy's LU, imported here (0.2 CPU-s) and not by a run that discretises nothing: numpy's
-        # solve (another LAPACK build, and a transposed factorisation for Cd) differs in the last
-        # bits on some matrices, which a closed loop with switching carries to 1e-9 of a peak
-        import scipy.linalg
-
-        lu = scipy.linalg.lu_factor(Msys) if n else None
-        Ad = scipy.linalg.lu_solve(lu, eye + (0.5 * h) * A) if n else np.zeros((0, 0))
-        Bd = h * scipy.linalg.lu_solve(lu, B) if n else np.zeros((0, m))
-        Cd = scipy.linalg.lu_solve(lu, C.T, trans=1).T if n else np.zeros((C.shape[0], 0))
-        Dd = D + 0.5 * (C @ Bd)
+    n = B.shape[0]
+    Ad, Bd, Cd, Dd = _cached_closed_form(A, B, C, D, T_s, method, prewarp)
     if n:
         # poles decisively in the left half-plane at this period (Re(p) T_s < -STABLE_TOL; an
         # integrator or a pole that rounds onto the axis is not counted)

@@ -98,7 +98,7 @@ def _folder() -> Path:
     """The native libraries' folder: beside the numba cache acdrive keys by its own sources
     (``acdrive/__init__.py`` sets NUMBA_CACHE_DIR before numba is imported), else a temporary
     folder."""
-    from acdrive.sim._codegen import cache_folder
+    from acdrive._cache import cache_folder
 
     return cache_folder("native", "acdrive")
 

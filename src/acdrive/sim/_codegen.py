@@ -28,6 +28,7 @@ import time
 import warnings
 from pathlib import Path
 
+from acdrive._cache import _cache_dir, cache_folder
 from acdrive.errors import Notice
 
 _LOADED: dict[str, object] = {}
@@ -37,33 +38,6 @@ _COMPILED_SECONDS: list[float] = []
 _COMPILE_RECORD = "compile-times.json"
 #: records kept per loop kind (the newest)
 _RECORDS_KEPT = 20
-
-
-def _cache_dir() -> str:
-    """numba's cache folder (acdrive/__init__.py hands it over as NUMBA_CACHE_DIR before numba
-    is imported; read from there while numba is not imported, so that this costs no import)."""
-    import sys
-
-    numba = sys.modules.get("numba")
-    if numba is not None:
-        return numba.config.CACHE_DIR
-    return os.environ.get("NUMBA_CACHE_DIR", "")
-
-
-def cache_folder(name: str, fallback: str) -> Path:
-    """The folder ``name`` of acdrive's compiled code in numba's cache folder (keyed by acdrive's
-    own sources), else ``fallback/name`` in the temporary folder; made if missing."""
-    base = Path(_cache_dir()) if _cache_dir() else None
-    for candidate in (base, Path(tempfile.gettempdir()) / fallback):
-        if candidate is None:
-            continue
-        folder = candidate / name
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-            return folder
-        except OSError:
-            continue
-    raise OSError(f"no writable folder for acdrive's compiled code ({name})")
 
 
 def _folder() -> Path:
