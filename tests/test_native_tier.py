@@ -253,3 +253,25 @@ def test_importing_and_running_natively_needs_no_numba(tmp_path):
                           capture_output=True, text=True, timeout=600, cwd=tmp_path)  # fmt: skip
     assert done.returncode == 0, done.stderr[-2000:]
     assert done.stdout.split() == ["native", "False"]
+
+
+@needs_cc
+def test_kept_objects_serve_a_new_controller_and_a_damaged_one_is_rebuilt(tmp_path):
+    """The plant's object is kept under the hash of its C: a second topology on the same plant
+    compiles only its controller and driver; an object that no longer links is removed and
+    the library built again."""
+    system, _, _ = _open_loop_im()
+    first, _, _ = _native.build(_native.native_source(system), folder=tmp_path)
+    plant_objects = sorted(tmp_path.glob("acdn_plant_*.o"))
+    assert len(plant_objects) == 1 and len(list(tmp_path.glob("*.o"))) == 3
+    other, _, _ = _open_loop_im()
+    other.part("program").__init__("program", V_pk=50.0, f=25.0)  # a one-point table: other C
+    source = _native.native_source(other)
+    assert _native.library_path(source, tmp_path) != first.path
+    _native.build(source, folder=tmp_path)
+    assert sorted(tmp_path.glob("acdn_plant_*.o")) == plant_objects  # the plant reused
+    plant_objects[0].write_bytes(b"damaged")
+    _native.library_path(source, tmp_path).unlink()  # the next build links the kept objects
+    loop, _, compiled = _native.build(source, folder=tmp_path)
+    assert compiled and loop.path.read_bytes()[:4] == b"\x7fELF"
+    assert plant_objects[0].read_bytes()[:4] == b"\x7fELF"  # compiled again

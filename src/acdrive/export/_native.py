@@ -506,34 +506,59 @@ def build(
             if notice is not None:
                 notice(f"the native library {path.name} could not be loaded ({error}); built again")
             path.unlink(missing_ok=True)
-    _compile(source, path)
+    try:
+        _compile(source, path)
+    except RuntimeError:  # a damaged kept object is removed by the failed link: once more
+        _compile(source, path)
     compiled = True
     library = ctypes.CDLL(str(path))
     _configure(library)
     return NativeLoop(path, library), time.perf_counter() - start, compiled
 
 
+def _run_compiler(command: list[str], what: str) -> None:
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
+        raise RuntimeError(f"{command[0]} could not compile {what}: {first}")
+
+
 def _compile(source: NativeSource, path: Path) -> None:
+    """Compile each of the three files to an object kept beside the libraries under the hash of
+    its text, its header and the flags (a new controller on a plant compiled before compiles
+    only the controller and the driver), then link the library; every file is written under a
+    temporary name and renamed into place, so an interrupted build leaves none half-written."""
     cc = compiler()
     if cc is None:
         raise InputError(
             "compiler", "no C compiler found (cc, gcc or $CC): the native tier needs one"
         )
+    object_flags = [f for f in NATIVE_CFLAGS if f != "-shared"]
+    units = [(f"{_PLANT}.c", source.plant_source, source.plant_header)]
+    if source.controller_source:
+        units.append((f"{_CTL}.c", source.controller_source, source.controller_header))
+    units.append(("acdn_driver.c", source.driver, source.plant_header + source.controller_header))
     with tempfile.TemporaryDirectory(prefix="acdrive-native-", dir=path.parent) as scratch:
         folder = Path(scratch)
-        files = [("acdn_driver.c", source.driver), (f"{_PLANT}.c", source.plant_source)]
         (folder / f"{_PLANT}.h").write_text(source.plant_header)
         if source.controller_source:
             (folder / f"{_CTL}.h").write_text(source.controller_header)
-            files.append((f"{_CTL}.c", source.controller_source))
-        for name, text in files:
-            (folder / name).write_text(text)
+        objects = []
+        for name, text, headers in units:
+            digest = hashlib.sha256("\0".join([*object_flags, text, headers]).encode())
+            obj = path.parent / f"{Path(name).stem}_{digest.hexdigest()[:24]}.o"
+            if not obj.exists():
+                (folder / name).write_text(text)
+                built = folder / f"{name}.o"
+                _run_compiler([cc, *object_flags, "-c", "-o", str(built), str(folder / name)], name)
+                os.replace(built, obj)
+            objects.append(obj)
         out = folder / "library.so"
-        done = subprocess.run(
-            [cc, *NATIVE_CFLAGS, "-o", str(out), *(str(folder / n) for n, _ in files), "-lm"],
-            capture_output=True, text=True, check=False,
-        )  # fmt: skip
-        if done.returncode != 0:
-            first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
-            raise RuntimeError(f"{cc} could not compile the native loop: {first}")
+        try:
+            _run_compiler([cc, "-shared", "-o", str(out), *map(str, objects), "-lm"], "the link")
+        except RuntimeError:
+            # a kept object that does not link (damaged): none of them is trusted again
+            for obj in objects:
+                obj.unlink(missing_ok=True)
+            raise
         os.replace(out, path)
