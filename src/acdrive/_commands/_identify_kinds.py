@@ -148,6 +148,19 @@ def _pole_pairs(args, required: bool):
     return require_between("--pole-pairs", args.pole_pairs, 1, 1000)
 
 
+def _measured_logs(args, second: str, pole_pairs_required: bool = False):
+    """(pole pairs, base frequency, settling time, the source log, the ``second`` one (an args
+    field, e.g. ``q_log``), the DC steps or None) of a measured standstill test."""
+    from acdrive.identify._log import read_log
+
+    n_p = _pole_pairs(args, pole_pairs_required)
+    base, settle = _plan_window(args)
+    first = read_log(args.source, "TEST_FILE_OR_SCENARIO")
+    other = read_log(_required(args, second), _flag(second))
+    dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+    return n_p, base, settle, first, other, dc
+
+
 def _spin_settle(args, bench):
     """The time dropped at the start of each spin plateau: the option or the bench's (the
     default plan's for a measured log), checked."""
@@ -171,18 +184,13 @@ def _pm(args, bench):
     import dataclasses
 
     from acdrive.identify._experiment import dc_test
-    from acdrive.identify._log import read_log
     from acdrive.identify._pm import axis_test, identify_pm_standstill, pm_identifiability
     from acdrive.identify._spin import fit_spin, read_spin_log, spin_test
 
     spin_settle = _spin_settle(args, bench)
     facts = {}
     if bench is None:
-        n_p = _pole_pairs(args, True)
-        base, settle = _plan_window(args)
-        d = read_log(args.source, "TEST_FILE_OR_SCENARIO")
-        q = read_log(_required(args, "q_log"), "--q-log")
-        dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+        n_p, base, settle, d, q, dc = _measured_logs(args, "q_log", pole_pairs_required=True)
         spin = read_spin_log(args.spin_log, "--spin-log") if args.spin_log else None
     else:
         n_p = _pole_pairs(args, False) or bench.machine.n_p
@@ -225,18 +233,13 @@ def _dfim(args, bench):
     """As ``_pm`` for --kind dfim: the rotor-converter tests, stator open and shorted."""
     from acdrive.errors import require_nonnegative, require_positive
     from acdrive.identify._dfim import dfim_identifiability, dfim_test, identify_dfim
-    from acdrive.identify._log import read_log
 
     R_s = args.stator_resistance_ohm
     if R_s is not None:
         require_positive("--stator-resistance-ohm", R_s)
     R_s_std = require_nonnegative("--stator-resistance-std-ohm", args.stator_resistance_std_ohm)
     if bench is None:
-        n_p = _pole_pairs(args, False)
-        base, settle = _plan_window(args)
-        opened = read_log(args.source, "TEST_FILE_OR_SCENARIO")
-        shorted = read_log(_required(args, "shorted_log"), "--shorted-log")
-        dc = read_log(args.dc_log, "--dc-log") if args.dc_log else None
+        n_p, base, settle, opened, shorted, dc = _measured_logs(args, "shorted_log")
     else:
         n_p = _pole_pairs(args, False) or bench.machine.n_p
         plan = _bench_plan(args, bench.standstill)

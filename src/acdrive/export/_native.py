@@ -459,10 +459,10 @@ class NativeLoop:
         status = np.zeros(1, dtype=np.int64)
         scratch = np.zeros(max(Y.size, 1))
         E = np.zeros(max(ECOUNT.shape[0], 1), dtype=np.int64)
-        arrays = [np.ascontiguousarray(a) for a in (X, S, Y)]
-        for a, b in zip(arrays, (X, S, Y), strict=True):
-            if a is not b:
-                raise ValueError("the packed arrays must be contiguous")
+        if not all(a.flags.c_contiguous and a.dtype == np.float64 for a in (X, S, Y)):
+            raise ValueError(
+                "the packed arrays X, S, Y must be contiguous float64 (updated in place)"
+            )
         ptr = ctypes.c_void_p
         P, PO = np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(PO, dtype=np.int64)
         done = f(ptr(P.ctypes.data), ptr(PO.ctypes.data),
