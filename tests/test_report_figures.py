@@ -166,3 +166,39 @@ rotor_current_limit_pk = 7.5
         "4.75 A stator limit": 4.75,
         "7.5 A rotor limit": 7.5,
     }
+
+
+# --- matplotlib imported by a command --------------------------------------------------------
+_DRAW = """
+import sys
+from pathlib import Path
+from acdrive import _figures
+_figures.COMMAND_PROCESS = {command}
+fig, ax = _figures.new_figure((4.0, 2.5), margins_in=_figures.TIME_PLOT_MARGINS_IN)
+ax.plot([0.0, 1.0, 2.0], [0.0, 1.5, -0.5], label="a")
+ax.set_xlabel("t [s]")
+ax.legend()
+_figures.save_figure(Path(sys.argv[1]), fig)
+import matplotlib.artist as artist
+from matplotlib.lines import Line2D
+print(artist.kwdoc.__module__, "antialiased" in (Line2D.set.__doc__ or ""))
+"""
+
+
+def test_a_command_draws_the_same_figure_without_matplotlibs_property_docstrings(tmp_path):
+    """``COMMAND_PROCESS`` skips only the ``set()`` docstrings of the classes matplotlib defines
+    while acdrive imports it: the PNG is byte for byte the one a Python session draws, and
+    ``kwdoc`` is matplotlib's own again afterwards."""
+    import subprocess
+    import sys
+
+    out = {}
+    for command in (False, True):
+        png = tmp_path / f"{command}.png"
+        done = subprocess.run([sys.executable, "-c", _DRAW.format(command=command), str(png)],
+                              capture_output=True, text=True, check=True)  # fmt: skip
+        out[command] = (png.read_bytes(), done.stdout.split())
+    assert out[True][0] == out[False][0]
+    assert out[True][1][0] == out[False][1][0] == "matplotlib.artist"  # kwdoc put back
+    # the property list is in a session's docstring, not in the command's
+    assert (out[False][1][1], out[True][1][1]) == ("True", "False")

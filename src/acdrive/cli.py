@@ -146,6 +146,9 @@ def main(argv: list[str] | None = None) -> int:
     if hasattr(signal, "SIGPIPE"):  # `acdrive ... | head` ends quietly, as shell tools do
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     argv = list(sys.argv[1:] if argv is None else argv)
+    from acdrive import _figures
+
+    _figures.COMMAND_PROCESS = True  # matplotlib's docstrings are not built (_figures)
     debug = "--debug" in argv
     if debug:
         argv.remove("--debug")
