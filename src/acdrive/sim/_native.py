@@ -1,10 +1,10 @@
 """The native tier of the simulation loop: a system's whole sampled-data loop as C, compiled by the
 machine's C compiler into a shared library in well under a second, loaded with ctypes.
 
-The C is the export's (``export._c_source.to_c`` for the controller chains,
-``export._plant_source.to_plant_c`` for the plant: the same generated text the FMUs and the
-software-in-the-loop runs use), plus one generated driver that repeats the compiled loop of
-``sim._loop_source`` sample by sample:
+The C is the engine's (``sim._ccode``: ``_c_source.to_c`` for the controller chains,
+``_plant_source.to_plant_c`` for the plant: the same generated text the export writes into the
+FMUs and the software-in-the-loop runs), plus one generated driver that repeats the compiled
+loop of ``sim._loop_source`` sample by sample:
 
 1. at t_k = t0 + k T_s: the plant's redundant states re-normalised and its outputs computed with
    the commands of sample k-1 held (``<plant>_update_outputs``: ``project``, ``plant_outputs``);
@@ -75,7 +75,7 @@ def compiler() -> str | None:
 
 def native_obstacle(system) -> str | None:
     """Why the native tier cannot run ``system`` (None: it can)."""
-    from acdrive.export._kinds import c_step_of, plant_c_of
+    from acdrive.sim._ccode._kinds import c_step_of, plant_c_of
 
     if compiler() is None:
         return "no C compiler found (cc, gcc or $CC)"
@@ -131,8 +131,8 @@ class NativeSource:
 
 def native_source(system) -> NativeSource:
     """The C of ``system``'s native loop (module docstring)."""
-    from acdrive.export._c_source import to_c
-    from acdrive.export._plant_source import to_plant_c
+    from acdrive.sim._ccode._c_source import to_c
+    from acdrive.sim._ccode._plant_source import to_plant_c
 
     # the sample time and substeps are overwritten per run (acdn_run); 1.0 and 1 are stand-ins
     plant = to_plant_c(system, 1.0, 1, name=_PLANT, description="acdrive native loop",
