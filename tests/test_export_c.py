@@ -124,11 +124,54 @@ def test_part_without_c_is_named():
     assert "toy" in message and "_NoC" in message and "\n" not in message
 
 
+#: run in a fresh interpreter: the engine's C registry loaded, then the PM drive's controller
+#: parts built and their C looked up, then a subclass of one (whose C is not its parent's)
+_C_MODULE_LOOKUP = """
+import json, sys
+from acdrive.sim._ccode import _kinds
+engine_kinds = _kinds.exportable_kinds()
+from acdrive.drives.pm import PMSpeedPI, controller_parts
+from acdrive.scenarios import load_scenario
+parts = controller_parts(load_scenario("pm-bly171d-speed"))
+imported_before = "acdrive.drives.pm._c_kinds" in sys.modules
+found = {type(p).__name__: _kinds.c_step_of(p) is _kinds._REGISTRY[type(p)] for p in parts.values()}
+class MySpeedPI(PMSpeedPI):
+    pass
+mine = MySpeedPI("mine", **parts["speed_pi"].values)
+try:
+    _kinds.c_step_of(mine)
+    refused = ""
+except Exception as error:
+    refused = str(error)
+print(json.dumps({"engine": engine_kinds, "before": imported_before, "found": found,
+                  "after": "acdrive.drives.pm._c_kinds" in sys.modules, "refused": refused}))
+"""
+
+
+def test_a_drive_kinds_c_is_found_through_its_class():
+    """The registry below the drives names no drive: the PM controller kinds' C
+    (``drives.pm._c_kinds``) is imported on the first look-up of one of them, from the module
+    their class names as ``C_MODULE``; a subclass (another kind) is still refused by name."""
+    import json
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _C_MODULE_LOOKUP], capture_output=True,
+                          text=True, check=True)  # fmt: skip
+    seen = json.loads(done.stdout)
+    assert "SpeedReference" in seen["engine"] and "PMSpeedPI" not in seen["engine"]
+    assert not seen["before"] and seen["after"]
+    assert seen["found"] == dict.fromkeys(
+        ["PMSpeedPI", "PMTorqueReference", "RotorFrameCurrentController"], True
+    )
+    assert seen["refused"].startswith("mine: part kind MySpeedPI has no C implementation")
+    assert "C_MODULE" in seen["refused"] and "\n" not in seen["refused"]
+
+
 def test_cli_part_without_c_exit_2(tmp_path, capsys, monkeypatch):
     """A kind without C (here the speed reference's entry taken out of the registry): one line
     naming the part, exit 2, nothing written."""
     from acdrive.control._speed import SpeedReference
-    from acdrive.export import _kinds as kinds
+    from acdrive.sim._ccode import _kinds as kinds
 
     kinds.exportable_kinds()  # loads the registry
     monkeypatch.delitem(kinds._REGISTRY, SpeedReference)

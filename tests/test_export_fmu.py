@@ -366,8 +366,8 @@ def test_direct_outputs_without_c_are_refused(monkeypatch):
     from acdrive.core._parts import ContinuousPart, SampledPart
     from acdrive.core._signals import Layout, real
     from acdrive.errors import InputError
-    from acdrive.export import _kinds
-    from acdrive.export._plant_source import to_plant_c
+    from acdrive.sim._ccode import _kinds
+    from acdrive.sim._ccode._plant_source import to_plant_c
     from acdrive.sim._system import System
 
     class Command(SampledPart):

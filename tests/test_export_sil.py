@@ -186,8 +186,8 @@ def test_no_limit_stand_ins_are_left_out_of_a_float_comparison():
 
     import numpy as np
 
-    from acdrive.export._prelude import FLOAT_NO_LIMIT, PRELUDE
     from acdrive.export._sil import deviation
+    from acdrive.sim._ccode._prelude import FLOAT_NO_LIMIT, PRELUDE
 
     assert f"ACD_R({FLOAT_NO_LIMIT!r})" in PRELUDE
     held = float(np.float32(FLOAT_NO_LIMIT))

@@ -1,7 +1,13 @@
 """The layers of acdrive, read from the import statements of its sources (no import is executed).
 
-The engine and the parts (``sim``, ``core``, ``plant``, ``machines``, ``control``) know no drive;
-the drives build on them; scenarios, batches, sweeps, the analysis and the commands reach a drive
+The engine and the parts (``sim``, ``core``, ``plant``, ``machines``, ``control``) import only one
+another and acdrive's top-level helper modules (``_cache``, ``_jit``, ``errors``, ...), at any
+level: no drive, no export, nothing else above them. The C of the parts and the generators of a
+system's C (``sim._ccode``) are the engine's: its native tier (``sim._native``) runs them, and the
+plant's C integrates with its Runge-Kutta tableau (``sim._integrators``); the export
+(``acdrive.export``) builds on them from above, and a drive's own controller kinds keep their C in
+the drive's package (named by the class's ``C_MODULE``, imported by the C registry without naming
+the drive). The drives build on the engine; scenarios, batches, sweeps, the analysis and the commands reach a drive
 only through the registry (``acdrive.drives._registry``, whose ``BUILTIN`` table is the one place
 that names a drive's package). Module-level imports must form no cycle, so every module can be
 imported on its own.
@@ -24,7 +30,8 @@ from pathlib import Path
 
 SOURCE = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = "acdrive"
-#: the layers below the drives: none of them may import acdrive.drives or name a drive kind
+#: the layers below the drives and the export (``sim`` with its C, ``sim._ccode``): they import
+#: only one another and acdrive's top-level helper modules, and name no drive kind
 ENGINE_LAYERS = ("sim", "core", "plant", "machines", "control")
 #: the drive packages, which only acdrive.drives itself (and the registry's BUILTIN) may name
 DRIVE_PACKAGES = ("acdrive.drives.dfim", "acdrive.drives.cage_im", "acdrive.drives.pm")
@@ -254,6 +261,15 @@ def test_the_graph_sees_the_drives_and_the_registry():
     )
 
 
+def test_the_graph_sees_the_engines_c_from_both_sides():
+    """The reader finds the engine's native tier importing the engine's C inside a function and
+    the export and the PM drive's C kinds importing it from above, so an empty list of upward
+    imports means something."""
+    assert "acdrive.sim._ccode._c_source" in GRAPH.function_level["acdrive.sim._native"]
+    assert "acdrive.sim._ccode._c_source" in GRAPH.module_level["acdrive.export._fmu"]
+    assert "acdrive.sim._ccode._kinds" in GRAPH.module_level["acdrive.drives.pm._c_kinds"]
+
+
 def test_no_module_level_import_cycle():
     cycles = GRAPH.cycles(GRAPH.module_level)
     assert not cycles, "module-level import cycles:\n" + "\n".join(
@@ -269,17 +285,44 @@ def test_no_import_cycle_even_inside_functions():
     assert not cycles, "import cycles:\n" + "\n".join(GRAPH.describe(c, every) for c in cycles)
 
 
+def _in_engine(module: str) -> bool:
+    return any(_in(module, f"{PACKAGE}.{layer}") for layer in ENGINE_LAYERS)
+
+
+def _is_top_level_helper(graph: ImportGraph, module: str) -> bool:
+    """A single-file module directly under acdrive/ (``acdrive._cache``, ``acdrive.errors``)."""
+    return module.count(".") == 1 and graph.files[module].name != "__init__.py"
+
+
+def engine_imports_above(graph: ImportGraph) -> list[str]:
+    """Every import of an engine module (at module or function level, or for a type checker)
+    of a module that is neither in the engine layers nor a top-level helper module: acdrive.export,
+    acdrive.drives, or anything else above the engine."""
+    bad = []
+    for module, targets in graph.all_imports().items():
+        if not _in_engine(module):
+            continue
+        for target, line in targets.items():
+            if not (_in_engine(target) or _is_top_level_helper(graph, target)):
+                bad.append(f"{module} line {line} imports {target}")
+    return bad
+
+
+def test_engine_layers_import_only_downward():
+    """sim (with its C, sim._ccode), core, plant, machines and control import nothing of
+    acdrive.export or acdrive.drives, nor of any other layer above them, at any level: only one
+    another and the top-level helper modules."""
+    bad = engine_imports_above(GRAPH)
+    assert not bad, "\n".join(bad)
+
+
 def test_engine_layers_know_no_drive():
-    """sim, core, plant, machines and control import nothing of acdrive.drives (at module or
-    function level) and name no drive kind in a string of their code."""
+    """sim, core, plant, machines and control name no drive kind in a string of their code (their
+    imports: the test above)."""
     bad = []
     for module in GRAPH.files:
-        if not any(_in(module, f"{PACKAGE}.{layer}") for layer in ENGINE_LAYERS):
+        if not _in_engine(module):
             continue
-        for edges in (GRAPH.module_level, GRAPH.function_level):
-            for target, line in edges[module].items():
-                if _in(target, f"{PACKAGE}.drives"):
-                    bad.append(f"{module} line {line} imports {target}")
         for text, line in _strings(GRAPH.trees[module]):
             if text in DRIVE_KINDS or any(_in(text, p) for p in DRIVE_PACKAGES):
                 bad.append(f"{module} line {line} names the drive {text!r}")
@@ -301,7 +344,6 @@ ONE_DRIVE_MODULES = {
     "acdrive._report.speed_overshoot": "Bodson reproduction",
     "acdrive._report.im.figures": "cage-IM paper reproduction",
     "acdrive._report.im.numbers": "cage-IM paper reproduction",
-    "acdrive.export._kinds.pm": "the C steps of the PM drive's controller parts (keyed by their class)",
 }
 
 
@@ -354,17 +396,25 @@ def _builtin_table_lines(module: str) -> set[int]:
 
 
 def test_a_planted_cycle_and_a_planted_drive_import_are_seen(tmp_path):
-    """The checks can fail: a copy of two modules importing each other, and an engine module
-    importing a drive, are found by the same reader."""
+    """The checks can fail: a copy of two modules importing each other, an engine module
+    importing a drive, and one importing the export inside a function, are found by the same
+    reader; an import of a top-level helper module is not."""
     package = tmp_path / PACKAGE
     (package / "sim").mkdir(parents=True)
     (package / "drives" / "pm").mkdir(parents=True)
-    for folder in (package, package / "sim", package / "drives", package / "drives" / "pm"):
+    (package / "export").mkdir(parents=True)
+    for folder in (package, package / "sim", package / "drives", package / "drives" / "pm",
+                   package / "export"):  # fmt: skip
         (folder / "__init__.py").write_text("")
     (package / "sim" / "a.py").write_text("from acdrive.sim import b\n")
     (package / "sim" / "b.py").write_text(
         "from . import a\nfrom acdrive.drives.pm import _plugin\n"
     )
+    (package / "sim" / "c.py").write_text(
+        "from acdrive import _cache\n\ndef native():\n    from acdrive.export import _native\n"
+    )
+    (package / "_cache.py").write_text("")
+    (package / "export" / "_native.py").write_text("")
     (package / "drives" / "pm" / "_plugin.py").write_text("import acdrive.sim.a\n")
     graph = ImportGraph(tmp_path)
     cycles = graph.cycles(graph.module_level)
@@ -372,6 +422,10 @@ def test_a_planted_cycle_and_a_planted_drive_import_are_seen(tmp_path):
         {"acdrive.sim.a", "acdrive.sim.b", "acdrive.drives.pm._plugin"}
     ]
     assert "acdrive.drives.pm._plugin" in graph.module_level["acdrive.sim.b"]
+    assert engine_imports_above(graph) == [
+        "acdrive.sim.b line 2 imports acdrive.drives.pm._plugin",
+        "acdrive.sim.c line 4 imports acdrive.export._native",
+    ]
 
 
 def _package(module: str) -> str:
@@ -383,8 +437,13 @@ def _package(module: str) -> str:
 
 
 def main() -> None:
-    """Print the cycles among modules (module-level imports; then all imports, function-level and
-    typing-only included) and among subpackages (all imports)."""
+    """Print the imports of the engine layers from above them, the cycles among modules
+    (module-level imports; then all imports, function-level and typing-only included) and among
+    subpackages (all imports)."""
+    upward = engine_imports_above(GRAPH)
+    print(f"{len(upward)} import(s) of the engine layers from above them, all imports")
+    for line in upward:
+        print("  " + line)
     every = GRAPH.all_imports()
     for label, edges in (("module-level", GRAPH.module_level), ("all", every)):
         cycles = GRAPH.cycles(edges)

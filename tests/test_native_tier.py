@@ -1,8 +1,9 @@
-"""The native tier of the loop (``acdrive.export._native``): the whole sampled-data loop as C from
-the parts' export, compiled by the machine's C compiler. Under strict IEEE arithmetic it gives the
-specialised loop's numbers bit for bit (the same operations in the same order); under numba's
-default fast-math the two differ by rounding only; a system it cannot run falls back to numba's
-tiers and says why; a damaged or half-built library is never used."""
+"""The native tier of the loop (``acdrive.sim._native``): the whole sampled-data loop as C from
+the parts' C (``acdrive.sim._ccode``, the text the export writes), compiled by the machine's C
+compiler. Under strict IEEE arithmetic it gives the specialised loop's numbers bit for bit (the
+same operations in the same order); under numba's default fast-math the two differ by rounding
+only; a system it cannot run falls back to numba's tiers and says why; a damaged or half-built
+library is never used."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import numpy as np
 import pytest
 
 from acdrive.errors import InputError, SimulationDiverged
-from acdrive.export import _native
+from acdrive.sim import _native
 from acdrive.sim._system import System
 
 needs_cc = pytest.mark.skipif(_native.compiler() is None, reason="no C compiler on this machine")

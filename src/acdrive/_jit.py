@@ -5,7 +5,7 @@ costs no check per division); the engine checks the state for non-finite values 
 nothing non-finite goes unnoticed. ``cache=True``: a second run does not pay the compile time.
 
 **Lazy kernels.** Importing numba costs about 0.35 CPU-s and its first use (even a load from the
-cache) another 0.4 s; a run in the native tier (``export._native``) needs neither. So the
+cache) another 0.4 s; a run in the native tier (``sim._native``) needs neither. So the
 decorators here do not import numba: they wrap the function in a :class:`LazyKernel`, which
 keeps the Python function (``py_func``, what the code generators read) and creates numba's
 dispatcher on first need: a call from Python, or any attribute of a dispatcher asked for. numba

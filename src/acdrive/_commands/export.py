@@ -64,9 +64,9 @@ def register(subparsers):
 
 def run_c(args) -> int:
     from acdrive._output import OutputFolder
-    from acdrive.export._c_source import require_c_name
     from acdrive.export._scenario import export_setup
     from acdrive.scenarios._loader import load_scenario
+    from acdrive.sim._ccode._c_source import require_c_name
 
     setup = load_scenario(args.scenario)
     if args.name is not None:
@@ -139,9 +139,9 @@ def run_fmu(args) -> int:
     from pathlib import Path
 
     from acdrive._output import OutputFolder
-    from acdrive.export._c_source import require_c_name
     from acdrive.export._fmu_check import PARTS, scenario_fmus
     from acdrive.scenarios._loader import load_scenario
+    from acdrive.sim._ccode._c_source import require_c_name
 
     setup = load_scenario(args.scenario)
     if args.name is not None:

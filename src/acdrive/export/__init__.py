@@ -1,16 +1,17 @@
 """Controllers exported as C99 and run in acdrive's loop (software in the loop).
 
 ``to_c(system, sample_time, initial, held)`` writes the sampled controller chains of a system
-as one header and one source (``acdrive.export._c_source``); ``run_in_loop`` compiles them with
-the system's C compiler and runs them in place of the compiled sampled parts
-(``acdrive.export._sil``); ``target_report(targets)`` (a case or a scenario) and
-``board_cost(compiled, export, ...)`` (any system's export) cross-compile the float build for a
-Cortex-M4F and count its instructions per step on QEMU's board model (``acdrive.export._cost``,
-``_target``). docs/guide/export.md describes the files and the checks.
+as one header and one source (the engine's C generator, ``acdrive.sim._ccode._c_source``, which
+the native tier of the loop compiles too); ``run_in_loop`` compiles them with the system's C
+compiler and runs them in place of the compiled sampled parts (``acdrive.export._sil``);
+``target_report(targets)`` (a case or a scenario) and ``board_cost(compiled, export, ...)`` (any
+system's export) cross-compile the float build for a Cortex-M4F and count its instructions per
+step on QEMU's board model (``acdrive.export._cost``, ``_target``). docs/guide/export.md
+describes the files and the checks.
 """
 
-from acdrive.export._c_source import CExport, to_c
 from acdrive.export._cost import board_cost, target_report
 from acdrive.export._sil import run_in_loop
+from acdrive.sim._ccode._c_source import CExport, to_c
 
 __all__ = ["CExport", "board_cost", "run_in_loop", "target_report", "to_c"]

@@ -94,8 +94,8 @@ def as_float32(replay: bytes) -> bytes:
 
 def case_export(target: str, duration: float | None = None):
     """(setup, drive, initial, held, export) of a case or a scenario of one run, shortened."""
-    from acdrive.export._c_source import to_c
     from acdrive.export._scenario import built, c_name
+    from acdrive.sim._ccode._c_source import to_c
 
     case, setup = _case_setup(target, duration)
     drive, initial, held = built(setup)

@@ -37,10 +37,10 @@ from xml.sax.saxutils import quoteattr
 
 from acdrive.core._parts import Part
 from acdrive.errors import InputError
-from acdrive.export._c_source import CExport, _port_name, _value_lines
 from acdrive.export._fmi2 import FMI2_WRAPPER
-from acdrive.export._plant_source import PlantExport
 from acdrive.export._sil import CFLAGS, find_compiler
+from acdrive.sim._ccode._c_source import CExport, _port_name, _value_lines
+from acdrive.sim._ccode._plant_source import PlantExport
 
 PLATFORM = "linux64"
 

@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.export._c_source import to_c
 from acdrive.export._fmu import build_fmu, controller_model, plant_model
-from acdrive.export._plant_source import to_plant_c
 from acdrive.export._scenario import built, c_name
+from acdrive.sim._ccode._c_source import to_c
+from acdrive.sim._ccode._plant_source import to_plant_c
 
 #: plant FMU against acdrive, open and closed loop: each signal's largest difference as a
 #: fraction of its peak (the issue's bound for the plant at the same step)

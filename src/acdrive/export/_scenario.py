@@ -9,8 +9,8 @@ import math
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.export._c_source import CExport, to_c
-from acdrive.export._prelude import FLOAT_NO_LIMIT
+from acdrive.sim._ccode._c_source import CExport, to_c
+from acdrive.sim._ccode._prelude import FLOAT_NO_LIMIT
 
 #: double build against acdrive (ACDRIVE_STRICT_MATH=1): each logged signal's largest
 #: difference over the run, as a fraction of that signal's peak (the issue's bound)

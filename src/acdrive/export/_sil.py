@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from acdrive.errors import InputError
-from acdrive.export._c_source import CExport, ChainModel, Member
+from acdrive.sim._ccode._c_source import CExport, ChainModel, Member
 
 #: gcc flags of the library: -ffp-contract=off keeps every product and sum rounded on its own
 #: (no fused multiply-add), as numba compiles the kernels without fast-math
@@ -228,8 +228,9 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
 def deviation(reference, other, no_limit: float | None = None) -> dict[str, tuple[float, float]]:
     """Per logged signal: (largest |difference| over the run, peak |value| of the reference).
     ``no_limit``: samples where both runs are at or beyond it in magnitude (each holding its
-    build's "no limit" stand-in, ``_prelude.FLOAT_NO_LIMIT`` in float, 1e300 in double) are left
-    out of both; a sample where only one of them is counts as the difference it is."""
+    build's "no limit" stand-in, ``sim._ccode._prelude.FLOAT_NO_LIMIT`` in float, 1e300 in
+    double) are left out of both; a sample where only one of them is counts as the difference it
+    is."""
     out = {}
     for j, name in enumerate(reference.columns):
         a, b = reference.data[:, j], other.data[:, j]

@@ -94,9 +94,9 @@ class CompiledSystem:
         self._generalise()
 
     def _nativise(self, required: bool) -> bool:
-        """Build or load the native loop (``export._native``) if it can run this system; else
+        """Build or load the native loop (``sim._native``) if it can run this system; else
         keep the reason (``required``: ACDRIVE_LOOP_TIER=native, an error naming it)."""
-        from acdrive.export import _native
+        from acdrive.sim import _native
 
         obstacle = _native.native_obstacle(self.system)
         if obstacle is None:

@@ -1,7 +1,7 @@
 """Which loop runs a system, and what it costs to get it: the tiers of the compiled loop.
 
-* **native**: the whole loop as C (``export._native``: the parts' C from their export, one
-  generated driver), compiled by the machine's C compiler in well under a second for a new
+* **native**: the whole loop as C (``sim._native``: the parts' C from ``sim._ccode``, the text
+  the export writes, and one generated driver), compiled by the machine's C compiler in well under a second for a new
   topology, loaded without numba's dispatcher; as fast per step as the specialised loop and,
   under strict math, bit-identical to it. Single runs take it when every part kind has C and a
   C compiler is present.

@@ -49,6 +49,10 @@ from acdrive.drives.pm._design import (
 from acdrive.errors import InputError
 from acdrive.plant._converter import max_voltage_magnitude
 
+#: the module that writes the three parts' steps in C (``Part.C_MODULE``: the C registry imports
+#: it when it first looks one of them up)
+C_KINDS = "acdrive.drives.pm._c_kinds"
+
 #: the controller's machine estimates, declared once for the three parts
 ESTIMATES = (
     real("R_s", "ohm", "stator resistance (controller's estimate)", "positive"),
@@ -136,6 +140,7 @@ class PMTorqueReference(SampledPart):
     DEFAULTS: ClassVar[dict] = {"margin": 0.9}
     EVENTS = REF_EVENTS
     step = torque_reference_step
+    C_MODULE = C_KINDS
 
     def check(self) -> None:
         _check_machine(self)
@@ -197,6 +202,7 @@ class PMSpeedPI(SampledPart):
     DEFAULTS: ClassVar[dict] = {"K_F": 1.0, "margin": 0.9}
     EVENTS = ("torque_limit",)
     step = pm_speed_pi_step
+    C_MODULE = C_KINDS
 
     def check(self) -> None:
         require_feedforward_fraction(f"{self.name}.K_F", self.values["K_F"])
@@ -303,3 +309,4 @@ class RotorFrameCurrentController(SampledPart):
     DEFAULTS: ClassVar[dict] = {"advance": 0.5, "decouple": 1.0}
     EVENTS = ("saturated",)
     step = rotor_current_step
+    C_MODULE = C_KINDS

@@ -14,8 +14,8 @@ from acdrive.control._bodson import (
     Synchroniser,
 )
 from acdrive.control._dfim import MIN_SUPPLY_FREQUENCY
-from acdrive.export._kinds import CStep, CSupport, register
-from acdrive.export._kinds.common import CLIP_MAGNITUDE, SPEED_PI, WRAP
+from acdrive.sim._ccode._kinds import CStep, CSupport, register
+from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, SPEED_PI, WRAP
 
 #: constants of the laws, taken from the Python modules that define them
 CONSTANTS = CSupport(

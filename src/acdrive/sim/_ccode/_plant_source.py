@@ -26,9 +26,12 @@ plant FMU does the same: the outputs after a step to t_{k+1} are computed with t
 that step integrated, and setting an input changes no output until the next step. There is no
 same-instant feedthrough across the boundary, so nothing is refused for it.
 
-Each kind's C is written once in ``acdrive.export._kinds.plant`` (the seam of the controller
+Each kind's C is written once in ``sim._ccode._kinds.plant`` (the seam of the controller
 kinds). A part with direct outputs or a ``project`` kernel its C lacks is refused, naming the
 part.
+
+The plant FMU (``acdrive.export``) is built from this text; the native tier of the loop
+(``sim._native``) compiles the same text, with its record hook, into its library.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from dataclasses import dataclass
 
 from acdrive.core._parts import Port, SampledPart
 from acdrive.errors import InputError
-from acdrive.export._c_source import (
+from acdrive.sim._ccode._c_source import (
     KindTypes,
     Member,
     _comment,
@@ -51,8 +54,8 @@ from acdrive.export._c_source import (
     part_params_lines,
     require_c_name,
 )
-from acdrive.export._kinds import PLANT_ROLES, plant_c_of
-from acdrive.export._prelude import HELPERS, PRELUDE
+from acdrive.sim._ccode._kinds import PLANT_ROLES, plant_c_of
+from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 
 #: the compiled loop's rule (sim._loop_source.integrate): a segment whose remaining length is
@@ -89,7 +92,7 @@ def _check_exportable(system) -> None:
             raise InputError(
                 part.name,
                 f"part kind {type(part).__name__} has direct outputs, which its C does not "
-                "write (a direct_outputs body in acdrive.export._kinds.plant)",
+                "write (a direct_outputs body in acdrive.sim._ccode._kinds.plant)",
             )
         if type(part).project is not None and plant_c_of(part).project is None:
             raise InputError(
@@ -266,7 +269,7 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
     L = ["    const ACDRIVE_REAL T_s = p->sample_time;", "    ACDRIVE_REAL h, tk = t;",
          "    int j;"]  # fmt: skip
     # a hook between the modulators and the integration, where acdrive's loop records a sample
-    # (undefined in an export; the native tier defines it, acdrive.export._native)
+    # (undefined in an export; the native tier defines it, acdrive.sim._native)
     hook = ["#ifdef ACD_AFTER_MODULATE", "    ACD_AFTER_MODULATE(t, s);", "#endif"]
     if not modulators:
         L += hook

@@ -4,7 +4,7 @@ the speed PI (25), the piecewise-linear table; each mirrors its numba function."
 from __future__ import annotations
 
 from acdrive._frames import LIMIT_RTOL
-from acdrive.export._kinds import CSupport
+from acdrive.sim._ccode._kinds import CSupport
 
 #: _frames.beyond_limit's tolerance: a magnitude a few ulps above its limit is at it
 LIMIT_RTOL_C = CSupport(

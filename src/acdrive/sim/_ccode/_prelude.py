@@ -14,7 +14,8 @@ is Smith's algorithm as in CPython's ``_Py_c_quot``, a magnitude is ``hypot``, a
 
 #: the float build's finite stand-in for "no limit" (``ACD_HUGE``; the kernels' and the double
 #: build's is 1e300, beyond float's range): a float comparison leaves out the samples where
-#: both runs hold their stand-in (``export._sil.deviation``)
+#: both runs hold their stand-in (the export's software-in-the-loop comparison,
+#: ``acdrive.export._sil.deviation``)
 FLOAT_NO_LIMIT = 1e38
 
 PRELUDE = r"""

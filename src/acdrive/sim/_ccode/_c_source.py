@@ -4,12 +4,15 @@ declarations (docs/guide/export.md).
 Per part kind: up to four structs (``acd_<kind>_params``, ``_state``, ``_in``, ``_out``, each
 present if the kind declares any such quantity) with one member per declared quantity, its unit
 and description in a comment, and a static step function whose body is the kind's C
-(``acdrive.export._kinds``). Per chain: ``<chain>_params`` (the sample time and each part's
+(``sim._ccode._kinds``). Per chain: ``<chain>_params`` (the sample time and each part's
 parameters), ``<chain>_state`` (each part's discrete state and held outputs),
 ``<chain>_inputs`` (the plant outputs it reads), ``<chain>_outputs`` (its commands and each
 part's event bits), and four functions: ``<chain>_step``, ``<chain>_set_params`` (the values of
 the exported system), ``<chain>_reset`` (its initial states and held outputs) and nothing
 else: no global variables, no dynamic memory, no recursion, loops with fixed bounds.
+
+The export writes this text into files (``acdrive.export.to_c``); the native tier of the loop
+(``sim._native``) compiles the same text into its library.
 """
 
 from __future__ import annotations
@@ -22,9 +25,9 @@ import numpy as np
 
 from acdrive.core._parts import SampledPart
 from acdrive.errors import InputError
-from acdrive.export._chain import Chain, chains_of
-from acdrive.export._kinds import CStep, CSupport, c_step_of
-from acdrive.export._prelude import HELPERS, PRELUDE
+from acdrive.sim._ccode._chain import Chain, chains_of
+from acdrive.sim._ccode._kinds import CStep, CSupport, c_step_of
+from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
 
 ROLES = ("params", "state", "in", "out")
 
@@ -388,7 +391,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     """C99 header and source of the controller chains of ``system`` (docs/guide/export.md):
     ``initial`` and ``held`` as for ``CompiledSystem.run`` give the values ``<chain>_reset``
     writes, ``sample_time`` the period ``<chain>_set_params`` writes. Raises ``InputError``
-    naming a part whose kind has no C (``acdrive.export._kinds``), and one for anything but a
+    naming a part whose kind has no C (``sim._ccode._kinds``), and one for anything but a
     ``System``: a list of parts has no wiring, and the wiring is what says which plant outputs a
     chain reads and which commands it gives (build the System from the parts first).
     ``open_loop``: a chain that reads no plant output is kept (``chain_model``; the native loop's
@@ -396,8 +399,8 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
     ``<chain>_set_params`` and ``<chain>_reset`` (the native loop loads both from acdrive's packed
     arrays, so its C names no parameter value and one library serves every parameter set)."""
     # a System by what the export reads of it (its parts, chains, slots and wiring), not by
-    # importing acdrive.sim._system: the engine imports the export's C for its native loop
-    # (export._native), so the class check here would close an import cycle
+    # importing acdrive.sim._system: System imports the loop's tiers (sim._compiled), whose
+    # native tier (sim._native) calls to_c, so the class check here would close an import cycle
     if not all(hasattr(system, attr) for attr in _SYSTEM_READS):
         what = "a list of parts" if isinstance(system, (list, tuple)) else type(system).__name__
         raise InputError(

@@ -1,4 +1,4 @@
-"""The C implementation of each sampled part kind: a registry keyed by the part's class.
+"""The C implementation of each part kind: registries keyed by the part's class.
 
 Each entry is a :class:`CStep`: the body of the kind's step function in C (the second
 implementation of its numba ``step`` kernel, kept equal to it by the software-in-the-loop tests,
@@ -11,11 +11,17 @@ sample period; it returns the event bits (``ACD_<KIND>_<EVENT>`` masks, from ``E
 
 A kind is looked up by its exact class: a subclass with another kernel needs its own entry.
 
-Plant kinds (continuous parts and modulators, for the plant FMU, ``acdrive.export._plant_source``)
+Plant kinds (continuous parts and modulators, for the plant C, ``sim._ccode._plant_source``)
 have a second registry of :class:`PlantC` entries, the same seam: bodies written against the
 structs the generator declares from the kind's layouts (``p->``, ``x->`` its continuous state,
 ``u->``, ``y->``, ``dx->`` the derivative of the state; a modulator's ``s->``, ``dt[i]`` and
 ``v[i]``, the outputs of segment i).
+
+Where the C is written: the engine's own kinds (the parts of ``core``, ``plant``, ``machines`` and
+``control``) in the modules of this package, registered on the first look-up; a kind defined
+above the engine (a drive's own controller) in a module of its own package, which its class
+names as ``C_MODULE`` (``Part.C_MODULE``): a look-up that finds no entry for the class imports
+that module, whose import registers the kind. The registry names no such module itself.
 """
 
 from __future__ import annotations
@@ -83,13 +89,12 @@ class PlantC:
 PLANT_ROLES = ("state_outputs", "direct_outputs", "rhs", "segments", "project")
 
 
-#: modules whose import registers their kinds (imported on first look-up)
+#: the modules whose import registers the engine's own kinds (imported on the first look-up)
 _MODULES = (
-    "acdrive.export._kinds.sensors",
-    "acdrive.export._kinds.bodson",
-    "acdrive.export._kinds.foc",
-    "acdrive.export._kinds.pm",
-    "acdrive.export._kinds.plant",
+    "acdrive.sim._ccode._kinds.sensors",
+    "acdrive.sim._ccode._kinds.bodson",
+    "acdrive.sim._ccode._kinds.foc",
+    "acdrive.sim._ccode._kinds.plant",
 )
 _REGISTRY: dict[type, CStep] = {}
 _PLANT_REGISTRY: dict[type, PlantC] = {}
@@ -114,15 +119,27 @@ def _load() -> None:
         _loaded = True
 
 
+def _entry(registry: dict, kind: type):
+    """``kind``'s entry in ``registry``, after importing the module the class names as
+    ``C_MODULE`` if it has none yet (None: no C)."""
+    entry = registry.get(kind)
+    module = getattr(kind, "C_MODULE", None)
+    if entry is None and module:
+        importlib.import_module(module)
+        entry = registry.get(kind)
+    return entry
+
+
 def c_step_of(part) -> CStep:
     """The C step of ``part``'s kind, or an InputError naming the part and the rule."""
     _load()
-    step = _REGISTRY.get(type(part))
+    step = _entry(_REGISTRY, type(part))
     if step is None:
         raise InputError(
             part.name,
             f"part kind {type(part).__name__} has no C implementation, so the chain cannot be "
-            "exported (acdrive.export._kinds lists the kinds that have one)",
+            "exported (a kind's C is registered in acdrive.sim._ccode._kinds or in the module "
+            "its class names as C_MODULE)",
         )
     return step
 
@@ -130,17 +147,19 @@ def c_step_of(part) -> CStep:
 def plant_c_of(part) -> PlantC:
     """The C of plant ``part``'s kind, or an InputError naming the part and the rule."""
     _load()
-    c = _PLANT_REGISTRY.get(type(part))
+    c = _entry(_PLANT_REGISTRY, type(part))
     if c is None:
         raise InputError(
             part.name,
             f"part kind {type(part).__name__} has no C implementation, so the plant cannot be "
-            "exported (acdrive.export._kinds.plant lists the plant kinds that have one)",
+            "exported (a plant kind's C is registered in acdrive.sim._ccode._kinds.plant or in "
+            "the module its class names as C_MODULE)",
         )
     return c
 
 
 def exportable_kinds() -> list[str]:
-    """Names of the part kinds that have a C step."""
+    """Names of the part kinds whose C step is registered: the engine's own, and a kind with a
+    ``C_MODULE`` once that module has been imported (a look-up of one of its parts does)."""
     _load()
     return sorted(k.__name__ for k in _REGISTRY)

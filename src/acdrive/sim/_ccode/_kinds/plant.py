@@ -1,4 +1,4 @@
-"""C of the plant kinds the plant FMU is built from (``acdrive.export._plant_source``): the DC
+"""C of the plant kinds the plant C is built from (``sim._ccode._plant_source``): the DC
 and three-phase sources, the cage induction motor, the PM machine, the DFIM with its supply bus
 and stator relay (Bodson (9)), the free shaft and the averaged converters,
 the switching SVPWM inverter (its segments inside one control period), and the C step of
@@ -12,8 +12,6 @@ from __future__ import annotations
 import math
 
 from acdrive._frames import K_3C, K_PEAK
-from acdrive.export._kinds import CStep, CSupport, PlantC, register, register_plant
-from acdrive.export._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE, DoublyFedMachine
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
@@ -22,6 +20,8 @@ from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
+from acdrive.sim._ccode._kinds import CStep, CSupport, PlantC, register, register_plant
+from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 
 #: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
 TANH = CSupport(

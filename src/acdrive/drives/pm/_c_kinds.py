@@ -1,7 +1,12 @@
-"""C steps of the PM synchronous motor's field-oriented control (``acdrive.drives.pm._control``)
-and the MTPA / field-weakening operating point they evaluate on line (``drives.pm._design``):
-each function mirrors its numba counterpart operation for operation, its bisections with the
-same fixed number of steps."""
+"""The C steps of the PM drive's controller parts (``drives.pm._control``: the speed PI, the
+torque reference, the rotor-frame current controller) and of the MTPA / field-weakening operating
+point they evaluate on line (``drives.pm._design``): each function mirrors its numba counterpart
+operation for operation, its bisections with the same fixed number of steps.
+
+Importing the module registers the three kinds in the engine's C registry
+(``sim._ccode._kinds``), which imports it when it first looks one of them up: each class names
+it as its ``C_MODULE`` (``_control.C_KINDS``), so the registry, below the drives, names no drive.
+"""
 
 from __future__ import annotations
 
@@ -13,8 +18,8 @@ from acdrive.drives.pm._design import (
     CURRENT_LIMITED,
     VOLTAGE_LIMITED,
 )
-from acdrive.export._kinds import CStep, CSupport, register
-from acdrive.export._kinds.common import LIMIT_RTOL_C, SPEED_PI
+from acdrive.sim._ccode._kinds import CStep, CSupport, register
+from acdrive.sim._ccode._kinds.common import LIMIT_RTOL_C, SPEED_PI
 
 DESIGN = CSupport(
     "pm_design",

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from acdrive.control._current import PERIOD_TOL, StationaryCurrentController
 from acdrive.control._foc import IndirectFOC, PositionP, SaturatedSpeedP, SpeedPI
-from acdrive.export._kinds import CStep, CSupport, register
-from acdrive.export._kinds.common import CLIP, LIMIT_RTOL_C, SPEED_PI, TABLE_AT, WRAP
+from acdrive.sim._ccode._kinds import CStep, CSupport, register
+from acdrive.sim._ccode._kinds.common import CLIP, LIMIT_RTOL_C, SPEED_PI, TABLE_AT, WRAP
 
 register(
     IndirectFOC,

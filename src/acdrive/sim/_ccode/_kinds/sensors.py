@@ -9,10 +9,10 @@ from acdrive.control._current import CurrentProgram
 from acdrive.control._delay import ComputationDelay
 from acdrive.control._open_loop import ComplexProgram, VoltageProgram
 from acdrive.control._speed import SpeedReference
-from acdrive.export._kinds import CStep, register
-from acdrive.export._kinds.common import TABLE_AT
 from acdrive.plant._network import ForcedRelay, RelayCommand
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
+from acdrive.sim._ccode._kinds import CStep, register
+from acdrive.sim._ccode._kinds.common import TABLE_AT
 
 register(
     Encoder,

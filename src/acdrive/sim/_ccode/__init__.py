@@ -1,0 +1,20 @@
+"""The engine's C: the C text of each part kind and the generators of a system's controller-chain
+C and plant C, the second implementation of the parts' numba kernels.
+
+* ``_kinds``: the C of each part kind, in registries keyed by the part's class (``CStep`` for a
+  sampled part, ``PlantC`` for a continuous part or a modulator); the engine's own kinds in its
+  modules, a kind defined above the engine (a drive's controller) in the module its class names
+  as ``C_MODULE``;
+* ``_prelude``: the C text every generated file starts with (the real type, the math functions
+  by precision, complex arithmetic);
+* ``_chain``: a system's controller chains (its sampled parts, grouped by their wiring);
+* ``_c_source``: the C99 header and source of the controller chains (``to_c``);
+* ``_plant_source``: the C99 header and source of the plant, with acdrive's integrator
+  (``to_plant_c``).
+
+The native tier of the loop (``sim._native``) compiles this C and runs it in place of numba's
+loop; the export (``acdrive.export``) writes the same text into files, FMUs and board builds. It
+lives in ``sim``: the plant's C integrates with the engine's Runge-Kutta tableau
+(``sim._integrators``) and the engine's native tier runs it; like the rest of the engine it
+imports nothing of the export or of a drive (``tests/test_layers.py``).
+"""
