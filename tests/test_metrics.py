@@ -41,4 +41,3 @@ def test_array_state_equals_the_kernel(n, seed, relay, windows, quantised):
     assert np.array_equal(s_array, s_kernel)
     assert np.array_equal(mask_array, mask_kernel)
     assert np.array_equal(until_array, until_kernel)
-
