@@ -50,11 +50,13 @@ from acdrive.sim._loop_source import (
     step_body,
 )
 
-#: variants per block: rows of ``LANES`` doubles (128 bytes: two cache lines, four AVX2
-#: registers). Measured on the DFIM kernels: a loop of 8 lanes is fully unrolled by LLVM before
-#: its loop vectoriser runs (and numba leaves the SLP vectoriser off), so it stays scalar; 16
-#: lanes vectorise; more only grow the workspace past the L1 cache.
-LANES = 16
+#: variants per block: rows of ``LANES`` doubles (512 bytes, eight AVX-512 registers). Measured on
+#: this machine (Zen 4, numba 0.68.1): a loop of 16 lanes is fully unrolled by LLVM before its loop
+#: vectoriser runs (numba leaves the SLP vectoriser off), so it stays scalar. On 256-512
+#: variants of bodson-ramp, 2 threads, interleaved, control steps per CPU second: 16 lanes
+#: 1.23-1.34 M, 32 lanes 1.48-1.52 M, 64 lanes 1.65-1.68 M, 128 lanes 1.20-1.25 M (the 435 KB
+#: block spills from the L2 cache). A batch needs LANES variants per thread to run in lockstep.
+LANES = 64
 
 #: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
 #: docstring). Measured on 20 variants of bodson-ramp, 100 samples: logged signals within
