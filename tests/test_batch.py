@@ -193,3 +193,13 @@ def test_cage_im_speed_figures_are_the_single_runs():
             assert math.isnan(row[key]), key
         else:
             assert row[key] == pytest.approx(expected, rel=1e-9, abs=1e-12), key
+
+
+def test_an_unknown_base_scenario_is_refused_before_any_variant_is_built():
+    """The base is read once for the whole batch: a scenario that does not exist is one
+    ``InputError`` naming it, not a batch of rows each marked invalid."""
+    from acdrive.batch import simulate_batch
+    from acdrive.errors import InputError
+
+    with pytest.raises(InputError, match="no-such-scenario"):
+        simulate_batch("no-such-scenario", [{}, {"motor[0].load_torque": 0.05}])

@@ -499,11 +499,16 @@ class BatchResult:
 
 
 def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None = None,
-                    substeps: int | None = None):  # fmt: skip
+                    substeps: int | None = None, base_data=None):  # fmt: skip
     """(setup, drive, system with reducers, initial, held, [(reducer, (part, slot))]) of one
     variant; raises ``InputError`` if it is invalid. ``reducers`` None: the drive's default
-    metrics."""
-    data, setup = _base_data(base)
+    metrics. ``base_data``: ``_base_data(base)`` read once for a whole batch (a scenario file
+    is then parsed once, not once per variant); this variant works on a copy of it."""
+    if base_data is None:
+        data, setup = _base_data(base)
+    else:
+        data, setup = base_data
+        data = copy.deepcopy(data)
     fields, part_changes, initial_changes = _split(dict(overrides))
     if fields:
         if data is None:
@@ -566,13 +571,14 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
         reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers)]
     rows: list[dict | None] = [None] * len(variants)
     groups: dict[tuple, list[_Prepared]] = {}
+    base_data = _base_data(base)  # the scenario parsed once for every variant
     for i, overrides in enumerate(variants):
         if not isinstance(overrides, dict):
             rows[i] = _invalid_row(i, "variants: each variant must be a dict", reducers)
             continue
         try:
             setup, _drive, system, initial, held, used = prepare_variant(
-                base, overrides, reducers, integrator, substeps
+                base, overrides, reducers, integrator, substeps, base_data
             )
             ports = []
             if log is not None:
