@@ -162,6 +162,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         parser = build_parser(argv)
         args = parser.parse_args(argv)
+        from acdrive._threads import one_blas_thread
+
+        one_blas_thread()  # numpy's BLAS threads would spin beside the command (_threads)
         return int(call_interruptible(args.handler, args) or 0)
     except InputError as exc:
         if debug:
