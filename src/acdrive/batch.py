@@ -60,6 +60,8 @@ from acdrive._reducer_parts import (
     _NS,
     NO_LIMIT,
     OSC_STATES,
+    REDUCER_KINDS,
+    Reducer,
     _reducer_class,
     _speed_error_class,
     _stats_class,
@@ -68,8 +70,6 @@ from acdrive._reducer_parts import (
 from acdrive.errors import InputError
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._metrics import (
-    LATE_WINDOW_S,
-    OSCILLATION_BAND_HZ,
     SPEED_ERROR_STATES,
     TrackingRule,
     speed_error_figures,
@@ -84,63 +84,8 @@ __all__ = [
     "simulate_batch",
 ]
 
-REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error")
 #: prefix of the parts appended to a system for its reducers
 REDUCER_PREFIX = "reducer_"
-
-
-@dataclass(frozen=True)
-class Reducer:
-    """A metric computed inside the loop.
-
-    ``kind``: ``peak`` (max |x|; also ``<name>_time``), ``mean``, ``rms``, ``exceed`` (samples
-    with |x| > ``limit``; also ``<name>_first_time``, NaN if none), ``final`` (x at the last
-    sample of the window), ``oscillation`` (RMS of x in ``band_hz`` over the last ``window`` s of
-    the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before),
-    ``speed_error`` (``signal`` a speed, ``reference`` its reference, ``gate`` the relay state or
-    None: the columns of ``sim._metrics.speed_error_figures`` in ``unit``, ``suffix`` appended,
-    the tracking window by ``rule``; ``name`` is not used). ``x`` is
-    ``signal`` ("part.output") minus ``reference`` if given; a space vector's magnitude. The
-    window is [``start``, ``stop``] (``stop`` None: the end of the run). The value is multiplied
-    by ``scale`` (e.g. rad/s -> rpm); ``limit`` is in the signal's unit.
-    """
-
-    name: str
-    kind: str
-    signal: str
-    reference: str | None = None
-    start: float = 0.0
-    stop: float | None = None
-    limit: float = 0.0
-    scale: float = 1.0
-    band_hz: tuple[float, float] = OSCILLATION_BAND_HZ
-    window: float = LATE_WINDOW_S
-    gate: str | None = None
-    rule: TrackingRule | None = None
-    unit: str = "rpm"
-    suffix: str = ""
-
-    def column_units(self, signal_unit: str) -> dict[str, str]:
-        """Column -> unit of this reducer's metrics, given the unit of its signal: the signal's
-        unit when the value is not rescaled (``scale`` +-1), else the unit the column's name
-        declares (``acdrive.columns.unit_from_name``: ``_rpm``, ``_a``, ...); times in s, sample
-        counts and ratios dimensionless; a speed error's columns by their names."""
-        from acdrive.columns import unit_from_name
-
-        if self.kind == "speed_error":
-            return {k: unit_from_name(k.removesuffix(self.suffix)) for k in self.columns()}
-        value = signal_unit if abs(self.scale) == 1.0 else unit_from_name(self.name)
-        if self.kind == "exceed":
-            return {self.name: "", f"{self.name}_first_time": "s"}
-        extra = {"peak": {f"{self.name}_time": "s"}, "oscillation": {f"{self.name}_growth": ""}}
-        return {self.name: value, **extra.get(self.kind, {})}
-
-    def columns(self) -> list[str]:
-        if self.kind == "speed_error":
-            state = np.ones(len(SPEED_ERROR_STATES))
-            return [k + self.suffix for k in speed_error_figures(state, 1.0, self.unit)]
-        extra = {"peak": ["_time"], "exceed": ["_first_time"], "oscillation": ["_growth"]}
-        return [self.name] + [self.name + s for s in extra.get(self.kind, [])]
 
 
 def check_reducer(r: Reducer, where: str) -> Reducer:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from acdrive.batch import Reducer
+from acdrive._reducer_parts import Reducer
 
 
 def im_reducers(setup) -> list[Reducer]:

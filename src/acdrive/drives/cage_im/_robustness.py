@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._frames import K_PEAK as SQRT_3_2
-from acdrive.batch import Reducer
+from acdrive._reducer_parts import Reducer
 from acdrive.drives._robustness_seam import (
     FINITE_RUN,
     Criterion,

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from acdrive._frames import K_PEAK as SQRT_3_2
-from acdrive.batch import Reducer
+from acdrive._reducer_parts import Reducer
 from acdrive.sim._metrics import OSCILLATION_FINDING_RPM, RPM_PER_RAD_S
 
 

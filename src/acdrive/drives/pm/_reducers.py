@@ -11,7 +11,7 @@ V_dc / sqrt(2)). A current-step setup compares two runs and is no batch variant 
 from __future__ import annotations
 
 from acdrive._frames import K_PEAK
-from acdrive.batch import Reducer
+from acdrive._reducer_parts import Reducer
 
 
 def pm_reducers(setup) -> list[Reducer]:

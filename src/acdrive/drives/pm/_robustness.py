@@ -18,7 +18,7 @@ Prediction: the larger spectral radius of the two sampled current-loop axes
 
 from __future__ import annotations
 
-from acdrive.batch import Reducer
+from acdrive._reducer_parts import Reducer
 from acdrive.core._signals import pack_table
 from acdrive.drives._robustness_seam import (
     FINITE_RUN,
