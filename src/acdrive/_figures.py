@@ -88,22 +88,19 @@ def _figure_classes():
     the figure modules, ``kwdoc`` gives a one-line pointer instead, and it is put back before
     any figure is drawn. Signatures, behaviour and drawing are untouched; in a Python session
     (``COMMAND_PROCESS`` false) matplotlib is imported as it is."""
+    built = None
     if COMMAND_PROCESS and "matplotlib.figure" not in sys.modules:
         from matplotlib import artist
 
         built = getattr(artist, "kwdoc", None)
         if built is not None:
             artist.kwdoc = lambda _artist: "Properties: see the class's set_* methods."
-        try:
-            from matplotlib.backends.backend_agg import FigureCanvasAgg
-            from matplotlib.figure import Figure
-        finally:
-            if built is not None:
-                artist.kwdoc = built
-        return Figure, FigureCanvasAgg
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    finally:
+        if built is not None:
+            artist.kwdoc = built
     return Figure, FigureCanvasAgg
 
 

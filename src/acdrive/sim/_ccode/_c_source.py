@@ -358,14 +358,13 @@ def kind_declarations(kinds) -> list[str]:
 
 
 @dataclass
-class CExport:
-    """The generated files (``header``, ``source``: text) and the model of their structs."""
+class CFiles:
+    """A generated C header and source (text) named ``name``, and the kinds' struct types."""
 
     name: str
     header: str
     source: str
     kinds: dict
-    chains: list[ChainModel]
 
     @property
     def header_name(self) -> str:
@@ -374,6 +373,13 @@ class CExport:
     @property
     def source_name(self) -> str:
         return f"{self.name}.c"
+
+
+@dataclass
+class CExport(CFiles):
+    """The controller chains' files and the model of their structs."""
+
+    chains: list[ChainModel]
 
 
 def require_c_name(field_name: str, name: str) -> str:

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from acdrive.core._parts import Port, SampledPart
 from acdrive.errors import InputError
 from acdrive.sim._ccode._c_source import (
+    CFiles,
     KindTypes,
     Member,
     _comment,
@@ -64,26 +65,14 @@ SEGMENT_END_RTOL = 1e-12
 
 
 @dataclass
-class PlantExport:
-    """The generated files and what the FMU needs to know of them: the plant parts, the FMU's
+class PlantExport(CFiles):
+    """The plant's files and what the FMU needs to know of them: the plant parts, the FMU's
     inputs (ports of sampled parts feeding the plant) and outputs (every plant part output)."""
 
-    name: str
-    header: str
-    source: str
-    kinds: dict
     continuous: list
     modulators: list
     inputs: list[Port]
     outputs: list[Port]
-
-    @property
-    def header_name(self) -> str:
-        return f"{self.name}.h"
-
-    @property
-    def source_name(self) -> str:
-        return f"{self.name}.c"
 
 
 def _check_exportable(system) -> None:
