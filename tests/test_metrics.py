@@ -41,3 +41,25 @@ def test_array_state_equals_the_kernel(n, seed, relay, windows, quantised):
     assert np.array_equal(s_array, s_kernel)
     assert np.array_equal(mask_array, mask_kernel)
     assert np.array_equal(until_array, until_kernel)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    k=st.one_of(st.integers(0, 10**6), st.integers(2**40, 2**40 + 10**6)),
+    every=st.integers(1, 5000),
+    T_s=st.sampled_from([1e-4, 2e-4, 1 / 3e3, 5e-5, 1e-3]),
+)
+def test_logged_time_is_the_integer_arithmetic_of_the_logged_rows(k, every, T_s):
+    """The reducers' floating-point test of "sample k is logged" (it vectorises over lockstep
+    lanes) gives the integer arithmetic of the logged rows, k % every and (k // every) T_s every,
+    exactly: the same samples and the same times as ``SystemResult.t``."""
+    from acdrive._reducer_parts import _logged_time
+
+    t = k * T_s  # the loop's control time at sample k (t0 = 0)
+    logged, t_log = _logged_time(t, T_s, float(every))
+    n = int(t / T_s + 0.5)  # the sample index the time stands for
+    assert logged == (n % every == 0)
+    if logged:
+        assert t_log == float(n // every) * T_s * every  # SystemResult.t: arange(rows) T_s every
+    else:
+        assert t_log == t

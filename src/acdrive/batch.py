@@ -23,9 +23,10 @@ peak with fast math); otherwise numba's ``prange`` runs the single run's loop on
 bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
-(``acdrive._reducer_parts``) appended after every other part: one "stats" part (``stats_step``) with one channel per signal,
-reference, window and exceed limit (peak |x| and its time, mean, RMS, the count of samples
-beyond a limit and the first such time, the final value), one part per oscillation metric
+(``acdrive._reducer_parts``) appended after every other part: one "stats" part (its step
+generated for its channels) with one channel per signal, reference, window and exceed limit
+(peak |x| and its time, mean, RMS, the count of samples beyond a limit and the first such time,
+the final value), one part per oscillation metric
 (``oscillation_step``: the band-limited RMS in two late windows) and one per speed error
 (``speed_error_step``: the kernel of ``sim._metrics`` that a single run's summary runs on its
 logged samples, so a batch row and summary.json give the same figures under the same names).
@@ -354,14 +355,11 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             (g["x"].var.unit, g["x"].var.kind == "complex", g["ref"] is not None) for g in stats
         )
         cls = _stats_class(channels)
-        values = {"channels": float(len(stats)), "every": float(every)}
+        values = {"every": float(every)}
         for c, g in enumerate(stats):
-            ref_slot = -1 if g["ref"] is None else cls.INPUTS.slot(f"ref{c}")
             values.update({
                 f"start{c}": g["start"], f"stop{c}": g["stop"],
                 f"limit{c}": NO_LIMIT if g["limit"] is None else g["limit"],
-                f"is_complex{c}": float(g["x"].var.kind == "complex"),
-                f"x_slot{c}": float(cls.INPUTS.slot(f"x{c}")), f"ref_slot{c}": float(ref_slot),
             })  # fmt: skip
         part = cls(f"{REDUCER_PREFIX}stats", **values)
         parts.append(part)

@@ -131,12 +131,14 @@ _OUT_V, _OUT_CLOSED = RELAY_OUTPUTS.slot("v"), RELAY_OUTPUTS.slot("closed")
 
 @jit_fast
 def relay_direct_outputs(t, x, u, p, y):
-    closed = u[_IN_CLOSED] != 0.0
-    # a choice of values, not of slots: the same loads on every path vectorise over lanes
-    # (sim._lockstep_source)
-    y[_OUT_V] = u[_IN_BUS] if closed else u[_IN_OPEN]
-    y[_OUT_V + 1] = u[_IN_BUS + 1] if closed else u[_IN_OPEN + 1]
-    y[_OUT_CLOSED] = 1.0 if closed else 0.0
+    # the relay as a switching function c in {0, 1}: v = c v_bus + (1 - c) v_open. Written as
+    # arithmetic, not as a choice: LLVM turns a choice between two inputs into a load from a
+    # chosen slot, which keeps the lockstep lane loop scalar (sim._lockstep_source). Exact for
+    # finite voltages (one of the products is a zero); the sign of a zero may differ.
+    c = 1.0 if u[_IN_CLOSED] != 0.0 else 0.0
+    y[_OUT_V] = c * u[_IN_BUS] + (1.0 - c) * u[_IN_OPEN]
+    y[_OUT_V + 1] = c * u[_IN_BUS + 1] + (1.0 - c) * u[_IN_OPEN + 1]
+    y[_OUT_CLOSED] = c
 
 
 class StatorRelay(ContinuousPart):

@@ -58,6 +58,7 @@ Physical pre-checks, made before any simulation (each an ``InputError`` naming t
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import warnings
 
@@ -330,8 +331,13 @@ def _flux_rate(machine: DFIMParams, R_s: float, L_s: float, R_r: float, w_el: fl
     """Largest |eigenvalue| [1/s] of the flux equations of ``machines._dfim_part`` at a fixed electrical
     rotor speed ``w_el``: d psi_s/dt = -R_s i_s, d psi_r/dt = -R_r i_r + j w_el psi_r in the
     stationary frame (the rotor-side mode turns at w_el there)."""
+    return _flux_rate_of(float(machine.M), float(machine.L_r), R_s, L_s, R_r, w_el)
+
+
+@functools.lru_cache(maxsize=4096)  # a batch's variants mostly share their machines
+def _flux_rate_of(M: float, L_r: float, R_s: float, L_s: float, R_r: float, w_el: float) -> float:
     with np.errstate(all="ignore"):
-        L = np.array([[L_s, machine.M], [machine.M, machine.L_r]])
+        L = np.array([[L_s, M], [M, L_r]])
         try:
             A = -np.diag([R_s, R_r]) @ np.linalg.inv(L) + np.diag([0.0, 1j * w_el])
         except np.linalg.LinAlgError:
