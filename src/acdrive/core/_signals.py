@@ -148,6 +148,7 @@ class Layout:
 
     def __init__(self, *variables: Var, relations: tuple[Relation, ...] = ()):
         self.vars = tuple(variables)
+        self._by_name = {v.name: v for v in self.vars}
         names = [v.name for v in self.vars]
         duplicates = {n for n in names if names.count(n) > 1}
         if duplicates:
@@ -191,13 +192,10 @@ class Layout:
         return len(self.vars)
 
     def __contains__(self, name: str) -> bool:
-        return any(v.name == name for v in self.vars)
+        return name in self._by_name
 
     def var(self, name: str) -> Var:
-        for v in self.vars:
-            if v.name == name:
-                return v
-        raise KeyError(name)
+        return self._by_name[name]
 
     def slot(self, name: str) -> int:
         """First slot of a real or complex quantity."""
