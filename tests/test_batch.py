@@ -203,3 +203,18 @@ def test_an_unknown_base_scenario_is_refused_before_any_variant_is_built():
 
     with pytest.raises(InputError, match="no-such-scenario"):
         simulate_batch("no-such-scenario", [{}, {"motor[0].load_torque": 0.05}])
+
+
+def test_a_batch_groups_by_topology_and_the_topology_fixes_the_generated_loop():
+    """Variants that differ in parameters and initial states share a topology and the same
+    generated loop (the batch groups them without generating each one's source); other
+    metrics (another reducer part) or another integrator make another topology and another
+    loop."""
+    a, b, c = (prepare_variant(BASE, v)[2] for v in _variants())
+    assert a.topology() == b.topology() == c.topology()
+    assert a.source() == b.source() == c.source()
+    fewer = prepare_variant(BASE, SHORT, reducers=[Reducer("peak_w", "peak", "shaft0.w")])[2]
+    rk6 = prepare_variant(BASE, SHORT, integrator="rk6")[2]
+    for other in (fewer, rk6):
+        assert other.topology() != a.topology()
+        assert other.source() != a.source()

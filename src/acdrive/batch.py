@@ -273,10 +273,9 @@ class _Prepared:
     index: int
     setup: object
     system: System
-    initial: dict
-    held: dict
     reducers: list[tuple[Reducer, tuple[str, int]]]
     log_ports: list
+    packed: tuple  # (P, X, S, Y) of this variant, packed once
 
 
 def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
@@ -528,13 +527,14 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
                 ports = [_port(system, name, f"log[{j}]") for j, name in enumerate(log)]
             every = log_every if log_every is not None else setup.log_every
             P, PO = system.pack_params()
-            system.pack_initial(initial)  # validates the initial-state overrides now
-            key = (system.source(), tuple(PO), setup.duration, setup.sample_time,
+            X, S = system.pack_initial(initial)  # validates the initial-state overrides now
+            Y = system.pack_held(held)
+            key = (system.topology(), tuple(PO), setup.duration, setup.sample_time,
                    setup.substeps, every if ports else None)  # fmt: skip
         except InputError as exc:
             rows[i] = _invalid_row(i, str(exc), reducers)
             continue
-        groups.setdefault(key, []).append(_Prepared(i, setup, system, initial, held, used, ports))
+        groups.setdefault(key, []).append(_Prepared(i, setup, system, used, ports, (P, X, S, Y)))
     wall, steps = 0.0, 0
     loops = []
     traces, units = {}, {}
@@ -542,11 +542,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
         _, PO, duration, sample_time, n_sub, every = key
         first = members[0]
         compiled = first.system.compile()
-        P = np.stack([m.system.pack_params()[0] for m in members])
-        packed = [m.system.pack_initial(m.initial) for m in members]
-        X = np.stack([x for x, _ in packed])
-        S = np.stack([s for _, s in packed])
-        Y = np.stack([m.system.pack_held(m.held) for m in members])
+        P, X, S, Y = (np.stack(arrays) for arrays in zip(*(m.packed for m in members)))
         LOG, ELOG, ECOUNT, DONE, STATUS, seconds = compiled.run_packed(
             P, np.array(PO, dtype=np.int64), X, S, Y, duration, sample_time, n_sub,
             log=first.log_ports, log_every=every, lockstep=lockstep,

@@ -173,6 +173,7 @@ class Layout:
             offset += v.width
         self.fixed_size = offset
         self.tables = tuple(v for v in self.vars if v.kind == "table")
+        self._one_point_size = self.fixed_size + 3 * len(self.tables)  # size() of one-point tables
 
     def extended(self, *variables: Var) -> Layout:
         """This layout with ``variables`` appended and the same relations: every quantity
@@ -212,8 +213,9 @@ class Layout:
 
     def size(self, table_lengths: dict[str, int] | None = None) -> int:
         """Floats needed for this layout with the given number of points per table."""
-        lengths = table_lengths or {}
-        return self.fixed_size + sum(1 + 2 * lengths.get(v.name, 1) for v in self.tables)
+        if not table_lengths:
+            return self._one_point_size
+        return self.fixed_size + sum(1 + 2 * table_lengths.get(v.name, 1) for v in self.tables)
 
     def columns(self, prefix: str = "") -> list[tuple[str, str, str, int]]:
         """(column name, unit, kind, first slot) per float of the fixed part: a complex

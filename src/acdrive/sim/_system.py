@@ -177,6 +177,15 @@ class System:
         """The generated module of this topology (``sim._loop_source``)."""
         return loop_source(self)
 
+    def topology(self) -> tuple:
+        """What ``source()`` is a function of: the integrator, each part's kind and name in
+        order (a kind fixes its kernels and its layouts, hence every slot) and each input's
+        source. Systems of equal topologies run in the same generated loop; a batch groups its
+        variants by it without generating each variant's source."""
+        wiring = tuple(sorted((dst, (src.part.name, src.var.name))
+                              for dst, src in self.source_of.items()))  # fmt: skip
+        return (self.method, tuple((type(p), p.name) for p in self.parts), wiring)
+
     def compile(self) -> CompiledSystem:
         """The compiled system, its loop compiled or loaded now (``sim._tier`` chooses the
         specialised or the generic loop; the seconds it took are reported by the first run)."""
