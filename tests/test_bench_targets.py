@@ -160,7 +160,11 @@ def _measured_cases(**scale):
             "warm_no_figures": {"cpu_s": _spread(s["no_fig"])},
             "empty_cache": {"wall_s": s["first"], "cpu_s": 4.0, "load_average_1min": [0.1, 0.2]},
         },
-        "compile_free": {"ratio": s["topo"], "new_topology_cpu_s": 1.2, "warm_cpu_s": 1.0},
+        "compile_free": {
+            "ratio": _spread(s["topo"]),
+            "new_topology_cpu_s": _spread(1.2),
+            "warm_cpu_s": _spread(1.0),
+        },
         "batch": {
             "variants": 1000,
             "lockstep_option": "lanes",

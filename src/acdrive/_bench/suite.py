@@ -80,6 +80,7 @@ FULL = {
     "extended_substeps": 4,
     "race_rounds": 3,
     "race_model_s": 1.5,
+    "compile_free_rounds": 5,
     "command_rounds": 3,
     "batch_variants": 1000,
     "batch_rounds": 2,
@@ -96,6 +97,7 @@ QUICK = {
     "extended_substeps": 4,
     "race_rounds": 2,
     "race_model_s": 1.5,
+    "compile_free_rounds": 2,
     "command_rounds": 2,
     "batch_variants": 50,
     "batch_rounds": 1,
@@ -233,7 +235,9 @@ def _run_target_case(name: str, report: dict, settings: dict, options: Options, 
     elif name == "command":
         got = targets.whole_command(settings["command_rounds"], say)
     elif name == "compile_free":
-        got = targets.compile_free_first_result(settings["race_model_s"], say)
+        got = targets.compile_free_first_result(
+            settings["race_model_s"], settings["compile_free_rounds"], say
+        )
     elif name == "batch":
         got = targets.batch_speed(settings["batch_variants"], settings["batch_rounds"], say)
     elif options.baseline_src is None:  # loop_speed
