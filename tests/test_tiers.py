@@ -6,6 +6,7 @@ crash; a run reports its compile or load time apart from its simulation time."""
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import signal
@@ -441,3 +442,31 @@ def test_a_run_reports_its_loop_time_once(monkeypatch):
     assert first.compile_time > 0.0 and second.compile_time == 0.0
     assert f"({compiled.tier} loop)" in repr(second)
     assert np.array_equal(first.data, second.data)
+
+
+@pytest.mark.slow
+def test_a_background_compile_finds_kernels_generated_beside_the_loop(tmp_path):
+    """A loop with a batch's stats reducer imports that reducer's step from a generated module
+    (``_reducer_parts._stats_source``). The background process never built the reducer, so it
+    never loaded that module: it finds it in the folder of the generated loops, compiles the
+    loop into the cache, and this process then loads it without compiling."""
+    from acdrive._reducer_parts import _stats_class
+    from acdrive.sim import _codegen as codegen
+
+    user = _user_kind(tmp_path)
+    decay = user.Decay("d", a=20.0)
+    stats = _stats_class((("", False, False),))("stats", every=1.0, start0=0.0, stop0=1.0,
+                                                limit0=0.5)  # fmt: skip
+    system = System([decay, stats], [(decay.out.y, stats.inp.x0)])
+    source = system.source()
+    assert "import stats_step" in source and "from acdrive_system_" in source
+    module = codegen.load_module(source)  # written to the cache folder; nothing compiled yet
+    assert not codegen.is_cached(module.run)
+    job = {"kinds": [], "generic": False, "specialised": str(codegen.module_path(source)),
+           "size": 2}  # fmt: skip
+    env = {**os.environ,
+           "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}  # fmt: skip
+    done = subprocess.run([sys.executable, "-m", "acdrive.sim._background", json.dumps(job)],
+                          env=env, capture_output=True, text=True, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert codegen.is_cached(module.run)

@@ -46,6 +46,9 @@ def main(argv: list[str]) -> int:
     if job.get("specialised"):
         try:
             path = Path(job["specialised"])
+            # a loop may import kernels generated beside it (a stats reducer's step), which the
+            # foreground process had loaded by name: here they are found in that folder
+            sys.path.append(str(path.parent))
             module = codegen.load_module(path.read_text())
             seconds, compiled = codegen.compile_for(module.run, tier.RUN_ARGS)
             if compiled:
