@@ -2,9 +2,10 @@
 its outputs at the samples a single run logs and accumulate metrics in their discrete state.
 
 One "stats" part (peak, mean, RMS, exceed count, final value, one channel per signal,
-reference, window and limit; its step generated for its channels by ``_stats_source``), one part per oscillation metric (``oscillation_step``: the
-band-limited RMS in two late windows) and one per speed error (``speed_error_step``: the kernel
-of ``sim._metrics`` that a single run's summary runs on its logged samples).
+reference, window and limit; its step generated for its channels by ``_stats_source``), one
+part per oscillation metric (``oscillation_step``: the band-limited RMS in two late windows) and
+one per speed error (``speed_error_step``: the kernel of ``sim._metrics`` that a single run's
+summary runs on its logged samples).
 
 ``Reducer`` is the metric these parts compute, as a batch or a drive's robustness map declares it
 (re-exported by ``acdrive.batch``). It lives here, below the drives, because a drive names its

@@ -150,8 +150,8 @@ class Layout:
         self.vars = tuple(variables)
         self._by_name = {v.name: v for v in self.vars}
         names = [v.name for v in self.vars]
-        duplicates = {n for n in names if names.count(n) > 1}
-        if duplicates:
+        if len(self._by_name) != len(names):
+            duplicates = {n for n in names if names.count(n) > 1}
             raise ValueError(f"duplicate declarations: {', '.join(sorted(duplicates))}")
         self.relations = tuple(relations)
         for relation in self.relations:
