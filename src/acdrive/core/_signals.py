@@ -19,6 +19,7 @@ Kinds:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -36,6 +37,13 @@ RULES = {
     "nonnegative": "must be >= 0",
     "count": "must be a positive integer",
     "fraction": "must be between 0 and 1",
+}
+#: whether a value obeys each rule (the empty rule holds for every value)
+_RULE_HOLDS: dict[str, Callable[[float], bool]] = {
+    "positive": lambda x: x > 0.0,
+    "nonnegative": lambda x: x >= 0.0,
+    "count": lambda x: x >= 1.0 and x == int(x),
+    "fraction": lambda x: 0.0 <= x <= 1.0,
 }
 
 
@@ -70,14 +78,7 @@ class Var:
 
     def check(self, field: str, value: float) -> float:
         """``value`` if it obeys the declared rule, else an InputError naming ``field``."""
-        ok = {
-            "": True,
-            "positive": value > 0.0,
-            "nonnegative": value >= 0.0,
-            "count": value >= 1.0 and value == int(value),
-            "fraction": 0.0 <= value <= 1.0,
-        }[self.rule]
-        if not ok:
+        if self.rule and not _RULE_HOLDS[self.rule](value):
             raise InputError(field, f"{RULES[self.rule]}, got {value:g}")
         return value
 
@@ -241,7 +242,7 @@ class Layout:
         """
         merged = dict(defaults or {})
         merged.update(values)
-        unknown = sorted(set(merged) - {v.name for v in self.vars})
+        unknown = sorted(set(merged) - self._by_name.keys())
         if unknown:
             raise InputError(
                 f"{owner}.{unknown[0]}",
@@ -281,6 +282,10 @@ class Layout:
 
 
 def _number(field: str, value, allow_complex: bool):
+    if type(value) is float:  # the common case, checked as below without numpy's scalar overhead
+        if not math.isfinite(value):
+            raise InputError(field, "must be finite (not NaN or infinite)")
+        return complex(value) if allow_complex else value
     if value is None:
         raise InputError(field, "must be given (got None)")
     if isinstance(value, bool) or not isinstance(value, (int, float, complex, np.number)):
@@ -289,11 +294,11 @@ def _number(field: str, value, allow_complex: bool):
         if not allow_complex:
             raise InputError(field, "must be a real number")
         z = complex(value)
-        if not (np.isfinite(z.real) and np.isfinite(z.imag)):
+        if not (math.isfinite(z.real) and math.isfinite(z.imag)):
             raise InputError(field, "must be finite (not NaN or infinite)")
         return z
     x = float(value)
-    if not np.isfinite(x):
+    if not math.isfinite(x):
         raise InputError(field, "must be finite (not NaN or infinite)")
     return complex(x) if allow_complex else x
 
