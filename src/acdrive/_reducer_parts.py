@@ -211,6 +211,9 @@ def _stats_source(channels: tuple[tuple[str, bool, bool], ...], inputs: Layout) 
     return "\n".join(lines) + "\n"
 
 
+#: the part classes made at run time, one per layout. Each carries ``FACTORY_KEY`` (its
+#: factory's name and key): a name for the class that pickles, which the class itself does not
+#: (a batch prepared in forked workers groups its variants by it, ``acdrive.batch``)
 _STATS_CLASSES: dict[tuple, type] = {}
 
 
@@ -235,6 +238,7 @@ def _stats_class(channels: tuple[tuple[str, bool, bool], ...]) -> type:
             (SampledPart,),
             {
                 "__doc__": "On-line peak, mean, RMS, exceed count and final value (acdrive.batch).",
+                "FACTORY_KEY": ("stats", channels),
                 "PARAMS": Layout(*params),
                 "STATES": Layout(*states),
                 "INPUTS": inputs,
@@ -309,6 +313,7 @@ def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> typ
             (SampledPart,),
             {
                 "__doc__": f"On-line {kind} of a signal (acdrive.batch).",
+                "FACTORY_KEY": ("reducer", key),
                 "PARAMS": REDUCER_PARAMS,
                 "STATES": states,
                 "INPUTS": Layout(*inputs),
@@ -368,6 +373,7 @@ def _speed_error_class(unit: str, gated: bool, n_windows: int) -> type:
             (SampledPart,),
             {
                 "__doc__": "On-line whole-run and tracking speed error (acdrive.batch).",
+                "FACTORY_KEY": ("speed_error", key),
                 "PARAMS": Layout(*params),
                 "STATES": Layout(*(real(n, u, d) for n, u, d in SPEED_ERROR_STATES)),
                 "INPUTS": Layout(*inputs),

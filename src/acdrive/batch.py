@@ -13,11 +13,14 @@ and initial states) and a list of variants, each a dict of overrides in three fo
   state, e.g. a perturbed speed).
 
 Every variant goes through the same validation as a single run (``scenarios._loader``): a bad one
-is recorded as invalid with the ``InputError`` text and the batch goes on. Valid variants are
+is recorded as invalid with the ``InputError`` text and the batch goes on. From ``PREPARE_SHARE``
+variants per core on, forked workers prepare shares of the variants while this process prepares
+the first (``_forked_map``; the same rows in the same order as one process gives). Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
 time, duration and substeps) and each group runs in one call of the compiled batch loop
-(``CompiledSystem.run_packed``). A group of at least 16 variants per core whose modulators make one
-segment per sample runs in lockstep, 16 variants at a time over SIMD lanes (``sim._lockstep_source``:
+(``CompiledSystem.run_packed``). A group of at least ``LANES`` (48) variants per core whose
+modulators make one segment per sample runs in lockstep, ``LANES`` variants at a time over SIMD
+lanes (``sim._lockstep_source``:
 bit-identical to the single runs under ``ACDRIVE_STRICT_MATH=1``, within 1e-13 of each signal's
 peak with fast math); otherwise numba's ``prange`` runs the single run's loop one variant per row,
 bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
@@ -57,6 +60,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._forked_map import forked_map
 from acdrive._reducer_parts import (
     _NS,
     NO_LIMIT,
@@ -268,14 +272,53 @@ def _port(system: System, path: str, where: str):
 
 @dataclass
 class _Prepared:
-    """One valid variant, ready to be packed."""
+    """One valid variant, packed. Only the first of a group holds its system and log ports
+    (every member of a group has the same topology, hence the same slots and ports)."""
 
     index: int
     setup: object
-    system: System
+    system: System | None
     reducers: list[tuple[Reducer, tuple[str, int]]]
     log_ports: list
     packed: tuple  # (P, X, S, Y) of this variant, packed once
+
+
+#: variants per process below which a batch prepares them in one process (``_forked_map``):
+#: a fork and the pickled results cost about as much as preparing 100 variants
+PREPARE_SHARE = 128
+
+
+def _portable(topology: tuple) -> tuple:
+    """``System.topology()`` with each part class made at run time (a reducer part) named by
+    its ``FACTORY_KEY``, so that it pickles; the same grouping, since each key has one class."""
+    method, parts, wiring = topology
+    named = tuple((kind.__dict__.get("FACTORY_KEY", kind), name) for kind, name in parts)
+    return (method, named, wiring)
+
+
+def _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data, log,
+                      log_every):  # fmt: skip
+    """One variant prepared (``prepare_variant``), validated and packed, as picklable values:
+    ``("ok", group key, setup, [(reducer, (part, slot))], (P, X, S, Y))`` or
+    ``("invalid", the InputError text)``."""
+    if not isinstance(overrides, dict):
+        return ("invalid", "variants: each variant must be a dict")
+    try:
+        setup, _drive, system, initial, held, used = prepare_variant(
+            base, overrides, reducers, integrator, substeps, base_data
+        )
+        ports = []
+        if log is not None:
+            ports = [_port(system, name, f"log[{j}]") for j, name in enumerate(log)]
+        every = log_every if log_every is not None else setup.log_every
+        P, PO = system.pack_params()
+        X, S = system.pack_initial(initial)  # validates the initial-state overrides now
+        Y = system.pack_held(held)
+    except InputError as exc:
+        return ("invalid", str(exc))
+    key = (_portable(system.topology()), tuple(PO), setup.duration, setup.sample_time,
+           setup.substeps, every if ports else None)  # fmt: skip
+    return ("ok", key, setup, used, (P, X, S, Y))
 
 
 def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
@@ -512,29 +555,27 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
     if reducers is not None and not callable(reducers):
         reducers = [check_reducer(r, f"metrics[{i}]") for i, r in enumerate(reducers)]
     rows: list[dict | None] = [None] * len(variants)
-    groups: dict[tuple, list[_Prepared]] = {}
     base_data = _base_data(base)  # the scenario parsed once for every variant
-    for i, overrides in enumerate(variants):
-        if not isinstance(overrides, dict):
-            rows[i] = _invalid_row(i, "variants: each variant must be a dict", reducers)
+
+    def prepare(overrides):
+        return _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data, log,
+                                 log_every)  # fmt: skip
+
+    groups: dict[tuple, list[_Prepared]] = {}
+    for i, outcome in enumerate(forked_map(prepare, list(variants), PREPARE_SHARE)):
+        if outcome[0] == "invalid":
+            rows[i] = _invalid_row(i, outcome[1], reducers)
             continue
-        try:
-            setup, _drive, system, initial, held, used = prepare_variant(
-                base, overrides, reducers, integrator, substeps, base_data
+        _, key, setup, used, packed = outcome
+        members = groups.setdefault(key, [])
+        system, ports = None, []
+        if not members:  # the group's system, built here (a worker's stays in the worker)
+            _, _, system, _, _, _ = prepare_variant(
+                base, variants[i], reducers, integrator, substeps, base_data
             )
-            ports = []
             if log is not None:
                 ports = [_port(system, name, f"log[{j}]") for j, name in enumerate(log)]
-            every = log_every if log_every is not None else setup.log_every
-            P, PO = system.pack_params()
-            X, S = system.pack_initial(initial)  # validates the initial-state overrides now
-            Y = system.pack_held(held)
-            key = (system.topology(), tuple(PO), setup.duration, setup.sample_time,
-                   setup.substeps, every if ports else None)  # fmt: skip
-        except InputError as exc:
-            rows[i] = _invalid_row(i, str(exc), reducers)
-            continue
-        groups.setdefault(key, []).append(_Prepared(i, setup, system, used, ports, (P, X, S, Y)))
+        members.append(_Prepared(i, setup, system, used, ports, packed))
     wall, steps = 0.0, 0
     loops = []
     traces, units = {}, {}
@@ -561,8 +602,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
                 "status": "ok" if ok else f"diverged at t = {DONE[b] * sample_time:.6g} s",
             }
             for r, (part, offset) in m.reducers:
-                units.update(r.column_units(_port(m.system, r.signal, "signal").var.unit))
-                a = m.system.slots[part].s[0] + offset
+                units.update(r.column_units(_port(first.system, r.signal, "signal").var.unit))
+                a = first.system.slots[part].s[0] + offset
                 width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES))
                 values = _reduce(r, S[b, a : a + width], ok)
                 row.update({k: float(x) for k, x in values.items()})
@@ -576,7 +617,7 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             if first.log_ports:
                 traces[m.index] = compiled._result(
                     0.0, sample_time, every, LOG.shape[1],
-                    m.system.log_columns(first.log_ports), LOG[b], ELOG[b], ECOUNT[b], X[b],
+                    first.system.log_columns(first.log_ports), LOG[b], ELOG[b], ECOUNT[b], X[b],
                     seconds / len(members), n_steps,
                 )  # fmt: skip
                 traces[m.index].extra["status"] = row["status"]

@@ -271,10 +271,11 @@ def batch_variants(n: int, seed: int = 1) -> list[dict]:
 
 
 def time_batch(simulate_batch, variants, clock: Clock, **options) -> dict:
-    """One batch run: control steps, wall and process CPU time (all threads), both rates."""
-    c0, w0 = clock.cpu(), clock.wall()
+    """One batch run: control steps, wall and CPU time (all threads of this process and the
+    workers it forked to prepare the variants), both rates."""
+    c0, w0 = clock.cpu() + clock.children(), clock.wall()
     result = simulate_batch(SCENARIO, variants, **options)
-    cpu, wall = clock.cpu() - c0, clock.wall() - w0
+    cpu, wall = clock.cpu() + clock.children() - c0, clock.wall() - w0
     return {
         "steps": result.steps,
         "wall_s": wall,
