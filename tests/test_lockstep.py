@@ -25,6 +25,7 @@ from acdrive.sim._lockstep_source import (
     lockstep_plan,
     lockstep_refusal,
     lockstep_source,
+    one_point_parts,
 )
 from acdrive.sim._system import System
 
@@ -73,6 +74,9 @@ def _run(compiled, P, PO, X, S, Y, setup, lockstep):
 def test_lockstep_gives_each_variant_its_per_variant_result():
     # 20 variants: one full block of lanes and one padded block
     group = _group(LANES + 4)
+    # the supply's and the shaft's tables have one point in every variant: their kernels run
+    # without the table search here (sim._one_point), and must agree all the same
+    assert {"grid", "shaft0"} <= one_point_parts(group[0].system, group[1], group[2])
     before = group[0].compile_time
     lock = _run(*group, lockstep=True)
     # the lockstep loop's compile (or cache load) is counted as compile time, not run time

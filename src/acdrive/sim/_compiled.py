@@ -455,7 +455,7 @@ class CompiledSystem:
         DONE = np.zeros(B, dtype=np.int64)
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
-        lanes = lockstep_plan(self.system, PO, B, lockstep)
+        lanes = lockstep_plan(self.system, PO, B, lockstep, P=P)
         if lanes is not None:
             lane_args = (X, P, S, Y, float(t0), float(sample_time), substeps, n_steps, log_every,
                          idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip

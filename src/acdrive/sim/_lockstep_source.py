@@ -87,11 +87,34 @@ def lockstep_refusal(system) -> str | None:
     return None
 
 
-def lockstep_plan(system, PO, variants: int, lockstep=None):
+def one_point_parts(system, P, PO) -> frozenset[str]:
+    """The parts with profile tables whose tables have one point in every row of the packed
+    parameters ``P`` (offsets ``PO``): their kernels run without the table search in lockstep
+    (``sim._one_point``)."""
+    chosen = set()
+    for i, part in enumerate(system.parts):
+        tables = part.PARAMS.tables
+        if not tables or P.shape[0] == 0:
+            continue
+        start = int(PO[i]) + part.PARAMS.fixed_size
+        one_point = True
+        for _ in tables:  # each one-point table is [1, t_0, v_0]: the next starts 3 slots on
+            one_point = bool(np.all(P[:, start] == 1.0))
+            if not one_point:
+                break
+            start += 3
+        if one_point and start == int(PO[i + 1]):
+            chosen.add(part.name)
+    return frozenset(chosen)
+
+
+def lockstep_plan(system, PO, variants: int, lockstep=None, P=None):
     """The compiled lockstep module to run ``variants`` rows of ``system`` in, or None for the
     per-variant loop. ``lockstep``: True requires lockstep (an ``InputError`` if the system
     cannot), False refuses it, None (the default) takes it when it pays: at least ``LANES``
-    variants for every thread numba runs (fewer would leave a core idle or lanes empty)."""
+    variants for every thread numba runs (fewer would leave a core idle or lanes empty).
+    ``P``: the packed parameters, if known: parts whose tables have one point in every variant
+    then run without the table search (``one_point_parts``)."""
     if lockstep is False:
         return None
     if lockstep not in (None, True):
@@ -107,7 +130,8 @@ def lockstep_plan(system, PO, variants: int, lockstep=None):
         return None
     if lockstep is None and not wide:
         return None
-    return codegen.load_module(lockstep_source(system, PO))
+    one_point = frozenset() if P is None else one_point_parts(system, P, PO)
+    return codegen.load_module(lockstep_source(system, PO, one_point))
 
 
 def lockstep_broken(before, states, outputs) -> None:
@@ -137,13 +161,22 @@ def _rows(system, PO) -> dict[str, int]:
     return rows
 
 
-def lockstep_source(system, PO) -> str:
-    """The generated lockstep module of this topology and parameter layout ``PO``."""
+def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
+    """The generated lockstep module of this topology and parameter layout ``PO``; the kernels
+    of the parts named in ``one_point`` (every variant's tables of one point) without the table
+    search (``sim._one_point``)."""
     reason = lockstep_refusal(system)
     if reason is not None:
         raise ValueError(reason)
     L, aliases = kernel_header(system, "acdrive.sim._lockstep_source")
     emit = L.append
+    rebound = sorted(a for (name, _role), a in aliases.items() if name in one_point)
+    if rebound:
+        emit("from acdrive.sim._one_point import one_point_kernel")
+        emit("# parts whose tables have one point in every variant: no table search")
+        for alias in rebound:
+            emit(f'{alias} = njit(inline="always", error_model="numpy")(one_point_kernel({alias}.py_func))')  # fmt: skip
+        emit("")
     index = {p.name: i for i, p in enumerate(system.parts)}
     PO = [int(o) for o in PO]
     lane = ", v"
