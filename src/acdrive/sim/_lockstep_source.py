@@ -50,15 +50,15 @@ from acdrive.sim._loop_source import (
     step_body,
 )
 
-#: variants per block: rows of ``LANES`` doubles (384 bytes, six AVX-512 registers). Measured on
-#: this machine (Zen 4, numba 0.68.1), bodson-ramp with the default reducers, one thread, in
-#: three groups of candidates interleaved in one process, control steps per CPU second: 16 lanes 2.19 M, 32 lanes
+#: variants per block: rows of ``LANES`` doubles (320 bytes, five AVX-512 registers). Measured
+#: on this machine (Zen 4, numba 0.68.1), bodson-ramp with the default reducers, one thread,
+#: candidates interleaved in one process, control steps per CPU second: 16 lanes 2.19 M, 32 lanes
 #: 2.26 M, 40 lanes 2.30 M, 48 lanes 2.30-2.37 M, 56 lanes 2.19 M, 64 lanes 2.00 M, 128 lanes
-#: 1.47 M. Fewer lanes leave less to vectorise per loop; more make the block (425 rows) outgrow
-#: the caches between one kernel's loop and the next. (Before the stats reducer, the relay and
-#: the logged-sample test vectorised, 64 lanes were the best.) A batch needs LANES variants per
-#: thread to run in lockstep.
-LANES = 48
+#: 1.47 M; after the one-point tables (``sim._one_point``) vectorised the supply and the shaft:
+#: 32 lanes 2.51 M, 40 lanes 2.65 M, 48 lanes 2.57 M, 56 lanes 2.43 M, 64 lanes 2.19 M. Fewer
+#: lanes leave less to vectorise per loop; more make the block outgrow the caches between one
+#: kernel's loop and the next. A batch needs LANES variants per thread to run in lockstep.
+LANES = 40
 
 #: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
 #: docstring). Measured on 20 variants of bodson-ramp, 100 samples: logged signals within
