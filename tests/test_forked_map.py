@@ -40,6 +40,17 @@ def test_the_variable_caps_the_processes_and_small_lists_stay_serial(monkeypatch
     assert forked_map(str, [], 1) == []
 
 
+def test_a_daemonic_process_maps_serially(monkeypatch):
+    """A daemonic process (a pool's worker) may not start children: it maps in itself."""
+    import multiprocessing
+
+    class Daemonic:
+        daemon = True
+
+    monkeypatch.setattr(multiprocessing, "current_process", lambda: Daemonic())
+    assert worker_count(10_000, 1) == 1
+
+
 @needs_two
 def test_an_error_in_a_worker_is_raised_in_the_parent(monkeypatch):
     monkeypatch.delenv(WORKERS_VARIABLE, raising=False)

@@ -8,7 +8,7 @@ results travel back, pickled through a pipe. The items are split into contiguous
 order, the parent works through the first share while the workers do the others, and the
 results come back in the order of the items: the same list as ``[fn(x) for x in items]``.
 
-It runs serially, in the parent, where ``fork`` is not available, with one core, below
+It runs serially, in the parent, off Linux, in a daemonic process, with one core, below
 ``min_per_worker`` items per worker, or with ``ACDRIVE_PREPARE_WORKERS=1`` (the variable caps
 the number of processes). An exception in a worker is raised again in the parent (as a
 ``RuntimeError`` carrying the worker's traceback when the exception cannot be pickled).
@@ -19,6 +19,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import pickle
+import sys
 import traceback
 
 #: the environment variable capping the processes (the parent counts as one)
@@ -27,8 +28,10 @@ WORKERS_VARIABLE = "ACDRIVE_PREPARE_WORKERS"
 
 def worker_count(n_items: int, min_per_worker: int) -> int:
     """Processes to use for ``n_items`` (the parent included): one per core, at most one per
-    ``min_per_worker`` items, capped by ``ACDRIVE_PREPARE_WORKERS``; 1 without ``fork``."""
-    if "fork" not in multiprocessing.get_all_start_methods():
+    ``min_per_worker`` items, capped by ``ACDRIVE_PREPARE_WORKERS``; 1 off Linux (``fork`` is
+    missing on Windows and unsafe with macOS's system libraries) and inside a daemonic process
+    (which may not start children)."""
+    if not sys.platform.startswith("linux") or multiprocessing.current_process().daemon:
         return 1
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     n = min(cores or 1, n_items // max(min_per_worker, 1))
