@@ -56,6 +56,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -298,11 +299,11 @@ def _portable(topology: tuple) -> tuple:
 
 def _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data, log,
                       log_every):  # fmt: skip
-    """One variant prepared (``prepare_variant``), validated and packed, as picklable values:
+    """One variant prepared (``prepare_variant``), validated and packed: the picklable outcome
     ``("ok", group key, setup, [(reducer, (part, slot))], (P, X, S, Y))`` or
-    ``("invalid", the InputError text)``."""
+    ``("invalid", the InputError text)``, and the variant's system (None if invalid)."""
     if not isinstance(overrides, dict):
-        return ("invalid", "variants: each variant must be a dict")
+        return ("invalid", "variants: each variant must be a dict"), None
     try:
         setup, _drive, system, initial, held, used = prepare_variant(
             base, overrides, reducers, integrator, substeps, base_data
@@ -315,10 +316,10 @@ def _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data
         X, S = system.pack_initial(initial)  # validates the initial-state overrides now
         Y = system.pack_held(held)
     except InputError as exc:
-        return ("invalid", str(exc))
+        return ("invalid", str(exc)), None
     key = (_portable(system.topology()), tuple(PO), setup.duration, setup.sample_time,
            setup.substeps, every if ports else None)  # fmt: skip
-    return ("ok", key, setup, used, (P, X, S, Y))
+    return ("ok", key, setup, used, (P, X, S, Y)), system
 
 
 def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time: float,
@@ -557,22 +558,31 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
     rows: list[dict | None] = [None] * len(variants)
     base_data = _base_data(base)  # the scenario parsed once for every variant
 
-    def prepare(overrides):
-        return _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data, log,
-                                 log_every)  # fmt: skip
+    here = os.getpid()
+    built: dict[tuple, tuple[int, System]] = {}  # group key -> (first index, system), this process
+
+    def prepare(item):
+        i, overrides = item
+        outcome, system = _prepared_outcome(overrides, base, reducers, integrator, substeps,
+                                            base_data, log, log_every)  # fmt: skip
+        if system is not None and os.getpid() == here:  # a worker's system stays in the worker
+            built.setdefault(outcome[1], (i, system))
+        return outcome
 
     groups: dict[tuple, list[_Prepared]] = {}
-    for i, outcome in enumerate(forked_map(prepare, list(variants), PREPARE_SHARE)):
+    for i, outcome in enumerate(forked_map(prepare, list(enumerate(variants)), PREPARE_SHARE)):
         if outcome[0] == "invalid":
             rows[i] = _invalid_row(i, outcome[1], reducers)
             continue
         _, key, setup, used, packed = outcome
         members = groups.setdefault(key, [])
         system, ports = None, []
-        if not members:  # the group's system, built here (a worker's stays in the worker)
-            _, _, system, _, _, _ = prepare_variant(
-                base, variants[i], reducers, integrator, substeps, base_data
-            )
+        if not members:  # the group's system: the one built here, else built again
+            first, system = built.get(key, (None, None))
+            if first != i:
+                _, _, system, _, _, _ = prepare_variant(
+                    base, variants[i], reducers, integrator, substeps, base_data
+                )
             if log is not None:
                 ports = [_port(system, name, f"log[{j}]") for j, name in enumerate(log)]
         members.append(_Prepared(i, setup, system, used, ports, packed))
