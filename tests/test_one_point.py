@@ -68,5 +68,5 @@ def test_the_parts_chosen_are_those_whose_every_table_has_one_point_in_every_var
     assert "grid" in one_point_parts(system, P, PO)
     source = lockstep_source(system, PO, one_point_parts(system, P, PO))
     index = [p.name for p in system.parts].index("grid")
-    assert f"one_point_kernel(k{index}_rhs.py_func)" in source
-    assert f"one_point_kernel(k{i}_rhs" not in source
+    assert f"rebound_kernel(k{index}_rhs.py_func, ONE_POINT" in source
+    assert f"rebound_kernel(k{i}_rhs.py_func, ONE_POINT" not in source

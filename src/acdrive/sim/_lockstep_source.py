@@ -24,9 +24,11 @@ Agreement with the per-variant loop (itself bit-identical to a single run). Unde
 ``ACDRIVE_STRICT_MATH=1`` every lane does the single loop's IEEE operations in the written order:
 the results are bit-identical (states, logs, event counts). With fast math (the default) LLVM
 contracts and reassociates differently in the per-kernel lane loops than in the single loop, where
-values flow from one kernel into the next without memory in between; the difference starts at
-the last bit and the closed loop carries it on: ``FAST_MATH_AGREEMENT`` bounds it, per signal,
-as a fraction of the signal's peak over the first 100 samples of bodson-ramp (tests/test_lockstep.py).
+values flow from one kernel into the next without memory in between; and the kernels compute
+sin, cos and the magnitude of a space vector by arithmetic that vectorises (``sim._lane_math``,
+within 2 ulp of the C library's, which a single run calls). The difference starts at the last
+bit and the closed loop carries it on: ``FAST_MATH_AGREEMENT`` bounds it, per signal, as a
+fraction of the signal's peak over the first 100 samples of bodson-ramp (tests/test_lockstep.py).
 """
 
 from __future__ import annotations
@@ -61,10 +63,12 @@ from acdrive.sim._loop_source import (
 LANES = 40
 
 #: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
-#: docstring). Measured on 20 variants of bodson-ramp, 100 samples: logged signals within
-#: 4.0e-14 of their peaks (the torque; speed 1.6e-14, currents <= 8.3e-15, converter voltage
-#: 2.3e-15), plant states within 5.6e-16 (relative); the issue's 1e-15 holds under
-#: ACDRIVE_STRICT_MATH=1 only, where the results are bit-identical.
+#: docstring). Measured on 44 variants of bodson-ramp, 100 samples (tests/test_lockstep.py's
+#: group), with the lane forms of sin, cos and |z|: logged signals within 7.0e-14 of their
+#: peaks (the torque; speed 2.3e-14, currents <= 1.2e-14, converter voltage 2.9e-15), plant
+#: states within 1.1e-15 and the parts' discrete states within 9.3e-15 (relative); event logs
+#: and counts equal. Before the lane forms: 4.0e-14 (torque) and 5.6e-16 (plant states). The
+#: issue's 1e-15 holds under ACDRIVE_STRICT_MATH=1 only, where the results are bit-identical.
 FAST_MATH_AGREEMENT = 1e-13
 
 
@@ -170,12 +174,20 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
         raise ValueError(reason)
     L, aliases = kernel_header(system, "acdrive.sim._lockstep_source")
     emit = L.append
-    rebound = sorted(a for (name, _role), a in aliases.items() if name in one_point)
+    # replacements (sim._rebind): ONE_POINT for the parts whose tables have one point in every
+    # variant (no table search), LANE_MATH under fast math (sin, cos, |z| as arithmetic)
+    lane_math = not STRICT_MATH
+    tables = {alias: [t for t, used in (("ONE_POINT", name in one_point), ("LANE_MATH", lane_math))
+                      if used] for (name, _role), alias in aliases.items()}  # fmt: skip
+    rebound = sorted(alias for alias, used in tables.items() if used)
     if rebound:
-        emit("from acdrive.sim._one_point import one_point_kernel")
-        emit("# parts whose tables have one point in every variant: no table search")
+        emit("from acdrive.sim._rebind import rebound_kernel")
+        emit("from acdrive.sim._one_point import ONE_POINT")
+        emit("from acdrive.sim._lane_math import LANE_MATH")
+        emit("# ONE_POINT: every variant's tables have one point, no table search; LANE_MATH:")
+        emit("# sin, cos and |z| as arithmetic that vectorises (fast math only)")
         for alias in rebound:
-            emit(f'{alias} = njit(inline="always", error_model="numpy")(one_point_kernel({alias}.py_func))')  # fmt: skip
+            emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, {", ".join(tables[alias])}))')  # fmt: skip
         emit("")
     index = {p.name: i for i, p in enumerate(system.parts)}
     PO = [int(o) for o in PO]

@@ -1,0 +1,130 @@
+"""Sine, cosine and the magnitude of a space vector as arithmetic, for the lockstep lane loops.
+
+In the lockstep batch loop (``sim._lockstep_source``) a kernel runs once per lane in a loop that
+LLVM vectorises only if every operation in it has a vector form. ``np.sin`` and ``np.cos`` are
+calls into the C library, one per lane even where the loop around them vectorises, and
+``np.abs`` of a complex number is a call to ``hypot``, which keeps a lane loop of the sampled
+controllers scalar. Measured on bodson-ramp (docs/design.md, "Lockstep"): libm's ``sincos`` and
+``hypot`` took about a quarter of a lockstep step.
+
+Here the same functions are written as arithmetic only:
+
+* ``sincos(x)``: x reduced by the nearest multiple k of pi/2 in four parts (Cody and Waite's
+  reduction: pi/2 split into ``PIO2_PARTS``, the first three of 27 significant bits, so that
+  k times each is exact for |k| < 2^26, that is |x| < 1e8), then the Taylor series of sine
+  (to r^17) and cosine (to r^18) on |r| <= pi/4, where the first omitted term is below 1e-19,
+  and the quadrant k mod 4 chosen by arithmetic (a swap and two signs), not by branches.
+  Within 2 ulp of the C library's correctly rounded results up to |x| = 1e8
+  (``tests/test_lane_math.py``), not always the same bits.
+* ``magnitude(z)``: sqrt(re^2 + im^2), within 1 ulp of ``hypot`` for |z| between 1e-150 and
+  1e150 (every voltage, current and flux in SI units); it has no guard against overflow.
+
+``LANE_MATH`` is the rebinding table (``sim._rebind``) that makes a kernel call these instead of
+numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos`` and ``abs``
+replaced. Only the lockstep loop under fast math uses it: there the plant already rounds
+differently from the single loop (``FAST_MATH_AGREEMENT``); under ``ACDRIVE_STRICT_MATH=1``
+the lockstep loop keeps the C library and stays bit-identical to a single run. A single run,
+the native tier and the exported C keep the C library everywhere.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+
+import numpy as np
+from numba import njit
+from numba import types as nb_types
+from numba.extending import overload
+
+#: pi/2 = PIO2_PARTS[0] + ... + PIO2_PARTS[3] to 2e-43: the first three rounded to 27 significant
+#: bits (exact products with any whole k below 2^26), the last the rest rounded to a double
+#: (computed from 110 digits of pi with exact rational arithmetic; tests/test_lane_math.py
+#: checks the sum and the bit counts)
+PIO2_PARTS = (1.570796325802803, 9.920935739593517e-10, 5.721188709663575e-18,
+              1.6446256936324258e-26)  # fmt: skip
+_P1, _P2, _P3, _P4 = PIO2_PARTS
+_TWO_OVER_PI = 0.6366197723675814
+#: Taylor coefficients of sin (r^3 .. r^17) and cos (r^4 .. r^18): (-1)^n / n!
+_S3, _S5, _S7, _S9, _S11, _S13, _S15, _S17 = (
+    (-1) ** n / math.factorial(2 * n + 1) for n in range(1, 9))  # fmt: skip
+_C4, _C6, _C8, _C10, _C12, _C14, _C16, _C18 = (
+    (-1) ** n / math.factorial(2 * n) for n in range(2, 10))  # fmt: skip
+#: |x| up to which the reduction's products are exact (module docstring)
+EXACT_REDUCTION_LIMIT = 1e8
+
+_strict = njit(cache=True, error_model="numpy")
+
+
+@_strict
+def sincos(x):
+    """(cos x, sin x) by arithmetic only (module docstring); NaN for an infinite or NaN x."""
+    k = np.floor(x * _TWO_OVER_PI + 0.5)  # a float: whole, and inf or NaN with x
+    r = (((x - k * _P1) - k * _P2) - k * _P3) - k * _P4
+    r2 = r * r
+    s = r + r * r2 * (_S3 + r2 * (_S5 + r2 * (_S7 + r2 * (_S9 + r2 * (_S11 + r2 * (
+        _S13 + r2 * (_S15 + r2 * _S17)))))))  # fmt: skip
+    c = 1.0 - 0.5 * r2 + r2 * r2 * (_C4 + r2 * (_C6 + r2 * (_C8 + r2 * (_C10 + r2 * (
+        _C12 + r2 * (_C14 + r2 * (_C16 + r2 * _C18)))))))  # fmt: skip
+    # quadrant k mod 4, from k's last two bits (k is converted only where it fits an integer,
+    # which a NaN does not; for a non-finite x, r is NaN already):
+    # cos x = (c, -s, -c, s), sin x = (s, c, -s, -c)
+    q = int(k) & 3 if abs(k) < 4.0e18 else 0
+    odd = (q & 1) == 1
+    cos_part = s if odd else c
+    sin_part = c if odd else s
+    sin_sign = 1.0 - 2.0 * ((q >> 1) & 1)
+    cos_sign = 1.0 - 2.0 * (((q + 1) >> 1) & 1)
+    return cos_part * cos_sign, sin_part * sin_sign
+
+
+def lane_sin(x):
+    """sin for the lane loops: ``sincos`` for a float, numpy's ``sin`` for anything else."""
+    return np.sin(x)
+
+
+def lane_cos(x):
+    """cos for the lane loops: ``sincos`` for a float, numpy's ``cos`` for anything else."""
+    return np.cos(x)
+
+
+def lane_abs(x):
+    """|x| for the lane loops: ``magnitude`` for a complex number, numpy's ``abs`` otherwise."""
+    return np.abs(x)
+
+
+@overload(lane_sin, jit_options={"error_model": "numpy"})
+def _lane_sin(x):
+    if isinstance(x, nb_types.Float):
+        return lambda x: sincos(x)[1]
+    return lambda x: np.sin(x)
+
+
+@overload(lane_cos, jit_options={"error_model": "numpy"})
+def _lane_cos(x):
+    if isinstance(x, nb_types.Float):
+        return lambda x: sincos(x)[0]
+    return lambda x: np.cos(x)
+
+
+@_strict
+def magnitude(z):
+    """|z| = sqrt(re^2 + im^2) (module docstring: no overflow guard)."""
+    return math.sqrt(z.real * z.real + z.imag * z.imag)
+
+
+@overload(lane_abs, jit_options={"error_model": "numpy"})
+def _lane_abs(x):
+    if isinstance(x, nb_types.Complex):
+        return lambda x: magnitude(x)
+    return lambda x: np.abs(x)
+
+
+#: numpy's namespace with the lane forms of sin, cos and abs, for a kernel's ``np``
+LANE_NUMPY = types.ModuleType("acdrive.sim._lane_numpy", "numpy with the lane forms of sin, "
+                              "cos and abs (acdrive.sim._lane_math)")  # fmt: skip
+LANE_NUMPY.__dict__.update({k: v for k, v in np.__dict__.items() if not k.startswith("__")})
+LANE_NUMPY.sin, LANE_NUMPY.cos, LANE_NUMPY.abs = lane_sin, lane_cos, lane_abs
+
+#: the rebinding table (``sim._rebind``): a kernel's numpy becomes ``LANE_NUMPY``
+LANE_MATH = {id(np): LANE_NUMPY}
