@@ -154,3 +154,28 @@ def test_invalid_parameters_name_the_field(field, value):
 def test_sigma_must_be_positive():
     with pytest.raises(InputError, match="sigma"):
         DFIMParams(R_s=1, R_r=1, L_s=1e-2, L_r=1e-2, M=1e-2, n_p=1, J=1)
+
+
+def test_the_divisions_by_j_w_e_m_and_by_v_s_give_the_complex_division_s_numbers():
+    """rotor_voltage_for, rotor_current_for and the stator current commands divide by the
+    imaginary Z_MS and by the real v_s written out (no branch, no raise path): the numbers of
+    numba's complex division, the signs of zeros aside."""
+    from numba import njit
+
+    from acdrive.machines._dfim import _minus_j_over, _over_j
+
+    @njit(error_model="numpy")
+    def by_division(z, x, Q, v_s, i_d):
+        return z / complex(0.0, x), i_d - 1j * Q / v_s
+
+    @njit(error_model="numpy")
+    def written_out(z, x, Q, v_s, i_d):
+        return _over_j(z, x), _minus_j_over(i_d, Q, v_s)
+
+    rng = np.random.default_rng(4)
+    for _ in range(2_000):
+        z = complex(*rng.normal(size=2) * 10.0 ** rng.uniform(-3, 3, size=2))
+        x, Q, v_s, i_d = rng.normal(size=4) * 10.0 ** rng.uniform(-3, 3, size=4)
+        for a, b in zip(by_division(z, x, Q, v_s, i_d), written_out(z, x, Q, v_s, i_d),
+                        strict=True):  # fmt: skip
+            assert a == b

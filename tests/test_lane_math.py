@@ -17,8 +17,10 @@ from acdrive.sim._lane_math import (
     lane_abs,
     lane_cos,
     lane_sin,
+    lane_sqrt,
     magnitude,
     sincos,
+    square_root,
 )
 from acdrive.sim._rebind import rebound_kernel
 
@@ -113,3 +115,14 @@ def test_a_rebound_kernel_computes_with_the_lane_forms():
     assert (lane != libm).any()
     expected = np.array([sincos(2.0 * t) for t in angles])
     assert np.array_equal(lane, expected)
+
+
+def test_square_root_is_numpy_s_sqrt_bit_for_bit_and_nan_below_zero():
+    @njit(error_model="numpy")
+    def both(x):
+        return lane_sqrt(x), np.sqrt(x), square_root(x)
+
+    for x in np.random.default_rng(11).uniform(0.0, 1e6, 5_000).tolist() + [0.0, 2.0, 1e-300]:
+        lane, numpy_root, instruction = both(x)
+        assert lane == numpy_root == instruction
+    assert all(math.isnan(v) for v in both(-1.0))

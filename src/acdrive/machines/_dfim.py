@@ -64,18 +64,25 @@ def impedances(p, w_e, w_m):
 
 
 @jit
+def _over_j(z, x):
+    """z / (j x) for real x: the numbers of the complex division by Z_MS = j w_e M (Bodson (11)),
+    but the signs of zeros, without its branches and its raise path for a zero divisor (the C of
+    ``sim._ccode._kinds.bodson`` writes the same)."""
+    return complex(z.imag / x, -z.real / x)
+
+
+@jit
 def rotor_voltage_for(p, w_e, w_m, v_s, i_s):
     """Steady-state rotor voltage that gives stator current ``i_s`` (Bodson (20))."""
     Z_S, Z_MS, Z_R, Z_MR = impedances(p, w_e, w_m)
-    return (Z_R * v_s - (Z_S * Z_R - Z_MS * Z_MR) * i_s) / Z_MS
+    return _over_j(Z_R * v_s - (Z_S * Z_R - Z_MS * Z_MR) * i_s, Z_MS.imag)
 
 
 @jit
 def rotor_current_for(p, w_e, v_s, i_s):
     """Steady-state rotor current that gives stator current ``i_s`` (Bodson (43), from (19))."""
     Z_S = p[R_S] + 1j * w_e * p[L_S]
-    Z_MS = 1j * w_e * p[M_SR]
-    return (v_s - Z_S * i_s) / Z_MS
+    return _over_j(v_s - Z_S * i_s, w_e * p[M_SR])
 
 
 @jit
@@ -86,6 +93,14 @@ def steady_state_currents(p, w_e, w_m, v_s, v_r):
     i_s = (Z_R * v_s - Z_MS * v_r) / det
     i_r = (Z_S * v_r - Z_MR * v_s) / det
     return i_s, i_r
+
+
+@jit
+def _minus_j_over(x, Q, v_s):
+    """x - j Q / v_s for real x, Q and v_s, written out: the numbers of the complex division
+    (0 + j Q) / v_s, without its branches and its raise path for a zero divisor (the C of
+    ``sim._ccode._kinds.bodson`` writes the same)."""
+    return complex(x - 0.0 / v_s, 0.0 - Q / v_s)
 
 
 @jit
@@ -106,14 +121,14 @@ def stator_current_command(p, w_e, v_s, tau, Q):
         radicand = 0.0
         b = a * a
     i_d = b / (a + np.sqrt(radicand))
-    return i_d - 1j * Q / v_s, limited
+    return _minus_j_over(i_d, Q, v_s), limited
 
 
 @jit
 def stator_current_lossless(p, w_e, v_s, tau, Q):
     """Stator current for torque ``tau`` and reactive power ``Q`` when R_s = 0 (Bodson (38));
     with (20) it gives the control law (39)."""
-    return w_e * tau / (v_s * p[N_P]) - 1j * Q / v_s
+    return _minus_j_over(w_e * tau / (v_s * p[N_P]), Q, v_s)
 
 
 @jit
@@ -178,10 +193,12 @@ def torque_limit_case2(p, w_e, v_s, Q, i_s_max, i_r_max):
     and by the rotor current constraint (42) at reactive power Q (negative if Q alone violates it).
     """
     k = w_e / (v_s * p[N_P])
-    rest_s = i_s_max * i_s_max - (Q / v_s) ** 2
+    q = Q / v_s
+    rest_s = i_s_max * i_s_max - q * q
     tau_max_2 = np.sqrt(rest_s) / k if rest_s >= 0.0 else -1.0
     m = p[L_S] / p[M_SR]
-    rest_r = i_r_max * i_r_max - (v_s / (w_e * p[M_SR]) - m * Q / v_s) ** 2
+    r = v_s / (w_e * p[M_SR]) - m * Q / v_s
+    rest_r = i_r_max * i_r_max - r * r
     tau_max_3 = np.sqrt(rest_r) / (m * k) if rest_r >= 0.0 else -1.0
     return tau_max_2, tau_max_3
 

@@ -33,9 +33,10 @@ import math
 import types
 
 import numpy as np
+from llvmlite import ir
 from numba import njit
 from numba import types as nb_types
-from numba.extending import overload
+from numba.extending import intrinsic, overload
 
 #: pi/2 = PIO2_PARTS[0] + ... + PIO2_PARTS[3] to 2e-43: the first three rounded to 27 significant
 #: bits (exact products with any whole k below 2^26), the last the rest rounded to a double
@@ -107,10 +108,26 @@ def _lane_cos(x):
     return lambda x: np.cos(x)
 
 
+@intrinsic
+def square_root(typingctx, x):
+    """The correctly rounded square root of a float64 as LLVM's ``llvm.sqrt`` (one instruction,
+    NaN below zero). numba's ``math.sqrt`` and ``np.sqrt`` give the same number but, without
+    fast math, through the C library's ``sqrt`` for its ``errno``: a call that keeps a lane
+    loop scalar."""
+    if not isinstance(x, nb_types.Float) or x.bitwidth != 64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        function = builder.module.declare_intrinsic("llvm.sqrt", [ir.DoubleType()])
+        return builder.call(function, args)
+
+    return nb_types.float64(nb_types.float64), codegen
+
+
 @_strict
 def magnitude(z):
     """|z| = sqrt(re^2 + im^2) (module docstring: no overflow guard)."""
-    return math.sqrt(z.real * z.real + z.imag * z.imag)
+    return square_root(z.real * z.real + z.imag * z.imag)
 
 
 @overload(lane_abs, jit_options={"error_model": "numpy"})
@@ -120,11 +137,25 @@ def _lane_abs(x):
     return lambda x: np.abs(x)
 
 
+def lane_sqrt(x):
+    """sqrt for the lane loops: for a float, ``square_root`` (the same correctly rounded result
+    as numpy's, NaN below zero as there), numpy's ``sqrt`` otherwise."""
+    return np.sqrt(x)
+
+
+@overload(lane_sqrt, jit_options={"error_model": "numpy"})
+def _lane_sqrt(x):
+    if isinstance(x, nb_types.Float):
+        return lambda x: square_root(float(x))
+    return lambda x: np.sqrt(x)
+
+
 #: numpy's namespace with the lane forms of sin, cos and abs, for a kernel's ``np``
 LANE_NUMPY = types.ModuleType("acdrive.sim._lane_numpy", "numpy with the lane forms of sin, "
                               "cos and abs (acdrive.sim._lane_math)")  # fmt: skip
 LANE_NUMPY.__dict__.update({k: v for k, v in np.__dict__.items() if not k.startswith("__")})
 LANE_NUMPY.sin, LANE_NUMPY.cos, LANE_NUMPY.abs = lane_sin, lane_cos, lane_abs
+LANE_NUMPY.sqrt = lane_sqrt
 
 #: the rebinding table (``sim._rebind``): a kernel's numpy becomes ``LANE_NUMPY``
 LANE_MATH = {id(np): LANE_NUMPY}

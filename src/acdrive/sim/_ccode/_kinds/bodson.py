@@ -34,6 +34,13 @@ CONSTANTS = CSupport(
 IMPEDANCES = CSupport(
     "dfim_impedances",
     r"""
+/* z / (j x) for real x: the division by Z_MS = j w_e M without Smith's branches (the numbers
+   of acd_cdiv but the signs of zeros) */
+static acd_complex acd_dfim_over_j(acd_complex z, ACDRIVE_REAL x)
+{
+    return acd_c(z.im / x, -z.re / x);
+}
+
 /* Z_S, Z_MS, Z_R, Z_MR of Bodson (11) at electrical frequency w_e and shaft speed w_m */
 static void acd_dfim_impedances(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_REAL w_e, ACDRIVE_REAL w_m,
                                 acd_complex Z[4])
@@ -52,7 +59,7 @@ static acd_complex acd_dfim_rotor_voltage_for(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_RE
     acd_complex Z[4], det;
     acd_dfim_impedances(R_s, R_r, L_s, L_r, M, n_p, w_e, w_m, Z);
     det = acd_csub(acd_cmul(Z[0], Z[2]), acd_cmul(Z[1], Z[3]));
-    return acd_cdiv(acd_csub(acd_cmul(Z[2], v_s), acd_cmul(det, i_s)), Z[1]);
+    return acd_dfim_over_j(acd_csub(acd_cmul(Z[2], v_s), acd_cmul(det, i_s)), Z[1].im);
 }
 
 /* steady-state rotor current that gives stator current i_s, Bodson (43) from (19) */
@@ -63,7 +70,7 @@ static acd_complex acd_dfim_rotor_current_for(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_RE
     (void)R_r;
     (void)L_r;
     (void)n_p;
-    return acd_cdiv(acd_csub(acd_c(v_s, ACD_R(0.0)), acd_cmul(Z_S, i_s)), Z_MS);
+    return acd_dfim_over_j(acd_csub(acd_c(v_s, ACD_R(0.0)), acd_cmul(Z_S, i_s)), Z_MS.im);
 }
 """,
     needs=(CONSTANTS,),
