@@ -18,7 +18,7 @@ variants per core on, forked workers prepare shares of the variants while this p
 the first (``_forked_map``; the same rows in the same order as one process gives). Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
 time, duration and substeps) and each group runs in one call of the compiled batch loop
-(``CompiledSystem.run_packed``). A group of at least ``LANES`` (40) variants per core whose
+(``CompiledSystem.run_packed``). A group of at least ``LANES`` (48) variants per core whose
 modulators make one segment per sample runs in lockstep, ``LANES`` variants at a time over SIMD
 lanes (``sim._lockstep_source``:
 bit-identical to the single runs under ``ACDRIVE_STRICT_MATH=1``, within 1e-13 of each signal's

@@ -57,14 +57,17 @@ from acdrive.sim._loop_source import (
 #: candidates interleaved in one process, control steps per CPU second: 16 lanes 2.19 M, 32 lanes
 #: 2.26 M, 40 lanes 2.30 M, 48 lanes 2.30-2.37 M, 56 lanes 2.19 M, 64 lanes 2.00 M, 128 lanes
 #: 1.47 M; after the one-point tables (``sim._one_point``) vectorised the supply and the shaft:
-#: 32 lanes 2.51 M, 40 lanes 2.65 M, 48 lanes 2.57 M, 56 lanes 2.43 M, 64 lanes 2.19 M. Fewer
-#: lanes leave less to vectorise per loop; more make the block outgrow the caches between one
-#: kernel's loop and the next. A batch needs LANES variants per thread to run in lockstep.
-LANES = 40
+#: 32 lanes 2.51 M, 40 lanes 2.65 M, 48 lanes 2.57 M, 56 lanes 2.43 M, 64 lanes 2.19 M; with the
+#: lane forms of sin, cos, |z| and sqrt (``sim._lane_math``, session 16's Zen 5 machine, 240
+#: variants, relative to 40 lanes = 1): 32 lanes 0.92, 48 lanes 1.06-1.08, 56 lanes 0.88 (its
+#: last block padded), 60 lanes 1.00, 80 lanes 1.05. Fewer lanes leave less to vectorise per
+#: loop; more make the block outgrow the caches between one kernel's loop and the next. A batch
+#: needs LANES variants per thread to run in lockstep.
+LANES = 48
 
 #: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
-#: docstring). Measured on 44 variants of bodson-ramp, 100 samples (tests/test_lockstep.py's
-#: group), with the lane forms of sin, cos and |z|: logged signals within 7.0e-14 of their
+#: docstring). Measured on 52 variants of bodson-ramp, 100 samples (tests/test_lockstep.py's
+#: group), with the lane forms of sin, cos, |z| and sqrt: logged signals within 7.0e-14 of their
 #: peaks (the torque; speed 2.3e-14, currents <= 1.2e-14, converter voltage 2.9e-15), plant
 #: states within 1.1e-15 and the parts' discrete states within 9.3e-15 (relative); event logs
 #: and counts equal. Before the lane forms: 4.0e-14 (torque) and 5.6e-16 (plant states). The
