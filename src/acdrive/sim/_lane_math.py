@@ -1,4 +1,5 @@
-"""Sine, cosine and the magnitude of a space vector as arithmetic, for the lockstep lane loops.
+"""Sine, cosine, square root and the magnitude of a space vector without C library calls, for
+the lockstep lane loops.
 
 In the lockstep batch loop (``sim._lockstep_source``) a kernel runs once per lane in a loop that
 LLVM vectorises only if every operation in it has a vector form. ``np.sin`` and ``np.cos`` are
@@ -18,10 +19,11 @@ Here the same functions are written as arithmetic only:
   (``tests/test_lane_math.py``), not always the same bits.
 * ``magnitude(z)``: sqrt(re^2 + im^2), within 1 ulp of ``hypot`` for |z| between 1e-150 and
   1e150 (every voltage, current and flux in SI units); it has no guard against overflow.
+* ``square_root(x)``: the ``llvm.sqrt`` instruction, numpy's result bit for bit.
 
 ``LANE_MATH`` is the rebinding table (``sim._rebind``) that makes a kernel call these instead of
-numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos`` and ``abs``
-replaced. Only the lockstep loop under fast math uses it: there the plant already rounds
+numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos``, ``abs`` and
+``sqrt`` replaced. Only the lockstep loop under fast math uses it: there the plant already rounds
 differently from the single loop (``FAST_MATH_AGREEMENT``); under ``ACDRIVE_STRICT_MATH=1``
 the lockstep loop keeps the C library and stays bit-identical to a single run. A single run,
 the native tier and the exported C keep the C library everywhere.
@@ -45,7 +47,7 @@ from numba.extending import intrinsic, overload
 PIO2_PARTS = (1.570796325802803, 9.920935739593517e-10, 5.721188709663575e-18,
               1.6446256936324258e-26)  # fmt: skip
 _P1, _P2, _P3, _P4 = PIO2_PARTS
-_TWO_OVER_PI = 0.6366197723675814
+_TWO_OVER_PI = 2.0 / math.pi
 #: Taylor coefficients of sin (r^3 .. r^17) and cos (r^4 .. r^18): (-1)^n / n!
 _S3, _S5, _S7, _S9, _S11, _S13, _S15, _S17 = (
     (-1) ** n / math.factorial(2 * n + 1) for n in range(1, 9))  # fmt: skip
@@ -150,9 +152,9 @@ def _lane_sqrt(x):
     return lambda x: np.sqrt(x)
 
 
-#: numpy's namespace with the lane forms of sin, cos and abs, for a kernel's ``np``
+#: numpy's namespace with the lane forms of sin, cos, abs and sqrt, for a kernel's ``np``
 LANE_NUMPY = types.ModuleType("acdrive.sim._lane_numpy", "numpy with the lane forms of sin, "
-                              "cos and abs (acdrive.sim._lane_math)")  # fmt: skip
+                              "cos, abs and sqrt (acdrive.sim._lane_math)")  # fmt: skip
 LANE_NUMPY.__dict__.update({k: v for k, v in np.__dict__.items() if not k.startswith("__")})
 LANE_NUMPY.sin, LANE_NUMPY.cos, LANE_NUMPY.abs = lane_sin, lane_cos, lane_abs
 LANE_NUMPY.sqrt = lane_sqrt

@@ -178,7 +178,7 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     L, aliases = kernel_header(system, "acdrive.sim._lockstep_source")
     emit = L.append
     # replacements (sim._rebind): ONE_POINT for the parts whose tables have one point in every
-    # variant (no table search), LANE_MATH under fast math (sin, cos, |z| as arithmetic)
+    # variant (no table search), LANE_MATH under fast math (sin, cos, |z|, sqrt without libm)
     lane_math = not STRICT_MATH
     tables = {alias: [t for t, used in (("ONE_POINT", name in one_point), ("LANE_MATH", lane_math))
                       if used] for (name, _role), alias in aliases.items()}  # fmt: skip
@@ -188,7 +188,9 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
         emit("from acdrive.sim._one_point import ONE_POINT")
         emit("from acdrive.sim._lane_math import LANE_MATH")
         emit("# ONE_POINT: every variant's tables have one point, no table search; LANE_MATH:")
-        emit("# sin, cos and |z| as arithmetic that vectorises (fast math only)")
+        emit(
+            "# sin, cos, |z| and sqrt without libm calls, so lane loops vectorise (fast math only)"
+        )
         for alias in rebound:
             emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, {", ".join(tables[alias])}))')  # fmt: skip
         emit("")

@@ -3,7 +3,7 @@ lockstep loop (``sim._lockstep_source``) gives its lane loops forms that vectori
 
 A replacement table maps ``id(original)`` to its replacement: a compiled function
 (``sim._one_point``: ``table_at`` by its one-point form) or a module (``sim._lane_math``: numpy
-by a namespace with arithmetic sin, cos and abs). ``rebound_kernel(function, *tables)`` is a
+by a namespace with sin, cos, abs and sqrt that make no library call). ``rebound_kernel(function, *tables)`` is a
 copy of the Python ``function`` whose globals hold the replacements; the acdrive helpers it calls
 (compiled functions of acdrive's modules) are copied the same way, recursively, so a
 replacement reaches the helper that makes the call. Each copy is compiled with its original's
