@@ -1,6 +1,6 @@
 """The lockstep batch loop (sim._lockstep_source): variants advanced together over SIMD lanes
-give each variant the result of the per-variant batch loop (itself bit-identical to a single run,
-tests/test_batch.py); a system whose modulator switches within a sample runs per variant."""
+give each variant the result of the per-variant batch loop bit for bit (itself bit-identical to
+a single run, tests/test_batch.py); a system whose modulator switches within a sample runs per variant."""
 
 from typing import ClassVar
 
@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from numba import njit
 
-from acdrive._jit import STRICT_MATH
 from acdrive.batch import prepare_variant
 from acdrive.control._open_loop import VoltageProgram
 from acdrive.core import Layout, cplx, real
@@ -19,7 +18,6 @@ from acdrive.machines._induction import UGALDE_IM_300W
 from acdrive.plant._converter import AveragedConverter
 from acdrive.plant._mechanics import PrescribedSpeed
 from acdrive.sim._lockstep_source import (
-    FAST_MATH_AGREEMENT,
     LANES,
     lockstep_broken,
     lockstep_plan,
@@ -82,22 +80,16 @@ def test_lockstep_gives_each_variant_its_per_variant_result():
     # the lockstep loop's compile (or cache load) is counted as compile time, not run time
     assert group[0].compile_time > before
     alone = _run(*group, lockstep=False)
-    LOG, ELOG, ECOUNT, DONE, STATUS, X, S = lock
+    LOG, ELOG, ECOUNT, DONE, STATUS, _X, _S = lock
     assert (STATUS == 0).all() and (DONE == alone[3]).all()
     # the variants really differ (copies of one variant would pass trivially)
     assert np.abs(LOG[0] - LOG[1]).max() > 1e-3 * np.abs(LOG[0]).max()
     # events (converter saturation, current limits) counted and logged alike, sample by sample
     assert np.array_equal(ELOG, alone[1]) and np.array_equal(ECOUNT, alone[2])
-    if STRICT_MATH:  # IEEE arithmetic in the written order: the same bits
-        for mine, theirs in zip(lock, alone, strict=True):
-            assert np.array_equal(mine, theirs)
-        return
-    # fast math: per signal and variant, within the stated fraction of the signal's peak
-    peak = np.abs(alone[0]).max(axis=1, keepdims=True)
-    assert (np.abs(LOG - alone[0]) <= FAST_MATH_AGREEMENT * peak).all()
-    for mine, theirs in ((X, alone[5]), (S, alone[6])):
-        scale = np.maximum(np.abs(theirs), 1.0)
-        assert (np.abs(mine - theirs) <= FAST_MATH_AGREEMENT * scale).all()
+    # IEEE operations in the written order, in the default fast math as under strict math
+    # (acdrive._jit.FAST_MATH_FLAGS): the same bits, logs, final states and discrete states
+    for mine, theirs in zip(lock, alone, strict=True):
+        assert np.array_equal(mine, theirs)
 
 
 def test_a_switching_inverter_refuses_lockstep_and_the_batch_runs_per_variant():
@@ -190,12 +182,8 @@ def test_lockstep_equals_per_variant_on_a_cage_machine_behind_an_averaged_conver
     for mine, theirs in zip(lock, alone, strict=True):
         assert mine.extra["status"] == theirs.extra["status"] == "ok"
         assert mine.events == theirs.events
-        if STRICT_MATH:
-            assert np.array_equal(mine.data, theirs.data)
-            assert np.array_equal(mine.final_state, theirs.final_state)
-        else:
-            peak = np.abs(theirs.data).max(axis=0)
-            assert (np.abs(mine.data - theirs.data) <= FAST_MATH_AGREEMENT * peak).all()
+        assert np.array_equal(mine.data, theirs.data)
+        assert np.array_equal(mine.final_state, theirs.final_state)
 
 
 @pytest.mark.slow
@@ -216,15 +204,14 @@ def test_a_segment_shorter_than_the_sample_sends_the_batch_back_to_the_per_varia
         assert np.array_equal(mine.data, theirs.data)
         assert np.array_equal(mine.final_state, theirs.final_state)
     # the half-sample variant's currents are not its full-sample twin's; the other variants'
-    # are, to the lockstep agreement
+    # are, bit for bit
     assert np.abs(rerun[3].data - whole[3].data).max() > 1e-3 * np.abs(whole[3].data).max()
-    peak = np.abs(whole[2].data).max(axis=0)
-    assert (np.abs(rerun[2].data - whole[2].data) <= FAST_MATH_AGREEMENT * peak).all()
+    assert np.array_equal(rerun[2].data, whole[2].data)
 
 
 def test_simulate_batch_passes_its_lockstep_choice_to_the_compiled_batch():
     """``simulate_batch(..., lockstep=True/False)`` runs the chosen loop; the rows' metrics agree
-    (bit for bit under strict math, within the lockstep's stated rounding otherwise)."""
+    bit for bit."""
     from acdrive.batch import simulate_batch
 
     variants = [
@@ -239,5 +226,4 @@ def test_simulate_batch_passes_its_lockstep_choice_to_the_compiled_batch():
         assert a["status"] == b["status"] == "ok"
         for key, value in b.items():
             if isinstance(value, float) and np.isfinite(value) and key in a:
-                bound = 0.0 if STRICT_MATH else 1e3 * FAST_MATH_AGREEMENT * max(abs(value), 1.0)
-                assert abs(a[key] - value) <= bound, (key, a[key], value)
+                assert a[key] == value, (key, a[key], value)

@@ -24,11 +24,29 @@ import threading
 
 import numpy as np
 
-#: ACDRIVE_STRICT_MATH=1 compiles the fast-math functions with strict IEEE arithmetic instead: the
-#: results then depend only on the order of operations written in the source, not on the
-#: compiler's choice of contractions, which is how two implementations are compared bit for bit
-#: (benchmarks/compare_engines.py). It has its own cache folder (acdrive/__init__.py).
+#: ACDRIVE_STRICT_MATH=1 compiles the fast-math functions with strict IEEE arithmetic instead
+#: (no flag of ``FAST_MATH_FLAGS``), as the exported C is compiled: that is how two
+#: implementations are compared bit for bit (benchmarks/compare_engines.py). It has its own
+#: cache folder (acdrive/__init__.py).
 STRICT_MATH = os.environ.get("ACDRIVE_STRICT_MATH") == "1"
+
+#: LLVM's fast-math flags of the fast functions: no NaN and no infinity inside (``nnan``,
+#: ``ninf``; the engine checks the state for non-finite values outside, every sample) and the
+#: sign of a zero not significant (``nsz``). Not granted: reassociation, contraction into fused
+#: multiply-adds and reciprocal approximations (``reassoc``, ``contract``, ``arcp``), whose use
+#: depends on what surrounds an operation after inlining, so the same kernel would round one way
+#: in the single loop and another in the lockstep lanes. With these flags every finite result
+#: depends only on the written order of operations: the tiers and the lockstep batch agree bit
+#: for bit. Measured (docs/design.md, "Session 17"): the three flags keep the single loop's
+#: speed; ``contract`` adds nothing; ``arcp`` gave im-foc-speed 6 %, which explicit reciprocals
+#: in the kernels give deterministically.
+FAST_MATH_FLAGS = frozenset() if STRICT_MATH else frozenset({"nnan", "ninf", "nsz"})
+
+#: ``FAST_MATH_FLAGS`` as the ``fastmath`` option of a generated module's source (sorted, so
+#: that the source, and with it the cache entry, is the same in every process)
+FAST_MATH_SOURCE = (
+    "{" + ", ".join(repr(f) for f in sorted(FAST_MATH_FLAGS)) + "}" if FAST_MATH_FLAGS else "False"
+)
 
 _registered = False
 #: how deep this thread is inside a Python call of a ``python_from_python`` kernel: the kernels
@@ -154,11 +172,11 @@ def njit(function=None, **options):
 
 jit = njit(cache=True, error_model="numpy")
 
-#: the plant's right-hand side and its integrator: also fast-math (reassociation, fused
-#: multiply-add, no NaN/inf special cases inside); the engine checks finiteness outside it.
-jit_fast = njit(cache=True, error_model="numpy", fastmath=not STRICT_MATH)
+#: the plant's right-hand side and its integrator: fast-math with ``FAST_MATH_FLAGS`` (no NaN/inf
+#: special cases inside); the engine checks finiteness outside it.
+jit_fast = njit(cache=True, error_model="numpy", fastmath=set(FAST_MATH_FLAGS))
 
 #: small helpers of the plant's kernels: inlined into the compiled loop at numba-IR level (numba
 #: does not inline one compiled function into another by itself; a call per table lookup or per
 #: current computation costs more than the arithmetic)
-jit_inline = njit(cache=True, error_model="numpy", fastmath=not STRICT_MATH, inline="always")
+jit_inline = njit(cache=True, error_model="numpy", fastmath=set(FAST_MATH_FLAGS), inline="always")

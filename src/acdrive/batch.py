@@ -21,8 +21,7 @@ time, duration and substeps) and each group runs in one call of the compiled bat
 (``CompiledSystem.run_packed``). A group of at least ``LANES`` (48) variants per core whose
 modulators make one segment per sample runs in lockstep, ``LANES`` variants at a time over SIMD
 lanes (``sim._lockstep_source``:
-bit-identical to the single runs under ``ACDRIVE_STRICT_MATH=1``, within 1e-13 of each signal's
-peak with fast math); otherwise numba's ``prange`` runs the single run's loop one variant per row,
+bit-identical to the single runs, ``tests/test_lockstep.py``); otherwise numba's ``prange`` runs the single run's loop one variant per row,
 bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts

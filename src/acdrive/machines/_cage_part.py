@@ -8,7 +8,9 @@ acdrive's power-invariant scaling, Bodson (8)); w_r = n_p w is the electrical ro
     tau_e            = n_p (L_m / L_r) Im(conj(psi_r) i_s)
 
 The first two lines are the rows of (1) (matrix A, B) written as complex numbers; the torque is
-(2) with the paper's amplitude-invariant 3/2 absorbed by the power-invariant scaling.
+(2) with the paper's amplitude-invariant 3/2 absorbed by the power-invariant scaling. The
+right-hand side divides by L_r and by sigma L_s through their reciprocals (the C mirror in
+``sim._ccode._kinds.plant`` the same way).
 """
 
 from __future__ import annotations
@@ -67,12 +69,19 @@ def cage_rhs(t, x, u, p, y, dx):
     psi_r = complex(x[_PSI_R], x[_PSI_R + 1])
     v_s = complex(u[_V_S], u[_V_S + 1])
     R_s, R_r, L_s, L_r, L_m = p[_R_S], p[_R_R], p[_L_S], p[_L_R], p[_L_M]
-    sigma_L_s = L_s - L_m * L_m / L_r
-    rotor_pole = R_r / L_r - 1j * p[_N_P] * u[_W]  # R_r/L_r - j w_r
+    # each division once, as a reciprocal (a division costs several multiplications, and the
+    # compiler may not make this change itself without changing where the results round)
+    over_L_r = 1.0 / L_r
+    sigma_L_s = L_s - L_m * L_m * over_L_r
+    rotor_pole = R_r * over_L_r - 1j * p[_N_P] * u[_W]  # R_r/L_r - j w_r
     di_s = (
-        v_s - (R_s + L_m * L_m * R_r / (L_r * L_r)) * i_s + L_m / L_r * rotor_pole * psi_r
-    ) / sigma_L_s
-    dpsi_r = L_m * R_r / L_r * i_s - rotor_pole * psi_r
+        v_s
+        - (R_s + L_m * L_m * R_r * (over_L_r * over_L_r)) * i_s
+        + L_m * over_L_r * rotor_pole * psi_r
+    )
+    over_sigma_L_s = 1.0 / sigma_L_s
+    di_s = complex(di_s.real * over_sigma_L_s, di_s.imag * over_sigma_L_s)
+    dpsi_r = L_m * R_r * over_L_r * i_s - rotor_pole * psi_r
     dx[_I_S], dx[_I_S + 1] = di_s.real, di_s.imag
     dx[_PSI_R], dx[_PSI_R + 1] = dpsi_r.real, dpsi_r.imag
 

@@ -21,13 +21,13 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from acdrive._jit import STRICT_MATH
+from acdrive._jit import FAST_MATH_FLAGS
 from acdrive.sim._borrow import borrowed
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 from acdrive.sim._kernels import ROLES
 from acdrive.sim._loop_source import STATUS_NONFINITE, STATUS_OK
 
-FAST = not STRICT_MATH
+FAST = set(FAST_MATH_FLAGS)
 
 
 def _function_from_address(signature):

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from numba import types
 
-from acdrive._jit import STRICT_MATH
+from acdrive._jit import FAST_MATH_SOURCE
 from acdrive.sim import _codegen as codegen
 
 _A = types.float64[::1]
@@ -55,13 +55,14 @@ def kind_source(kind) -> str:
         if fingerprint:
             fingerprints.add(f"# kernels of {fn.py_func.__module__}: {fingerprint}")
     lines += sorted(fingerprints)
-    lines += ["from numba import njit", *sorted(imports), ""]
-    for attr in sorted(kernels):
-        lines.append(f'_{attr} = njit(inline="always", error_model="numpy")(_{attr}.py_func)')
+    lines += ["from numba import njit", "from acdrive.sim._lane_math import LANE_MATH",
+              "from acdrive.sim._rebind import rebound_kernel", *sorted(imports), ""]  # fmt: skip
+    for attr in sorted(kernels):  # acdrive's sin, cos, |z| and sqrt, as in the other tiers
+        lines.append(f'_{attr} = njit(inline="always", error_model="numpy")(rebound_kernel(_{attr}.py_func, LANE_MATH))')  # fmt: skip
     lines.append("")
     for role in roles_of(kind):
         attr, _, args, fast, nrt = ROLES[role]
-        fast = fast and not STRICT_MATH
+        fast = FAST_MATH_SOURCE if fast else False
         lines += [
             f'@njit(cache=True, error_model="numpy", fastmath={fast}, _nrt={nrt})',
             f"def {role}({args}):",

@@ -1,5 +1,5 @@
-"""Sine, cosine, square root and the magnitude of a space vector without C library calls, for
-the lockstep lane loops.
+"""Sine, cosine, square root and the magnitude of a space vector without C library calls: the
+elementary functions of every compiled tier, which vectorise in the lockstep lane loops.
 
 In the lockstep batch loop (``sim._lockstep_source``) a kernel runs once per lane in a loop that
 LLVM vectorises only if every operation in it has a vector form. ``np.sin`` and ``np.cos`` are
@@ -23,15 +23,16 @@ Here the same functions are written as arithmetic only:
 
 ``LANE_MATH`` is the rebinding table (``sim._rebind``) that makes a kernel call these instead of
 numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos``, ``abs`` and
-``sqrt`` replaced. Only the lockstep loop under fast math uses it: there the plant already rounds
-differently from the single loop (``FAST_MATH_AGREEMENT``); under ``ACDRIVE_STRICT_MATH=1``
-the lockstep loop keeps the C library and stays bit-identical to a single run. A single run,
-the native tier and the exported C keep the C library everywhere.
+``sqrt`` replaced. Every compiled tier uses it: the generated loops rebind each kernel they
+inline (``sim._loop_source``, the single and the lockstep loops, and ``sim._kernels``, the
+generic tier's part kinds), and the exported C and the native tier compute the same (the double
+build's ``acd_sincos`` and ``acd_cabs``, ``sim._ccode._prelude``, with these constants from
+``sim._sincos_constants``). So a single run, a lockstep lane and a native run agree bit for bit.
+Python code outside the compiled loops (designs, analyses, reports) keeps numpy's functions.
 """
 
 from __future__ import annotations
 
-import math
 import types
 
 import numpy as np
@@ -40,21 +41,18 @@ from numba import njit
 from numba import types as nb_types
 from numba.extending import intrinsic, overload
 
-#: pi/2 = PIO2_PARTS[0] + ... + PIO2_PARTS[3] to 2e-43: the first three rounded to 27 significant
-#: bits (exact products with any whole k below 2^26), the last the rest rounded to a double
-#: (computed from 110 digits of pi with exact rational arithmetic; tests/test_lane_math.py
-#: checks the sum and the bit counts)
-PIO2_PARTS = (1.570796325802803, 9.920935739593517e-10, 5.721188709663575e-18,
-              1.6446256936324258e-26)  # fmt: skip
+from acdrive.sim._sincos_constants import (  # noqa: F401 (EXACT_REDUCTION_LIMIT: the tests')
+    COSINE_TERMS,
+    EXACT_REDUCTION_LIMIT,
+    PIO2_PARTS,
+    QUADRANT_LIMIT,
+    SINE_TERMS,
+    TWO_OVER_PI,
+)
+
 _P1, _P2, _P3, _P4 = PIO2_PARTS
-_TWO_OVER_PI = 2.0 / math.pi
-#: Taylor coefficients of sin (r^3 .. r^17) and cos (r^4 .. r^18): (-1)^n / n!
-_S3, _S5, _S7, _S9, _S11, _S13, _S15, _S17 = (
-    (-1) ** n / math.factorial(2 * n + 1) for n in range(1, 9))  # fmt: skip
-_C4, _C6, _C8, _C10, _C12, _C14, _C16, _C18 = (
-    (-1) ** n / math.factorial(2 * n) for n in range(2, 10))  # fmt: skip
-#: |x| up to which the reduction's products are exact (module docstring)
-EXACT_REDUCTION_LIMIT = 1e8
+_S3, _S5, _S7, _S9, _S11, _S13, _S15, _S17 = SINE_TERMS
+_C4, _C6, _C8, _C10, _C12, _C14, _C16, _C18 = COSINE_TERMS
 
 _strict = njit(cache=True, error_model="numpy")
 
@@ -62,7 +60,7 @@ _strict = njit(cache=True, error_model="numpy")
 @_strict
 def sincos(x):
     """(cos x, sin x) by arithmetic only (module docstring); NaN for an infinite or NaN x."""
-    k = np.floor(x * _TWO_OVER_PI + 0.5)  # a float: whole, and inf or NaN with x
+    k = np.floor(x * TWO_OVER_PI + 0.5)  # a float: whole, and inf or NaN with x
     r = (((x - k * _P1) - k * _P2) - k * _P3) - k * _P4
     r2 = r * r
     s = r + r * r2 * (_S3 + r2 * (_S5 + r2 * (_S7 + r2 * (_S9 + r2 * (_S11 + r2 * (
@@ -72,7 +70,7 @@ def sincos(x):
     # quadrant k mod 4, from k's last two bits (k is converted only where it fits an integer,
     # which a NaN does not; for a non-finite x, r is NaN already):
     # cos x = (c, -s, -c, s), sin x = (s, c, -s, -c)
-    q = int(k) & 3 if abs(k) < 4.0e18 else 0
+    q = int(k) & 3 if abs(k) < QUADRANT_LIMIT else 0
     odd = (q & 1) == 1
     cos_part = s if odd else c
     sin_part = c if odd else s

@@ -20,15 +20,13 @@ makes per-variant segment boundaries inside a sample, so such systems run per va
 (``run_batch`` in ``sim._loop_source``). The generated loop checks the one-segment rule at run
 time too; a block that breaks it reports so and the caller reruns the batch per variant.
 
-Agreement with the per-variant loop (itself bit-identical to a single run). Under
-``ACDRIVE_STRICT_MATH=1`` every lane does the single loop's IEEE operations in the written order:
-the results are bit-identical (states, logs, event counts). With fast math (the default) LLVM
-contracts and reassociates differently in the per-kernel lane loops than in the single loop, where
-values flow from one kernel into the next without memory in between; and the kernels compute
-sin, cos and the magnitude of a space vector by arithmetic that vectorises (``sim._lane_math``,
-within 2 ulp of the C library's, which a single run calls). The difference starts at the last
-bit and the closed loop carries it on: ``FAST_MATH_AGREEMENT`` bounds it, per signal, as a
-fraction of the signal's peak over the first 100 samples of bodson-ramp (tests/test_lockstep.py).
+Agreement with the per-variant loop (itself bit-identical to a single run): bit for bit (states,
+logs, event counts), in the default mode and under ``ACDRIVE_STRICT_MATH=1`` alike. Every lane
+does the single loop's IEEE operations in the written order: the fast-math flags
+(``acdrive._jit.FAST_MATH_FLAGS``) leave out reassociation, contraction and reciprocal
+approximations, whose use depends on what surrounds an operation after inlining, and every tier
+computes sin, cos, |z| and sqrt with acdrive's own arithmetic (``sim._lane_math``), which
+vectorises, instead of the C library (tests/test_lockstep.py).
 """
 
 from __future__ import annotations
@@ -39,7 +37,7 @@ import numba
 import numpy as np
 from numba import carray, njit
 
-from acdrive._jit import STRICT_MATH
+from acdrive._jit import FAST_MATH_SOURCE
 from acdrive.errors import InputError, Notice
 from acdrive.sim import _codegen as codegen
 from acdrive.sim._borrow import _pointer
@@ -64,15 +62,6 @@ from acdrive.sim._loop_source import (
 #: loop; more make the block outgrow the caches between one kernel's loop and the next. A batch
 #: needs LANES variants per thread to run in lockstep.
 LANES = 48
-
-#: fast-math agreement with the per-variant loop, a fraction of each signal's peak (module
-#: docstring). Measured on 52 variants of bodson-ramp, 100 samples (tests/test_lockstep.py's
-#: group), with the lane forms of sin, cos, |z| and sqrt: logged signals within 7.0e-14 of their
-#: peaks (the torque; speed 2.3e-14, currents <= 1.2e-14, converter voltage 2.9e-15), plant
-#: states within 1.1e-15 and the parts' discrete states within 9.3e-15 (relative); event logs
-#: and counts equal. Before the lane forms: 4.0e-14 (torque) and 5.6e-16 (plant states). The
-#: issue's 1e-15 holds under ACDRIVE_STRICT_MATH=1 only, where the results are bit-identical.
-FAST_MATH_AGREEMENT = 1e-13
 
 
 @njit(cache=True, forceinline=True)
@@ -177,22 +166,13 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
         raise ValueError(reason)
     L, aliases = kernel_header(system, "acdrive.sim._lockstep_source")
     emit = L.append
-    # replacements (sim._rebind): ONE_POINT for the parts whose tables have one point in every
-    # variant (no table search), LANE_MATH under fast math (sin, cos, |z|, sqrt without libm)
-    lane_math = not STRICT_MATH
-    tables = {alias: [t for t, used in (("ONE_POINT", name in one_point), ("LANE_MATH", lane_math))
-                      if used] for (name, _role), alias in aliases.items()}  # fmt: skip
-    rebound = sorted(alias for alias, used in tables.items() if used)
+    # the parts whose tables have one point in every variant: no table search (sim._one_point),
+    # on top of the lane math every tier's kernels have (kernel_header)
+    rebound = sorted(alias for (name, _role), alias in aliases.items() if name in one_point)
     if rebound:
-        emit("from acdrive.sim._rebind import rebound_kernel")
         emit("from acdrive.sim._one_point import ONE_POINT")
-        emit("from acdrive.sim._lane_math import LANE_MATH")
-        emit("# ONE_POINT: every variant's tables have one point, no table search; LANE_MATH:")
-        emit(
-            "# sin, cos, |z| and sqrt without libm calls, so lane loops vectorise (fast math only)"
-        )
         for alias in rebound:
-            emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, {", ".join(tables[alias])}))')  # fmt: skip
+            emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, ONE_POINT))')  # fmt: skip
         emit("")
     index = {p.name: i for i, p in enumerate(system.parts)}
     PO = [int(o) for o in PO]
@@ -208,7 +188,7 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     def lanes(statements):
         return ["    for v in range(LANES):", *("        " + s for s in statements)]
 
-    fast = not STRICT_MATH
+    fast = FAST_MATH_SOURCE
     emit("from acdrive.sim._lockstep_source import LANES, lane_view")
     emit('_jit = njit(cache=True, error_model="numpy")')
     emit('_jit_inline = njit(cache=True, error_model="numpy", inline="always")')

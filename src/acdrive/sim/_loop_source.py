@@ -5,7 +5,7 @@ parts' declarations, the kernels imported by name and inlined (the steps are lis
 
 from __future__ import annotations
 
-from acdrive._jit import STRICT_MATH
+from acdrive._jit import FAST_MATH_SOURCE
 from acdrive.core._parts import Part
 from acdrive.sim._codegen import kernel_fingerprint, kernel_import
 from acdrive.sim._integrators import INTEGRATORS, RK6_A, RK6_B, RK6_C
@@ -113,10 +113,13 @@ def kernel_header(system, generator: str) -> tuple[list[str], dict]:
     emit("from numba import njit, prange")
     emit("from acdrive.sim._borrow import borrowed")
     L.extend(sorted(set(imports)))
-    # Kernels are inlined (numba IR inlining) into one function per piece of the sample.
+    emit("from acdrive.sim._rebind import rebound_kernel")
+    emit("from acdrive.sim._lane_math import LANE_MATH")
+    # Kernels are inlined (numba IR inlining) into one function per piece of the sample, with
+    # acdrive's sin, cos, |z| and sqrt (sim._lane_math), the same in every tier.
     emit("")
     for alias in sorted(set(aliases.values())):
-        emit(f'{alias} = njit(inline="always", error_model="numpy")({alias}.py_func)')
+        emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, LANE_MATH))')  # fmt: skip
     emit("")
     return L, aliases
 
@@ -142,13 +145,13 @@ def loop_source(system) -> str:
     emit("# plant side: fast-math, no reference counting (sim._loop_source)")
     emit('_jit_plant = njit(cache=True, error_model="numpy", _nrt=False)')
     emit(
-        f'_jit_plant_fast = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False)'
+        f'_jit_plant_fast = njit(cache=True, error_model="numpy", fastmath={FAST_MATH_SOURCE}, _nrt=False)'
     )
     # LLVM-level inlining (numba's forceinline): the right-hand side goes into each stage of
     # the step and the step into the segment loop without a call and its ~40 array-field
     # arguments per call; unlike numba-level inlining it adds little compile time
     emit(
-        f'_jit_plant_fast_inline = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, _nrt=False, forceinline=True)'
+        f'_jit_plant_fast_inline = njit(cache=True, error_model="numpy", fastmath={FAST_MATH_SOURCE}, _nrt=False, forceinline=True)'
     )
     emit('_jit_inline = njit(cache=True, error_model="numpy", inline="always")')
     emit('_jit_into_run = njit(cache=True, error_model="numpy", forceinline=True)')
@@ -156,7 +159,7 @@ def loop_source(system) -> str:
         '_jit_plant_into_run = njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)'
     )
     emit(
-        f'_jit_fast_inline = njit(cache=True, error_model="numpy", fastmath={not STRICT_MATH}, inline="always")'
+        f'_jit_fast_inline = njit(cache=True, error_model="numpy", fastmath={FAST_MATH_SOURCE}, inline="always")'
     )
     emit(
         f"N_X, N_S, N_U, N_Y = {system.sizes['x']}, {system.sizes['s']}, {system.sizes['u']}, {system.sizes['y']}"

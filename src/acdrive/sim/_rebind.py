@@ -35,7 +35,7 @@ def _jit_options(value) -> dict | None:
         options = value.targetoptions
     else:
         return None
-    return {k: v for k, v in options.items() if k != "cache"}
+    return {k: v for k, v in options.items() if k not in ("cache", "nopython")}
 
 
 def _rebound(value, replaced: dict, key: tuple):

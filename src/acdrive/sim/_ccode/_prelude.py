@@ -8,9 +8,21 @@ newlib's libm also provides are used: sqrt, sin, cos, atan2, acos, hypot, exp, l
 
 The complex helpers repeat, operation for operation, what numba compiles for the kernels'
 Python complex numbers (CPython's algorithms): a product is (ac - bd) + j(ad + bc), a quotient
-is Smith's algorithm as in CPython's ``_Py_c_quot``, a magnitude is ``hypot``, an angle is
-``atan2(im, re)``. With ``-ffp-contract=off`` the double build then rounds as the kernels do.
+is Smith's algorithm as in CPython's ``_Py_c_quot``, an angle is ``atan2(im, re)``. Sine, cosine
+and a magnitude are acdrive's own, as every compiled tier computes them (``sim._lane_math``):
+``acd_sincos`` is the same reduction and series with the same constants, a magnitude is
+sqrt(re^2 + im^2). With ``-ffp-contract=off`` the double build then rounds as the kernels do.
+The float build keeps the C library's ``sinf``, ``cosf`` and ``hypotf`` (newlib's on the
+Cortex-M4F): its series would need constants of its own, and nothing compares it bit for bit.
 """
+
+from acdrive.sim._sincos_constants import (
+    COSINE_TERMS,
+    PIO2_PARTS,
+    QUADRANT_LIMIT,
+    SINE_TERMS,
+    TWO_OVER_PI,
+)
 
 #: the float build's finite stand-in for "no limit" (``ACD_HUGE``; the kernels' and the double
 #: build's is 1e300, beyond float's range): a float comparison leaves out the samples where
@@ -38,8 +50,8 @@ PRELUDE = r"""
 #else
 #define ACDRIVE_REAL double
 #define ACD_SQRT sqrt
-#define ACD_SIN sin
-#define ACD_COS cos
+#define ACD_SIN acd_sin /* acdrive's sine and cosine (the helpers' acd_sincos) */
+#define ACD_COS acd_cos
 #define ACD_ATAN2 atan2
 #define ACD_HYPOT hypot
 #define ACD_EXP exp
@@ -119,9 +131,13 @@ static inline acd_complex acd_conj(acd_complex z)
 
 static inline ACDRIVE_REAL acd_cabs(acd_complex z)
 {
+#ifdef ACDRIVE_FLOAT
     return ACD_HYPOT(z.re, z.im);
+#else
+    return ACD_SQRT(z.re * z.re + z.im * z.im); /* sim._lane_math.magnitude */
+#endif
 }
-
+@SINCOS@
 static inline ACDRIVE_REAL acd_carg(acd_complex z)
 {
     return ACD_ATAN2(z.im, z.re);
@@ -152,3 +168,50 @@ static inline ACDRIVE_REAL acd_min(ACDRIVE_REAL a, ACDRIVE_REAL b)
     return (b < a) ? b : a;
 }
 """
+
+
+def _horner(variable: str, coefficients) -> str:
+    """c_0 + v (c_1 + v (c_2 + ...)) in C, nested as ``sim._lane_math`` writes it."""
+    text = repr(coefficients[-1])
+    for c in reversed(coefficients[:-1]):
+        text = f"{c!r} + {variable} * ({text})"
+    return text
+
+
+#: ``sim._lane_math.sincos`` in C, operation for operation (the double build)
+SINCOS = f"""
+#ifndef ACDRIVE_FLOAT
+/* (cos x, sin x): x reduced by the nearest multiple k of pi/2 in four parts, the Taylor series
+   of sine and cosine on |r| <= pi/4, the quadrant k mod 4 (acdrive.sim._lane_math.sincos) */
+static inline void acd_sincos(double x, double *cos_x, double *sin_x)
+{{
+    double k = floor(x * {TWO_OVER_PI!r} + 0.5);
+    double r = (((x - k * {PIO2_PARTS[0]!r}) - k * {PIO2_PARTS[1]!r}) - k * {PIO2_PARTS[2]!r}) - k * {PIO2_PARTS[3]!r};
+    double r2 = r * r;
+    double s = r + r * r2 * ({_horner("r2", SINE_TERMS)});
+    double c = 1.0 - 0.5 * r2 + r2 * r2 * ({_horner("r2", COSINE_TERMS)});
+    long long q = fabs(k) < {QUADRANT_LIMIT!r} ? ((long long)k & 3) : 0;
+    double cos_part = (q & 1) ? s : c, sin_part = (q & 1) ? c : s;
+    double sin_sign = 1.0 - 2.0 * (double)((q >> 1) & 1);
+    double cos_sign = 1.0 - 2.0 * (double)(((q + 1) >> 1) & 1);
+    *cos_x = cos_part * cos_sign;
+    *sin_x = sin_part * sin_sign;
+}}
+
+static inline double acd_sin(double x)
+{{
+    double c, s;
+    acd_sincos(x, &c, &s);
+    return s;
+}}
+
+static inline double acd_cos(double x)
+{{
+    double c, s;
+    acd_sincos(x, &c, &s);
+    return c;
+}}
+#endif
+"""
+
+HELPERS = HELPERS.replace("@SINCOS@", SINCOS)

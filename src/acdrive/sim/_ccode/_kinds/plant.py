@@ -57,13 +57,14 @@ register_plant(
         rhs=r"""
     /* (1): sigma L_s di_s/dt = v_s - (R_s + L_m^2 R_r / L_r^2) i_s + (L_m / L_r) k psi_r,
        dpsi_r/dt = (L_m R_r / L_r) i_s - k psi_r, with k = R_r / L_r - j n_p w */
-    ACDRIVE_REAL sigma_L_s = p->L_s - p->L_m * p->L_m / p->L_r;
-    acd_complex rotor_pole = acd_c(p->R_r / p->L_r, -(p->n_p * u->w));
-    ACDRIVE_REAL r_eq = p->R_s + p->L_m * p->L_m * p->R_r / (p->L_r * p->L_r);
+    ACDRIVE_REAL over_L_r = ACD_R(1.0) / p->L_r; /* each division once, as the kernel does */
+    ACDRIVE_REAL sigma_L_s = p->L_s - p->L_m * p->L_m * over_L_r;
+    acd_complex rotor_pole = acd_c(p->R_r * over_L_r, -(p->n_p * u->w));
+    ACDRIVE_REAL r_eq = p->R_s + p->L_m * p->L_m * p->R_r * (over_L_r * over_L_r);
     acd_complex sum = acd_cadd(acd_csub(u->v_s, acd_cscale(r_eq, x->i_s)),
-                               acd_cmul(acd_cscale(p->L_m / p->L_r, rotor_pole), x->psi_r));
-    dx->i_s = acd_cdiv(sum, acd_c(sigma_L_s, ACD_R(0.0)));
-    dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r / p->L_r, x->i_s),
+                               acd_cmul(acd_cscale(p->L_m * over_L_r, rotor_pole), x->psi_r));
+    dx->i_s = acd_cscale(ACD_R(1.0) / sigma_L_s, sum);
+    dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r * over_L_r, x->i_s),
                          acd_cmul(rotor_pole, x->psi_r));
 """,
     ),
