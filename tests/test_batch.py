@@ -64,12 +64,15 @@ def test_batch_without_reducers_equals_single_runs_bit_for_bit():
 @pytest.mark.slow
 def test_batch_with_reducers_equals_each_variant_alone():
     """With the reducers in the loop, a variant in a batch equals the same variant alone (the
-    same compiled loop, one variant), metrics and states alike."""
+    same compiled loop, one variant), metrics and states alike; and its plant states are the
+    single run's without reducers, bit for bit (the reducers only read, and the fast-math flags
+    let no larger compiled loop round the plant differently: acdrive._jit.FAST_MATH_FLAGS)."""
     variants = _variants()
     batch = simulate_batch(BASE, variants, log=["shaft0.w"], log_every=1)
     for i, v in enumerate(variants):
         alone = simulate_batch(BASE, [v], log=["shaft0.w"], log_every=1)
         assert np.array_equal(batch.traces[i].final_state, alone.traces[0].final_state)
+        assert np.array_equal(batch.traces[i].final_state, _alone(v).final_state)
         for key, value in alone.rows[0].items():
             if key == "variant":
                 continue

@@ -24,7 +24,8 @@ from acdrive.errors import InputError
 from acdrive.sim._ccode._c_source import CExport, ChainModel, Member
 
 #: gcc flags of the library: -ffp-contract=off keeps every product and sum rounded on its own
-#: (no fused multiply-add), as numba compiles the kernels without fast-math
+#: (no fused multiply-add), as numba compiles the kernels (no ``contract`` among
+#: ``acdrive._jit.FAST_MATH_FLAGS``)
 CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off", "-fPIC", "-shared")
 
 

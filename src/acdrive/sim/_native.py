@@ -24,10 +24,10 @@ nothing), and a library that cannot be loaded is built again with a one-line not
 
 Arithmetic: compiled with ``-ffp-contract=off`` (``NATIVE_CFLAGS``), the C repeats the
 kernels' operations in their order, so under ``ACDRIVE_STRICT_MATH=1`` (strict IEEE in numba too)
-the native tier equals the specialised loop bit for bit (``tests/test_native_tier.py``); under
-numba's default fast-math flags (``acdrive._jit.FAST_MATH_FLAGS``) the two differ by rounding
-at most (stated in docs/design.md). Sine, cosine and magnitudes are acdrive's own on both sides
-(``sim._lane_math``, ``acd_sincos`` in ``sim._ccode._prelude``).
+the native tier equals the specialised loop bit for bit, and so it does with numba's default
+fast-math flags (``acdrive._jit.FAST_MATH_FLAGS``: no reordering, fusing or reciprocals), since
+sine, cosine and magnitudes are acdrive's own on both sides (``sim._lane_math``, ``acd_sincos``
+in ``sim._ccode._prelude``): ``tests/test_native_tier.py``.
 
 A system the native tier cannot run is named with the reason (``native_obstacle``): a part kind
 without C (a user's own kernel), an integrator without C, no C compiler on the machine.

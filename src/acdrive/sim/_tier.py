@@ -23,10 +23,10 @@ background, so the next new topology need not wait). A run long enough that the 
 specialised loop in the foreground; ``ACDRIVE_LOOP_TIER=generic`` insists on the generic one,
 ``ACDRIVE_LOOP_TIER=native`` on the native one. Batches always run numba's loops (one variant per
 core, or the lockstep loop across SIMD lanes).
-The two numba tiers give bit-identical results (the same operations in the same order, and
-fast-math flags that allow no reordering, fusing or reciprocals: ``acdrive._jit.FAST_MATH_FLAGS``,
-``tests/test_tiers.py``). Under ACDRIVE_STRICT_MATH=1 the native tier's do too
-(``tests/test_native_tier.py``); by default it is compared within a stated tolerance there.
+The tiers give bit-identical results: the same operations in the same order, fast-math flags
+that allow no reordering, fusing or reciprocals (``acdrive._jit.FAST_MATH_FLAGS``), and the same
+sine, cosine and magnitudes in numba and in C (``sim._lane_math``): ``tests/test_tiers.py``,
+``tests/test_native_tier.py``, in the default build and under ACDRIVE_STRICT_MATH=1.
 """
 
 from __future__ import annotations
