@@ -64,6 +64,21 @@ from acdrive.sim._loop_source import (
 LANES = 48
 
 
+#: bytes of an AVX-512 vector: the block workspace starts at a multiple of it. numba aligns its
+#: arrays to 32 bytes, so without this about half the blocks had every 512-bit load and store of
+#: a lane row split over two cache lines (rows are LANES doubles, a multiple of 64 bytes); the
+#: batch's speed then changed from run to run with the allocation (docs/design.md, "Session 17").
+VECTOR_BYTES = 64
+
+
+@njit(cache=True, forceinline=True)
+def vector_aligned(a, n):
+    """The ``n`` float64 of ``a`` from its first ``VECTOR_BYTES`` boundary on (``a`` has
+    ``VECTOR_BYTES // 8`` more), as an array that owns nothing (``sim._borrow``)."""
+    address = a.ctypes.data
+    return carray(_pointer(address + (-address) % VECTOR_BYTES), (n,), np.float64)
+
+
 @njit(cache=True, forceinline=True)
 def lane_view(a, shape):
     """A float64 array of ``shape`` over the memory of ``a`` that owns nothing (``sim._borrow``):
@@ -189,7 +204,7 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
         return ["    for v in range(LANES):", *("        " + s for s in statements)]
 
     fast = FAST_MATH_SOURCE
-    emit("from acdrive.sim._lockstep_source import LANES, lane_view")
+    emit("from acdrive.sim._lockstep_source import LANES, VECTOR_BYTES, lane_view, vector_aligned")
     emit('_jit = njit(cache=True, error_model="numpy")')
     emit('_jit_inline = njit(cache=True, error_model="numpy", inline="always")')
     emit('_jit_into_run = njit(cache=True, error_model="numpy", forceinline=True)')
@@ -309,7 +324,8 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     emit("def run_block(b0, nb, X, P, S, Y, t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG, ELOG, ECOUNT, DONE, STATUS):")  # fmt: skip
     emit('    """Variants b0 .. b0 + nb - 1 in lockstep (lanes past nb repeat the last variant and')
     emit('    are dropped); returns 1 if a modulator broke the one-segment rule, else 0."""')
-    emit("    Z_owner = np.zeros(R_N * LANES)")
+    emit("    Z_owner = np.zeros(R_N * LANES + VECTOR_BYTES // 8)")
+    emit("    Z_flat = vector_aligned(Z_owner, R_N * LANES)  # rows start on vector boundaries")
     emit("    V_owner = np.zeros((N_MOD, 1, MAX_W, LANES))")
     emit("    E = np.zeros((N_EVENTS, LANES), dtype=np.int64)")
     emit("    BAD = np.zeros(LANES, dtype=np.int64)")
@@ -318,18 +334,18 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     emit("        b = b0 + min(v, nb - 1)")
     emit("        ACTIVE[v] = v < nb")
     emit("        for i in range(N_X):")
-    emit("            Z_owner[(R_X + i) * LANES + v] = X[b, i]")
+    emit("            Z_flat[(R_X + i) * LANES + v] = X[b, i]")
     emit("        for i in range(N_S):")
-    emit("            Z_owner[(R_S + i) * LANES + v] = S[b, i]")
+    emit("            Z_flat[(R_S + i) * LANES + v] = S[b, i]")
     emit("        for i in range(N_Y):")
-    emit("            Z_owner[(R_Y + i) * LANES + v] = Y[b, i]")
+    emit("            Z_flat[(R_Y + i) * LANES + v] = Y[b, i]")
     emit("        for i in range(N_P):")
-    emit("            Z_owner[(R_P + i) * LANES + v] = P[b, i]")
+    emit("            Z_flat[(R_P + i) * LANES + v] = P[b, i]")
     emit(
         "    # one address for every view of the workspace (lane_view), W first: rows 0 .. N_W N_X"
     )
     emit(
-        "    Z, Wz, V = lane_view(Z_owner, (R_N, LANES)), lane_view(Z_owner, (N_W, N_X, LANES)), borrowed(V_owner)"
+        "    Z, Wz, V = lane_view(Z_flat, (R_N, LANES)), lane_view(Z_flat, (N_W, N_X, LANES)), borrowed(V_owner)"
     )
     emit("    Xz, Yz, Uz, Sz, Pz = Z[R_X:R_X + N_X], Z[R_Y:R_Y + N_Y], Z[R_U:R_U + N_U], Z[R_S:R_S + N_S], Z[R_P:R_P + N_P]")  # fmt: skip
     emit("    DTz, FIN = Z[R_DT:R_DT + N_MOD], Z[R_FIN]")
