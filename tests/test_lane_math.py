@@ -1,4 +1,4 @@
-"""Sine, cosine and magnitude as arithmetic for the lockstep lane loops (sim._lane_math): the
+"""Sine, cosine and magnitude as arithmetic, every compiled tier's (sim._lane_math): the
 reduction's constants are pi/2, the results stay within 2 ulp of the C library over the angles
 a long simulation reaches, the identities hold, and a rebound kernel really uses them."""
 
@@ -11,9 +11,7 @@ import pytest
 from numba import njit
 
 from acdrive.sim._lane_math import (
-    EXACT_REDUCTION_LIMIT,
     LANE_MATH,
-    PIO2_PARTS,
     lane_abs,
     lane_cos,
     lane_sin,
@@ -23,6 +21,7 @@ from acdrive.sim._lane_math import (
     square_root,
 )
 from acdrive.sim._rebind import rebound_kernel
+from acdrive.sim._sincos_constants import EXACT_REDUCTION_LIMIT, PIO2_PARTS
 
 # pi to 110 digits (a fact, independent of the module's constants)
 _PI = ("3.1415926535897932384626433832795028841971693993751058209749445923078164062862089986280"

@@ -37,7 +37,8 @@ run logs (every ``log_every``-th) and accumulates in its discrete state, read ba
 run. Nothing is logged per sample unless asked for, so the memory of
 a batch is a few hundred floats per variant whatever the duration. The reducer parts only read,
 so the plant's slots and generated code are those of the single run; the plant states agree
-with the reducer-free loop bit for bit (docs/design.md, "Batches and sweeps"). A variant in a batch equals the same variant alone in the same loop bit for bit.
+with the reducer-free loop bit for bit (docs/design.md, "Batches and sweeps"). A variant in a
+batch equals the same variant alone in the same loop bit for bit.
 
 **The drive** of each variant answers what is particular to it (``acdrive.drives``): its
 scenario schema, its system of parts (``Drive.build``), its default metrics

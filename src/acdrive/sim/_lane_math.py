@@ -41,9 +41,8 @@ from numba import njit
 from numba import types as nb_types
 from numba.extending import intrinsic, overload
 
-from acdrive.sim._sincos_constants import (  # noqa: F401 (EXACT_REDUCTION_LIMIT: the tests')
+from acdrive.sim._sincos_constants import (
     COSINE_TERMS,
-    EXACT_REDUCTION_LIMIT,
     PIO2_PARTS,
     QUADRANT_LIMIT,
     SINE_TERMS,
