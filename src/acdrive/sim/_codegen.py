@@ -217,6 +217,21 @@ def kernel_import(function, alias: str) -> str:
     return f"from {py.__module__} import {py.__name__} as {alias}"
 
 
+#: the imports ``inlined_kernel`` lines need in a generated module
+INLINED_KERNEL_IMPORTS = (
+    "from acdrive.sim._rebind import rebound_kernel",
+    "from acdrive.sim._lane_math import LANE_MATH",
+)
+
+
+def inlined_kernel(alias: str, original: str, *tables: str) -> str:
+    """The generated line that binds ``alias`` to the kernel ``original`` re-jitted for numba-IR
+    inlining, with acdrive's sin, cos, |z| and sqrt (``sim._lane_math``: the same in every tier)
+    and the further replacement ``tables`` named (``sim._rebind``)."""
+    replaced = ", ".join((*tables, "LANE_MATH"))  # disjoint tables: the order does not matter
+    return f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({original}.py_func, {replaced}))'
+
+
 def kernel_fingerprint(function) -> str | None:
     """A hash of the source a kernel from outside acdrive is compiled from, or None for acdrive's
     own kernels (the cache folder is keyed by acdrive's sources already).

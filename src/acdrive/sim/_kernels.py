@@ -55,10 +55,8 @@ def kind_source(kind) -> str:
         if fingerprint:
             fingerprints.add(f"# kernels of {fn.py_func.__module__}: {fingerprint}")
     lines += sorted(fingerprints)
-    lines += ["from numba import njit", "from acdrive.sim._lane_math import LANE_MATH",
-              "from acdrive.sim._rebind import rebound_kernel", *sorted(imports), ""]  # fmt: skip
-    for attr in sorted(kernels):  # acdrive's sin, cos, |z| and sqrt, as in the other tiers
-        lines.append(f'_{attr} = njit(inline="always", error_model="numpy")(rebound_kernel(_{attr}.py_func, LANE_MATH))')  # fmt: skip
+    lines += ["from numba import njit", *codegen.INLINED_KERNEL_IMPORTS, *sorted(imports), ""]
+    lines += [codegen.inlined_kernel(f"_{attr}", f"_{attr}") for attr in sorted(kernels)]
     lines.append("")
     for role in roles_of(kind):
         attr, _, args, fast, nrt = ROLES[role]

@@ -179,16 +179,8 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     reason = lockstep_refusal(system)
     if reason is not None:
         raise ValueError(reason)
-    L, aliases = kernel_header(system, "acdrive.sim._lockstep_source")
+    L, aliases = kernel_header(system, "acdrive.sim._lockstep_source", one_point)
     emit = L.append
-    # the parts whose tables have one point in every variant: no table search (sim._one_point),
-    # on top of the lane math every tier's kernels have (kernel_header)
-    rebound = sorted(alias for (name, _role), alias in aliases.items() if name in one_point)
-    if rebound:
-        emit("from acdrive.sim._one_point import ONE_POINT")
-        for alias in rebound:
-            emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, ONE_POINT))')  # fmt: skip
-        emit("")
     index = {p.name: i for i, p in enumerate(system.parts)}
     PO = [int(o) for o in PO]
     lane = ", v"

@@ -7,7 +7,12 @@ from __future__ import annotations
 
 from acdrive._jit import FAST_MATH_SOURCE
 from acdrive.core._parts import Part
-from acdrive.sim._codegen import kernel_fingerprint, kernel_import
+from acdrive.sim._codegen import (
+    INLINED_KERNEL_IMPORTS,
+    inlined_kernel,
+    kernel_fingerprint,
+    kernel_import,
+)
 from acdrive.sim._integrators import INTEGRATORS, RK6_A, RK6_B, RK6_C
 
 #: the status codes ``run`` returns (mirrored by the generated source)
@@ -89,10 +94,13 @@ def _step_lines(method: str) -> list[str]:
     return lines
 
 
-def kernel_header(system, generator: str) -> tuple[list[str], dict]:
+def kernel_header(
+    system, generator: str, one_point: frozenset[str] = frozenset()
+) -> tuple[list[str], dict]:
     """The generated module's first lines (docstring naming ``generator``, the fingerprints of
-    kernels from outside acdrive, the imports, each kernel re-jitted for numba-IR inlining) and
-    the alias of every (part name, kernel role)."""
+    kernels from outside acdrive, the imports, each kernel re-jitted for numba-IR inlining with
+    acdrive's elementary functions, and without the table search for the parts named in
+    ``one_point``, ``sim._one_point``) and the alias of every (part name, kernel role)."""
     imports, aliases, fingerprints = [], {}, set()
     for k, part in enumerate(system.parts):
         for role, fn in part.kernels().items():
@@ -113,13 +121,13 @@ def kernel_header(system, generator: str) -> tuple[list[str], dict]:
     emit("from numba import njit, prange")
     emit("from acdrive.sim._borrow import borrowed")
     L.extend(sorted(set(imports)))
-    emit("from acdrive.sim._rebind import rebound_kernel")
-    emit("from acdrive.sim._lane_math import LANE_MATH")
-    # Kernels are inlined (numba IR inlining) into one function per piece of the sample, with
-    # acdrive's sin, cos, |z| and sqrt (sim._lane_math), the same in every tier.
+    L.extend(INLINED_KERNEL_IMPORTS)
+    if one_point:
+        emit("from acdrive.sim._one_point import ONE_POINT")
+    # Kernels are inlined (numba IR inlining) into one function per piece of the sample.
     emit("")
-    for alias in sorted(set(aliases.values())):
-        emit(f'{alias} = njit(inline="always", error_model="numpy")(rebound_kernel({alias}.py_func, LANE_MATH))')  # fmt: skip
+    for (name, _role), alias in sorted(aliases.items(), key=lambda item: item[1]):
+        emit(inlined_kernel(alias, alias, *(("ONE_POINT",) if name in one_point else ())))
     emit("")
     return L, aliases
 

@@ -1,10 +1,12 @@
-"""A kernel compiled with some of the functions it calls replaced: the seam through which the
-lockstep loop (``sim._lockstep_source``) gives its lane loops forms that vectorise.
+"""A kernel compiled with some of the functions it calls replaced: the seam through which every
+generated loop gives its kernels acdrive's elementary functions (``sim._lane_math``, the same in
+every tier), and the lockstep loop its one-point table lookups (``sim._one_point``).
 
 A replacement table maps ``id(original)`` to its replacement: a compiled function
 (``sim._one_point``: ``table_at`` by its one-point form) or a module (``sim._lane_math``: numpy
-by a namespace with sin, cos, abs and sqrt that make no library call). ``rebound_kernel(function, *tables)`` is a
-copy of the Python ``function`` whose globals hold the replacements; the acdrive helpers it calls
+by a namespace with sin, cos, abs and sqrt that make no library call).
+``rebound_kernel(function, *tables)`` is a copy of the Python ``function`` whose globals hold
+the replacements; the acdrive helpers it calls
 (compiled functions of acdrive's modules) are copied the same way, recursively, so a
 replacement reaches the helper that makes the call. Each copy is compiled with its original's
 options, caching aside (a copy made at run time has no file of its own).
