@@ -10,8 +10,9 @@ time per step and saves the compile of each new topology.
 Tables (int64): ``SLOT[i] = (x0, x1, s0, s1, u0, u1, y0, y1)`` of part i; ``PROJECT``,
 ``STATE_OUT`` rows ``(part, address)``; ``DIRECT``, ``RHS``, ``SAMPLED``, ``MODS`` rows ``(part,
 address, c0, c1, address of the fast variant)`` whose inputs are the copies ``COPY[c0:c1]`` of
-``(U index, Y index)`` pairs made just before the call; ``SIZES = (N_X, method, N_W, N_MOD,
-MAX_SEG, MAX_W, N_EVENTS, n_sampled)``.
+``(U index, Y index)`` pairs made just before the call; ``BREAKS`` rows ``(part, first table
+slot, tables)`` of the continuous parts with profiles (``sim._loop_source.advance_lines``);
+``SIZES = (N_W, MAX_SEG, MAX_W, method)``.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from acdrive._jit import FAST_MATH_FLAGS
+from acdrive.core._tables import NO_BREAK, tables_next_time
 from acdrive.sim._borrow import borrowed
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 from acdrive.sim._kernels import ROLES
@@ -112,28 +114,32 @@ def derivatives(t, X, P, PO, Y, U, dX, SLOT, STATE_OUT, DIRECT, RHS, COPY):
 
 
 @_plant_fast
-def plant_step(t, X, h, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, method, RA, RB, RC):
-    """One step of the integrator with the inputs held, written as ``sim._loop_source``'s
-    ``step_body`` writes it (RK4 literally; RK6 with its zero coefficients skipped)."""
+def plant_step(t, X, h, cap, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, method, RA, RB,
+               RC):  # fmt: skip
+    """One step of the integrator with the inputs held and the stage times capped at ``cap``,
+    written as ``sim._loop_source``'s ``step_body`` writes it (RK4 literally; RK6 with its zero
+    coefficients skipped)."""
     n_x = X.shape[0]
     if method == 0:
         k1, k2, k3, k4, xt = W[0], W[1], W[2], W[3], W[4]
-        derivatives(t, X, P, PO, Y, U, k1, SLOT, STATE_OUT, DIRECT, RHS, COPY)
+        derivatives(min(t, cap), X, P, PO, Y, U, k1, SLOT, STATE_OUT, DIRECT, RHS, COPY)
         for i in range(n_x):
             xt[i] = X[i] + 0.5 * h * k1[i]
-        derivatives(t + 0.5 * h, xt, P, PO, Y, U, k2, SLOT, STATE_OUT, DIRECT, RHS, COPY)
+        derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k2, SLOT, STATE_OUT, DIRECT, RHS,
+                    COPY)  # fmt: skip
         for i in range(n_x):
             xt[i] = X[i] + 0.5 * h * k2[i]
-        derivatives(t + 0.5 * h, xt, P, PO, Y, U, k3, SLOT, STATE_OUT, DIRECT, RHS, COPY)
+        derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k3, SLOT, STATE_OUT, DIRECT, RHS,
+                    COPY)  # fmt: skip
         for i in range(n_x):
             xt[i] = X[i] + h * k3[i]
-        derivatives(t + h, xt, P, PO, Y, U, k4, SLOT, STATE_OUT, DIRECT, RHS, COPY)
+        derivatives(min(t + h, cap), xt, P, PO, Y, U, k4, SLOT, STATE_OUT, DIRECT, RHS, COPY)
         for i in range(n_x):
             X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
         return
     stages = RB.shape[0]
     xt = W[stages]
-    derivatives(t, X, P, PO, Y, U, W[0], SLOT, STATE_OUT, DIRECT, RHS, COPY)
+    derivatives(min(t, cap), X, P, PO, Y, U, W[0], SLOT, STATE_OUT, DIRECT, RHS, COPY)
     for s in range(1, stages):
         for i in range(n_x):
             acc = 0.0
@@ -146,7 +152,8 @@ def plant_step(t, X, h, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, meth
                     else:
                         acc = acc + RA[s, j] * W[j, i]
             xt[i] = X[i] + h * acc
-        derivatives(t + RC[s] * h, xt, P, PO, Y, U, W[s], SLOT, STATE_OUT, DIRECT, RHS, COPY)
+        derivatives(min(t + RC[s] * h, cap), xt, P, PO, Y, U, W[s], SLOT, STATE_OUT, DIRECT,
+                    RHS, COPY)  # fmt: skip
     for i in range(n_x):
         acc = 0.0
         first = True
@@ -158,6 +165,40 @@ def plant_step(t, X, h, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, meth
                 else:
                     acc = acc + RB[j] * W[j, i]
         X[i] += h * acc
+
+
+@_plant
+def next_break(t, P, PO, BREAKS):
+    """The first point of a continuous part's profile later than t (``NO_BREAK`` if none)."""
+    earliest = NO_BREAK
+    for r in range(BREAKS.shape[0]):
+        i = BREAKS[r, 0]
+        later = tables_next_time(P[PO[i] : PO[i + 1]], BREAKS[r, 1], BREAKS[r, 2], t)
+        if later < earliest:
+            earliest = later
+    return earliest
+
+
+@_plant
+def advance(a, span, n_sub, X, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, BREAKS,
+            method, RA, RB, RC):  # fmt: skip
+    """n_sub steps over [a, a + span], split at the profiles' points inside it (as
+    ``sim._loop_source.advance_lines`` writes ``advance``)."""
+    nb = next_break(a, P, PO, BREAKS)
+    while nb < a + span:
+        end = a + span
+        h = (nb - a) / n_sub
+        cap = np.nextafter(nb, -NO_BREAK)
+        for j in range(n_sub):
+            plant_step(a + j * h, X, h, cap, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY,
+                       method, RA, RB, RC)  # fmt: skip
+        a, span = nb, end - nb
+        nb = next_break(a, P, PO, BREAKS)
+    h = span / n_sub
+    cap = np.nextafter(nb, -NO_BREAK) if nb < NO_BREAK else NO_BREAK
+    for j in range(n_sub):
+        plant_step(a + j * h, X, h, cap, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY,
+                   method, RA, RB, RC)  # fmt: skip
 
 
 @_strict
@@ -185,15 +226,13 @@ def sample(t, T_s, P, PO, S, Y, U, E, DT, V, NSEG, SLOT, SAMPLED, MODS, COPY):
 
 @_plant
 def integrate(t, T_s, n_sub, X, P, PO, Y, U, W, DT, V, NSEG, IDX, LEFT, SLOT, STATE_OUT, DIRECT,
-              RHS, MODS, COPY, method, RA, RB, RC):  # fmt: skip
+              RHS, MODS, COPY, BREAKS, method, RA, RB, RC):  # fmt: skip
     """The plant over the sample: ``n_sub`` steps per segment of the merged modulator segments
     (as ``sim._loop_source`` writes ``integrate``)."""
     n_mod = MODS.shape[0]
     if n_mod == 0:
-        h = T_s / n_sub
-        for j in range(n_sub):
-            plant_step(t + j * h, X, h, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY,
-                       method, RA, RB, RC)  # fmt: skip
+        advance(t, T_s, n_sub, X, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY, BREAKS,
+                method, RA, RB, RC)  # fmt: skip
         return
     index, left = IDX, LEFT
     for m in range(n_mod):
@@ -213,10 +252,8 @@ def integrate(t, T_s, n_sub, X, P, PO, Y, U, W, DT, V, NSEG, IDX, LEFT, SLOT, ST
         if span == np.inf:
             break
         if span > 0.0:
-            h = span / n_sub
-            for j in range(n_sub):
-                plant_step(tk + j * h, X, h, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY,
-                           method, RA, RB, RC)  # fmt: skip
+            advance(tk, span, n_sub, X, P, PO, Y, U, W, SLOT, STATE_OUT, DIRECT, RHS, COPY,
+                    BREAKS, method, RA, RB, RC)  # fmt: skip
             tk += span
         for m in range(n_mod):
             left[m] -= span
@@ -247,7 +284,7 @@ def record(k, log_every, Y, E, LOG_IDX, LOG, ELOG, ECOUNT):
 
 @_strict
 def run(X, P, PO, S, Y, U, t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG, ELOG, ECOUNT,
-        SLOT, PROJECT, STATE_OUT, DIRECT, RHS, SAMPLED, MODS, COPY, SIZES):  # fmt: skip
+        SLOT, PROJECT, STATE_OUT, DIRECT, RHS, SAMPLED, MODS, COPY, BREAKS, SIZES):  # fmt: skip
     """Run n_steps samples in place; returns (samples done, status). ``SIZES = (N_W, MAX_SEG,
     MAX_W, method)``."""
     n_x = X.shape[0]
@@ -271,7 +308,7 @@ def run(X, P, PO, S, Y, U, t0, T_s, n_sub, n_steps, log_every, LOG_IDX, LOG, ELO
         sample(t, T_s, Pb, PO, Sb, Yb, Ub, E, DT, V, NSEG, SLOT, SAMPLED, MODS, COPY)
         record(k, log_every, Yb, E, LOG_IDX, LOG, ELOG, ECOUNT)
         integrate(t, T_s, n_sub, Xb, Pb, PO, Yb, Ub, W, DT, V, NSEG, IDX, LEFT, SLOT, STATE_OUT,
-                  DIRECT, RHS, MODS, COPY, method, RA, RB, RC)  # fmt: skip
+                  DIRECT, RHS, MODS, COPY, BREAKS, method, RA, RB, RC)  # fmt: skip
         finite = True
         for i in range(n_x):
             if not np.isfinite(Xb[i]):

@@ -45,8 +45,10 @@ from acdrive.sim._integrators import INTEGRATORS
 from acdrive.sim._loop_source import (
     STATUS_NONFINITE,
     STATUS_OK,
+    advance_lines,
     input_copies,
     kernel_header,
+    profile_parts,
     step_body,
 )
 
@@ -98,6 +100,24 @@ def lockstep_refusal(system) -> str | None:
     return None
 
 
+def profile_points_differ(system, P, PO) -> str | None:
+    """The first continuous part whose profiles have points at other times in some row of the
+    packed parameters ``P`` than in the first (None if every row has the same points): the
+    integration splits at those points (``sim._loop_source.advance_lines``), so lanes stepping
+    together must share them."""
+    for i, part in profile_parts(system):
+        offset = int(PO[i]) + part.PARAMS.table_start
+        for _ in part.PARAMS.tables:
+            n = P[0, offset]
+            if np.any(P[:, offset] != n):
+                return part.name
+            times = P[:, offset + 1 : offset + 1 + int(n)]
+            if np.any(times != times[0]):
+                return part.name
+            offset += 1 + 2 * int(n)
+    return None
+
+
 def one_point_parts(system, P, PO) -> frozenset[str]:
     """The parts with profile tables whose tables have one point in every row of the packed
     parameters ``P`` (offsets ``PO``): their kernels run without the table search in lockstep
@@ -131,6 +151,10 @@ def lockstep_plan(system, PO, variants: int, lockstep=None, P=None):
     if lockstep not in (None, True):
         raise InputError("lockstep", f"must be None, True or False, got {lockstep!r}")
     reason = lockstep_refusal(system)
+    differing = None if P is None else profile_points_differ(system, P, PO)
+    if reason is None and differing is not None:
+        reason = (f"the profiles of {differing} have their points at other times in some "
+                  "variants (the integration splits a sample at them)")
     wide = variants >= LANES * numba.get_num_threads()
     if reason is not None:
         if lockstep:
@@ -246,9 +270,11 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
                         f"{aliases[(p.name, 'rhs')]}(t, X[{sl(p, 'x')}], U[{sl(p, 'u')}], P[{sl(p, 'p')}], Y[{sl(p, 'y')}], dX[{sl(p, 'x')}])"]))  # fmt: skip
     emit("")
     emit("@_jit_plant_fast_inline")
-    emit("def plant_step(t, X, h, P, PO, Y, U, W):")
+    emit("def plant_step(t, X, h, cap, P, PO, Y, U, W):")
     L.extend(step_body(system.method, lanes=True))
     emit("")
+    # the lanes share their profiles' points (lockstep_plan): the first lane's are every lane's
+    L.extend(advance_lines(system, lambda i: f"P[{PO[i]}:{PO[i + 1]}, 0]", po="0"))
     # sampled parts, then modulators (one segment each, checked)
     emit("@_jit_into_run")
     emit("def sample(t, T_s, P, S, Y, U, E, DT, V, BAD):")
@@ -269,9 +295,7 @@ def lockstep_source(system, PO, one_point: frozenset[str] = frozenset()) -> str:
     emit("")
     emit("@_jit_plant_into_run")
     emit("def integrate(t, T_s, n_sub, X, P, Y, U, W):")
-    emit("    h = T_s / n_sub  # the single loop's h = span / n_sub, one span of T_s")
-    emit("    for j in range(n_sub):")
-    emit("        plant_step(t + j * h, X, h, P, 0, Y, U, W)")
+    emit("    advance(t, T_s, n_sub, X, P, 0, Y, U, W)  # the single loop's, one span of T_s")
     emit("")
     emit("@_jit_plant_into_run")
     emit("def not_finite(X, FIN):")

@@ -41,9 +41,56 @@ def input_copies(system, part: Part, only=None, skip=(), lane="") -> list[str]:
     return [f"U[{d}{lane}] = Y[{s}{lane}]" for d, s in copy_pairs(system, part, only, skip)]
 
 
+def profile_parts(system) -> list[tuple[int, Part]]:
+    """(index, part) of every continuous part with profile tables: the profiles the integrator's
+    stages read between two samples, whose points split the integration (``advance_lines``)."""
+    return [(i, p) for i, p in enumerate(system.parts)
+            if p in system.continuous and p.PARAMS.tables]  # fmt: skip
+
+
+def advance_lines(system, params, po: str = "PO") -> list[str]:
+    """``next_break`` and ``advance``, the integration of the plant over one span with the
+    inputs held. A profile of a continuous part (a load step, a supply's ramp) changes where it
+    has a point; ``advance`` splits the span at every such point inside it, so no step of the
+    integrator straddles one, and caps every stage time of a piece just below the point that
+    ends it (``cap``): the last stage of a step ending on a load step reads the load before it,
+    whatever the rounding of its time, and the first stage of the next piece, at the point
+    itself, the load after it (``core._tables.table_at``). Without a point inside or at the end
+    of the span the cap is never reached and the steps are those of an unsplit span.
+    ``params(i)``: the generated slice of part i's parameters; ``po``: the argument
+    ``plant_step`` takes for the parameter offsets."""
+    L = ["@_jit_plant_into_run", "def next_break(t, P, PO):",
+         '    """The first point of a continuous part\'s profile later than t (NO_BREAK if none)."""',
+         "    earliest = NO_BREAK"]  # fmt: skip
+    for i, part in profile_parts(system):
+        L += [f"    later = tables_next_time({params(i)}, {part.PARAMS.table_start}, "
+              f"{len(part.PARAMS.tables)}, t)",
+              "    if later < earliest:", "        earliest = later"]  # fmt: skip
+    L += ["    return earliest", ""]
+    L += ["@_jit_plant_into_run  # not fast-math: NO_BREAK is compared and nextafter called",
+          "def advance(a, span, n_sub, X, P, PO, Y, U, W):",
+          '    """n_sub steps over [a, a + span], split at the profiles\' points inside it."""',
+          "    nb = next_break(a, P, PO)",
+          "    while nb < a + span:",
+          "        end = a + span",
+          "        h = (nb - a) / n_sub",
+          "        cap = np.nextafter(nb, -NO_BREAK)",
+          "        for j in range(n_sub):",
+          f"            plant_step(a + j * h, X, h, cap, P, {po}, Y, U, W)",
+          "        a, span = nb, end - nb",
+          "        nb = next_break(a, P, PO)",
+          "    h = span / n_sub",
+          "    cap = np.nextafter(nb, -NO_BREAK) if nb < NO_BREAK else NO_BREAK",
+          "    for j in range(n_sub):",
+          f"        plant_step(a + j * h, X, h, cap, P, {po}, Y, U, W)",
+          ""]  # fmt: skip
+    return L
+
+
 def step_body(method: str, lanes: bool = False) -> list[str]:
-    """Body of ``plant_step``: one step of ``system.method`` with the inputs held; ``W`` holds
-    the stage derivatives and, in its last row, the stage state. ``lanes``: every array has a
+    """Body of ``plant_step(t, X, h, cap, ...)``: one step of ``system.method`` with the inputs
+    held, every stage time capped at ``cap`` (``advance_lines``); ``W`` holds the stage
+    derivatives and, in its last row, the stage state. ``lanes``: every array has a
     trailing axis over variants, run by an innermost loop over ``LANES`` (``sim._lockstep_source``)."""
     lines = _step_lines(method)
     if not lanes:
@@ -63,16 +110,16 @@ def _step_lines(method: str) -> list[str]:
     if method == "rk4":  # written out: the DFIM results' rounding is this sequence
         return [
             "    k1, k2, k3, k4, xt = W[0], W[1], W[2], W[3], W[4]",
-            "    derivatives(t, X, P, PO, Y, U, k1)",
+            "    derivatives(min(t, cap), X, P, PO, Y, U, k1)",
             "    for i in range(N_X):",
             "        xt[i] = X[i] + 0.5 * h * k1[i]",
-            "    derivatives(t + 0.5 * h, xt, P, PO, Y, U, k2)",
+            "    derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k2)",
             "    for i in range(N_X):",
             "        xt[i] = X[i] + 0.5 * h * k2[i]",
-            "    derivatives(t + 0.5 * h, xt, P, PO, Y, U, k3)",
+            "    derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k3)",
             "    for i in range(N_X):",
             "        xt[i] = X[i] + h * k3[i]",
-            "    derivatives(t + h, xt, P, PO, Y, U, k4)",
+            "    derivatives(min(t + h, cap), xt, P, PO, Y, U, k4)",
             "    for i in range(N_X):",
             "        X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])",
         ]
@@ -84,11 +131,11 @@ def _step_lines(method: str) -> list[str]:
 
     for i in range(stages):
         if i == 0:
-            lines.append("    derivatives(t, X, P, PO, Y, U, W[0])")
+            lines.append("    derivatives(min(t, cap), X, P, PO, Y, U, W[0])")
             continue
         lines.append("    for i in range(N_X):")
         lines.append(f"        xt[i] = X[i] + h * ({combination(RK6_A[i])})")
-        lines.append(f"    derivatives(t + {RK6_C[i]!r} * h, xt, P, PO, Y, U, W[{i}])")
+        lines.append(f"    derivatives(min(t + {RK6_C[i]!r} * h, cap), xt, P, PO, Y, U, W[{i}])")
     lines.append("    for i in range(N_X):")
     lines.append(f"        X[i] += h * ({combination(RK6_B)})")
     return lines
@@ -120,6 +167,7 @@ def kernel_header(
     emit("import numpy as np")
     emit("from numba import njit, prange")
     emit("from acdrive.sim._borrow import borrowed")
+    emit("from acdrive.core._tables import NO_BREAK, tables_next_time")
     L.extend(sorted(set(imports)))
     L.extend(INLINED_KERNEL_IMPORTS)
     if one_point:
@@ -217,9 +265,10 @@ def loop_source(system) -> str:
         )
     emit("")
     emit("@_jit_plant_fast_inline")
-    emit("def plant_step(t, X, h, P, PO, Y, U, W):")
+    emit("def plant_step(t, X, h, cap, P, PO, Y, U, W):")
     L.extend(step_body(system.method))
     emit("")
+    L.extend(advance_lines(system, lambda i: f"P[PO[{i}]:PO[{i + 1}]]"))
     # sampled parts and modulators: one function per sampled part (its input copies and its
     # step), so the slow path can run a Python step in place of any one of them
     for i, p in enumerate(system.sampled):
@@ -256,9 +305,7 @@ def loop_source(system) -> str:
     emit("@_jit_plant_into_run")  # not fast-math: it compares with np.inf
     emit("def integrate(t, T_s, n_sub, X, P, PO, Y, U, W, DT, V, NSEG, IDX, LEFT):")
     if not system.modulators:
-        emit("    h = T_s / n_sub")
-        emit("    for j in range(n_sub):")
-        emit("        plant_step(t + j * h, X, h, P, PO, Y, U, W)")
+        emit("    advance(t, T_s, n_sub, X, P, PO, Y, U, W)")
     else:
         emit("    index, left = IDX, LEFT  # scratch from the caller: no allocation per sample")
         emit("    for m in range(N_MOD):")
@@ -278,9 +325,7 @@ def loop_source(system) -> str:
         emit("        if span == np.inf:")
         emit("            break")
         emit("        if span > 0.0:")
-        emit("            h = span / n_sub")
-        emit("            for j in range(n_sub):")
-        emit("                plant_step(tk + j * h, X, h, P, PO, Y, U, W)")
+        emit("            advance(tk, span, n_sub, X, P, PO, Y, U, W)")
         emit("            tk += span")
         emit("        for m in range(N_MOD):")
         emit("            left[m] -= span")

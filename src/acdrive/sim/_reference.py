@@ -55,10 +55,17 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
     IDX, LEFT = np.zeros(m.N_MOD, dtype=np.int64), np.zeros(m.N_MOD)
     steps = _sampled_steps(system, m, P, PO, S, Y, U, python_steps or {})
 
-    def rhs(t, x):
+    def rhs(t, x, cap):
         dx = np.empty_like(x)
-        m.derivatives(t, x, P, PO, Y, U, dx)
+        m.derivatives(min(t, cap), x, P, PO, Y, U, dx)
         return dx
+
+    def breaks(t):  # the profiles' points in (t, t + sample_time)
+        points, nb = [], m.next_break(t, P, PO)
+        while nb < t + sample_time:
+            points.append(nb)
+            nb = m.next_break(nb, P, PO)
+        return points, nb
 
     for k in range(n_steps):
         t = t0 + k * sample_time
@@ -72,7 +79,7 @@ def simulate_reference(compiled: CompiledSystem, duration: float, sample_time: f
             m.integrate(t, sample_time, substeps, X, P, PO, Y, U, W, DT, V, NSEG, IDX, LEFT)
         else:
             _integrate_adaptive(t, sample_time, X, Y, DT, V, NSEG, out_slots, rhs, method, rtol,
-                                atol, len(system.modulators))  # fmt: skip
+                                atol, len(system.modulators), *breaks(t))  # fmt: skip
         if not np.all(np.isfinite(X)):
             raise SimulationDiverged(t + sample_time, "the slow-path integration diverged")
     return compiled._result(t0, sample_time, 1, rows, columns, LOG, ELOG, ECOUNT, X, 0.0, n_steps)
@@ -107,25 +114,28 @@ def _sampled_steps(system, m, P, PO, S, Y, U, python_steps: dict) -> list:
     return steps
 
 
-def _integrate_adaptive(t, T_s, X, Y, DT, V, NSEG, out_slots, rhs, method, rtol, atol, n_mod):
-    """Integrate over [t, t + T_s] segment by segment with ``solve_ivp``."""
-    boundaries = sorted(
-        {T_s}
-        | {float(np.sum(DT[j, : n + 1])) for j, n_j in enumerate(NSEG[:n_mod]) for n in range(n_j)}
-    )
-    start = 0.0
+def _integrate_adaptive(t, T_s, X, Y, DT, V, NSEG, out_slots, rhs, method, rtol, atol, n_mod,
+                        points, after):  # fmt: skip
+    """Integrate over [t, t + T_s] segment by segment with ``solve_ivp``, split at the profiles'
+    ``points`` inside it (``after``: the first point after them); a piece's right-hand side reads
+    the profiles just below the point that ends it (``sim._loop_source.advance_lines``)."""
+    ends = {T_s} | {float(np.sum(DT[j, : n + 1])) for j, n_j in enumerate(NSEG[:n_mod])
+                    for n in range(n_j)}  # fmt: skip
+    boundaries = sorted({t + end for end in ends} | set(points))  # absolute times
+    start = t
     for end in boundaries:
-        if end - start <= 1e-12 * T_s:
+        if end - start <= 1e-12 * T_s and end not in points:
             continue
-        middle = 0.5 * (start + end)
+        middle = 0.5 * (start + end) - t
         for j, (a, b) in enumerate(out_slots):  # each modulator's segment covering `middle`
             edges = np.cumsum(DT[j, : NSEG[j]])
             seg = min(int(np.searchsorted(edges, middle)), NSEG[j] - 1)
             Y[a:b] = V[j, seg, : b - a]
-        sol = solve_ivp(rhs, (t + start, t + end), X, method=method, rtol=rtol, atol=atol)
+        cap = np.nextafter(min([b for b in (*points, after) if b > start]), -np.inf)
+        sol = solve_ivp(rhs, (start, end), X, method=method, rtol=rtol, atol=atol, args=(cap,))
         if not sol.success:
             raise FloatingPointError(
-                f"reference integration failed at t = {t + start:.6g} s: {sol.message}"
+                f"reference integration failed at t = {start:.6g} s: {sol.message}"
             )
         X[:] = sol.y[:, -1]
         start = end

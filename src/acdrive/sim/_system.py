@@ -11,6 +11,10 @@ Per control sample t_k = t_0 + k T_s (the structure of Bodson's bench and of eve
 5. the plant is integrated over the segments of all modulators (their boundaries merged), each
    segment by ``substeps`` explicit Runge-Kutta steps with its inputs held (``method``: the
    classical fourth-order method, or Butcher's seven-stage sixth-order one, ``INTEGRATORS``);
+   a segment is split further at every point of a continuous part's profile inside it (a load
+   step, a ramp's corner), and the stages of a step that ends on such a point read the profile
+   just before it: a load step at t_L acts from t_L on, whether or not t_L is a sample instant,
+   while a sampled part reading a profile at t_k = t_L sees the value after the step;
 6. a state that stops being finite stops the run with the time at which it happened.
 
 Every slot is derived from the parts' declarations (``core._signals``); a wiring mistake (unknown

@@ -7,7 +7,7 @@ import numpy as np
 
 from acdrive.sim import _kernels as kernels
 from acdrive.sim._integrators import INTEGRATORS
-from acdrive.sim._loop_source import copy_pairs
+from acdrive.sim._loop_source import copy_pairs, profile_parts
 
 METHOD_CODES = {"rk4": 0, "rk6": 1}
 
@@ -17,7 +17,7 @@ class GenericUnavailable(Exception):
 
 
 def tables(system, addresses) -> tuple:
-    """(SLOT, PROJECT, STATE_OUT, DIRECT, RHS, SAMPLED, MODS, COPY, SIZES) of ``system``;
+    """(SLOT, PROJECT, STATE_OUT, DIRECT, RHS, SAMPLED, MODS, COPY, BREAKS, SIZES) of ``system``;
     ``addresses[(kind, role)]`` is the native address of a kind's role kernel."""
     index = {p.name: i for i, p in enumerate(system.parts)}
     slot = np.zeros((len(system.parts), 8), dtype=np.int64)
@@ -48,6 +48,8 @@ def tables(system, addresses) -> tuple:
     sampled = [row(p, "step", copy_pairs(system, p)) for p in system.sampled]
     mods = [row(p, "segments", copy_pairs(system, p)) for p in system.modulators]
     copy = np.array(copies, dtype=np.int64).reshape(len(copies), 2)
+    breaks = np.array([(i, p.PARAMS.table_start, len(p.PARAMS.tables))
+                       for i, p in profile_parts(system)], dtype=np.int64).reshape(-1, 3)  # fmt: skip
     sizes = np.array(
         [
             INTEGRATORS[system.method][1] + 1,
@@ -58,4 +60,4 @@ def tables(system, addresses) -> tuple:
         dtype=np.int64,
     )
     return (slot, table(project), table(state_out), table(direct), table(rhs), table(sampled),
-            table(mods), copy, sizes)  # fmt: skip
+            table(mods), copy, breaks, sizes)  # fmt: skip

@@ -60,7 +60,7 @@ def __getattr__(name: str):
     if name == "GENERIC_RUN_ARGS":
         from numba import types
 
-        return (*_run_args(), *([types.int64[:, ::1]] * 8), types.int64[::1])
+        return (*_run_args(), *([types.int64[:, ::1]] * 9), types.int64[::1])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

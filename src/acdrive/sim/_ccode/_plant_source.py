@@ -57,7 +57,9 @@ from acdrive.sim._ccode._c_source import (
 )
 from acdrive.sim._ccode._kinds import PLANT_ROLES, plant_c_of
 from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
+from acdrive.sim._ccode._kinds.common import TABLE_NEXT_TIME
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
+from acdrive.sim._loop_source import profile_parts
 
 #: the compiled loop's rule (sim._loop_source.integrate): a segment whose remaining length is
 #: at most this fraction of T_s is finished
@@ -207,26 +209,27 @@ def _direct_lines(system, kinds) -> list[str]:
 
 
 def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
-    """Body of ``<name>_plant_step``: one Runge-Kutta step with the inputs held, the arithmetic
-    of ``sim._loop_source._step_lines`` in the same order."""
+    """Body of ``<name>_plant_step``: one Runge-Kutta step with the inputs held and the stage
+    times capped at ``cap``, the arithmetic of ``sim._loop_source._step_lines`` in the same
+    order."""
     d = f"{name}_derivatives"
     if method == "rk4":
         return [
             "    int i;",
             f"    {name}_vector k1, k2, k3, k4, xt;",
-            f"    {d}(t, p, &X->x, in, y, &k1.x);",
+            f"    {d}(ACD_CAPPED(t, cap), p, &X->x, in, y, &k1.x);",
             f"    for (i = 0; i < {n_x}; ++i) {{",
             "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k1.v[i];",
             "    }",
-            f"    {d}(t + ACD_R(0.5) * h, p, &xt.x, in, y, &k2.x);",
+            f"    {d}(ACD_CAPPED(t + ACD_R(0.5) * h, cap), p, &xt.x, in, y, &k2.x);",
             f"    for (i = 0; i < {n_x}; ++i) {{",
             "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k2.v[i];",
             "    }",
-            f"    {d}(t + ACD_R(0.5) * h, p, &xt.x, in, y, &k3.x);",
+            f"    {d}(ACD_CAPPED(t + ACD_R(0.5) * h, cap), p, &xt.x, in, y, &k3.x);",
             f"    for (i = 0; i < {n_x}; ++i) {{",
             "        xt.v[i] = X->v[i] + h * k3.v[i];",
             "    }",
-            f"    {d}(t + h, p, &xt.x, in, y, &k4.x);",
+            f"    {d}(ACD_CAPPED(t + h, cap), p, &xt.x, in, y, &k4.x);",
             f"    for (i = 0; i < {n_x}; ++i) {{",
             (
                 "        X->v[i] += h / ACD_R(6.0) * (k1.v[i] + ACD_R(2.0) * k2.v[i] + "
@@ -242,30 +245,54 @@ def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
         return " + ".join(f"ACD_R({w!r}) * k[{j}].v[i]" for j, w in enumerate(weights) if w != 0.0)
 
     lines = ["    int i;", f"    {name}_vector k[{stages}], xt;"]
-    lines.append(f"    {d}(t, p, &X->x, in, y, &k[0].x);")
+    lines.append(f"    {d}(ACD_CAPPED(t, cap), p, &X->x, in, y, &k[0].x);")
     for s in range(1, stages):
         lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
                   f"        xt.v[i] = X->v[i] + h * ({combination(RK6_A[s])});", "    }",
-                  f"    {d}(t + ACD_R({RK6_C[s]!r}) * h, p, &xt.x, in, y, &k[{s}].x);"]  # fmt: skip
+                  f"    {d}(ACD_CAPPED(t + ACD_R({RK6_C[s]!r}) * h, cap), p, &xt.x, in, y, &k[{s}].x);"]  # fmt: skip
     lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
               f"        X->v[i] += h * ({combination(RK6_B)});", "    }"]  # fmt: skip
     return lines
 
 
+def _advance_lines(system, name: str, in_arg: str) -> list[str]:
+    """``<name>_next_break`` and ``<name>_advance``: the integration over one span split at the
+    points of the continuous parts' profiles, with the stage times capped below the point that
+    ends a piece (``sim._loop_source.advance_lines``, same rule and order)."""
+    L = [f"static ACDRIVE_REAL {name}_next_break(ACDRIVE_REAL t, const {name}_params *p)", "{",
+         "    ACDRIVE_REAL earliest = ACD_HUGE, later;", "    (void)p;", "    (void)later;"]  # fmt: skip
+    for _, part in profile_parts(system):
+        for v in part.PARAMS.tables:
+            tab = f"p->{part.name}.{v.name}"
+            L += [f"    later = acd_table_next_time({tab}.n, {tab}.t, t);",
+                  "    if (later < earliest) {", "        earliest = later;", "    }"]  # fmt: skip
+    L += ["    return earliest;", "}", ""]
+    step = f"{name}_plant_step(a + (ACDRIVE_REAL)j * h, h, cap, p, X, in, y);"
+    L += [(f"static void {name}_advance(ACDRIVE_REAL a, ACDRIVE_REAL span, const {name}_params *p, "
+           f"{name}_vector *X, {in_arg}, {name}_outputs *y)"), "{",
+          "    ACDRIVE_REAL nb = " + f"{name}_next_break(a, p), end, h, cap;", "    int j;",
+          "    while (nb < a + span) {", "        end = a + span;",
+          "        h = (nb - a) / (ACDRIVE_REAL)p->substeps;",
+          "        cap = ACD_NEXTAFTER(nb, -ACD_HUGE);",
+          "        for (j = 0; j < p->substeps; ++j) {", f"            {step}", "        }",
+          "        a = nb;", "        span = end - nb;", f"        nb = {name}_next_break(a, p);",
+          "    }", "    h = span / (ACDRIVE_REAL)p->substeps;",
+          "    cap = nb < ACD_HUGE ? ACD_NEXTAFTER(nb, -ACD_HUGE) : ACD_HUGE;",
+          "    for (j = 0; j < p->substeps; ++j) {", f"        {step}", "    }", "}", ""]  # fmt: skip
+    return L
+
+
 def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
     """Body of ``<name>_step``: modulate, then integrate over the merged segments
     (``sim._loop_source``: ``modulate`` and ``integrate``, same rule and order)."""
-    L = ["    const ACDRIVE_REAL T_s = p->sample_time;", "    ACDRIVE_REAL h, tk = t;",
-         "    int j;"]  # fmt: skip
+    L = ["    const ACDRIVE_REAL T_s = p->sample_time;", "    ACDRIVE_REAL tk = t;",
+         "    (void)tk;"]  # fmt: skip
     # a hook between the modulators and the integration, where acdrive's loop records a sample
     # (undefined in an export; the native tier defines it, acdrive.sim._native)
     hook = ["#ifdef ACD_AFTER_MODULATE", "    ACD_AFTER_MODULATE(t, s);", "#endif"]
     if not modulators:
         L += hook
-        L += ["    h = T_s / (ACDRIVE_REAL)p->substeps;",
-              "    for (j = 0; j < p->substeps; ++j) {",
-              f"        {name}_plant_step(t + (ACDRIVE_REAL)j * h, h, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
-              "    }"]  # fmt: skip
+        L += [f"    {name}_advance(t, T_s, p, ({name}_vector *)(void *)&s->x, in, &s->y);"]
         return L
     total = sum(m.MAX_SEGMENTS for m in modulators)
     L += ["    int pass;"]
@@ -304,10 +331,8 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
         L.append(f"        if (left{k} < span) {{ span = left{k}; }}")
     L += ["        if (span == ACD_INF) {", "            break;", "        }",
           "        if (span > ACD_R(0.0)) {",
-          "            h = span / (ACDRIVE_REAL)p->substeps;",
-          "            for (j = 0; j < p->substeps; ++j) {",
-          f"                {name}_plant_step(tk + (ACDRIVE_REAL)j * h, h, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
-          "            }", "            tk += span;", "        }"]  # fmt: skip
+          f"            {name}_advance(tk, span, p, ({name}_vector *)(void *)&s->x, in, &s->y);",
+          "            tk += span;", "        }"]  # fmt: skip
     rtol = literal(SEGMENT_END_RTOL, "SEGMENT_END_RTOL")
     for k in range(len(modulators)):
         L += [f"        left{k} -= span;", f"        if (left{k} <= {rtol} * T_s) {{",
@@ -387,7 +412,10 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
     ]  # fmt: skip
 
     C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
-    for support in _support_order(kinds):
+    supports = _support_order(kinds)
+    if profile_parts(system) and TABLE_NEXT_TIME not in supports:
+        supports.append(TABLE_NEXT_TIME)
+    for support in supports:
         C += [support.code.strip("\n"), ""]
     C += _kind_functions(kinds, [*continuous, *modulators])
     C += [f"/* the continuous states as one array, for the integrator ({n_x} reals) */",
@@ -425,10 +453,11 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
         )
         C.append("    }")
     C += ["}", ""]
-    C += [(f"static void {name}_plant_step(ACDRIVE_REAL t, ACDRIVE_REAL h, const {name}_params *p, "
-          f"{name}_vector *X, {in_arg}, {name}_outputs *y)"), "{"]  # fmt: skip
+    C += [(f"static void {name}_plant_step(ACDRIVE_REAL t, ACDRIVE_REAL h, ACDRIVE_REAL cap, "
+          f"const {name}_params *p, {name}_vector *X, {in_arg}, {name}_outputs *y)"), "{"]  # fmt: skip
     C += _rk_lines(system.method, n_x, name)
     C += ["}", ""]
+    C += _advance_lines(system, name, in_arg)
     C += [
         f"void {name}_step(ACDRIVE_REAL t, const {name}_params *p, {name}_state *s, {in_arg})",
         "{",

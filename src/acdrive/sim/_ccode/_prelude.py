@@ -4,7 +4,8 @@ precision, the complex space vector and its arithmetic.
 ``ACDRIVE_REAL`` is ``double`` unless the file is compiled with ``-DACDRIVE_FLOAT``, which makes
 it ``float`` and switches every math function to its ``f`` form (sinf, sqrtf, ...) so that a
 Cortex-M4F's single-precision FPU does all the work. Only functions of C99 <math.h> that
-newlib's libm also provides are used: sqrt, sin, cos, atan2, acos, hypot, exp, log, floor, fmod, fabs.
+newlib's libm also provides are used: sqrt, sin, cos, atan2, acos, hypot, exp, log, floor, fmod, fabs,
+nextafter.
 
 The complex helpers repeat, operation for operation, what numba compiles for the kernels'
 Python complex numbers (CPython's algorithms): a product is (ac - bd) + j(ad + bc), a quotient
@@ -46,6 +47,7 @@ PRELUDE = r"""
 #define ACD_FMOD fmodf
 #define ACD_FABS fabsf
 #define ACD_ACOS acosf
+#define ACD_NEXTAFTER nextafterf
 #define ACD_HUGE ACD_R(@FLOAT_NO_LIMIT@) /* a finite stand-in for "no limit" (1e300 in the double build) */
 #else
 #define ACDRIVE_REAL double
@@ -60,6 +62,7 @@ PRELUDE = r"""
 #define ACD_FMOD fmod
 #define ACD_FABS fabs
 #define ACD_ACOS acos
+#define ACD_NEXTAFTER nextafter
 #define ACD_HUGE ACD_R(1e300) /* a finite stand-in for "no limit" */
 #endif
 
@@ -67,6 +70,8 @@ PRELUDE = r"""
 #define ACD_R(x) ((ACDRIVE_REAL)(x))
 #define ACD_PI ACD_R(3.141592653589793)
 #define ACD_INF ((ACDRIVE_REAL)HUGE_VAL) /* +infinity (HUGE_VAL of <math.h>) */
+/* a stage time t held at cap (Python's min(t, cap) for numbers: the first of two equal ones) */
+#define ACD_CAPPED(t, cap) ((cap) < (t) ? (cap) : (t))
 
 /* a space vector: real and imaginary parts (the kernels' complex numbers) */
 typedef struct {

@@ -66,6 +66,33 @@ static ACDRIVE_REAL acd_wrap(ACDRIVE_REAL angle)
 """,
 )
 
+#: core._tables.table_next_time: the first point time later than t (ACD_HUGE, the kernels'
+#: NO_BREAK, if none; a one-point table is a constant and has none)
+TABLE_NEXT_TIME = CSupport(
+    "table_next_time",
+    r"""
+static ACDRIVE_REAL acd_table_next_time(int n, const ACDRIVE_REAL *times, ACDRIVE_REAL t)
+{
+    int lo = 0, hi = n - 1, pass;
+    if (n == 1 || t >= times[n - 1]) {
+        return ACD_HUGE;
+    }
+    if (t < times[0]) {
+        return times[0];
+    }
+    for (pass = 0; pass < 32 && hi - lo > 1; ++pass) { /* times[lo] <= t < times[hi] */
+        int mid = (lo + hi) / 2;
+        if (times[mid] <= t) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return times[hi];
+}
+""",
+)
+
 #: core._tables.table_at: linear between points, held outside, a vertical step where two times
 #: are equal. The bisection halves [lo, hi] each pass: 32 passes cover any table an int counts.
 TABLE_AT = CSupport(
