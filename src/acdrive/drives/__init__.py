@@ -1,6 +1,11 @@
-"""Drives: one folder per drive kind (``dfim``, ``cage_im``) on the engine of ``acdrive.sim``, and
-the registry the command line, batches and sweeps ask (``Drive``, ``register``, ``get``,
-``for_setup``, ``kinds``; docs/design.md, "Drives as plug-ins")."""
+"""Drives: one folder per drive kind (``dfim``, ``cage_im``, ``pm``) on the engine of
+``acdrive.sim``, and the registry the command line, batches and sweeps ask (``Drive``,
+``register``, ``get``, ``for_setup``, ``kinds``; docs/design.md, "Drives as plug-ins").
+
+``run_scenario(setup)`` runs the setup of any drive (``acdrive.scenarios.load_scenario``) and
+returns that drive's outcome. The other names are one drive's own and take that drive's setups
+only: ``simulate``, ``simulate_slow``, ``DFIMDrive`` the DFIM's (``DriveSetup``),
+``run_im_scenario`` and ``IMDrive`` the cage IM's (``IMDriveSetup``)."""
 
 from acdrive._lazy import namespace
 
@@ -21,7 +26,7 @@ __all__, __getattr__, __dir__ = namespace(
         "simulate_slow": ".dfim._drive",
         "DriveResult": ".dfim._result",
         "ScenarioOutcome": ".dfim._outcome",
-        "run_scenario": ".dfim._outcome",
+        "run_scenario": "._registry",
         "IMDrive": ".cage_im._drive",
         "IMDriveSetup": ".cage_im._setup",
         "IMDriveResult": ".cage_im._result",

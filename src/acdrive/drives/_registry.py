@@ -9,6 +9,8 @@ with ``for_data(data).load(data)``, runs it with ``run``, writes it with ``write
 the module that defines its ``DRIVE`` object, imported on first use (``acdrive --help`` and
 ``import acdrive.drives`` stay light); any other drive, e.g. one defined in a user's script or
 a test, is registered with ``register(drive)`` and is then used exactly as the built-ins are.
+From Python, ``run_scenario(setup)`` runs the setup of any drive the same way (``for_setup``,
+then ``run``); ``require_setup`` is the check a drive's own functions make before any work.
 """
 
 from __future__ import annotations
@@ -179,7 +181,8 @@ def for_setup(setup) -> Drive:
         drive = get(kind)
         if drive.owns(setup):
             return drive
-    raise InputError("setup", f"{type(setup).__name__} is not the setup of a registered drive")
+    raise InputError("setup", "must be the setup of a registered drive (what "
+                     f"acdrive.scenarios.load_scenario returns), got {type(setup).__name__}")
 
 
 def is_setup(value) -> bool:
@@ -189,3 +192,32 @@ def is_setup(value) -> bool:
     except InputError:
         return False
     return True
+
+
+def run_scenario(setup, on_run=None):
+    """Simulate the setup of any registered drive (what ``acdrive.scenarios.load_scenario``
+    returns) with that drive's ``run`` and return its outcome: the object ``acdrive run`` writes,
+    with ``results`` (label -> result) and ``summary`` (summary.json's figures). ``on_run(label)``,
+    if given, is called before each simulation (a progress display). A value that is not a
+    registered drive's setup is an ``InputError`` on ``setup``, before any work."""
+    drive = for_setup(setup)
+    if on_run is not None and not callable(on_run):
+        raise InputError("on_run", f"must be callable or None, got {type(on_run).__name__}")
+    return drive.run(setup, on_run)
+
+
+def require_setup(setup, setup_types: tuple[type, ...], function: str, argument: str = "setup"):
+    """``setup`` if it is one of ``setup_types``, else an ``InputError`` naming ``argument``: the
+    drive whose setup it is, that ``function`` (a drive's own name, e.g.
+    ``acdrive.drives.simulate``) takes its own drive's setups only, and that
+    ``acdrive.drives.run_scenario`` runs any drive's."""
+    if isinstance(setup, setup_types):
+        return setup
+    wanted = " or ".join(t.__name__ for t in setup_types)
+    if is_setup(setup):
+        kind = for_setup(setup).kind
+        raise InputError(argument, f'is the setup of drive "{kind}" ({type(setup).__name__}); '
+                         f"{function} takes {wanted} only: acdrive.drives.run_scenario({argument}) "
+                         "runs the setup of any drive")  # fmt: skip
+    raise InputError(argument, f"must be of type {wanted} (what acdrive.scenarios.load_scenario "
+                     f"returns), got {type(setup).__name__}")  # fmt: skip

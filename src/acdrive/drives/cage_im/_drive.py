@@ -147,7 +147,9 @@ class IMDrive:
     ``current_control.controller``; ``IMDriveSetup.runs`` splits a comparison)."""
 
     def __init__(self, setup: IMDriveSetup):
-        self.setup = s = setup
+        from acdrive.drives._registry import require_setup
+
+        self.setup = s = require_setup(setup, (IMDriveSetup,), "acdrive.drives.IMDrive")
         mech, inv, cc = s.mechanics, s.inverter, s.current_control
         p = {}
         p["dc"] = DCSource("dc", V=inv.dc_link)

@@ -37,7 +37,11 @@ COMPARED = {
 def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
     """Simulate every run of ``setup`` (compiled systems are shared between runs of the same
     topology) and summarise: the first run's metrics at the top level, every run's under
-    ``runs``, and, with several runs, the compared metrics per label."""
+    ``runs``, and, with several runs, the compared metrics per label. Another drive's setup is
+    an ``InputError`` on ``setup`` pointing to ``acdrive.drives.run_scenario``."""
+    from acdrive.drives._registry import require_setup
+
+    require_setup(setup, (IMDriveSetup,), "acdrive.drives.run_im_scenario")
     results = {}
     for label, run_setup in setup.runs():
         drive = IMDrive(run_setup)

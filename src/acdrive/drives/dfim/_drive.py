@@ -165,7 +165,9 @@ class DFIMDrive:
     """The parts, wiring, initial state and logged signals of one ``DriveSetup``."""
 
     def __init__(self, setup):
-        self.setup = setup
+        from acdrive.drives._registry import get, require_setup
+
+        self.setup = require_setup(setup, get("dfim").setup_types, "acdrive.drives.DFIMDrive")
         s = setup.supply
         if s.phase_scales is None:
             self.grid = ThreePhaseSource("grid", V_pk=s.voltage_pk, f=s.frequency_hz)
@@ -329,8 +331,10 @@ def simulate_slow(setup, method: str = "RK4", python_steps: dict | None = None,
     Python, integrated by the loop's own RK4 (``method="RK4"``) or by ``solve_ivp`` (e.g.
     "Radau"); ``python_steps[part name]`` replaces a sampled part (e.g. ``"controller0"``) by a
     Python function with the signature of its compiled step."""
+    from acdrive.drives._registry import get, require_setup
     from acdrive.sim._reference import simulate_reference
 
+    require_setup(setup, get("dfim").setup_types, "acdrive.drives.simulate_slow")
     drive = DFIMDrive(setup)
     initial, held = drive.initial()
     result = simulate_reference(

@@ -183,8 +183,13 @@ def synchronous_rpm(setup: DriveSetup) -> float:
 
 
 def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
-    """Simulate ``setup`` (once per mode if it compares modes) and summarise. ``on_run(mode)``,
-    if given, is called before each simulation (a progress display)."""
+    """Simulate the DFIM ``setup`` (once per mode if it compares modes) and summarise.
+    ``on_run(mode)``, if given, is called before each simulation (a progress display). Another
+    drive's setup is an ``InputError`` on ``setup`` pointing to ``acdrive.drives.run_scenario``
+    (the registry's, which runs any drive's and calls this one for a DFIM)."""
+    from acdrive.drives._registry import require_setup
+
+    require_setup(setup, (DriveSetup,), "acdrive.drives.dfim.run_scenario")
     runs = (
         [(mode, setup.with_mode(mode)) for mode in setup.compare_modes]
         if setup.compare_modes

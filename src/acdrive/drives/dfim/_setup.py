@@ -224,12 +224,16 @@ def divergence_hint(setup: DriveSetup) -> str:
 
 def simulate(setup: DriveSetup) -> DriveResult:
     """Run ``setup`` on its parts-built system (``drives.dfim._drive``) and return its typed result.
+    A DFIM setup only: another drive's setup is an ``InputError`` on ``setup`` pointing to
+    ``acdrive.drives.run_scenario``, which runs any drive's.
 
     Raises ``SimulationDiverged`` (a RuntimeError) with the time and a hint of what to change if
     the state stops being finite (a simulation never returns NaN silently).
     """
+    from acdrive.drives._registry import require_setup
     from acdrive.drives.dfim import _drive as dfim_drive
 
+    require_setup(setup, (DriveSetup,), "acdrive.drives.simulate")
     return dfim_drive.simulate(setup, divergence_hint)
 
 

@@ -25,7 +25,6 @@ from pathlib import Path
 from acdrive.drives.pm import _build, _icad_step, _metrics
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._setup import PMDriveSetup
-from acdrive.errors import InputError
 from acdrive.sim._timing import run_timing, simulated_in
 
 #: labels of the results of one scenario, by kind
@@ -33,15 +32,18 @@ SPEED_LABELS = ("run",)
 STEP_LABELS = ("step", "base")
 
 
-def _check(setup) -> None:
-    if not isinstance(setup, (PMDriveSetup, CurrentStepSetup)):
-        raise InputError("setup", "must be a PMDriveSetup or a CurrentStepSetup")
+def _check(setup, function: str, types: tuple[type, ...] = (PMDriveSetup, CurrentStepSetup)):
+    """An ``InputError`` on ``setup`` unless it is one of ``types``, naming ``function`` (another
+    drive's setup is pointed to ``acdrive.drives.run_scenario``)."""
+    from acdrive.drives._registry import require_setup
+
+    require_setup(setup, types, function)
 
 
 def build_scenario(setup) -> _build.Built:
     """The system of parts of either kind of setup (for a current-step setup: the run with the
     step; ``run_outcome`` runs it together with the run without)."""
-    _check(setup)
+    _check(setup, "acdrive.drives.pm.build_scenario")
     if isinstance(setup, CurrentStepSetup):
         return _icad_step.build(setup)
     return _build.build(setup)
@@ -51,6 +53,7 @@ def run(setup: PMDriveSetup, compiled=None):
     """Simulate ``setup``: (the engine's ``SystemResult`` with ``summary(setup, result)``
     attached as its ``summary``, that summary). ``compiled`` reuses a ``System.compile()`` of
     the same topology."""
+    _check(setup, "acdrive.drives.pm.run", (PMDriveSetup,))
     built = _build.build(setup)
     compiled = compiled or built.system.compile()
     result = compiled.run(
@@ -68,7 +71,7 @@ def run(setup: PMDriveSetup, compiled=None):
 
 def runs(setup) -> int:
     """Simulations per scenario: 2 for a current step (with and without the step), else 1."""
-    _check(setup)
+    _check(setup, "acdrive.drives.pm._entry.runs")
     return len(STEP_LABELS if isinstance(setup, CurrentStepSetup) else SPEED_LABELS)
 
 
@@ -84,7 +87,7 @@ class PMOutcome:
 def run_outcome(setup, on_run=None) -> PMOutcome:
     """Simulate ``setup``; ``on_run(label)`` is called before (the runs of a current step are
     one batch: one call names both)."""
-    _check(setup)
+    _check(setup, "acdrive.drives.pm._entry.run_outcome")
     if isinstance(setup, CurrentStepSetup):
         if on_run is not None:
             on_run(" and ".join(STEP_LABELS))
@@ -100,7 +103,7 @@ def run_outcome(setup, on_run=None) -> PMOutcome:
 def run_scenario(setup, compiled=None):
     """(the result of the run, its summary): for a current-step setup, the run with the step
     (``CurrentStepResult.runs[0]``) and the comparison's summary."""
-    _check(setup)
+    _check(setup, "acdrive.drives.pm.run_scenario")
     if isinstance(setup, CurrentStepSetup):
         out = _icad_step.run(setup, compiled)
         return out.runs[0], out.summary
