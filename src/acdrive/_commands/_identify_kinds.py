@@ -19,8 +19,10 @@ sample by half of it (``identify._impedance``).
 * ``mechanics``: the source is the speed-step log (``time [s]``, ``tau_e [N m]``,
   ``w [rad/s]``); the file has J, the viscous friction and the Coulomb friction.
 
-Every estimate is printed and written with both 95 % intervals; a fit that does not converge
-says so with its residual (exit 1); bad input is one line naming the field (exit 2).
+A measured log's ``--base-frequency-hz``, ``--settle-s`` and ``--spin-settle-s`` default to those
+of the kind's built-in benches (``identify._builtin.measured_window``), so a bench's own logs run
+without them. Every estimate is printed and written with both 95 % intervals; a fit that does not
+converge says so with its residual (exit 1); bad input is one line naming the field (exit 2).
 """
 
 from __future__ import annotations
@@ -129,12 +131,13 @@ def _required(args, name: str):
 
 
 def _plan_window(args, plan=None):
-    """(base frequency, settle) of the injections: the options or those of ``plan`` (the
-    built-in bench's, or the cage IM's default plan for a measured log)."""
+    """(base frequency, settle) of the injections: the options, else those of ``plan`` (a
+    built-in bench's), else for a measured log those of the kind's benches
+    (``identify._builtin.measured_window``)."""
     from acdrive.errors import require_nonnegative, require_positive
-    from acdrive.identify._experiment import StandstillPlan
+    from acdrive.identify._builtin import measured_window
 
-    plan = StandstillPlan() if plan is None else plan
+    plan = measured_window(args.kind) if plan is None else plan
     base = plan.base_frequency if args.base_frequency_hz is None else args.base_frequency_hz
     settle = plan.settle if args.settle_s is None else args.settle_s
     return require_positive("--base-frequency-hz", base), require_nonnegative("--settle-s", settle)
@@ -162,19 +165,19 @@ def _measured_logs(args, second: str, pole_pairs_required: bool = False):
 
 
 def _spin_settle(args, bench):
-    """The time dropped at the start of each spin plateau: the option or the bench's (the
-    default plan's for a measured log), checked."""
+    """The time dropped at the start of each spin plateau: the option, else the bench's, else
+    for a measured log that of the PM benches (``identify._builtin.measured_window``), checked."""
     from acdrive.errors import require_nonnegative
-    from acdrive.identify._spin import SpinPlan
+    from acdrive.identify._builtin import measured_window
 
-    plan = SpinPlan() if bench is None else bench.spin
-    settle = plan.settle if args.spin_settle_s is None else args.spin_settle_s
+    default = measured_window("pm").spin_settle if bench is None else bench.spin.settle
+    settle = default if args.spin_settle_s is None else args.spin_settle_s
     require_nonnegative("--spin-settle-s", settle)
-    if bench is not None and not settle < plan.hold:
+    if bench is not None and not settle < bench.spin.hold:
         from acdrive.errors import InputError
 
         raise InputError("--spin-settle-s", f"must be shorter than the built-in spin test's "
-                         f"{plan.hold:g} s plateaus")  # fmt: skip
+                         f"{bench.spin.hold:g} s plateaus")  # fmt: skip
     return settle
 
 

@@ -42,9 +42,11 @@ def register(subparsers):
                    help="DC-link voltage of a measured no-load run (V): models the PWM pulses' "
                    "second-order term (else a v_dc [V] column of the log, else left out)")  # fmt: skip
     p.add_argument("--base-frequency-hz", type=float, default=None,
-                   help="step between the injected tones (Hz; default that of the built-in test)")  # fmt: skip
+                   help="step between the injected tones (Hz; default that of the built-in "
+                   "tests of --kind)")  # fmt: skip
     p.add_argument("--settle-s", type=float, default=None,
-                   help="time dropped at the start of the injection log (s; default the built-in test's)")  # fmt: skip
+                   help="time dropped at the start of the injection log (s; default that of the "
+                   "built-in tests of --kind)")  # fmt: skip
     p.add_argument("--pole-pairs", type=int, default=None,
                    help="pole pairs (not identifiable at standstill; required for a measured log)")  # fmt: skip
     p.add_argument("--leakage-split", choices=tuple(LEAKAGE_SPLITS), default="equal",
@@ -66,7 +68,8 @@ def register(subparsers):
     p.add_argument("--q-log", help="pm: q-axis injection log (the source is the d-axis one)")
     p.add_argument("--spin-log", help="pm: short-circuit spin-test log (with w [rad/s]): psi_m")
     p.add_argument("--spin-settle-s", type=float, default=None,
-                   help="pm: time dropped at the start of each spin plateau (s) [0.2]")  # fmt: skip
+                   help="pm: time dropped at the start of each spin plateau (s; default that of "
+                   "the built-in spin tests)")  # fmt: skip
     p.add_argument("--shorted-log",
                    help="dfim: stator-shorted injection log (the source is the stator-open one)")  # fmt: skip
     p.add_argument("--stator-resistance-ohm", type=float, default=None,

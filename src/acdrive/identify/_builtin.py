@@ -22,6 +22,10 @@ PM speed drive with its 4096-count encoder.
   bandwidths) on the switching converter at 20 kHz, with a Coulomb friction of 2 mN m on the
   shaft (3.5 % of the rated torque; the table gives none, so it is assumed, and the scenario
   has no field for it).
+
+``measured_window(kind)`` is what a measured log of that kind is assumed to share with these
+benches unless the command says otherwise: its injection's base frequency and settling time, and
+the spin test's settling time, computed from the benches' plans.
 """
 
 from __future__ import annotations
@@ -145,3 +149,42 @@ def builtin_bench(kind: str, name: str, field: str = "TEST_FILE_OR_SCENARIO"):
         raise InputError(field, f"unknown built-in {KIND_NOUN[kind]} '{name}' (known for --kind "
                          f"{kind}: {', '.join(benches)})")  # fmt: skip
     return benches[name]
+
+
+@dataclass(frozen=True)
+class MeasuredWindow:
+    """What ``acdrive identify LOG --kind KIND`` assumes of a measured log unless told: the base
+    frequency [Hz] of its injection (every tone a multiple of it), the time [s] dropped at its
+    start, and (pm) the time [s] dropped at the start of each spin plateau."""
+
+    base_frequency: float
+    settle: float
+    spin_settle: float | None = None
+
+
+def _common_base(frequencies) -> float:
+    """The largest frequency of which every one of ``frequencies`` is a whole multiple (their
+    greatest common divisor, as exact fractions of at most 1e6 in the denominator)."""
+    from fractions import Fraction
+
+    parts = [Fraction(f).limit_denominator(10**6) for f in frequencies]
+    common = math.lcm(*(p.denominator for p in parts))
+    return math.gcd(*(int(p * common) for p in parts)) / common
+
+
+def measured_window(kind: str) -> MeasuredWindow:
+    """The defaults of a measured log of ``kind`` (pm, dfim), from that kind's benches, so that
+    every built-in bench's own logs are analysed as printed, at all their tones: the base
+    frequency of which each bench's is a whole multiple, the longest of their settling times
+    (pm: 1 Hz, the BLY171D's 2 Hz and the 2.2 kW IPMSM's 1 Hz; 0.5 s) and of their spin
+    plateaus' settling times."""
+    benches = list(_benches().get(kind, {}).values())
+    plans = [b.standstill for b in benches if hasattr(b, "standstill")]
+    if not plans:
+        raise InputError("kind", f"{kind!r} has no standstill test")
+    spins = [b.spin.settle for b in benches if hasattr(b, "spin")]
+    return MeasuredWindow(
+        base_frequency=_common_base(p.base_frequency for p in plans),
+        settle=max(p.settle for p in plans),
+        spin_settle=max(spins) if spins else None,
+    )
