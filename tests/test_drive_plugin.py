@@ -191,6 +191,19 @@ def test_acdrive_run_runs_the_toy_drive(toy, tmp_path, capsys):
     assert cmath.phase(np.mean(ratio)) == pytest.approx(-math.atan2(z.imag, z.real), abs=TOL)
 
 
+def test_run_scenario_runs_a_registered_drive_from_python(toy):
+    """``acdrive.drives.run_scenario`` asks the registry: the toy's own outcome, whose current
+    amplitude is the phasor formula's."""
+    from acdrive.drives import run_scenario
+    from acdrive.scenarios import load_scenario
+
+    _, path = toy
+    outcome = run_scenario(load_scenario(path))
+    assert isinstance(outcome, ToyOutcome) and list(outcome.results) == ["main"]
+    expected = outcome.setup.steady_amplitude()
+    assert outcome.summary["current_amplitude_a"] == pytest.approx(expected, rel=TOL)
+
+
 def test_an_invalid_toy_scenario_is_one_line_naming_the_field(toy, tmp_path, capsys):
     _, path = toy
     path.write_text(SCENARIO.replace("R = 2.0", "R = -1.0"))
