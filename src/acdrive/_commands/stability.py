@@ -45,6 +45,31 @@ RANGES = {
     "--converter-loss": (0.0, 1e3),  # V
 }
 MAX_GRID = 60  # speeds or loads of --map
+DEFAULT_OUT = "stability-map"  # folder of --map's figure
+
+#: the options of the linearised model of Bodson's drive (one point, --map): --scenario sets
+#: its own drive up, --bench its own candidates
+MODEL_OPTIONS = ("bandwidth", "speed_filter_tau", "supply_resistance", "supply_inductance",
+                 "viscous_friction", "inertia", "rotor_resistance", "converter_loss")  # fmt: skip
+#: the options of --map alone
+MAP_OPTIONS = ("out", "grid")
+#: each task's option (None: one operating point) -> (the options it leaves unused, why)
+UNUSED = {
+    "map": (("scenario", "mode", "speed_rpm", "load_nm"),
+            "the map covers both commands over a grid of speeds and loads of Bodson's DFIM"),
+    "bench": (("scenario", "mode", "speed_rpm", "load_nm", *MODEL_OPTIONS[1:], *MAP_OPTIONS),
+              "the bench candidates are voltage-command variants of Bodson's drive at their own "
+              "operating points (only --bandwidth, --model and --delay-samples act)"),
+    "scenario": (("mode", "delay_samples", *MODEL_OPTIONS, *MAP_OPTIONS),
+                 "the scenario's own drive is linearised with every setting of the scenario "
+                 "(only --speed-rpm, --load-nm and --model act)"),
+    None: (MAP_OPTIONS, "it belongs to --map"),
+}
+#: the value of each model option not given
+MODEL_DEFAULTS = {"bandwidth": PAPER_BANDWIDTH, "speed_filter_tau": 0.0,
+                  "supply_resistance": 0.0, "supply_inductance": 0.0, "viscous_friction": 0.0,
+                  "converter_loss": 0.0, "delay_samples": 0, "mode": "voltage",
+                  "out": DEFAULT_OUT, "grid": (13, 7)}  # fmt: skip
 
 
 def _flag(name: str, value) -> float:
@@ -65,29 +90,32 @@ def register(subparsers) -> None:
         "--scenario", default=None,
         help="a DFIM scenario (built-in name or TOML path) to linearise as it is set up",
     )  # fmt: skip
-    p.add_argument("--mode", choices=("voltage", "current"), default="voltage")
+    p.add_argument("--mode", choices=("voltage", "current"), default=None,
+                   help="command of one operating point (voltage)")  # fmt: skip
     p.add_argument("--speed-rpm", type=float, default=None, help="shaft speed [rpm]")
     p.add_argument("--load-nm", type=float, default=None, help="load torque [N m] (0)")
-    p.add_argument("--bandwidth", type=float, default=PAPER_BANDWIDTH, help="a_D,VEL [rad/s] (314)")
+    p.add_argument("--bandwidth", type=float, default=None, help="a_D,VEL [rad/s] (314)")
     p.add_argument("--model", choices=("continuous", "sampled"), default="continuous")
-    p.add_argument("--delay-samples", type=int, default=0, help="0 or 1 (sampled model)")
-    p.add_argument("--speed-filter-tau", type=float, default=0.0, help="speed filter [s]")
-    p.add_argument("--supply-resistance", type=float, default=0.0, help="supply R [ohm]")
-    p.add_argument("--supply-inductance", type=float, default=0.0, help="supply L [H]")
-    p.add_argument("--viscous-friction", type=float, default=0.0, help="B [N m s/rad]")
+    p.add_argument("--delay-samples", type=int, default=None, help="0 or 1 (sampled model) (0)")
+    p.add_argument("--speed-filter-tau", type=float, default=None, help="speed filter [s] (0)")
+    p.add_argument("--supply-resistance", type=float, default=None, help="supply R [ohm] (0)")
+    p.add_argument("--supply-inductance", type=float, default=None, help="supply L [H] (0)")
+    p.add_argument("--viscous-friction", type=float, default=None, help="B [N m s/rad] (0)")
     p.add_argument("--inertia", type=float, default=None, help="true J [kg m^2] (design: 3.5e-4)")
     p.add_argument(
         "--rotor-resistance", type=float, default=None, help="true R_r [ohm] (controller: 0.94)"
     )
     p.add_argument(
-        "--converter-loss", type=float, default=0.0, help="converter fundamental voltage loss [V]"
-    )
+        "--converter-loss", type=float, default=None,
+        help="converter fundamental voltage loss [V] (0)",
+    )  # fmt: skip
     p.add_argument(
-        "--out", default="stability-map", help="folder the --map figure is written into (created)"
-    )
+        "--out", default=None,
+        help=f"folder the --map figure is written into (created) ({DEFAULT_OUT})",
+    )  # fmt: skip
     p.add_argument(
-        "--grid", type=int, nargs=2, default=(13, 7), metavar=("N_SPEED", "N_LOAD"),
-        help="map grid: speeds 0..2700 rpm, loads over 90%% of the torque window",
+        "--grid", type=int, nargs=2, default=None, metavar=("N_SPEED", "N_LOAD"),
+        help="map grid: speeds 0..2700 rpm, loads over 90%% of the torque window (13 7)",
     )  # fmt: skip
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(handler=run)
@@ -133,17 +161,35 @@ def _pairs(values) -> list[list[float]]:
     return [[float(v.real), float(v.imag)] for v in values]
 
 
+def _task(args) -> str | None:
+    """The task the options choose ("map", "bench", "scenario", None: one operating point);
+    an option the task does not use is refused (``_options.refuse_unused``), and every option
+    not given takes its default (``MODEL_DEFAULTS``)."""
+    from acdrive._commands._options import refuse_unused
+
+    task = "map" if args.map else "bench" if args.bench else None
+    if task is None and args.scenario is not None:
+        task = "scenario"
+    unused, why = UNUSED[task]
+    refuse_unused(args, unused, f"--{task}" if task else "one operating point (--speed-rpm)", why)
+    for dest, value in MODEL_DEFAULTS.items():
+        if getattr(args, dest) is None:
+            setattr(args, dest, value)
+    return task
+
+
 def run(args) -> int:
-    if args.map:
+    task = _task(args)
+    if task == "map":
         return _map(args)
-    if args.bench:
+    if task == "bench":
         return _bench(args)
+    if task == "scenario":
+        return _scenario(args)
     lin = _linearisation()
     RAD_S_PER_RPM, OperatingPoint = lin.RAD_S_PER_RPM, lin.OperatingPoint
     check_point, linearize = lin.check_point, lin.linearize
 
-    if args.scenario is not None:
-        return _scenario(args)
     if args.speed_rpm is None:
         raise InputError("--speed-rpm", "is required (or give --map or --scenario)")
     model = _model(args, args.mode)
@@ -164,9 +210,11 @@ def _scenario(args) -> int:
     from acdrive.drives import for_setup
     from acdrive.scenarios._loader import load_scenario
 
-    if args.map or args.bench:
-        raise InputError("--scenario", "linearises one operating point: no --map or --bench")
-    setup = load_scenario(args.scenario)
+    try:
+        setup = load_scenario(args.scenario)
+    except InputError as exc:  # the scenario was typed as --scenario
+        field = "--scenario" if exc.field == "scenario" else exc.field
+        raise InputError(field, exc.rule) from None
     try:
         lin = for_setup(setup).linearisation()
     except InputError as exc:
