@@ -11,6 +11,7 @@ Every option is checked before any simulation; a bad one is one line naming it, 
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 HELP = """Map how robust a drive is to parameter errors: the simulated plant's parameters
 multiplied by factors (R_s, R_r, L_s, L_r, L_m, J, and the combined perturbation of
@@ -25,19 +26,19 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("robustness", help="robustness map of parameter errors (grid or Monte Carlo, batch engine)",
                               description=HELP)  # fmt: skip
     p.add_argument("scenario", metavar="SCENARIO", help="built-in scenario name or TOML path")
-    p.add_argument("--map", choices=KINDS, default="grid", help="grid (default) or monte-carlo")
+    p.add_argument("--map", choices=KINDS, default=None, help="grid (default) or monte-carlo")
     p.add_argument("--params", default=None,
                    help=f"comma-separated axes of {','.join((*PARAMETERS, PAPER))} (default: every "
                         "one the drive perturbs; monte-carlo: the single parameters)")  # fmt: skip
-    p.add_argument("--points", type=int, default=DEFAULT_POINTS,
+    p.add_argument("--points", type=int, default=None,
                    help=f"grid points per axis [{DEFAULT_POINTS}]")  # fmt: skip
-    p.add_argument("--variants", type=int, default=DEFAULT_VARIANTS,
+    p.add_argument("--variants", type=int, default=None,
                    help=f"monte-carlo variants, the nominal included [{DEFAULT_VARIANTS}]")  # fmt: skip
-    p.add_argument("--low", type=float, default=0.5, help="smallest factor [0.5]")
-    p.add_argument("--high", type=float, default=2.0, help="largest factor [2]")
-    p.add_argument("--severity-max", type=float, default=2.0,
+    p.add_argument("--low", type=float, default=None, help="smallest factor [0.5]")
+    p.add_argument("--high", type=float, default=None, help="largest factor [2]")
+    p.add_argument("--severity-max", type=float, default=None,
                    help="largest severity s of the paper axis (factors PAPER^s) [2]")  # fmt: skip
-    p.add_argument("--seed", type=int, default=1, help="monte-carlo seed [1]")
+    p.add_argument("--seed", type=int, default=None, help="monte-carlo seed [1]")
     p.add_argument("--tracking-tolerance", type=float, default=None,
                    help="tracking criterion's fraction (default: the drive's)")  # fmt: skip
     p.add_argument("--current-tolerance", type=float, default=0.05,
@@ -66,22 +67,65 @@ def _params(text: str | None, kind: str) -> tuple:
     return names
 
 
-def _compare(args) -> int:
-    from acdrive._output import strict_json
+#: the options of a map, unused by --estimates (a design comparison runs the scenario twice)
+MAP_OPTIONS = ("map", "params", "points", "variants", "low", "high", "severity_max", "seed",
+               "linear", "out")  # fmt: skip
+
+
+def _map_defaults() -> dict:
+    """The values of the map options not given."""
+    from acdrive.robustness._map import DEFAULT_POINTS, DEFAULT_VARIANTS
+
+    return {"map": "grid", "points": DEFAULT_POINTS, "variants": DEFAULT_VARIANTS, "low": 0.5,
+            "high": 2.0, "severity_max": 2.0, "seed": 1}
+
+
+def _overrides(args) -> dict:
+    """The scenario overrides of the options (``--duration``), each checked under its flag."""
+    from acdrive.errors import require_positive
+
+    if args.duration is None:
+        return {}
+    return {"simulation.duration": require_positive("--duration", args.duration)}
+
+
+@contextlib.contextmanager
+def _typed_names(args):
+    """Errors on a scenario field an option set (``--duration``, ``--estimates``) name the
+    option: the user typed it, not the field."""
     from acdrive.errors import InputError
+
+    try:
+        yield
+    except InputError as exc:
+        field = exc.field
+        if args.duration is not None and field == "simulation.duration":
+            field = "--duration"
+        elif args.estimates is not None and (field == "estimates"
+                                             or field.endswith("design.machine_file")):  # fmt: skip
+            field = "--estimates"
+        if field == exc.field:
+            raise
+        raise InputError(field, exc.rule) from None
+
+
+def _compare(args) -> int:
+    from acdrive._commands._options import refuse_unused
+    from acdrive._output import strict_json
     from acdrive.robustness._design import design_comparison
 
-    if args.out is not None:
-        raise InputError("--out", "applies to a map, not to --estimates (use --json to keep it)")
-    overrides = {} if args.duration is None else {"simulation.duration": args.duration}
-    c = design_comparison(args.scenario, args.estimates, tracking_tolerance=args.tracking_tolerance,
-                          current_tolerance=args.current_tolerance, overrides=overrides)  # fmt: skip
+    refuse_unused(args, MAP_OPTIONS, "--estimates", "it compares two designs of the scenario, "
+                  "no map is run (use --json to keep the comparison)")  # fmt: skip
+    overrides = _overrides(args)
+    with _typed_names(args):
+        c = design_comparison(args.scenario, args.estimates,
+                              tracking_tolerance=args.tracking_tolerance,
+                              current_tolerance=args.current_tolerance, overrides=overrides)  # fmt: skip
     print(strict_json(c.to_json(), indent=1) if args.json else "\n".join(c.lines()))
     return 0
 
 
 def run(args) -> int:
-    import contextlib
     from pathlib import Path
 
     from acdrive._output import OutputFolder, strict_json
@@ -90,13 +134,24 @@ def run(args) -> int:
 
     if args.estimates is not None:
         return _compare(args)
+    from acdrive._commands._options import refuse_unused
+
+    kind = args.map or "grid"
+    if kind == "grid":
+        refuse_unused(args, ("variants", "seed"), "a grid map (--map grid, the default)",
+                      "--variants and --seed draw a --map monte-carlo")  # fmt: skip
+    else:
+        refuse_unused(args, ("points", "severity_max"), "--map monte-carlo",
+                      "--points and --severity-max set the axes of a grid")  # fmt: skip
+    for dest, value in _map_defaults().items():
+        if getattr(args, dest) is None:
+            setattr(args, dest, value)
     spec = MapSpec(kind=args.map, params=_params(args.params, args.map), points=args.points,
                    variants=args.variants, low=args.low, high=args.high,
                    severity_max=args.severity_max, seed=args.seed)  # fmt: skip
-    overrides = {}
-    if args.duration is not None:
-        overrides["simulation.duration"] = args.duration
+    overrides = _overrides(args)
     with contextlib.ExitStack() as stack:
+        stack.enter_context(_typed_names(args))
         folder = None
         if args.out is not None:  # --out is checked here, before any simulation
             name = f"{Path(args.scenario).stem}-robustness"

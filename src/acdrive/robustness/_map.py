@@ -106,6 +106,10 @@ class MapSpec:
             raise InputError("--points", f"must be at least 2 grid points, got {self.points}")
         if self.variants < 1:
             raise InputError("--variants", f"must be at least 1, got {self.variants}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
+            raise InputError("--seed", f"must be an integer, got {self.seed!r}")
+        if self.seed < 0:
+            raise InputError("--seed", f"must be an integer >= 0, got {self.seed}")
         require_positive("--low", self.low)
         require_positive("--high", self.high)
         if not self.low < self.high:
@@ -113,6 +117,12 @@ class MapSpec:
                 "--high", f"must be larger than --low ({self.low:g}), got {self.high:g}"
             )
         require_positive("--severity-max", self.severity_max)
+        if self.kind == "grid" and 1 + len(params) * (self.points - 1) > MAX_VARIANTS:
+            # counted before any axis is built: the nominal and points - 1 others per axis
+            raise InputError(
+                "--points", f"asks for 1 + {len(params)} axes x ({self.points} - 1) = "
+                f"{1 + len(params) * (self.points - 1)} variants (limit {MAX_VARIANTS})"
+            )  # fmt: skip
         if self.size > MAX_VARIANTS:
             raise InputError(
                 "--points" if self.kind == "grid" else "--variants",
