@@ -21,7 +21,13 @@ from dataclasses import dataclass
 
 from acdrive.core._parts import ContinuousPart
 from acdrive.core._signals import RULES, Var
+from acdrive.errors import InputError
 from acdrive.plant._mechanics import SHAFT_PARAMS, Shaft
+
+#: the most pole pairs a machine record accepts: above any machine built (low-speed hydro and
+#: direct-drive wind generators have up to a few hundred poles), so that more is a mistake in the
+#: input, refused before the electrical speed n_p w outruns every sample time
+MAX_POLE_PAIRS = 1000
 
 #: the shaft's mechanics every machine record carries, as ``plant.Shaft`` declares them
 MECHANICS: tuple[Var, ...] = tuple(SHAFT_PARAMS.var(n) for n in ("J", "B", "tau_c"))
@@ -95,7 +101,8 @@ def machine_record(part: type[MachinePart], leave_out: tuple[str, ...] = (),
 
 
 def _validate(self) -> None:
-    """Each field against its declared rule (n_p stored as int), then the relations."""
+    """Each field against its declared rule (n_p stored as int, at most ``MAX_POLE_PAIRS``), then
+    the relations."""
     values = {}
     for v in self.DECLARED:
         value = getattr(self, v.name)
@@ -104,6 +111,8 @@ def _validate(self) -> None:
         value = v.checked(v.name, value)
         if v.rule == "count":
             value = int(value)
+        if v.name == "n_p" and value > MAX_POLE_PAIRS:
+            raise InputError(v.name, f"must be at most {MAX_POLE_PAIRS} pole pairs, got {value:g}")
         object.__setattr__(self, v.name, value)
         values[v.name] = value
     units = {v.name: v.unit for v in self.DECLARED}

@@ -25,6 +25,25 @@ def encoder_angle(theta, offset, counts_per_rev):
     return np.floor(reading / step) * step
 
 
+#: the finest encoder resolution a scenario accepts [counts per revolution]: a 32-bit count per
+#: turn. Finer counts quantise nothing a float64 angle resolves after a few thousand turns (the
+#: step 2 pi / N against the angle's spacing of 2^-52 of its value), and at 1e30 the step is far
+#: below it from the first turn on.
+MAX_COUNTS_PER_REV = 2**32
+
+
+def check_counts_per_rev(field: str, value) -> float:
+    """``value`` (an encoder's counts per revolution; 0: ideal) as float, or an ``InputError``
+    on ``field`` unless it is a whole number from 0 to ``MAX_COUNTS_PER_REV``."""
+    from acdrive.errors import InputError, require_nonnegative
+
+    value = require_nonnegative(field, value)
+    if value > MAX_COUNTS_PER_REV or value != int(value):
+        raise InputError(field, f"must be a whole number of counts from 0 (ideal) to "
+                         f"{MAX_COUNTS_PER_REV} (2^32) per revolution, got {value:g}")  # fmt: skip
+    return value
+
+
 # --- sensors as sampled parts ----------------------------------------------------------------
 
 ENCODER_PARAMS = Layout(

@@ -128,6 +128,7 @@ from acdrive.errors import (
 )
 from acdrive.machines._induction import IMParams
 from acdrive.machines._record import electrical_fields
+from acdrive.plant._sensors import MAX_COUNTS_PER_REV
 from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 from acdrive.sim._integrators import INTEGRATORS
 
@@ -516,7 +517,9 @@ def build_im_setup(data: dict) -> IMDriveSetup:
 
     sens = _Section(top.get("sensors", {}), "sensors")
     sensors = SensorSetup(
-        counts_per_rev=float(sens.integer("encoder_counts_per_rev", 0, minimum=0)),
+        counts_per_rev=float(
+            sens.integer("encoder_counts_per_rev", 0, minimum=0, maximum=MAX_COUNTS_PER_REV)
+        ),
         offset=sens.number("encoder_offset_rad", 0.0),
         speed_filter_tau=sens.number("speed_filter_tau_s", 0.0, require_nonnegative),
     )

@@ -99,6 +99,7 @@ from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE
 from acdrive.machines._record import electrical_fields
 from acdrive.plant._converter import max_voltage_magnitude
 from acdrive.plant._mechanics import W_COULOMB
+from acdrive.plant._sensors import MAX_COUNTS_PER_REV
 from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 __all__ = ["KIND", "build_dfim_setup", "choose_substeps", "fastest_mode"]
@@ -594,7 +595,9 @@ def build_dfim_setup(data: dict) -> DriveSetup:
             converter=_converter(
                 sec, k, dc_link_voltage, None if dc_link_profile is None else float(min(dc_link[1]))
             ),
-            encoder_counts_per_rev=float(sec.integer("encoder_counts_per_rev", 0, minimum=0)),
+            encoder_counts_per_rev=float(
+                sec.integer("encoder_counts_per_rev", 0, minimum=0, maximum=MAX_COUNTS_PER_REV)
+            ),
             encoder_offset=sec.number("encoder_offset", 0.0),
             initial_speed=sec.number("initial_speed_rpm", 0.0) * RAD_S_PER_RPM,
             current_sensor_fault_time=sec.number(

@@ -51,6 +51,7 @@ from acdrive.drives.pm._setup import CONVERTERS, PMDriveSetup
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
 from acdrive.machines._record import electrical_fields
+from acdrive.plant._sensors import check_counts_per_rev
 
 DRIVE = "pm"
 #: machines a scenario may name (``drives.pm._machines`` and seed 001's PMSG)
@@ -142,7 +143,7 @@ def load(data: dict) -> PMDriveSetup | CurrentStepSetup:
     speed = _profile_points(ref, "speed_rad_s", None)
     ref.done()
     sen = Section(top.get("sensors", {}), "sensors")
-    counts = sen.number("encoder_counts_per_rev", 0.0, require_nonnegative)
+    counts = sen.number("encoder_counts_per_rev", 0.0, check_counts_per_rev)
     offset = sen.number("encoder_offset_rad", 0.0)
     sen.done()
     sim = Section(top.get("simulation", {}), "simulation")
@@ -237,8 +238,11 @@ _SETUP_FIELDS = {
     "voltage_margin": "control.voltage_margin",
     "tau_max": "control.tau_max",
     "speed_reference": "reference.speed_rad_s_profile",
+    "encoder_counts": "sensors.encoder_counts_per_rev",
     "duration": "simulation.duration",
     "sample_time": "simulation.sample_time",
+    "substeps": "simulation.substeps",
+    "log_every": "simulation.log_every",
     "estimates.L_q": "machine.params.L_q",
 }
 
