@@ -95,7 +95,8 @@ def test_all_tones_far_below_the_rotor_corner_cannot_separate_the_rotor_resistan
 
 def test_too_few_tones_too_short_and_too_coarse_logs_are_refused():
     log = injection_log(DELORENZO_IM, seed=1, tones=(1, 2))
-    with pytest.raises(InputError, match=r"^excitation: needs at least 3 excited tones"):
+    with pytest.raises(InputError, match=r"column 'v_a': the injected voltage must excite at "
+                       r"least 3 tones"):  # fmt: skip
         fit_impedance(log, 1.0, 2.0)
     short = injection_log(DELORENZO_IM, seed=1, duration=2.5)
     with pytest.raises(InputError, match=r"column 'time': too short"):

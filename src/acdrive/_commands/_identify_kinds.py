@@ -307,14 +307,17 @@ def run_kind(args, target) -> int:
     """Identify ``args.kind`` from its measured logs or a built-in machine's simulated tests;
     print the table and write the file."""
     from acdrive._commands._identify_table import print_table
+    from acdrive._commands._options import typed_names
+    from acdrive._commands.identify import WINDOW_OPTIONS
     from acdrive.identify._fit import FitNotConverged
     from acdrive.identify._params_file import estimates_text, write_params
 
     refuse_other_options(args)
     bench = _source(args)
     try:
-        groups, statement, facts, params, note = {"pm": _pm, "dfim": _dfim,
-                                                  "mechanics": _mechanics}[args.kind](args, bench)  # fmt: skip
+        with typed_names(WINDOW_OPTIONS):
+            groups, statement, facts, params, note = {"pm": _pm, "dfim": _dfim,
+                                                      "mechanics": _mechanics}[args.kind](args, bench)  # fmt: skip
     except FitNotConverged as exc:
         sys.stderr.write(f"acdrive: error: {exc}\n")
         return 1

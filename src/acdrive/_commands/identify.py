@@ -219,13 +219,21 @@ def _json(result, path, no_load=None) -> dict:
     return out
 
 
+#: the Python arguments of the injection window -> the options that set them
+WINDOW_OPTIONS = {"base_frequency": "--base-frequency-hz", "settle": "--settle-s"}
+
+
 def run(args) -> int:
+    from acdrive._commands._options import typed_names
     from acdrive._commands._table import format_value
     from acdrive.identify._experiment import StandstillPlan
     from acdrive.identify._fit import FitNotConverged
     from acdrive.identify._params_file import check_target, params_text, write_params
+    from acdrive.errors import InputError
     from acdrive.identify._standstill import identifiability, identify_standstill
 
+    if args.seed < 0:  # numpy's generators take seeds >= 0
+        raise InputError("--seed", f"must be an integer >= 0, got {args.seed}")
     target = check_target(args.out)  # before any work
     if args.kind != "cage-im":
         from acdrive._commands._identify_kinds import run_kind
@@ -242,9 +250,10 @@ def run(args) -> int:
     no_load_log, frequency, no_load_settle = _no_load(args, machine)
     v_dc = _link_voltage(args, no_load_log, machine)
     try:
-        result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
-                                     split=args.leakage_split, seed=args.seed,
-                                     dead_time=args.dead_time_s)  # fmt: skip
+        with typed_names(WINDOW_OPTIONS):
+            result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
+                                         split=args.leakage_split, seed=args.seed,
+                                         dead_time=args.dead_time_s)  # fmt: skip
         no_load = None
         if no_load_log is not None:
             no_load = fit_no_load(no_load_log, frequency, no_load_settle, n_p, result.impedance,

@@ -189,8 +189,9 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
     excited = bins[np.abs(V[bins]) > EXCITED_FRACTION * strongest] if strongest > 0.0 else bins[:0]
     polarity = np.fft.rfft(np.sign(i)) * (2.0 / n)
     if excited.size < MIN_TONES:
-        raise InputError("excitation", f"needs at least {MIN_TONES} excited tones at multiples "
-                         f"of {base_frequency:g} Hz, found {excited.size}")  # fmt: skip
+        raise InputError(f"{log.source}: column 'v_a'", f"the injected voltage must excite at "
+                         f"least {MIN_TONES} tones at multiples of {base_frequency:g} Hz, found "
+                         f"{excited.size}" + (" (the column is zero)" if strongest == 0.0 else ""))  # fmt: skip
     frequency = (excited // periods) * base_frequency
     if frequency[-1] * hold * SAMPLES_PER_TONE > 1.0 + 1e-12:
         raise InputError(where, f"sampling at {1 / hold:g} Hz is too coarse for the tone at "

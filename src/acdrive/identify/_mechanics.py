@@ -229,6 +229,13 @@ def _window(log: MechanicsLog) -> tuple[np.ndarray, np.ndarray, float, float]:
         raise InputError(where, "the speed must keep one sign")
     if w.size < 4 * len(MECHANICS):
         raise InputError(where, f"too short: {w.size} samples above {MIN_SPEED:g} rad/s")
+    if np.ptp(w) == 0.0:
+        raise InputError(where, f"the speed never changes ({w[0]:g} rad/s throughout): J needs "
+                         "accelerations and B, tau_c plateaus at two speeds or more; step the "
+                         "speed between two levels or more")  # fmt: skip
+    if not np.any(tau):
+        raise InputError(f"{log.source}: column 'tau_e'", "is zero throughout: the fit divides "
+                         "the torque among inertia and friction")  # fmt: skip
     return tau, w, sign, h
 
 
@@ -282,7 +289,12 @@ def fit_mechanics(log: MechanicsLog, seed: int = 0, bootstrap: int = BOOTSTRAP_C
     top = float(np.max(np.abs(w)))
     torque = float(np.max(np.abs(tau)))
     scale = np.array([start[0], 0.1 * torque / top, 0.1 * torque, max(abs(start[3]), 1.0)])
-    fit = _solve(tau, w, sign, h, scale, start)
+    try:
+        fit = _solve(tau, w, sign, h, scale, start)
+    except OverflowError:  # a shaft time constant J / B beyond float range: no speed change
+        raise InputError(f"{log.source}: column 'w'", "the speed changes too little to tell the "
+                         "inertia from the friction (the fit's time constant J / B overflows); "
+                         "step the speed between two levels or more") from None  # fmt: skip
     m, n = w.size, 4
     dof = m - n
     rms = float(np.sqrt(2.0 * fit.cost / m))
