@@ -69,8 +69,10 @@ class Section:
 
     def integer(self, key, default, minimum=1, maximum=None):
         value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-            raise InputError(self.field(key), f"must be an integer >= {minimum}")
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(self.field(key), f"must be an integer, got {type(value).__name__}")
+        if value < minimum:
+            raise InputError(self.field(key), f"must be an integer >= {minimum}, got {value}")
         if maximum is not None and value > maximum:
             raise InputError(self.field(key), f"must be an integer <= {maximum}, got {value}")
         return value

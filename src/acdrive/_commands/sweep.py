@@ -116,5 +116,32 @@ def run(args) -> int:
         done = f"{state[0]} of {state[1]} variants done; " if state else ""
         sys.stderr.write(f"acdrive: sweep {spec.name} stopped ({done}resume with: {command})\n")
         raise
+    refuse_all_invalid(args.sweep, folder)
     print(folder)
     return 0
+
+
+def refuse_all_invalid(source: str, folder) -> None:
+    """An ``InputError`` on ``sweep`` if no variant of the finished sweep in ``folder`` is valid
+    (every one refused by the scenario loader, so nothing was simulated): the count, the first
+    variant's reason, and where the table keeps every reason. The folder stays (acdrive wrote it;
+    its table and report are the record of each refusal)."""
+    from pathlib import Path
+
+    import pyarrow.dataset as ds
+
+    from acdrive.errors import InputError
+
+    table = ds.dataset(Path(folder) / "table", format="parquet").to_table(
+        columns=["variant", "valid", "reason"]
+    )
+    valid = table.column("valid").to_pylist()
+    if not valid or any(valid):
+        return
+    first = min(range(len(valid)), key=table.column("variant").to_pylist().__getitem__)
+    raise InputError(
+        "sweep",
+        f"none of the {len(valid)} variants of {source} is valid (nothing was simulated; variant "
+        f"{table.column('variant')[first].as_py()}: {table.column('reason')[first].as_py()}); "
+        f"every reason is in {Path(folder) / 'table'}",
+    )

@@ -367,6 +367,7 @@ def _check_count(method: str, samples: int, vary: tuple[Vary, ...], limit: int) 
 _TYPE_RULES = (
     "must be a number",
     "must be a real number",
+    "must be an integer,",
     "must be a string",
     "must be true or false",
     "must be a table",
