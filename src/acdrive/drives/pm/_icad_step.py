@@ -61,12 +61,16 @@ from acdrive.control._lti import LTI
 from acdrive.drives.pm._build import Built
 from acdrive.drives.pm._control import RotorFrameCurrentController
 from acdrive.drives.pm._design import magnet_flux
+from acdrive.drives.pm._size import check_run_size
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSGParams
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._mechanics import PrescribedSpeed
+from acdrive.sim._compiled import LOG_BUDGET_BYTES
 from acdrive.sim._system import System
 
+#: the most frequencies a run compares (S) with (10) at: a table, not a spectrum
+MAX_FREQUENCIES = 1000
 #: the relative complex difference allowed between the measured coupling and (10), at the
 #: frequencies up to ICAD_W_MAX [rad/s] (module docstring; the coupling report's 2 % and 1000 rad/s)
 ICAD_REL_TOL = 0.02
@@ -121,6 +125,17 @@ class CurrentStepSetup:
             or self.substeps < 1
         ):
             raise InputError("substeps", "must be an integer >= 1")
+        samples = check_run_size(self.duration, self.sample_time, self.substeps, runs=2)
+        if len(w) > MAX_FREQUENCIES:
+            raise InputError("frequencies", f"at most {MAX_FREQUENCIES} frequencies, got {len(w)}")
+        table_bytes = 16.0 * len(w) * samples  # step_transfer's complex frequencies x samples
+        if table_bytes > LOG_BUDGET_BYTES:
+            raise InputError(
+                "frequencies", f"{len(w)} frequencies x {samples:.3g} samples of the run need "
+                f"{table_bytes / 1024**3:.3g} GB for the comparison (limit "
+                f"{LOG_BUDGET_BYTES / 1024**3:g} GB): compare at fewer frequencies or shorten "
+                "the run"
+            )  # fmt: skip
 
     @property
     def controller(self) -> LTI:

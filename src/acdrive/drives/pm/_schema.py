@@ -212,6 +212,7 @@ def _current_step(top: Section) -> CurrentStepSetup:
         "frequencies": "comparison.frequencies_rad_s",
         "duration": "simulation.duration",
         "sample_time": "simulation.sample_time",
+        "substeps": "simulation.substeps",
     }
     try:
         return CurrentStepSetup(

@@ -7,7 +7,6 @@ with space vectors, |i| = sqrt(3/2) I_pk (``acdrive._frames.K_PEAK``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from acdrive._frames import K_PEAK
@@ -19,16 +18,13 @@ from acdrive.drives.pm._design import (
     require_salient_or_round,
 )
 from acdrive.drives.pm._period import check_current_period
+from acdrive.drives.pm._size import check_run_size
 from acdrive.errors import InputError, require_between, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSGParams
 from acdrive.plant._inverter import _N_TOLERANCE as CARRIER_RTOL
 from acdrive.plant._sensors import check_counts_per_rev
-from acdrive.sim._compiled import LOG_BUDGET_BYTES, MAX_SUBSTEPS, MAX_WORK
 
 CONVERTERS = ("averaged", "switching")
-#: an upper bound on the columns a PM run logs (signals and limit events), for the size check
-#: made before any part is built (``PMDriveSetup``)
-LOG_COLUMNS = 40
 
 
 @dataclass(frozen=True)
@@ -115,9 +111,7 @@ class PMDriveSetup:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise InputError(name, "must be an integer >= 1")
-        if self.substeps > MAX_SUBSTEPS:
-            raise InputError("substeps", f"must be at most {MAX_SUBSTEPS}, got {self.substeps}")
-        self._check_size()
+        check_run_size(self.duration, self.sample_time, self.substeps, self.log_every)
         budget = self.voltage_margin * self.V_dc / 2**0.5 - est.R_s * self.i_max
         if budget <= 0.0:
             raise InputError(
@@ -137,27 +131,6 @@ class PMDriveSetup:
                 "f_pwm", f"the carrier period 1 / f = {1.0 / self.f_pwm:g} s must be the "
                 f"sample time {self.sample_time:g} s times a whole number >= 1, got "
                 f"{ratio:.6g} (at most {1.0 / self.sample_time:g} Hz at this sample time)"
-            )  # fmt: skip
-
-    def _check_size(self) -> None:
-        """Refuse, before any part is built, a run whose log would not fit the memory budget or
-        whose integration steps would take hours (``sim._compiled``'s bounds), on ``duration``."""
-        steps = self.duration / self.sample_time
-        log_bytes = math.ceil(steps / self.log_every) * LOG_COLUMNS * 8.0
-        what = f"{self.duration:g} s at a sample time of {self.sample_time:g} s is {steps:.3g} " \
-            "samples"
-        if log_bytes > LOG_BUDGET_BYTES:
-            raise InputError(
-                "duration", f"{what}; its log would need about {log_bytes / 1024**3:.3g} GB "
-                f"(limit {LOG_BUDGET_BYTES / 1024**3:g} GB): shorten the run or log every k-th "
-                "sample"
-            )  # fmt: skip
-        work = steps * self.substeps
-        if work > MAX_WORK:
-            raise InputError(
-                "duration", f"{what} x {self.substeps} substeps = {work:.3g} integration steps "
-                f"(limit {MAX_WORK:.0e}, about half an hour): shorten the run or lengthen the "
-                "sample time"
             )  # fmt: skip
 
     @property
