@@ -81,7 +81,7 @@ def test_bad_input_is_one_line_with_exit_2(logs, tmp_path, capsys):
     one_line_error(capsys, ["identify", str(bad), "--pole-pairs", "1", "--out", out],
                    r"TEST_FILE_OR_SCENARIO: column 'i_a': must be in A, got 'mA'")  # fmt: skip
     one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out", out,
-                            "--base-frequency-hz", "0.3"], r"base_frequency: a period")  # fmt: skip
+                            "--base-frequency-hz", "0.3"], r"--base-frequency-hz: a period")  # fmt: skip
     one_line_error(capsys, ["identify", str(injection), "--pole-pairs", "1", "--out", out,
                             "--no-load-log", str(injection)],
                    r"--no-load-log: column 'w': is missing; a no-load log has")  # fmt: skip

@@ -190,6 +190,11 @@ def _pm(args, bench):
     from acdrive.identify._pm import axis_test, identify_pm_standstill, pm_identifiability
     from acdrive.identify._spin import fit_spin, read_spin_log, spin_test
 
+    if bench is None and not args.spin_log and args.spin_settle_s is not None:
+        from acdrive.errors import InputError
+
+        raise InputError("--spin-settle-s", "does not apply without --spin-log: it is the time "
+                         "dropped at the start of each spin plateau")  # fmt: skip
     spin_settle = _spin_settle(args, bench)
     facts = {}
     if bench is None:
@@ -240,6 +245,11 @@ def _dfim(args, bench):
     R_s = args.stator_resistance_ohm
     if R_s is not None:
         require_positive("--stator-resistance-ohm", R_s)
+    elif args.stator_resistance_std_ohm != 0.0:
+        from acdrive.errors import InputError
+
+        raise InputError("--stator-resistance-std-ohm", "does not apply without "
+                         "--stator-resistance-ohm: it is that value's standard error")  # fmt: skip
     R_s_std = require_nonnegative("--stator-resistance-std-ohm", args.stator_resistance_std_ohm)
     if bench is None:
         n_p, base, settle, opened, shorted, dc = _measured_logs(args, "shorted_log")

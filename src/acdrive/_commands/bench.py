@@ -53,6 +53,14 @@ def run(args) -> int:
             raise InputError(
                 "--only", f"each name must be one of {', '.join(CASE_NAMES)}, got {name!r}"
             )
+    if args.peers_dir is not None and args.no_peers:
+        raise InputError("--peers-dir", "does not apply with --no-peers: no peer is measured")
+    if args.no_reference_cache and args.no_reference:
+        raise InputError("--no-reference-cache", "does not apply with --no-reference: no "
+                         "accuracy reference is computed")  # fmt: skip
+    if args.baseline_src is not None and "loop_speed" not in only:
+        raise InputError("--baseline-src", "does not apply with --only without loop_speed: only "
+                         "the loop_speed case compares against a baseline tree")  # fmt: skip
     peers_dir = None
     if args.peers_dir is not None:
         if not args.peers_dir.strip():

@@ -120,7 +120,7 @@ def register(subparsers) -> None:
     mode.add_argument("--sweep", action="store_true", help="sweep speed and write figures")
     parser.add_argument("--controller", choices=CONTROLLER_NAMES, help="built-in controller")
     parser.add_argument(
-        "--bandwidth", type=float, default=A_CUR_DEFAULT, help="a [rad/s] of imc-pi (3142)"
+        "--bandwidth", type=float, default=None, help="a [rad/s] of imc-pi (3142)"
     )
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument(
@@ -196,9 +196,18 @@ def run(args) -> int:
             "--speeds", "sets the speeds of a sweep and needs --sweep (one analysis at one speed "
             "takes --speed)"
         )  # fmt: skip
+    if args.out is not None and not args.sweep:
+        raise InputError("--out", "does not apply with --speed: one analysis writes no figures "
+                         "(--sweep writes them into --out)")  # fmt: skip
     params = machine_params(args.machine)
     name = args.controller or default_controller_name(params)
-    bandwidth = require_between("--bandwidth", args.bandwidth, *BANDWIDTH_RANGE)
+    if args.bandwidth is not None and name != "imc-pi":
+        which = (f"--controller {name}" if args.controller
+                 else f"{name} (the default --controller of {args.machine})")  # fmt: skip
+        raise InputError("--bandwidth", f"does not apply with {which}: it sets a of imc-pi; "
+                         "the papers' controllers have fixed gains")  # fmt: skip
+    bandwidth = A_CUR_DEFAULT if args.bandwidth is None else args.bandwidth
+    bandwidth = require_between("--bandwidth", bandwidth, *BANDWIDTH_RANGE)
     k = controller_for(name, params, bandwidth)
     if args.sweep:
         return _sweep(args, params, name, k)

@@ -89,6 +89,11 @@ def _no_load(args, machine=None):
     from acdrive.identify._no_load import NoLoadPlan, no_load_test, read_no_load_log
 
     plan = NoLoadPlan(t_d=args.dead_time_s, v_drop=args.device_drop_v)
+    if machine is None and not args.no_load_log and args.no_load_frequency_hz is not None:
+        from acdrive.errors import InputError
+
+        raise InputError("--no-load-frequency-hz", "does not apply without --no-load-log: a "
+                         "measured test has no no-load run to set it for")  # fmt: skip
     if args.no_load_frequency_hz is not None:
         frequency = require_positive("--no-load-frequency-hz", args.no_load_frequency_hz)
         plan = dataclasses.replace(plan, frequency=frequency)

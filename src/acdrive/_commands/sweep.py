@@ -18,6 +18,9 @@ after an interruption: an interrupted sweep prints that command), then write rep
 figures. --scheduler sends the chunks to a Dask cluster. --list names the built-in sweeps."""
 
 DEFAULT_OUT = "acdrive-sweeps"
+DEFAULT_TIMEOUT = 10.0  # seconds to reach a Dask scheduler
+#: the options of running a sweep, unused by --list
+RUN_OPTIONS = ("out", "scheduler", "timeout", "chunk")
 
 
 def register(subparsers) -> None:
@@ -30,14 +33,15 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--out",
-        default=DEFAULT_OUT,
+        default=None,
         help=f"the sweep is written to DIR/<sweep name>/ (default DIR: ./{DEFAULT_OUT}); a "
         "folder there that acdrive did not write is refused",
         metavar="DIR",
     )
     p.add_argument("--scheduler", default=None, help="Dask scheduler address, tcp://host:port")
     p.add_argument(
-        "--timeout", type=float, default=10.0, help="seconds to reach the scheduler (10)"
+        "--timeout", type=float, default=None,
+        help=f"seconds to reach the --scheduler ({DEFAULT_TIMEOUT:g})",
     )
     p.add_argument("--chunk", type=int, default=None, help="variants per chunk (the file's)")
     p.add_argument("--no-report", action="store_true", help="skip report.md and figures")
@@ -82,6 +86,7 @@ def run(args) -> int:
     import math
     import sys
 
+    from acdrive._commands._options import flag, refuse_unused
     from acdrive._output import require_out
     from acdrive.errors import InputError, Terminated, call_interruptible
     from acdrive.sweep._engine import run_sweep, sweep_progress
@@ -90,10 +95,20 @@ def run(args) -> int:
     if args.list:
         if args.sweep is not None:
             raise InputError("--list", "names the built-in sweeps and takes no SWEEP")
+        refuse_unused(args, RUN_OPTIONS, "--list", "it names the built-in sweeps, running none")
+        for switch in ("no_report", "quiet"):
+            if getattr(args, switch):
+                raise InputError(flag(switch), "does not apply with --list: it names the "
+                                 "built-in sweeps, running none")  # fmt: skip
         print("\n".join(list_builtin()))
         return 0
     if args.sweep is None:
         raise InputError("sweep", "give a sweep file (TOML) or a built-in sweep name (--list)")
+    if args.timeout is not None and args.scheduler is None:
+        raise InputError("--timeout", "does not apply without --scheduler: it bounds the wait "
+                         "for a Dask scheduler")  # fmt: skip
+    args.out = DEFAULT_OUT if args.out is None else args.out
+    args.timeout = DEFAULT_TIMEOUT if args.timeout is None else args.timeout
     out = require_out("--out", args.out)  # before anything else: "" would mean "here"
     spec = load_sweep(args.sweep)
     if args.chunk is not None:
