@@ -76,6 +76,8 @@ def files(tmp_path_factory) -> dict:
             'machine = "bodson-dfim"\nencoder_counts_per_rev = 1099511627776\n', 1),
         "sweep-type.toml": SWEEP.format(values='["fast"]'),
         "sweep-invalid.toml": SWEEP.format(values="[0, -1]"),
+        "sweep-unknown.toml": SWEEP.format(values="[1]").replace("simulation.substeps",
+                                                                 "motor[0].compare_modes"),
     }
     paths = {}
     for name, text in texts.items():
@@ -194,6 +196,8 @@ ROWS = [
     # sweeps: a value of the wrong type is refused at load; a sweep with no valid variant fails
     ("sweep-wrong-type", ["sweep", "{sweep-type.toml}", "--out", "{out}", "--quiet"],
      "vary[0].values[0]", ["'fast'", "simulation.substeps", "must be an integer"]),
+    ("sweep-unknown-field", ["sweep", "{sweep-unknown.toml}", "--out", "{out}", "--quiet"],
+     "vary[0].field", ["motor[0].compare_modes", "unknown key"]),
     ("sweep-all-invalid", ["sweep", "{sweep-invalid.toml}", "--out", "{out}", "--quiet",
                            "--no-report"], "sweep", ["none of the 2 variants",
                                                      "simulation.substeps"]),  # fmt: skip

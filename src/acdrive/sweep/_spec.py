@@ -388,10 +388,12 @@ def _kind(value) -> str:
     return type(value).__name__
 
 
-def _check_value(field: str, where: str, value, base_data: dict, fixed: dict) -> None:
+def _check_value(field: str, where: str, value, base_data: dict, fixed: dict,
+                 field_where: str | None = None) -> None:  # fmt: skip
     """Refuse ``value`` for ``field`` (named ``where``) if the base scenario's loader refuses it
     for its type: the variant with that value alone is built, and an error naming ``field`` with
-    a type rule is raised on ``where``."""
+    a type rule is raised on ``where``; a ``field`` the loader does not know (an unknown key) is
+    refused on ``field_where`` (default ``where``), the entry that names it."""
     from acdrive.batch import apply_overrides, build_variant_setup
 
     if field.startswith(("part:", "initial:")):
@@ -403,6 +405,9 @@ def _check_value(field: str, where: str, value, base_data: dict, fixed: dict) ->
     except InputError as exc:
         if exc.field == field and exc.rule.startswith(_TYPE_RULES):
             raise InputError(where, f"{value!r} for {field}: {exc.rule}") from None
+        if exc.field == field and exc.rule.startswith("unknown key"):
+            raise InputError(field_where or where, f"{field} is not a field of the base "
+                             f"scenario (its loader: {exc.rule})") from None  # fmt: skip
 
 
 def _check_values(vary: tuple[Vary, ...], fixed: dict, base_data: dict) -> None:
@@ -427,13 +432,15 @@ def _check_values(vary: tuple[Vary, ...], fixed: dict, base_data: dict) -> None:
             except InputError as exc:
                 raise InputError(f"vary[{i}].field", exc.rule) from None
         if v.values is None:
-            _check_value(v.field, f"vary[{i}].low", v.low, base_data, scenario_fixed)
+            _check_value(v.field, f"vary[{i}].low", v.low, base_data, scenario_fixed,
+                         f"vary[{i}].field")  # fmt: skip
             continue
         kinds: dict[str, int] = {}
         for j, value in enumerate(v.values):
             kinds.setdefault(_kind(value), j)
         for j in kinds.values():
-            _check_value(v.field, f"vary[{i}].values[{j}]", v.values[j], base_data, scenario_fixed)
+            _check_value(v.field, f"vary[{i}].values[{j}]", v.values[j], base_data, scenario_fixed,
+                         f"vary[{i}].field")  # fmt: skip
         if len(kinds) > 1:
             j = sorted(kinds.values())[1]
             raise InputError(
