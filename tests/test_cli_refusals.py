@@ -56,7 +56,8 @@ def files(tmp_path_factory) -> dict:
     """Name -> path of every file the table's command lines use."""
     folder = tmp_path_factory.mktemp("refusals")
     texts = {
-        "pm-pole-pairs.toml": _pm("pm-ipmsm-speed", ('machine = "ipmsm-2.2kw"\n', PM_MACHINE_PARAMS),
+        "pm-pole-pairs.toml": _pm("pm-ipmsm-speed",
+                                  ('machine = "ipmsm-2.2kw"\n', PM_MACHINE_PARAMS),
                                   (PM_LOAD, "")),  # fmt: skip
         "pm-encoder.toml": _pm("pm-ipmsm-speed", ("[simulation]", "[sensors]\n"
                                "encoder_counts_per_rev = 1e30\n\n[simulation]")),  # fmt: skip
