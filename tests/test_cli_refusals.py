@@ -207,8 +207,9 @@ ROWS = [
 
 @pytest.mark.parametrize(("argv", "field", "words"), [row[1:] for row in ROWS],
                          ids=[row[0] for row in ROWS])  # fmt: skip
-def test_refused_with_one_line_naming_what_was_typed(request, files, monkeypatch, capsys, argv,
-                                                     field, words):  # fmt: skip
+def test_refused_with_one_line_naming_what_was_typed(request, files, monkeypatch, capsys,
+                                                     tmp_path, argv, field, words):  # fmt: skip
+    monkeypatch.chdir(tmp_path)  # a command that is not refused writes its default output here
     row = request.node.callspec.id
     if row in WIRES:
         module, name = WIRES[row]
