@@ -170,6 +170,26 @@ def njit(function=None, **options):
     return lambda f: LazyKernel(f, options)
 
 
+def serial_twin(kernel: LazyKernel, name: str) -> LazyKernel:
+    """``kernel``'s Python function compiled with its options but without ``parallel``, under
+    the module-level name ``name``: for calls whose work is too small to pay for starting a
+    parallel region (the OpenMP workers wake, and spin after it ends). Its loops run in order;
+    every point's arithmetic is the kernel's. numba names a function's disk cache after its
+    qualified name and does not key it on ``parallel``: two dispatchers compiled from one
+    Python function would read and write the same cache entry, and whichever compiled first
+    would serve both; the renamed copy has its own."""
+    import types
+
+    function = kernel.py_func
+    twin = types.FunctionType(
+        function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
+    )
+    twin.__qualname__ = name
+    twin.__doc__ = function.__doc__
+    options = {k: v for k, v in kernel._options.items() if k != "parallel"}
+    return LazyKernel(twin, options)
+
+
 jit = njit(cache=True, error_model="numpy")
 
 #: the plant's right-hand side and its integrator: fast-math with ``FAST_MATH_FLAGS`` (no NaN/inf

@@ -15,7 +15,6 @@ from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.control._ss_frequency import (
     CANCEL_LIMIT,
     EIG_COND_LIMIT,
-    _hessenberg_points,
     _hessenberg_solve,
     _modal_sum,
     check_frequency_grid,
@@ -29,7 +28,6 @@ __all__ = [
     "LTIMatrix",
     "_canonical",
     "_group",
-    "_hessenberg_points",
     "_hessenberg_solve",
     "_modal_sum",
     "_real_section",

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._jit import njit, prange
+from acdrive._jit import njit, prange, serial_twin
 from acdrive.analysis._freqresp import LTI, check_frequency_grid, evaluate_ss
 from acdrive.analysis._plants import Plant2x2, as_plant
 from acdrive.control._lti import as_lti
@@ -49,7 +49,9 @@ def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
     G (rows, K, 2, 2) and the outputs (rows, K[, 2]): a row is one plant (speed) over the
     frequency grid. The controller values k (nk, K) repeat with the period of their rows: row r
     takes k[r % nk] (nk = 1: the same frequency grid at every speed). Rows run in parallel on all
-    cores; every output is written once, and each reciprocal is computed once per point."""
+    cores; every output is written once, and each reciprocal is computed once per point. A call
+    with one row or fewer than ``PARALLEL_MIN_POINTS`` points runs the serial twin
+    (``_icad_kernel_serial``), whose every point is the same arithmetic."""
     for r in prange(G.shape[0]):
         k1r, k2r = k1[r % k1.shape[0]], k2[r % k2.shape[0]]
         for j in range(G.shape[1]):
@@ -65,6 +67,16 @@ def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
             c[r, j, 0], c[r, j, 1] = c1, c2
             coupling[r, j, 0] = g12 * b * r2 * _reciprocal(1.0 + c1)
             coupling[r, j, 1] = g21 * a * r1 * _reciprocal(1.0 + c2)
+
+
+#: the same kernel without threads (its own cache entry, ``_jit.serial_twin``)
+_icad_kernel_serial = serial_twin(_icad_kernel, "_icad_kernel_serial")
+
+#: the fewest points a call must have to run its rows in parallel. A point costs about 30 ns on
+#: one core; starting a parallel region costs 60 us of CPU on quiet cores and milliseconds when
+#: other processes share them (the OpenMP workers wake, and spin after it ends), so a call of
+#: fewer points (0.3 ms of work) runs on the calling thread.
+PARALLEL_MIN_POINTS = 10_000
 
 
 def _derived(key: str, G, k1, k2, gamma, h, c) -> np.ndarray:
@@ -107,7 +119,9 @@ def _kernel_outputs(G, k1, k2):
         block[(2 * i + 1) * N : (2 * i + 3) * N].reshape(rows, K, 2) for i in range(3)
     )
     if N:
-        call_interruptible(_icad_kernel, G_rows, periodic(k1), periodic(k2), gamma, h, c, coupling)
+        # one row (a point evaluation) or a small grid: no parallel region
+        kernel = _icad_kernel if rows > 1 and N >= PARALLEL_MIN_POINTS else _icad_kernel_serial
+        call_interruptible(kernel, G_rows, periodic(k1), periodic(k2), gamma, h, c, coupling)
     two = shape + (2,)
     k1, k2 = np.broadcast_to(k1, shape), np.broadcast_to(k2, shape)
     G = G_rows.reshape(shape + (2, 2))

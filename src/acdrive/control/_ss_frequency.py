@@ -14,15 +14,20 @@ LU solve of (s I - A) X = B, backward stable like the Hessenberg solve); models 
 ill-conditioned V (defective or nearly defective A) are evaluated by the Hessenberg path, which is
 as accurate as a dense solve. The compiled modal sum exists twice, threaded over models
 (``_modal_sum``) and serial for one model (``_modal_sum_one``), each with its own cache entry.
+
+The per-model part (decomposition, residues, Hessenberg form: ``_PreparedSS``) does not depend on
+the points; for a single model it is kept per process, keyed by the bits of A, B, C and D
+(``_prepared_model``), so a search that evaluates one model at one point after another pays it
+once. A kept preparation gives the same bits as a fresh one.
 """
 
 from __future__ import annotations
 
-import types
+import functools
 
 import numpy as np
 
-from acdrive._jit import njit, prange
+from acdrive._jit import njit, prange, serial_twin
 from acdrive.errors import InputError, call_interruptible
 
 #: Models whose eigenvector matrix has a larger condition number use the Hessenberg path.
@@ -60,23 +65,8 @@ def _modal_sum(s, lam, R, D, limit, out, lost):
     return out
 
 
-def _renamed(function, name):
-    """A copy of a plain function under another name. Numba names a function's disk cache after
-    its qualified name and does not key it on ``parallel``: two dispatchers compiled from one
-    Python function would read and write the same cache entry, and whichever compiled first
-    would serve both."""
-    twin = types.FunctionType(
-        function.__code__, function.__globals__, name, function.__defaults__, function.__closure__
-    )
-    twin.__qualname__ = name
-    twin.__doc__ = function.__doc__
-    return twin
-
-
 #: the same loop compiled without threads, for a single model (its own cache entry)
-_modal_sum_one = njit(cache=True, error_model="numpy")(
-    _renamed(_modal_sum.py_func, "_modal_sum_one")
-)
+_modal_sum_one = serial_twin(_modal_sum, "_modal_sum_one")
 
 
 @njit(cache=True, error_model="numpy")
@@ -124,21 +114,90 @@ def _hessenberg_solve(s, H, QB, CQ, D, out):
     return out
 
 
-def _hessenberg_points(A, B, C, D, s) -> np.ndarray:
-    """G(s) of one model at points s by the Hessenberg path, shape (k, p, m)."""
+def _hessenberg_form(A, B, C, D) -> tuple:
+    """One model's data for ``_hessenberg_solve``: H = Q^T A Q and Q^T B, C Q, D, each with a
+    leading batch axis of one."""
     import scipy.linalg  # only when a model needs the Hessenberg path
 
     H, Q = scipy.linalg.hessenberg(A, calc_q=True)
-    out = np.empty((1, s.size) + D.shape, dtype=complex)
-    _hessenberg_solve(
-        s,
+    return (
         np.ascontiguousarray(H)[None],
         (Q.T @ B).astype(complex)[None],
         (C @ Q).astype(complex)[None],
         np.ascontiguousarray(D, dtype=float)[None],
-        out,
     )
-    return out[0]
+
+
+class _PreparedSS:
+    """What ``evaluate_ss`` computes once per batch of models, before any point: the modal
+    residues of the models with a well-conditioned eigenvector matrix, the Hessenberg form of
+    the others (module docstring). ``at(s)`` is G at points s, shape (nb, k, p, m)."""
+
+    def __init__(self, A2, B2, C2, D2):
+        nb, n, _ = A2.shape
+        p, m = D2.shape[-2:]
+        self.A2, self.B2, self.C2, self.D2 = A2, B2, C2, D2
+        lam, V = np.linalg.eig(A2)
+        cond = np.linalg.cond(V)
+        self.good = good = np.isfinite(cond) & (cond < EIG_COND_LIMIT)
+        self.all_good = bool(np.all(good))  # then the modal sum writes straight into G
+        self.good_index = np.flatnonzero(good)
+        self.R = None
+        if self.good_index.size:
+            Vg = V[good]
+            CV = C2[good] @ Vg  # (b, p, n)
+            VB = np.linalg.solve(Vg, B2[good].astype(complex))  # (b, n, m)
+            self.R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(
+                -1, n, p * m
+            )
+            self.lam = np.ascontiguousarray(lam[good])
+            self.Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
+        self.hessenberg = {
+            b: _hessenberg_form(A2[b], B2[b], C2[b], D2[b]) for b in np.flatnonzero(~good)
+        }
+
+    def at(self, s) -> np.ndarray:
+        nb, n, _ = self.A2.shape
+        p, m = self.D2.shape[-2:]
+        G = np.empty((nb, s.size, p, m), dtype=complex)
+        R = self.R
+        if R is not None:
+            modal = (
+                G.reshape(nb, s.size, p * m)
+                if self.all_good
+                else np.empty((R.shape[0], s.size, p * m), complex)
+            )
+            lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
+            # one model (a controller's response): the serial twin, no thread start-up
+            modal_sum = _modal_sum if R.shape[0] > 1 else _modal_sum_one
+            call_interruptible(modal_sum, s, self.lam, R, self.Dg, CANCEL_LIMIT, modal, lost)
+            if not self.all_good:
+                G[self.good] = modal.reshape(-1, s.size, p, m)
+            gb, k = np.nonzero(lost)
+            if gb.size:  # every such point at once: C (s I - A)^-1 B + D by a batched LU solve
+                b = self.good_index[gb]
+                M = s[k, None, None] * np.eye(n) - self.A2[b]
+                X = np.linalg.solve(M, self.B2[b].astype(complex))
+                G[b, k] = self.C2[b] @ X + self.D2[b]
+        for b, form in self.hessenberg.items():
+            out = np.empty((1, s.size, p, m), dtype=complex)
+            _hessenberg_solve(s, *form, out)
+            G[b] = out[0]
+        return G
+
+
+#: how many single models ``_prepared_model`` keeps, and the most states a kept model has
+PREPARED_MODELS = 64
+PREPARED_MAX_STATES = 64
+
+
+@functools.lru_cache(maxsize=PREPARED_MODELS)
+def _prepared_model(key: tuple) -> _PreparedSS:
+    """The preparation of one model, kept per process: root finding and margins evaluate the
+    same plant and controllers at one point after another. ``key``: each matrix's shape and
+    bytes (float64), so equal bits give the same preparation and any changed bit a new one."""
+    A, B, C, D = (np.frombuffer(data, dtype=float).reshape(shape).copy() for shape, data in key)
+    return _PreparedSS(A[None], B[None], C[None], D[None])
 
 
 def evaluate_ss(A, B, C, D, s) -> np.ndarray:
@@ -146,6 +205,8 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
 
     A: (..., n, n), B: (..., n, m), C: (..., p, n), D: (..., p, m) (same leading batch shape);
     s: complex points, shape (k,). Returns shape (..., k, p, m). (For a discrete model, s = z.)
+    The per-model work (eigen- or Hessenberg decomposition, residues) of a single model is done
+    once per process for the same bits of A, B, C, D (``_prepared_model``).
     """
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
@@ -158,44 +219,15 @@ def evaluate_ss(A, B, C, D, s) -> np.ndarray:
     out_shape = batch + (s.size, p, m)
     if n == 0:
         return np.broadcast_to(D[..., None, :, :], out_shape).astype(complex)
+    if A.ndim == B.ndim == C.ndim == D.ndim == 2 and n <= PREPARED_MAX_STATES:
+        key = tuple((M.shape, np.ascontiguousarray(M).tobytes()) for M in (A, B, C, D))
+        return _prepared_model(key).at(s).reshape(out_shape)
     A2 = A.reshape(-1, n, n)
     nb = A2.shape[0]
     B2 = np.broadcast_to(B, batch + (n, m)).reshape(nb, n, m)
     C2 = np.broadcast_to(C, batch + (p, n)).reshape(nb, p, n)
     D2 = np.ascontiguousarray(np.broadcast_to(D, batch + (p, m)).reshape(nb, p, m))
-    G = np.empty((nb, s.size, p, m), dtype=complex)
-    lam, V = np.linalg.eig(A2)
-    cond = np.linalg.cond(V)
-    good = np.isfinite(cond) & (cond < EIG_COND_LIMIT)
-    if np.any(good):
-        Vg = V[good]
-        CV = C2[good] @ Vg  # (b, p, n)
-        VB = np.linalg.solve(Vg, B2[good].astype(complex))  # (b, n, m)
-        R = (CV.transpose(0, 2, 1)[:, :, :, None] * VB[:, :, None, :]).reshape(-1, n, p * m)
-        all_good = bool(np.all(good))  # then write straight into G (no copy)
-        modal = (
-            G.reshape(nb, s.size, p * m)
-            if all_good
-            else np.empty((R.shape[0], s.size, p * m), complex)
-        )
-        lost = np.zeros((R.shape[0], s.size), dtype=np.bool_)
-        Dg = np.ascontiguousarray(D2[good].reshape(-1, p * m))
-        # one model (a controller's response): the serial twin, no thread start-up
-        modal_sum = _modal_sum if R.shape[0] > 1 else _modal_sum_one
-        call_interruptible(
-            modal_sum, s, np.ascontiguousarray(lam[good]), R, Dg, CANCEL_LIMIT, modal, lost
-        )
-        if not all_good:
-            G[good] = modal.reshape(-1, s.size, p, m)
-        gb, k = np.nonzero(lost)
-        if gb.size:  # every such point at once: C (s I - A)^-1 B + D by a batched LU solve
-            b = np.flatnonzero(good)[gb]
-            M = s[k, None, None] * np.eye(n) - A2[b]
-            X = np.linalg.solve(M, B2[b].astype(complex))
-            G[b, k] = C2[b] @ X + D2[b]
-    for b in np.flatnonzero(~good):
-        G[b] = _hessenberg_points(A2[b], B2[b], C2[b], D2[b], s)
-    return G.reshape(out_shape)
+    return _PreparedSS(A2, B2, C2, D2).at(s).reshape(out_shape)
 
 
 def check_frequency_grid(w, name: str = "w") -> np.ndarray:
