@@ -49,7 +49,7 @@ COMMANDS = {
     "parts": "list the built-in part kinds, or describe one (parameters, states, ports, units)",
     "bench": "benchmark suite: speed ratios against motulator and gym-electric-motor (both "
     "sides timed in interleaved process-CPU-time windows, with spread and load) with both "
-    "sides' accuracy, and the ICAD timing",
+    "sides' accuracy, and the ICAD timings (grid, point, `reproduce icad`)",
 }
 COMMAND_MODULES = tuple(COMMANDS)
 

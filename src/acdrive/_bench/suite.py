@@ -7,7 +7,11 @@ Cases (``CASES``; ``--only`` picks some):
 * ``motulator_pwm``: the same drive with switching PWM -> ``ratio_vs_motulator_pwm``;
 * ``gem_dfim``: the open-loop DFIM against gym-electric-motor 3.0.3 (``_bench.gem_dfim``) ->
   ``ratio_vs_gem``;
-* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``;
+* ``icad``: the full ICAD over 100 speeds x 2,000 frequencies (``_bench.icad``) -> ``icad_ms``,
+  and one ICAD point evaluation's CPU time (the analysis's root finding and margins) ->
+  ``icad_point_cpu_us``;
+* ``reproduce_icad``: ``acdrive reproduce icad`` as whole processes, empty cache then warm
+  (``_bench.reproduce_icad``) -> ``reproduce_icad_cpu_s``;
 * ``first_result``: the first-result race against motulator, whole processes from a clean start,
   acdrive with an empty and with a warm cache (``_bench.first_result``);
 * ``command``, ``compile_free``, ``batch``, ``loop_speed``: the other measurements behind issue
@@ -46,6 +50,7 @@ CASES = (
     "motulator_pwm",
     "gem_dfim",
     "icad",
+    "reproduce_icad",
     "first_result",
     "command",
     "compile_free",
@@ -60,6 +65,10 @@ TARGETS = {
     "ratio_vs_motulator_pwm_min": 300.0,
     "ratio_vs_gem_min": 300.0,
     "icad_ms_max": 20.0,
+    # one point costs about 0.1 ms of CPU; a parallel region started per point costs 0.2 to
+    # 20 ms, depending on how busy the cores are
+    "icad_point_cpu_us_max": 1000.0,
+    "reproduce_icad_cpu_s_max": 20.0,
     "errors": "acdrive's current and speed errors no larger than the peer's in every matched "
     "case, against the tightest reference computed for both (the extended-precision one when "
     "present, else Radau rtol 1e-10 within its own resolution)",
@@ -77,6 +86,7 @@ FULL = {
     "solo_window_cpu_s": 1.0,
     "min_calibration_cpu_s": 0.1,
     "icad_repeat": 7,
+    "reproduce_icad_rounds": 3,
     "extended_substeps": 4,
     "race_rounds": 3,
     "race_model_s": 1.5,
@@ -94,6 +104,7 @@ QUICK = {
     "solo_window_cpu_s": 0.2,
     "min_calibration_cpu_s": 0.05,
     "icad_repeat": 3,
+    "reproduce_icad_rounds": 1,
     "extended_substeps": 4,
     "race_rounds": 2,
     "race_model_s": 1.5,
@@ -214,6 +225,10 @@ def run_suite(options: Options) -> dict:
             from acdrive._bench.icad import run_icad
 
             report["cases"][name] = run_icad(settings["icad_repeat"])
+        elif name == "reproduce_icad":
+            from acdrive._bench.reproduce_icad import reproduce_icad
+
+            report["cases"][name] = reproduce_icad(settings["reproduce_icad_rounds"], say)
         else:
             _run_target_case(name, report, settings, options, say)
     report["host"]["load_average_at_end"] = load_average()
@@ -315,6 +330,10 @@ def summarise(report: dict) -> None:
     if "gem_dfim" in cases:
         report["ratio_vs_gem_env_step"] = cases["gem_dfim"].get("ratio_env_step")
     report["icad_ms"] = cases["icad"]["icad_ms"] if "icad" in cases else None
+    points = cases.get("icad", {}).get("points")
+    report["icad_point_cpu_us"] = points["cpu_us_per_point"]["median"] if points else None
+    warm = cases.get("reproduce_icad", {}).get("warm_cpu_s")
+    report["reproduce_icad_cpu_s"] = warm["median"] if warm else None
     report["load_rule"] = LOAD_RULE
     report["warnings"] = [f"{k}: {v}" for k, v in report["load_warnings"].items()]
     report["ratio_targets"] = TARGETS
@@ -334,6 +353,10 @@ def summarise(report: dict) -> None:
 
 def _at_least(value, bound):
     return None if value is None else bool(value >= bound)
+
+
+def _at_most(value, bound):
+    return None if value is None else bool(value <= bound)
 
 
 def target_checks(report: dict) -> dict:
@@ -356,6 +379,15 @@ def target_checks(report: dict) -> dict:
     if "icad" in cases:
         out[f"icad_at_most_{TARGETS['icad_ms_max']:g}_ms"] = bool(
             report["icad_ms"] <= TARGETS["icad_ms_max"]
+        )
+        limit = TARGETS["icad_point_cpu_us_max"]
+        out[f"icad_point_at_most_{limit:g}_cpu_us"] = _at_most(
+            report.get("icad_point_cpu_us"), limit
+        )
+    if "reproduce_icad" in cases:
+        limit = TARGETS["reproduce_icad_cpu_s_max"]
+        out[f"reproduce_icad_at_most_{limit:g}_cpu_s"] = _at_most(
+            report.get("reproduce_icad_cpu_s"), limit
         )
     return out
 
@@ -400,6 +432,17 @@ def table(report: dict) -> str:
     lines += race_lines(report["cases"].get("first_result"))
     if report.get("icad_ms") is not None:
         lines.append(f"icad: {report['icad_ms']:.1f} ms (full ICAD, 100 x 2,000)")
+    if report.get("icad_point_cpu_us") is not None:
+        lines.append(f"icad point: {report['icad_point_cpu_us']:.0f} CPU-us per point (median)")
+    repro = report["cases"].get("reproduce_icad")
+    if repro and "warm_cpu_s" in repro:
+        w, first = repro["warm_cpu_s"], repro["empty_cache"]
+        lines.append(
+            f"reproduce icad, whole process: warm {w['median']:.1f} CPU-s "
+            f"({w['min']:.1f}-{w['max']:.1f}), empty cache {first['cpu_s']:.1f} CPU-s"
+        )
+    elif repro:
+        lines.append(f"reproduce icad not measured: {repro['not_measured']}")
     lines.append(
         "ratios: median over interleaved CPU-time rounds (min-max); current errors "
         "relative to the peak, against the tightest reference"

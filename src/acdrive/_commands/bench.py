@@ -1,5 +1,5 @@
 """``acdrive bench``: the benchmark suite (``acdrive._bench.suite``) against motulator 0.18 and
-gym-electric-motor 3.0.3, measured in one run on this machine, plus the ICAD timing."""
+gym-electric-motor 3.0.3, measured in one run on this machine, plus the ICAD timings."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ def register(subparsers):
         "bench",
         help="benchmark suite: speed ratios against motulator and gym-electric-motor (both "
         "sides timed in interleaved process-CPU-time windows, with spread and load) with both "
-        "sides' accuracy, and the ICAD timing",
+        "sides' accuracy, and the ICAD timings (grid, point, `reproduce icad`)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON document to stdout")
     p.add_argument("--quick", action="store_true", help="short model times (a smoke test)")
