@@ -134,7 +134,7 @@ class _PreparedSS:
     the others (module docstring). ``at(s)`` is G at points s, shape (nb, k, p, m)."""
 
     def __init__(self, A2, B2, C2, D2):
-        nb, n, _ = A2.shape
+        n = A2.shape[-1]
         p, m = D2.shape[-2:]
         self.A2, self.B2, self.C2, self.D2 = A2, B2, C2, D2
         lam, V = np.linalg.eig(A2)
