@@ -65,9 +65,9 @@ TARGETS = {
     "ratio_vs_motulator_pwm_min": 300.0,
     "ratio_vs_gem_min": 300.0,
     "icad_ms_max": 20.0,
-    # one point costs about 0.1 ms of CPU; a parallel region started per point costs 0.2 to
-    # 20 ms, depending on how busy the cores are
-    "icad_point_cpu_us_max": 1000.0,
+    # a point costs 75-80 CPU-us (load average 2-7 on 2 cores); with a parallel region started
+    # per point it cost 180-1300 CPU-us at load 2.4 and 4,000-6,000 at load 5-8
+    "icad_point_cpu_us_max": 300.0,
     "reproduce_icad_cpu_s_max": 20.0,
     "errors": "acdrive's current and speed errors no larger than the peer's in every matched "
     "case, against the tightest reference computed for both (the extended-precision one when "
