@@ -73,8 +73,8 @@ def _icad_kernel(G, k1, k2, gamma, h, c, coupling):
 _icad_kernel_serial = serial_twin(_icad_kernel, "_icad_kernel_serial")
 
 #: the fewest points a call must have to run its rows in parallel. A point costs about 30 ns on
-#: one core; starting a parallel region costs 60 us of CPU on quiet cores and milliseconds when
-#: other processes share them (the OpenMP workers wake, and spin after it ends), so a call of
+#: one core; starting a parallel region cost 60 CPU-us and more, milliseconds when other
+#: processes shared the cores (the OpenMP workers wake, and spin after it ends), so a call of
 #: fewer points (0.3 ms of work) runs on the calling thread.
 PARALLEL_MIN_POINTS = 10_000
 
