@@ -41,6 +41,9 @@ OPTIONS = {
     "link_voltage_v": ("cage-im",),
 }
 
+#: the Python arguments of the injection window -> the options that set them
+WINDOW_OPTIONS = {"base_frequency": "--base-frequency-hz", "settle": "--settle-s"}
+
 
 def _flag(name: str) -> str:
     return "--" + name.replace("_", "-")
@@ -318,7 +321,6 @@ def run_kind(args, target) -> int:
     print the table and write the file."""
     from acdrive._commands._identify_table import print_table
     from acdrive._commands._options import typed_names
-    from acdrive._commands.identify import WINDOW_OPTIONS
     from acdrive.identify._fit import FitNotConverged
     from acdrive.identify._params_file import estimates_text, write_params
 

@@ -224,11 +224,8 @@ def _json(result, path, no_load=None) -> dict:
     return out
 
 
-#: the Python arguments of the injection window -> the options that set them
-WINDOW_OPTIONS = {"base_frequency": "--base-frequency-hz", "settle": "--settle-s"}
-
-
 def run(args) -> int:
+    from acdrive._commands._identify_kinds import WINDOW_OPTIONS
     from acdrive._commands._options import typed_names
     from acdrive._commands._table import format_value
     from acdrive.identify._experiment import StandstillPlan
