@@ -15,8 +15,10 @@ scale alike, so the MTPA and field-weakening formulas below read the same in bot
 long as psi_f and the currents are taken in the same one.
 
 **MTPA** (the current angle that gives the most torque per ampere; L_q >= L_d). With
-i_d = -|i| sin(beta), i_q = |i| cos(beta), d tau / d beta = 0 gives
-2 (L_q - L_d) i_d^2 + psi_f i_d - (L_q - L_d) |i|^2 = 0, whose root with i_d <= 0 is
+i_d = -|i| sin(beta), i_q = |i| cos(beta), the torque (T) is n_p (psi_f |i| cos(beta) + (L_q - L_d)
+|i|^2 sin(beta) cos(beta)), and d tau / d beta = n_p (-psi_f |i| sin(beta) + (L_q - L_d) |i|^2
+cos(2 beta)) = 0 with |i| sin(beta) = -i_d and |i|^2 cos(2 beta) = |i|^2 - 2 i_d^2 gives
+2 (L_q - L_d) i_d^2 - psi_f i_d - (L_q - L_d) |i|^2 = 0, whose root with i_d <= 0 is
 
     i_d = (psi_f - sqrt(psi_f^2 + 8 (L_q - L_d)^2 |i|^2)) / (4 (L_q - L_d))           (MTPA)
         = -2 (L_q - L_d) |i|^2 / (psi_f + sqrt(psi_f^2 + 8 (L_q - L_d)^2 |i|^2)),
