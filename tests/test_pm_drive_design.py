@@ -157,3 +157,33 @@ def test_flux_limit_bounds_the_steady_state_voltage():
         psi = psi_max * rng.random() * np.exp(2j * np.pi * rng.random())
         assert abs(R * i + 1j * w_e * psi) <= margin * v_max * (1 + 1e-12)
     assert d.flux_limit(R, v_max, margin, i_max, 0.0) == np.inf
+
+
+@given(machines, st.floats(0.3, 3.0), st.floats(0.05, 0.5))
+def test_base_speed_solves_the_steady_state_voltage_equation(machine, current, drop):
+    """``base_speed``: the steady-state voltage R_s i + j w_e psi_dq of the MTPA point of full
+    current has magnitude margin v_max at w_e = n_p base_speed, and less at any lower speed;
+    ``voltage_bound_speed`` (the drive's bound R_s |i| + |w_e| |psi| of (V)) lies below it."""
+    L_d, ratio, psi_f, n_p = machine
+    L_q = ratio * L_d
+    i_max = current * psi_f / L_q
+    v_max, margin = 400.0, 0.9
+    R_s = drop * margin * v_max / i_max  # the resistive drop: 5 ... 50 % of the limit
+    w_b = d.base_speed(R_s, L_d, L_q, psi_f, n_p, i_max, v_max, margin)
+    i_d, i_q = d.mtpa_point(psi_f, L_d, L_q, i_max)
+    psi_dq = complex(L_d * i_d + psi_f, L_q * i_q)
+
+    def voltage(w_mech):
+        return abs(R_s * complex(i_d, i_q) + 1j * n_p * w_mech * psi_dq)
+
+    assert voltage(w_b) == pytest.approx(margin * v_max, rel=1e-12)
+    speeds = np.linspace(0.0, w_b, 1001)
+    assert max(voltage(w) for w in speeds[:-1]) < margin * v_max
+    bound = d.voltage_bound_speed(R_s, L_d, L_q, psi_f, n_p, i_max, v_max, margin)
+    assert R_s * i_max + n_p * bound * abs(psi_dq) == pytest.approx(margin * v_max, rel=1e-12)
+    assert bound <= w_b * (1 + 1e-12)
+
+
+def test_base_speed_refuses_a_resistive_drop_beyond_the_limit():
+    with pytest.raises(InputError, match="i_max"):
+        d.base_speed(10.0, 1e-3, 2e-3, 0.1, 4, 40.0, 400.0, 0.9)

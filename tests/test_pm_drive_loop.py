@@ -14,8 +14,8 @@ Three machines:
 
   - ``pm-ipmsm-speed``: below base speed, MTPA; the settled current angle is the closed-form MTPA
     angle, the torque formula with the plant's currents carries the nominal 14 N m load;
-  - ``pm-ipmsm-field-weakening``: at more than 2x the base speed (``_design.base_speed`` at the
-    scenario's current limit and link) with a load the drive can carry there
+  - ``pm-ipmsm-field-weakening``: at more than 2x the base speed (``_design.base_speed``, the
+    steady-state voltage equation, at the scenario's current limit and link) with a load the drive can carry there
     (``_design.available_torque``); the voltage command stays within margin V_dc / sqrt(2) (1 %
     for the loops' residual ripple), i_d < 0 and below its MTPA value, the plant's flux on the
     limit (V), the torque formula against the shaft balance.
@@ -415,3 +415,33 @@ def test_speed_outcome_headline_reads_the_summary(tmp_path):
     assert (tmp_path / "data.csv").exists() and (tmp_path / "signals.png").exists()
     first, _ = _entry.headline(outcome, summary)
     assert f"{summary['speed_final_to_base_ratio']:.3g} x base speed" in first
+
+
+def test_field_weakening_summary_gives_steady_values_beside_the_transient_extremes(
+    field_weakening,
+):
+    """The load step at 1.3 s drives i_d and the voltage command beyond their settled values:
+    the summary gives the final window's mean beside the run's extreme and its instant, and the
+    headline names an extreme before the final window a transient's."""
+    from acdrive.drives.pm import _entry
+
+    setup, result, summary, s = field_weakening
+    final = window(result.t, 1.8, 2.0 + 1e-9)
+    assert summary["final_window_from_s"] == pytest.approx(1.8, abs=setup.sample_time)
+    i_d_final = np.mean(s["i_dq"].real[final]) / K_PEAK
+    assert summary["i_d_final_a"] == pytest.approx(i_d_final, rel=1e-12)
+    v_lim = setup.voltage_margin * setup.V_dc / math.sqrt(2)
+    use = np.abs(s["v_dq_wanted"]) / v_lim
+    assert summary["voltage_use_final"] == pytest.approx(np.mean(use[final]), rel=1e-12)
+    assert summary["voltage_use_max"] == pytest.approx(np.max(use), rel=1e-12)
+    load_at = next(t for t, value in setup.load if value != 0.0)  # the load step (1.3 s)
+    for key in ("i_d_min_time_s", "voltage_use_max_time_s"):
+        assert load_at <= summary[key] < summary["final_window_from_s"]
+    assert summary["i_d_min_a"] < summary["i_d_final_a"]
+    assert summary["voltage_use_max"] > summary["voltage_use_final"]
+    rows = dict(_entry.headline(_entry.PMOutcome(setup, {"main": result}, summary), summary)[1])
+    assert "final" in rows["d current (phase peak)"]
+    assert "(transient, t = " in rows["d current (phase peak)"]
+    assert "(transient, t = " in rows["voltage command / m V_dc / sqrt(2)"]
+    assert summary["voltage_bound_speed_rad_s"] == pytest.approx(setup.voltage_bound_speed)
+    assert summary["base_speed_rad_s"] == pytest.approx(setup.base_speed)

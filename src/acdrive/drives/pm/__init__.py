@@ -37,6 +37,7 @@ __all__, __getattr__, __dir__ = namespace(
         "operating_point": "._design",
         "available_torque": "._design",
         "base_speed": "._design",
+        "voltage_bound_speed": "._design",
         "magnet_flux": "._design",
         "BLY171D": "._machines",
         "IPMSM_2KW2": "._machines",

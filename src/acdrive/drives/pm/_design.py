@@ -48,7 +48,9 @@ a cos(phi) + b cos(2 phi) = 0, i.e. cos(phi_mtpv) = 2 b / (a + sqrt(a^2 + 8 b^2)
 is the point of that rising branch with the commanded torque (bisection on phi); if it needs more
 current than i_max, the reference moves along the ellipse to its intersection with the current
 circle |i| = i_max (bisection again: past the smallest-current point of the ellipse, |i| grows
-with phi). Below base speed the MTPA point already lies inside the ellipse and is taken as it is.
+with phi). Below ``voltage_bound_speed`` the MTPA point of full current already lies inside the
+ellipse and is taken as it is; (V) is conservative, so that speed lies a little below the
+machine's ``base_speed``, where the exact steady-state voltage of that point reaches m V_max.
 
 **Gains.** Current PI per axis by the internal model: with the cross terms and the back-EMF fed
 forward, each axis is L di/dt = v - R_s i, and K_P = alpha L, K_I = alpha R_s puts the PI's zero on
@@ -232,11 +234,37 @@ def available_torque(n_p, psi_f, L_d, L_q, i_max, psi_max):
     return torque(n_p, psi_f, L_d, L_q, i_d, i_q)
 
 
-def base_speed(R_s, L_d, L_q, psi_f, n_p, i_max, v_max, margin) -> float:
-    """Mechanical speed [rad/s] above which the MTPA point of full current i_max leaves the
-    voltage limit (V): |w_e| = (margin v_max - R_s i_max) / |psi_dq(MTPA at i_max)|, / n_p."""
+def voltage_bound_speed(R_s, L_d, L_q, psi_f, n_p, i_max, v_max, margin) -> float:
+    """Mechanical speed [rad/s] up to which the drive's voltage bound (V) admits the MTPA point of
+    full current i_max: |w_e| = (margin v_max - R_s i_max) / |psi_dq(MTPA at i_max)|, / n_p.
+    Above it the references (``operating_point``) leave MTPA at full current. (V) bounds
+    |R_s i + j w_e psi| by R_s |i| + |w_e| |psi|, so this speed lies below the machine's
+    ``base_speed`` (equal only when i_dq and j psi_dq are parallel)."""
     i_d, i_q = mtpa_point(psi_f, L_d, L_q, i_max)
     return (margin * v_max - R_s * i_max) / float(flux_magnitude(psi_f, L_d, L_q, i_d, i_q)) / n_p
+
+
+def base_speed(R_s, L_d, L_q, psi_f, n_p, i_max, v_max, margin) -> float:
+    """The machine's base speed [rad/s, mechanical]: the speed at which the steady-state voltage
+    v_dq = R_s i_dq + j w_e psi_dq (module docstring, "Voltage limit") of the MTPA point of full
+    current i_max reaches margin v_max. With a = R_s i_dq and b = j psi_dq,
+    |a + w_e b|^2 = (margin v_max)^2 is the quadratic |b|^2 w_e^2 + 2 Re(a conj b) w_e + |a|^2 -
+    (margin v_max)^2 = 0 in w_e, whose positive root, / n_p, is returned. Requires
+    R_s i_max < margin v_max (else no speed is reachable at full current)."""
+    limit = margin * v_max
+    if not R_s * i_max < limit:
+        raise InputError(
+            "i_max",
+            f"the resistive drop R_s i_max = {R_s * i_max:g} V (i_max = {i_max:g} A) must be below "
+            f"margin v_max = {limit:g} V for a base speed to exist",
+        )
+    i_d, i_q = mtpa_point(psi_f, L_d, L_q, i_max)
+    a = R_s * complex(i_d, i_q)
+    b = 1j * complex(L_d * i_d + psi_f, L_q * i_q)
+    bb = abs(b) ** 2
+    half_linear = (a * b.conjugate()).real
+    w_e = (-half_linear + math.sqrt(half_linear**2 - bb * (abs(a) ** 2 - limit**2))) / bb
+    return w_e / n_p
 
 
 @dataclass(frozen=True)

@@ -139,15 +139,30 @@ def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, st
     first = (
         f"{name}: final speed {summary['speed_final_rad_s']:.5g} rad/s = "
         f"{summary['speed_final_to_base_ratio']:.3g} x base speed "
-        f"({summary['base_speed_rad_s']:.5g} rad/s)"
+        f"({summary['base_speed_rad_s']:.5g} rad/s, steady-state voltage equation)"
+    )
+    bound = (
+        f"{summary['voltage_bound_speed_rad_s']:.5g} rad/s (the drive's conservative voltage "
+        "bound: its references leave MTPA at full current there)"
+    )
+    d_current = (
+        f"final {summary['i_d_final_a']:.4g} A; least over the run {summary['i_d_min_a']:.4g} A "
+        + _when(summary, "i_d_min_time_s")
+    )
+    voltage_use = (
+        f"final {summary['voltage_use_final']:.3g}; largest over the run "
+        f"{summary['voltage_use_max']:.3g} " + _when(summary, "voltage_use_max_time_s")
     )
     current = (
         f"{summary['current_peak_a']:.4g} A (limit {summary['current_limit_peak_a']:.4g} A, "
         "phase peak)"
     )
     rows = [
+        ("MTPA at full current until", bound),
         ("speed error, final", f"{summary['speed_error_final_rad_s']:.3g} rad/s"),
         ("current peak", current),
+        ("d current (phase peak)", d_current),
+        ("voltage command / m V_dc / sqrt(2)", voltage_use),
         ("torque, final", f"{summary['torque_final_n_m']:.4g} N m"),
         ("voltage command's margin, least", f"{summary['voltage_margin_min']:.3g}"),
         (
@@ -158,6 +173,14 @@ def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, st
         timing,
     ]
     return first, rows
+
+
+def _when(summary: dict, key: str) -> str:
+    """Where an extreme of the run lies: a transient's (before the final window) or the final
+    window's, with its instant."""
+    t = summary[key]
+    where = "transient" if t < summary["final_window_from_s"] else "in the final window"
+    return f"({where}, t = {t:.4g} s)"
 
 
 def _step_headline(name: str, summary: dict) -> tuple[str, list[tuple[str, str]]]:

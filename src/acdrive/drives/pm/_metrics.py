@@ -7,10 +7,16 @@ duration must allow). Currents are given as phase peaks (|i| / sqrt(3/2)); the v
 (negative: the current controller limited its command). Event totals are samples: the
 converter's limit (``saturated`` of the averaged converter, ``overmodulation`` of the inverter),
 the current controller's own limit |v| <= V_dc / sqrt(2), the reference's
-current and voltage limits and the speed controller's torque limit. The base speed is the
-setup's (``PMDriveSetup.base_speed``: ``_design.base_speed`` at the run's current limit, DC link
-and margin), and the speed ratio is the mean speed of the final window over it (above 1: the run
-ends in field weakening).
+current and voltage limits and the speed controller's torque limit. Two speeds mark the end of
+MTPA at full current (``PMDriveSetup``, at the run's current limit, DC link and margin): the
+machine's base speed (``base_speed_rad_s``, ``_design.base_speed``: the steady-state voltage
+equation) and the lower speed where the drive's conservative voltage bound (V) makes its
+references leave MTPA (``voltage_bound_speed_rad_s``, ``_design.voltage_bound_speed``); the
+speed ratio is the mean speed of the final window over the base speed (above 1: the run ends in
+field weakening). A figure over the whole run ("min", "max", "peak") is an extreme, often a
+transient's (a step's); its steady value is the "final" figure beside it: the d current and the
+voltage command's use of the references' limit m V_dc / sqrt(2) are given both ways, the
+extreme with its instant (``..._time_s``; before ``final_window_from_s``: a transient's).
 """
 
 from __future__ import annotations
@@ -48,6 +54,7 @@ def summary(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
     v_max = setup.V_dc / np.sqrt(2.0)
     margin = 1.0 - np.abs(s["v_dq_wanted"]) / v_max
     base = setup.base_speed
+    voltage_use = np.abs(s["v_dq_wanted"]) / (setup.voltage_margin * v_max)
     speed_final = float(np.mean(s["w"][final]))
     return {
         "speed_error_rms_rad_s": float(np.sqrt(np.mean(error**2))),
@@ -56,13 +63,20 @@ def summary(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
         "speed_max_rad_s": float(np.max(s["w"])),
         "speed_final_rad_s": speed_final,
         "base_speed_rad_s": float(base),
+        "voltage_bound_speed_rad_s": float(setup.voltage_bound_speed),
         "speed_final_to_base_ratio": speed_final / base,
         "current_peak_a": float(np.max(np.abs(s["i_s"])) / K_PEAK),
         "current_limit_peak_a": float(setup.i_max_peak),
         "i_d_min_a": float(np.min(s["i_dq"].real) / K_PEAK),
+        "i_d_min_time_s": float(t[np.argmin(s["i_dq"].real)]),
+        "i_d_final_a": float(np.mean(s["i_dq"].real[final]) / K_PEAK),
         "torque_final_n_m": float(np.mean(s["tau_e"][final])),
         "torque_peak_n_m": float(np.max(np.abs(s["tau_e"]))),
         "voltage_margin_min": float(np.min(margin)),
+        "voltage_use_max": float(np.max(voltage_use)),
+        "voltage_use_max_time_s": float(t[np.argmax(voltage_use)]),
+        "voltage_use_final": float(np.mean(voltage_use[final])),
+        "final_window_from_s": float(t[final][0]),
         "voltage_limited_fraction": float(np.mean(margin < 0.0)),
         **event_totals(result),
     }

@@ -16,6 +16,7 @@ from acdrive.drives.pm._design import (
     magnet_flux,
     mtpa_torque,
     require_salient_or_round,
+    voltage_bound_speed,
 )
 from acdrive.drives.pm._period import check_current_period
 from acdrive.drives.pm._size import check_run_size
@@ -158,13 +159,23 @@ class PMDriveSetup:
 
     @property
     def base_speed(self) -> float:
-        """Base speed [rad/s, mechanical] of the controller's machine at this current limit, DC
-        link and voltage margin: ``_design.base_speed`` (the MTPA point of full current reaches
-        margin V_dc / sqrt(2))."""
+        """The machine's base speed [rad/s, mechanical] for the controller's machine at this
+        current limit, DC link and voltage margin: ``_design.base_speed`` (the steady-state voltage
+        of the MTPA point of full current reaches margin V_dc / sqrt(2))."""
+        return self._at_full_current(base_speed)
+
+    @property
+    def voltage_bound_speed(self) -> float:
+        """Speed [rad/s, mechanical] above which the references leave MTPA at full current:
+        ``_design.voltage_bound_speed``, the drive's conservative voltage bound (V), a little
+        below ``base_speed``."""
+        return self._at_full_current(voltage_bound_speed)
+
+    def _at_full_current(self, speed_of) -> float:
         m = self.controller_machine
         v_max = self.V_dc / 2**0.5
-        return base_speed(m.R_s, m.L_d, m.L_q, magnet_flux(m.psi_m), m.n_p, self.i_max, v_max,
-                          self.voltage_margin)  # fmt: skip
+        return speed_of(m.R_s, m.L_d, m.L_q, magnet_flux(m.psi_m), m.n_p, self.i_max, v_max,
+                        self.voltage_margin)  # fmt: skip
 
     @property
     def carrier_samples(self) -> int:
