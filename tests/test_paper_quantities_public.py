@@ -18,6 +18,7 @@ from scipy.optimize import brentq
 from acdrive.analysis import (
     PAPER_PERTURBATION,
     PAPER_SPECS,
+    Perturbation,
     analyse,
     check_controller,
     compare_design_models,
@@ -201,7 +202,24 @@ def test_controller_20_on_the_perturbed_plant_of_sec_viii():
     for name, factor in (("R_s", 2.0), ("R_r", 2.0), ("L_s", 0.6), ("L_r", 0.6), ("L_m", 0.59)):
         assert getattr(p, name) == pytest.approx(factor * getattr(DELORENZO_IM_13, name))
     ch = analyse(plant_from_params(p, 375.0), PAPER_20, PAPER_20).channels[0]
-    assert ch.margins.crossover_rad_s == pytest.approx(3700.0, rel=0.025)
+    # the printed 'bandwidth' 3700 is not reached to the 1 % of the nominal 3350 (3770, +1.9 %);
+    # the factor L_m x 0.59 as printed stands for 0.585 ... 0.595, over which the crossover
+    # spans 3700 (the report's explanation)
+    assert abs(ch.margins.crossover_rad_s / 3700.0 - 1) > 0.01
+    ends = [
+        analyse(
+            plant_from_params(
+                Perturbation(R_s=2.0, R_r=2.0, L_s=0.6, L_r=0.6, L_m=f).apply(DELORENZO_IM_13),
+                375.0,
+            ),
+            PAPER_20,
+            PAPER_20,
+        )
+        .channels[0]
+        .margins.crossover_rad_s
+        for f in (0.585, 0.595)
+    ]
+    assert ends[0] < 3700.0 < ends[1]
     assert ch.margins.pm_deg == pytest.approx(77.0, abs=1.0)
     assert -ch.margins.gm_reduction_db == pytest.approx(20.0, abs=1.0)
     assert ch.kg_margins.pm_deg == pytest.approx(77.0, abs=1.0)

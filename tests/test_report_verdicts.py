@@ -446,3 +446,128 @@ def test_fig16_a_drifting_speed_is_not_settled_whatever_the_error():
 def test_fig16_slow_response_from_the_ramp_slopes():
     v, _ = _fig16_numbers(fig16_slope_pi_rad_s2=690.0)  # within 5 % of the ideal: not slow
     assert "its slow response is not (" in v.text
+
+
+# --- IM report: Fig. 13(c) amplitude change, Fig. 18 ringing ---------------------------------
+
+
+def _amplitude_verdict(before, after, predicted):
+    from acdrive._report.im.settings import TOLERANCES
+    from acdrive._report.im.verdicts import amplitude_change_verdict
+
+    n = {
+        "fig13_ref_amplitude_before_a": before,
+        "fig13_ref_amplitude_after_a": after,
+        "fig13_ref_amplitude_predicted_a": predicted,
+    }
+    return amplitude_change_verdict(n, TOLERANCES), TOLERANCES
+
+
+def test_fig13_amplitude_change_needs_a_change_and_the_torques_prediction():
+    t = _amplitude_verdict(1.0, 1.0, 1.0)[1]
+    step, fit = t["amplitude_change_rel"], t["amplitude_prediction_rel"]
+    v, _ = _amplitude_verdict(0.55, 0.55 * (1 + 1.01 * step), 0.55 * (1 + 1.01 * step))
+    assert v.holds and "changes at the load change" in v.text
+    assert "the change is the load's" in v.text
+    v, _ = _amplitude_verdict(0.55, 0.55 * (1 + 0.99 * step), 0.55 * (1 + 0.99 * step))
+    assert not v.holds and "does not change clearly" in v.text
+    # a clear change that the torque does not predict is not the load's
+    v, _ = _amplitude_verdict(0.55, 0.70, 0.70 / (1 + 1.01 * fit))
+    assert not v.holds and "not the predicted one" in v.text
+    v, _ = _amplitude_verdict(0.55, 0.70, 0.70 / (1 + 0.99 * fit))
+    assert v.holds
+    assert f"{100 * step:g} %" in v.text and f"{100 * fit:g} %" in v.text  # tolerances stated
+
+
+def _ringing_verdict(high, low, icad):
+    from acdrive._report.im.settings import TOLERANCES
+    from acdrive._report.im.verdicts import ringing_eliminated_verdict
+
+    n = {"step_ringing_high_ki_pi": high, "step_ringing_inner_pi": low, "step_ringing_icad": icad}
+    return ringing_eliminated_verdict(n, TOLERANCES), TOLERANCES
+
+
+def test_fig18_ringing_eliminated_flips_at_the_ratio_and_at_the_ringing_of_20():
+    r = _ringing_verdict(1, 1, 1)[1]["ringing_ratio"]
+    v, _ = _ringing_verdict(0.007, 0.007 * r * 1.01, 0.009)
+    assert v.holds and "rings less than the lower-gain inner PI" in v.text
+    v, _ = _ringing_verdict(0.007, 0.007 * r * 0.99, 0.009)
+    assert not v.holds and "not clearly less" in v.text
+    v, _ = _ringing_verdict(0.007, 0.02, 0.0069)  # rings more than (20): not eliminated
+    assert not v.holds and "and more than (20)" in v.text
+    assert f"threshold {r:g}" in v.text
+
+
+def test_ringing_is_the_rms_deviation_after_the_first_overshoot():
+    from acdrive.drives.cage_im._outputs import RINGING_AFTER_S, ringing
+
+    # a decaying cosine about 1: the mean square of A e^{-a t} cos(w t) over [t0, t1] is
+    # A^2 / (2 (t1 - t0)) [F(t0) - F(t1)] with the antiderivative of -e^{-2at} (1 + cos 2wt)
+    t = np.linspace(0.0, 0.2, 400001)
+    a, w, amp = 50.0, 2000.0, 0.3
+    y = 1.0 + amp * np.exp(-a * t) * np.cos(w * t)
+    t0, t1 = RINGING_AFTER_S, t[-1]
+
+    def F(x):
+        e = np.exp(-2 * a * x)
+        return e / (2 * a) + e * (2 * a * np.cos(2 * w * x) - 2 * w * np.sin(2 * w * x)) / (
+            4 * a**2 + 4 * w**2
+        )
+
+    mean_square = amp**2 / (2 * (t1 - t0)) * (F(t0) - F(t1))
+    assert ringing(t, y, 1.0) == pytest.approx(np.sqrt(mean_square), rel=1e-4)
+    assert ringing(t, np.ones_like(t), 1.0) == 0.0
+
+
+# --- ICAD report, sec. VIII: the perturbed crossover and Fig. 22's high gain --------------------
+
+
+def test_perturbed_crossover_is_judged_by_the_nominal_rule_and_explained_only_where_it_differs():
+    from acdrive._report.icad.common import BANDWIDTH_REL_TOL
+    from acdrive._report.icad.perturbed import CrossoverOverRounding, perturbed_crossover_note
+
+    inside = CrossoverOverRounding((0.585, 0.595), 3300.0, 4400.0, 0.5893)
+    outside = CrossoverOverRounding((0.585, 0.595), 3800.0, 4400.0, float("nan"))
+    near = 3700.0 * (1 + 0.99 * BANDWIDTH_REL_TOL)
+    text = perturbed_crossover_note({"(13)": near}, {"(13)": inside}, 3700.0)
+    assert text.startswith("agrees") and "L_m" not in text  # nothing to explain
+    far = 3700.0 * (1 + 1.01 * BANDWIDTH_REL_TOL)
+    text = perturbed_crossover_note({"(13)": far}, {"(13)": inside}, 3700.0)
+    assert text.startswith("differs") and f"tolerance {100 * BANDWIDTH_REL_TOL:g} %" in text
+    assert "which contains 3700; 3700 is reached at L_m x 0.5893 with (13)" in text
+    text = perturbed_crossover_note({"(13)": far}, {"(13)": outside}, 3700.0)
+    assert "which does not contain 3700: the rounding of the factor does not explain it" in text
+
+
+def test_the_crossover_over_the_rounding_of_the_lm_factor_brackets_and_reaches_the_printed_one():
+    """On the paper's problem: the factor found gives the printed crossover (checked through
+    ``analyse`` of the public API), and the printed 0.59 gives the crossover of the report."""
+    from acdrive._report.icad.perturbed import crossover_over_lm_rounding, perturbed_crossover
+    from acdrive.analysis import PAPER_PERTURBATION, Perturbation, analyse, plant_from_params
+    from acdrive.control import PAPER_20
+    from acdrive.machines import DELORENZO_IM_13
+
+    reach = crossover_over_lm_rounding(DELORENZO_IM_13, PAPER_20, 3700.0)
+    assert reach.factors == pytest.approx((0.585, 0.595), abs=1e-15)
+    assert reach.low < 3700.0 < reach.high and reach.contains_printed
+    f = reach.factor_at_printed
+    pert = Perturbation(R_s=2.0, R_r=2.0, L_s=0.6, L_r=0.6, L_m=f)
+    a = analyse(plant_from_params(pert.apply(DELORENZO_IM_13), 375.0), PAPER_20, PAPER_20)
+    assert a.channels[0].margins.crossover_rad_s == pytest.approx(3700.0, rel=1e-6)
+    nominal = analyse(
+        plant_from_params(PAPER_PERTURBATION.apply(DELORENZO_IM_13), 375.0), PAPER_20, PAPER_20
+    )
+    assert perturbed_crossover(DELORENZO_IM_13, PAPER_20, 0.59) == pytest.approx(
+        nominal.channels[0].margins.crossover_rad_s, rel=1e-9
+    )
+
+
+def test_fig22_high_gain_flips_at_20_db_for_either_function():
+    from acdrive._report.icad.perturbed import high_gain_note
+
+    ok = high_gain_note({"(13)": 23.0, "App.": 20.01}, {"(13)": 27.6, "App.": 27.7}, 20.0)
+    assert "c_i high (bound >= 20 dB" in ok and "k_i g_ii high" in ok
+    low = high_gain_note({"(13)": 23.0, "App.": 19.99}, {"(13)": 27.6, "App.": 27.7}, 20.0)
+    assert "c_i NOT high" in low
+    low = high_gain_note({"(13)": 23.0}, {"(13)": 19.9}, 20.0)
+    assert "k_i g_ii NOT high" in low

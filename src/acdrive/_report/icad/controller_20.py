@@ -22,6 +22,7 @@ import numpy as np
 from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
 from acdrive._report.icad.common import (
+    BANDWIDTH_REL_TOL,
     APPROX_GAIN_TOL_DB,
     PM_TOL_DEG,
     SPEEDS_002,
@@ -39,9 +40,6 @@ from acdrive.analysis._icad_frequency import icad_response
 from acdrive.analysis._plants import plant_from_params
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, IMParams
 
-#: The 'bandwidth' (crossover of c_i) quoted in the text for the nominal plant (3350 rad/s,
-#: sec. V-C).
-BANDWIDTH_REL_TOL = 0.01
 #: Structural gain margin of gamma h_j quoted with one decimal (3.4 dB, sec. V-C).
 GM_GAMMA_H_TOL_DB = 0.1
 

@@ -18,7 +18,7 @@ from acdrive._report.im.settings import (
     PMSG_FREQUENCIES,
     PMSG_SPEED,
     PRELOAD_WINDOW,
-    RINGING_FROM,
+    FIG13_BEFORE_LOAD_WINDOW,
     TOLERANCES,
 )
 from acdrive._verdicts import window_drift
@@ -82,14 +82,26 @@ def measure_couplings() -> dict[str, CouplingResult]:
     return {key: measure_coupling(s) for key, s in coupling_setups().items()}
 
 
-def _ringing(result) -> tuple[float, float]:
-    """RMS deviation of the alpha step response from its final value after ``RINGING_FROM``
-    (simulated, linear), per unit of the step."""
-    c = step_comparison(result)
-    late = c["t"] >= RINGING_FROM
-    sim = float(np.sqrt(np.mean((c["simulated"].real[late] - c["final_simulated"]) ** 2)))
-    lin = float(np.sqrt(np.mean((c["linear"][late, 0] - c["final_linear"]) ** 2)))
-    return sim, lin
+def reference_amplitude_change(result: IMDriveResult, t_load: float) -> dict:
+    """Fig. 13(c): the current reference's amplitude (phase peak) before the load change (mean
+    over the ``FIG13_BEFORE_LOAD_WINDOW`` before ``t_load``) and after it (the summary's steady
+    window at the end), and the amplitude after it that field orientation predicts from the
+    torque: the d reference is held (constant flux) and the q reference scales with the
+    electromagnetic torque (tau = n_P (L_m / L_r) psi_r i_q), so i_q after = i_q before x
+    tau_E after / tau_E before."""
+    before = (result.t >= t_load - FIG13_BEFORE_LOAD_WINDOW) & (result.t < t_load)
+    after = _steady_mask(result.t)
+    i_dq = result.signal("i_dq_ref") / math.sqrt(1.5)  # phase peak (Bodson (8))
+    tau = result.signal("tau_e")
+    d_before, q_before = float(np.mean(i_dq[before].real)), float(np.mean(i_dq[before].imag))
+    q_predicted = q_before * float(np.mean(tau[after])) / float(np.mean(tau[before]))
+    return {
+        "fig13_ref_amplitude_before_a": float(np.mean(np.abs(i_dq[before]))),
+        "fig13_ref_amplitude_after_a": float(np.mean(np.abs(i_dq[after]))),
+        "fig13_ref_amplitude_predicted_a": math.hypot(d_before, q_predicted),
+        "fig13_tau_e_before_n_m": float(np.mean(tau[before])),
+        "fig13_before_window_s": FIG13_BEFORE_LOAD_WINDOW,
+    }
 
 
 def _peak_modulation(outcome: IMOutcome) -> float:
@@ -157,6 +169,7 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
     _, n["fig13_speed_drift_rad_s"], n["fig13_steady_window_s"] = _steady_drift(
         outcomes["fig13"].main, "w"
     )
+    n.update(reference_amplitude_change(outcomes["fig13"].main, n["fig13_load_time_s"]))
     # Fig. 14
     sm = outcomes["fig14"].summary
     n["fig14_position_reference_rad"] = sm["position_reference_final_rad"]
@@ -227,7 +240,8 @@ def compute_numbers(outcomes: dict[str, IMOutcome], couplings: dict[str, Couplin
         n[f"step_overshoot_linear_delayed_{label}"] = float(np.max(delayed[:, 0]) - 1.0)
         n[f"step_coupling_peak_{label}"] = c["coupling_peak_simulated"]
         n[f"step_coupling_peak_linear_{label}"] = c["coupling_peak_linear"]
-        n[f"step_ringing_{label}"], n[f"step_ringing_linear_{label}"] = _ringing(result)
+        n[f"step_ringing_{label}"] = c["ringing_simulated"]
+        n[f"step_ringing_linear_{label}"] = c["ringing_linear"]
     # Fig. 23
     o = outcomes["fig23"]
     for k in targets.PERTURBATION_FACTORS:

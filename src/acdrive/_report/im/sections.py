@@ -5,10 +5,11 @@ Amezquita-Brooks et al., secs. VI-VIII, written from the numbers, the verdicts a
 from __future__ import annotations
 
 from acdrive._report import icad_targets as targets
-from acdrive._report.im.settings import PMSG_BANDWIDTH, PRINTED, RINGING_FROM, TOLERANCES, pct
+from acdrive._report.im.settings import PMSG_BANDWIDTH, PRINTED, TOLERANCES, pct
 from acdrive._report.im.verdicts import coupling_delay_text, hold_explanation
 from acdrive._report.markdown import Row, Section, fmt
 from acdrive._verdicts import Verdict
+from acdrive.drives.cage_im._outputs import RINGING_AFTER_S
 
 
 def _coupling_table(rows: list[dict], delayed: bool) -> str:
@@ -157,6 +158,17 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
             "currents follow references (figure)",
             f"RMS error {pct(n['fig13_rms_error_rel'])} of the RMS reference",
             str(v["fig13_tracking"]),
+        ),
+        Row(
+            "current reference amplitude at the load change",
+            "Fig. 13(c), text",
+            "the load change 'reflects as an amplitude change in the references'",
+            f"{fmt(n['fig13_ref_amplitude_before_a'], 4)} A (mean over the "
+            f"{fmt(n['fig13_before_window_s'])} s before the load) -> "
+            f"{fmt(n['fig13_ref_amplitude_after_a'], 4)} A (last "
+            f"{fmt(n['fig13_steady_window_s'], 2)} s), phase peak; tau_E "
+            f"{fmt(n['fig13_tau_e_before_n_m'], 3)} -> {fmt(n['fig13_tau_e_n_m'], 4)} N m",
+            str(v["fig13_amplitude"]),
         ),
         Row(
             "phase-a modulation",
@@ -323,7 +335,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         "runs `im-step-responses` (machine of matrix (13) held at "
         f"{fmt(n['steps_speed_rad_s'])} rad/s, a 0.5 A step, switching SVPWM) beside the "
         "continuous linear closed loop of the ICAD model. Ringing = RMS deviation from the final "
-        f"value after {fmt(1e3 * RINGING_FROM)} ms, per unit of the step."
+        f"value after {fmt(1e3 * RINGING_AFTER_S)} ms, per unit of the step."
     )
     s.rows.append(
         Row(
@@ -354,6 +366,7 @@ def build_sections(n: dict, v: dict[str, Verdict], figures: dict[str, list]) -> 
         )
     s.rows += [
         Row("high-K_I PI vs (20)", "Fig. 18", "PI overshoot larger", "", str(v["fig18_overshoot"])),
+        Row("ringing of the high-K_I PI", "Fig. 18", "eliminates the ringing of lower gains", "", str(v["fig18_ringing"])),
         Row("(20) vs inner PI", "Fig. 20", "(20) overshoot higher", "", str(v["fig20_overshoot"])),
         Row("ringing of the inner PI", "Fig. 20", "rings; (20) does not", "", str(v["fig20_ringing"])),
     ]  # fmt: skip

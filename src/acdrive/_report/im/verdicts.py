@@ -79,6 +79,7 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
     v["fig13_tracking"] = at_most(
         n["fig13_rms_error_rel"], t["tracking_rel"], yes="low error", no="not low"
     )
+    v["fig13_amplitude"] = amplitude_change_verdict(n, t)
     v["fig13_modulation"] = at_most(
         n["fig13_peak_modulation"],
         1.0 - t["modulation_margin"],
@@ -189,6 +190,7 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
         yes="the inner PI rings more",
         no="the inner PI does not ring clearly more",
     )
+    v["fig18_ringing"] = ringing_eliminated_verdict(n, t)
     for label in ("icad", "inner_pi", "high_ki_pi"):
         v[f"step_linear_{label}"] = within_abs(
             n[f"step_overshoot_{label}"], n[f"step_overshoot_linear_{label}"], t["overshoot_abs"]
@@ -259,6 +261,55 @@ def compute_verdicts(n: dict, tol: dict | None = None) -> dict[str, Verdict]:
             ),
         )
     return v
+
+
+def amplitude_change_verdict(n: dict, t: dict) -> Verdict:
+    """Fig. 13(c): the load change "reflects as an amplitude change in the references". Holds
+    when the reference amplitude after the load differs from the one before by at least
+    ``t["amplitude_change_rel"]`` of it, and equals the field-oriented prediction from the
+    electromagnetic torques (``numbers.reference_amplitude_change``) within
+    ``t["amplitude_prediction_rel"]``: the change is the load's."""
+    before, after = n["fig13_ref_amplitude_before_a"], n["fig13_ref_amplitude_after_a"]
+    predicted = n["fig13_ref_amplitude_predicted_a"]
+    change = (after - before) / before
+    off = (after - predicted) / predicted
+    changes = abs(change) >= t["amplitude_change_rel"]
+    predicted_ok = abs(off) <= t["amplitude_prediction_rel"]
+    return Verdict(
+        changes and predicted_ok,
+        f"{'agrees' if changes and predicted_ok else 'differs'}: the reference amplitude "
+        f"{'changes' if changes else 'does not change clearly'} at the load change, "
+        f"{fmt(before, 4)} A -> {fmt(after, 4)} A ({fmt(100 * change, 3)} %, tolerance: at least "
+        f"{pct(t['amplitude_change_rel'])}); field orientation predicts {fmt(predicted, 4)} A "
+        f"from the torque (relative difference {fmt(100 * off, 2)} %, tolerance "
+        f"{pct(t['amplitude_prediction_rel'])}): "
+        + ("the change is the load's" if predicted_ok else "the change is not the predicted one"),
+    )
+
+
+def ringing_eliminated_verdict(n: dict, t: dict) -> Verdict:
+    """Fig. 18: the high-K_I PI "eliminates the ringing associated with lower gains around 300
+    rad/s". The lower-gain PI run beside it is the inner PI of (22) (K_I = 3.265e5 < 9e5).
+    Holds when the lower-gain PI rings at least ``t["ringing_ratio"]`` times as much as the
+    high-K_I PI (the rule of Fig. 20's ringing) and the high-K_I PI rings no more than (20),
+    which Fig. 20 calls "without the ringing"."""
+    high, low, icad = (
+        n["step_ringing_high_ki_pi"],
+        n["step_ringing_inner_pi"],
+        n["step_ringing_icad"],
+    )
+    ratio = low / high if high > 0 else float("inf")
+    less = ratio >= t["ringing_ratio"]
+    as_icad = high <= icad
+    ok = less and as_icad
+    return Verdict(
+        ok,
+        f"{'agrees' if ok else 'differs'}: the high-K_I PI rings "
+        f"{'less' if less else 'not clearly less'} than the lower-gain inner PI of (22) (ringing "
+        f"{fmt(high)} vs {fmt(low)}: ratio {fmt(ratio, 3)}, threshold {fmt(t['ringing_ratio'])}) "
+        f"and {'no more' if as_icad else 'more'} than (20), 'without the ringing' in Fig. 20 "
+        f"({fmt(icad)})",
+    )
 
 
 def overshoot_order(larger: float, smaller: float, tol: float, yes: str, no: str) -> Verdict:

@@ -101,10 +101,25 @@ def delayed_linear_step_response(
     return np.column_stack([np.interp(t, grid, out[:, j]) for j in range(2)])
 
 
+#: Ringing of a step response: the RMS deviation from its final value from this time [s] after
+#: the step on (past the first overshoot of loops of a few thousand rad/s, Amezquita-Brooks
+#: Figs. 18, 20), per unit of the step.
+RINGING_AFTER_S = 0.005
+
+
+def ringing(t, response, final) -> float:
+    """RMS of ``response - final`` over ``t >= RINGING_AFTER_S`` (``t`` from the step, the
+    response per unit of the step): how much a step response still rings after its first
+    overshoot."""
+    late = np.asarray(t) >= RINGING_AFTER_S
+    return float(np.sqrt(np.mean((np.asarray(response)[late] - final) ** 2)))
+
+
 def step_comparison(result: IMDriveResult) -> dict | None:
     """Simulated step response of the alpha current against the linear closed loop, both per
-    unit of the step, after the step: overshoots, final values, largest difference and the
-    largest coupling into i_beta (None unless the run is a current step on a held shaft)."""
+    unit of the step, after the step: overshoots, final values, ringing (``ringing``), largest
+    difference and the largest coupling into i_beta (None unless the run is a current step on a
+    held shaft)."""
     s = result.setup
     ref = s.current_reference
     if s.mode != "current" or ref is None or ref.waveform != "step" or s.mechanics.free:
@@ -116,6 +131,8 @@ def step_comparison(result: IMDriveResult) -> dict | None:
     t = result.t[after] - ref.start
     sim = result.phase_peak("i_s")[after] / ref.amplitude_pk
     lin = linear_step_response(s.plant, w, s.current_control.lti, t)
+    final_sim = float(np.mean(sim.real[t >= 0.9 * t[-1]]))
+    final_lin = float(np.mean(lin[t >= 0.9 * t[-1], 0]))
     return {
         "t": t,
         "simulated": sim,
@@ -123,8 +140,10 @@ def step_comparison(result: IMDriveResult) -> dict | None:
         "speed_rad_s": w,
         "overshoot_simulated": float(np.max(sim.real) - 1.0),
         "overshoot_linear": float(np.max(lin[:, 0]) - 1.0),
-        "final_simulated": float(np.mean(sim.real[t >= 0.9 * t[-1]])),
-        "final_linear": float(np.mean(lin[t >= 0.9 * t[-1], 0])),
+        "final_simulated": final_sim,
+        "final_linear": final_lin,
+        "ringing_simulated": ringing(t, sim.real, final_sim),
+        "ringing_linear": ringing(t, lin[:, 0], final_lin),
         "max_difference": float(np.max(np.abs(sim.real - lin[:, 0]))),
         "coupling_peak_simulated": float(np.max(np.abs(sim.imag))),
         "coupling_peak_linear": float(np.max(np.abs(lin[:, 1]))),
