@@ -571,3 +571,77 @@ def test_fig22_high_gain_flips_at_20_db_for_either_function():
     assert "c_i NOT high" in low
     low = high_gain_note({"(13)": 23.0}, {"(13)": 19.9}, 20.0)
     assert "k_i g_ii NOT high" in low
+
+
+# --- Bodson report: the regulated runs and the side effect, the R_S = 0 law, run figures ----------
+
+
+def _effect(mode, q_s, motor=0):
+    from acdrive.drives.dfim._converter_effect import SideEffect
+
+    return SideEffect(mode=mode, motor=motor, samples=100, q_s=q_s, q_com=0.0, tau_com=0.0,
+                      tau_e=0.0, q_tolerance=3.74, oscillation_rpm=0.0)  # fmt: skip
+
+
+def test_regulated_runs_sentence_counts_the_runs_that_hold_q_com():
+    from acdrive._report.bodson.discussion import Q_LOOP_SCENARIO, regulated_runs_sentence
+
+    effects = {
+        "bodson-step": [_effect("voltage", 15.0), _effect("current", 0.001)],
+        Q_LOOP_SCENARIO: [_effect("voltage", 0.5, k) for k in range(3)],
+    }
+    text = regulated_runs_sentence(effects)
+    # the voltage-command run of bodson-step is not regulated: 1 + 3 runs
+    assert text.startswith("of their 4 runs with the bench converter, 4 can be judged")
+    assert text.endswith("Q_S holds Q_COM in 4 of them: none of them shows the effect.")
+    effects[Q_LOOP_SCENARIO][1] = _effect("voltage", 3.74 * 1.01, 1)
+    text = regulated_runs_sentence(effects)
+    assert f"in 3 of them; it departs in `{Q_LOOP_SCENARIO}` (voltage, motor 2)." in text
+
+
+def test_the_law_with_rs_zero_everywhere_delivers_the_command_only_on_a_lossless_stator():
+    """With R_S -> 0 the listing's law (R_S = 0 in Z_S too) is exact: the torque equals the
+    command at every speed; on the 0.66 ohm motor it depends on the speed, while the law that
+    keeps R_S in Z_S gives the speed-independent closed form of (31)."""
+    import dataclasses
+    import math
+
+    from acdrive._report.bodson_listing import (
+        LISTING_SPEEDS_RPM,
+        lossless_everywhere_torque,
+        lossless_law_torque,
+    )
+    from acdrive.machines import BODSON_DFIM
+
+    w_e, v_s, tau = 2 * math.pi * 60, 11.1 * math.sqrt(1.5), 0.2
+    lossless = dataclasses.replace(BODSON_DFIM, R_s=1e-9)
+    for rpm in LISTING_SPEEDS_RPM:
+        w_m = rpm * math.pi / 30
+        assert lossless_everywhere_torque(lossless, w_e, w_m, v_s, tau) == pytest.approx(
+            tau, rel=1e-6
+        )
+    real = [
+        lossless_everywhere_torque(BODSON_DFIM, w_e, rpm * math.pi / 30, v_s, tau)
+        for rpm in LISTING_SPEEDS_RPM
+    ]
+    assert max(real) - min(real) > 0.01 * tau  # depends on the speed
+    assert real[0] < lossless_law_torque(BODSON_DFIM, w_e, v_s, tau) < tau
+
+
+def test_the_largest_speed_error_is_placed_in_the_settling_of_a_reference_step():
+    from acdrive._report.bodson.run_figures import largest_error_where
+
+    class Run:
+        t = np.arange(0.0, 1.0, 1e-3)
+
+        def reference_rpm(self):
+            return np.where(self.t < 0.8, 2700.0, 0.0)  # the reference steps to zero at 0.8 s
+
+        def tracking_mask(self):
+            return ~((self.t >= 0.8) & (self.t <= 0.85)) & (self.t >= 0.1)
+
+    where = largest_error_where(Run(), 0.8, [[0.8, 0.85]])
+    assert "reference change at 0.8 s (the reference goes from 2700 to 0 rpm)" in where
+    assert "it measures that change, not the tracking" in where
+    assert largest_error_where(Run(), 0.5, [[0.8, 0.85]]) == "where tracking is expected"
+    assert "not expected" in largest_error_where(Run(), 0.05, [[0.8, 0.85]])

@@ -50,6 +50,7 @@ def listing_rotor_voltage(
     v_s: float,
     tau_com: float,
     as_printed: bool = False,
+    stator_resistance: float | None = None,
 ) -> complex:
     """The rotor voltage (stator-voltage frame, v_S real) of the listing at the end of Bodson
     section IV (its ``vrc``), for torque command ``tau_com`` [N m] at shaft speed ``w_m`` [rad/s].
@@ -58,10 +59,12 @@ def listing_rotor_voltage(
     Z_MR = j w_r M and v_R = Z_R v_S / Z_MS - (Z_S Z_R - Z_MS Z_MR) w_e tau_COM / (Z_MS v_S n_P),
     i.e. (39) with Q_COM = 0. ``as_printed`` False takes the rotor frequency w_r of (11), the slip
     frequency w_e - n_P w_m; True takes the listing's printed ``ome*np*om`` = w_e n_P w_m
-    (a misprint)."""
+    (a misprint). ``stator_resistance`` replaces R_S in Z_S (0: the listing's "assuming R_S = 0"
+    taken everywhere)."""
     n_p = machine.n_p
     w_r = w_e * n_p * w_m if as_printed else w_e - n_p * w_m
-    z_s = machine.R_s + 1j * w_e * machine.L_s
+    r_s = machine.R_s if stator_resistance is None else stator_resistance
+    z_s = r_s + 1j * w_e * machine.L_s
     z_r = machine.R_r + 1j * w_r * machine.L_r
     z_ms = 1j * w_e * machine.M
     z_mr = 1j * w_r * machine.M
@@ -111,6 +114,19 @@ def lossless_law_torque_simulated(
     (``steady_state_currents``) and the torque of (9) (``electromagnetic_torque``)."""
     p = machine_vector(machine)
     v_r = law_39_rotor_voltage(machine, w_e, w_m, v_s, tau_com)
+    i_s, i_r = steady_state_currents(p, w_e, w_m, v_s, v_r)
+    return float(electromagnetic_torque(p, i_s, i_r))
+
+
+def lossless_everywhere_torque(
+    machine: DFIMParams, w_e: float, w_m: float, v_s: float, tau_com: float
+) -> float:
+    """The torque on ``machine`` (steady state (19), torque (9)) of the listing's rotor voltage
+    with R_S = 0 in Z_S as well: the law assuming R_S = 0 everywhere. Unlike the law that keeps
+    R_S in (20), it does not hold the stator current of (38), so the torque depends on the
+    speed ``w_m``."""
+    p = machine_vector(machine)
+    v_r = listing_rotor_voltage(machine, w_e, w_m, v_s, tau_com, stator_resistance=0.0)
     i_s, i_r = steady_state_currents(p, w_e, w_m, v_s, v_r)
     return float(electromagnetic_torque(p, i_s, i_r))
 
@@ -193,18 +209,33 @@ def listing_rows(machine: DFIMParams, w_e: float, v_s: float, tau_lim: float, ro
 
 def _shortfall_row(machine: DFIMParams, w_e: float, v_s: float, tau_com: float, is_limit: bool,
                    row) -> str:  # fmt: skip
-    """The torque the R_S = 0 law produces on ``machine`` at ``tau_com``, two ways."""
+    """The torque the R_S = 0 law produces on ``machine`` at ``tau_com``, two ways, and beside
+    it the torque of the law with R_S = 0 everywhere (``lossless_everywhere_torque``) over
+    LISTING_SPEEDS_RPM."""
     tau_e = lossless_law_torque(machine, w_e, v_s, tau_com)
     tau_e_ss = lossless_law_torque_simulated(machine, w_e, 0.0, v_s, tau_com)
     same = within_rel(
         tau_e_ss, tau_e, TORQUE_FORM_REL_TOL, yes="agrees", no="differs", floor=ROUNDOFF_FLOOR
     )
+    everywhere = [
+        lossless_everywhere_torque(machine, w_e, rpm * math.pi / 30.0, v_s, tau_com)
+        for rpm in LISTING_SPEEDS_RPM
+    ]
+    lo, hi = min(everywhere), max(everywhere)
+    below = sum(x < tau_e for x in everywhere)
+    delivered = sum(delivered_torque_verdict(x, tau_com).holds for x in everywhere)
     command = f"tau_LIM = {tau_com:.4f}" if is_limit else f"{tau_com:g}"
     return row(
         f"torque of the listing's R_S = 0 law on the R_S = {machine.R_s:g} ohm motor at "
         f"tau_COM = {command} N m",
         "(not printed; the listing assumes R_S = 0)",
-        f"{tau_e:.4f} N m (steady state (19): {tau_e_ss:.4f} N m)",
+        f"{tau_e:.4f} N m (steady state (19): {tau_e_ss:.4f} N m); with R_S = 0 everywhere "
+        f"(also in Z_S of v_R): {everywhere[0]:.4f} N m at standstill, {lo:.4f} ... "
+        f"{hi:.4f} N m over {LISTING_SPEEDS_RPM[0]:g}-{LISTING_SPEEDS_RPM[-1]:g} rpm",
         f"{delivered_torque_verdict(tau_e, tau_com)}: (31) loses n_P R_S i_S^2 / w_e "
-        f"= {tau_com - tau_e:.4f} N m; closed form vs steady state {same}",
+        f"= {tau_com - tau_e:.4f} N m; closed form vs steady state {same}. With R_S in Z_S, v_R "
+        "holds the current of (38) at any speed, so the torque does not depend on it; with "
+        f"R_S = 0 everywhere it does (range beside): below the value with R_S in Z_S at {below} "
+        f"of {len(everywhere)} speeds of the grid, the command delivered (tolerance "
+        f"{100 * TORQUE_DELIVERED_REL_TOL:g} %) at {delivered} of them",
     )

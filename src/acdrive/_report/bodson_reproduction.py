@@ -4,8 +4,9 @@
 runs the section IV experiments (built-in scenarios), and writes ``<out_dir>/bodson.md`` with the
 figures under ``<out_dir>/bodson/``. Regenerate the committed report with
 ``acdrive reproduce bodson --out docs/reproduction``. The sections are computed in
-``_report/bodson/``: ``numbers`` (sections II-III), ``experiments`` (section IV), ``verdicts``
-and ``discussion``; this module assembles them.
+``_report/bodson/``: ``numbers`` (sections II-III), ``experiments`` (section IV),
+``run_figures`` (each run's drive figures with what they measure), ``verdicts`` and
+``discussion``; this module assembles them.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from pathlib import Path
 from acdrive._report.bodson.discussion import discussion
 from acdrive._report.bodson.experiments import EXPERIMENTS, experiment_checks, run_experiment
 from acdrive._report.bodson.numbers import paper_numbers
+from acdrive._report.bodson.run_figures import run_figure_lines
 from acdrive._report.limit_cycle_summary import shown_summary
 
 
@@ -54,17 +56,7 @@ def write_report(out_dir: str | Path) -> Path:
             "",
             *experiment_checks(name, outcome, ideal),
         ]
-        keys = [
-            "speed_rms_error_tracking_rpm",
-            "speed_max_abs_error_whole_run_rpm",
-            "peak_rotor_current_a",
-            "peak_stator_current_a",
-            "peak_rotor_current_vc_a",
-            "peak_rotor_current_cc_a",
-            "speed_rms_error_tracking_vc_rpm",
-            "speed_rms_error_tracking_cc_rpm",
-        ]
-        lines += [f"- `{k}`: {summary[k]:.3f}" for k in keys if k in summary]
+        lines += run_figure_lines(outcome, summary)
         if len(summary.get("motors", [])) > 1:
             for k, motor in enumerate(summary["motors"]):
                 lines.append(
