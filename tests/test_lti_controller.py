@@ -239,13 +239,13 @@ def test_builtin_controllers_are_the_papers_and_the_icad_ones():
 @pytest.mark.slow
 def test_fig17_family_gains_solve_the_crossover_of_20():
     """The stored K_P give c_i the crossover of (20) at w_r = 375 (sec. VII), as re-solved."""
-    from acdrive._report.icad.pi_comparison import _pi_kp_for_crossover
+    from acdrive.analysis import pi_gain_for_crossover
 
     plant = plant_from_params(DELORENZO_IM_13, W_R)
     wc20 = analyse(plant, PAPER_20, PAPER_20, verify=False).channels[0].margins.crossover_rad_s
     for ki, kp, k in zip(FIG17_K_I, FIG17_K_P, FIG17_PI_FAMILY, strict=True):
         assert k.D[0, 0] == kp
-        assert _pi_kp_for_crossover(plant, ki, wc20) == pytest.approx(kp, rel=1e-9)
+        assert pi_gain_for_crossover(plant, ki, wc20) == pytest.approx(kp, rel=1e-9)
     pm = [analyse(plant, k, k, verify=False).channels[0].margins.pm_deg for k in FIG17_PI_FAMILY]
     assert pm[-1] < pm[0] - 40.0  # the high-integral-gain PI of Fig. 18 loses its margin
 

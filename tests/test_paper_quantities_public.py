@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize_scalar
 
 from acdrive.analysis import (
     PAPER_PERTURBATION,
@@ -26,12 +26,16 @@ from acdrive.analysis import (
     evaluate_ss,
     gm_min,
     hold_delay,
+    icad_coupling,
+    icad_coupling_peak,
     icad_quantities,
     im_dgamma_re_im,
     im_msf_at_rotor_speed,
     im_msf_closed_form,
     im_msf_magnitude_at_rotor_speed,
     im_msf_positive_crossing,
+    msf_positive_real_crossing,
+    pi_gain_for_crossover,
     plant_from_params,
     pmsg_msf,
     structure_conditions,
@@ -58,13 +62,16 @@ from acdrive.machines import (
     delta_z_coefficients,
     electrical_poles,
     electromagnetic_torque,
+    lossless_law_torque,
     machine_vector,
     params_from_stationary_matrix,
     rotor_current_for,
     rotor_voltage_for,
     shifted_delta_z_coefficients,
+    stator_current_lossless,
     stator_current_ss,
     steady_state_currents,
+    torque_limits_case1,
 )
 
 
@@ -297,3 +304,68 @@ def test_rotor_current_loop_gains_of_bodson_49():
     s = 1j * 37.0
     loop = (k_p + k_i / s) / (sg * p.L_r * s + r_t)
     assert loop == pytest.approx(a / s, rel=1e-12)
+
+
+# --- quantities the reports compute with helpers of their own, reached through public names --------
+
+
+def test_gamma_crossing_of_the_positive_real_axis_is_the_closed_form_f3():
+    """``msf_positive_real_crossing`` (the reports' crossing of gamma with the positive real axis)
+    equals the closed form F(3) of Ugalde-Loo (72)-(73) for the 300 W IM, and the 2 MW PMSG's
+    gamma does not cross it (Ugalde-Loo sec. 3.5: gamma(j w) real negative)."""
+    w3, g3 = im_msf_positive_crossing(UGALDE_IM_300W, 300.0)
+    x, wx = msf_positive_real_crossing(plant_from_params(UGALDE_IM_300W, 300.0))
+    assert wx == pytest.approx(w3, rel=1e-8) and x == pytest.approx(float(np.real(g3)), rel=1e-8)
+    assert printed(x, "0.6204")
+    for w_gen in (0.0, 78.5, 157.0):
+        x, wx = msf_positive_real_crossing(plant_from_params(PMSG_2MW, 2 * w_gen))
+        assert x == 0.0 and math.isnan(wx)
+
+
+def test_coupling_peak_of_10_is_the_maximum_of_10():
+    """``icad_coupling_peak``: the largest |(10)| of the DeLorenzo IM with (20) at 375 rad/s (the
+    IM report's injection frequency 379.3 rad/s and its (10) peak -18.85 dB) is the maximum of
+    |(10)| found by a bounded optimiser around it."""
+    w_peak, peak_db = icad_coupling_peak(DELORENZO_IM, 375.0, PAPER_20)
+    best = minimize_scalar(lambda w: -abs(icad_coupling(DELORENZO_IM, 375.0, PAPER_20, [w])[0]),
+                           bounds=(w_peak - 5, w_peak + 5), method="bounded",
+                           options={"xatol": 1e-6})  # fmt: skip
+    assert w_peak == pytest.approx(best.x, abs=0.1)  # the grid step is 0.1 rad/s
+    # within the grid step the peak is flat to second order: 1e-3 dB
+    assert peak_db == pytest.approx(20 * math.log10(-best.fun), abs=1e-3)
+    assert peak_db <= 20 * math.log10(-best.fun) + 1e-12
+    assert printed(w_peak, "379.3") and printed(peak_db, "-18.85")
+
+
+def test_pi_family_gains_are_those_of_equal_crossover_with_20():
+    """``pi_gain_for_crossover``: the K_P of each PI of Fig. 17 puts the crossover of c_i at that
+    of (20) (the built-in FIG17_K_P, to the bisection's tolerance)."""
+    plant = plant_from_params(DELORENZO_IM_13, 375.0)
+    w_c = analyse(plant, PAPER_20, PAPER_20).channels[0].margins.crossover_rad_s
+    for k_i, k_p in zip(FIG17_K_I, FIG17_K_P, strict=True):
+        found = pi_gain_for_crossover(plant, k_i, w_c)
+        assert found == pytest.approx(k_p, rel=1e-9)
+        c = icad_quantities(
+            evaluate_ss(plant.A, plant.B, plant.C, plant.D, np.array([1j * w_c])),
+            (k_p + k_i / (1j * np.array([w_c]))),
+            (k_p + k_i / (1j * np.array([w_c]))),
+        )["c"][0, 0]
+        assert abs(c) == pytest.approx(1.0, rel=1e-7)
+
+
+def test_torque_of_the_rs_zero_law_is_the_steady_state_of_19():
+    """``lossless_law_torque``: the torque of Bodson's R_S = 0 law (38)-(39) on the 0.66 ohm
+    motor equals the steady state (19) with the rotor voltage (20) of the lossless current (38),
+    at every speed; at tau_LIM the 0.274 N m command gives 0.2235 N m (the Bodson report)."""
+    p = machine_vector(BODSON_DFIM)
+    w_e, v_s, i_max = 2 * math.pi * 60, math.sqrt(1.5) * 11.1, math.sqrt(1.5) * 6.0
+    tau_lim = torque_limits_case1(p, w_e, v_s, i_max, i_max)[2]
+    assert printed(tau_lim, "0.274")
+    for tau in (0.1, 0.2, tau_lim):
+        closed = lossless_law_torque(BODSON_DFIM, w_e, v_s, tau)
+        for w_m in (0.0, 100.0, 250.0):
+            i_s = stator_current_lossless(p, w_e, v_s, tau, 0.0)
+            v_r = rotor_voltage_for(p, w_e, w_m, v_s, i_s)
+            i_s2, i_r2 = steady_state_currents(p, w_e, w_m, v_s, v_r)
+            assert float(electromagnetic_torque(p, i_s2, i_r2)) == pytest.approx(closed, rel=1e-10)
+    assert printed(lossless_law_torque(BODSON_DFIM, w_e, v_s, tau_lim), "0.2235")

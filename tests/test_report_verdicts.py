@@ -606,12 +606,8 @@ def test_the_law_with_rs_zero_everywhere_delivers_the_command_only_on_a_lossless
     import dataclasses
     import math
 
-    from acdrive._report.bodson_listing import (
-        LISTING_SPEEDS_RPM,
-        lossless_everywhere_torque,
-        lossless_law_torque,
-    )
-    from acdrive.machines import BODSON_DFIM
+    from acdrive._report.bodson_listing import LISTING_SPEEDS_RPM, lossless_everywhere_torque
+    from acdrive.machines import BODSON_DFIM, lossless_law_torque
 
     w_e, v_s, tau = 2 * math.pi * 60, 11.1 * math.sqrt(1.5), 0.2
     lossless = dataclasses.replace(BODSON_DFIM, R_s=1e-9)

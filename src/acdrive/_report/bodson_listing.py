@@ -19,6 +19,7 @@ from acdrive._verdicts import ROUNDOFF_FLOOR, Verdict, below_floor, num, within_
 from acdrive.machines._dfim import (
     DFIMParams,
     electromagnetic_torque,
+    lossless_law_torque,
     machine_vector,
     rotor_voltage_for,
     stator_current_lossless,
@@ -97,14 +98,6 @@ def listing_differences(
             corrected.append(abs(fixed - ref) / abs(ref))
             ratios.append(abs(printed) / abs(ref))
     return float(max(corrected)), float(min(ratios)), float(max(ratios))
-
-
-def lossless_law_torque(machine: DFIMParams, w_e: float, v_s: float, tau_com: float) -> float:
-    """Closed form of the torque the R_S = 0 law (38)-(39) produces on a machine with R_S > 0:
-    the law sets the real stator current i_S = w_e tau_COM / (v_S n_P) (v_R from (20) holds it
-    exactly), and (31) then gives tau_e = tau_COM - n_P R_S i_S^2 / w_e."""
-    i_s = w_e * tau_com / (v_s * machine.n_p)
-    return tau_com - machine.n_p * machine.R_s * i_s * i_s / w_e
 
 
 def lossless_law_torque_simulated(

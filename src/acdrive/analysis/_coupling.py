@@ -61,7 +61,7 @@ from acdrive.control._current import CurrentProgram, StationaryCurrentController
 from acdrive.control._lti import LTI
 from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.core._profile import Profile
-from acdrive.errors import InputError
+from acdrive.errors import InputError, require_positive
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._induction import IMParams
 from acdrive.machines._pmsm import PMSGParams
@@ -128,6 +128,23 @@ def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarr
     G = _plant_response(params, w_e, w, delay)
     kv = k.freqresp(w) * np.exp(-1j * w * delay)
     return icad_quantities(G, kv, kv)["coupling"][:, 1]
+
+
+def icad_coupling_peak(
+    params, w_e: float, k: LTI, lo: float = 100.0, hi: float = 3000.0, points: int = 29001
+) -> tuple[float, float]:
+    """(frequency [rad/s], magnitude [dB]) of the largest |y_2 / r_1| of (10)
+    (``icad_coupling``) on ``points`` evenly spaced frequencies from ``lo`` to ``hi``."""
+    lo = require_positive("lo", lo)
+    hi = require_positive("hi", hi)
+    if not hi > lo:
+        raise InputError("hi", f"must be above lo = {lo:g}, got {hi:g}")
+    if isinstance(points, bool) or not isinstance(points, int) or not 2 <= points <= 10**7:
+        raise InputError("points", f"must be a whole number from 2 to 1e7, got {points!r}")
+    w = np.linspace(lo, hi, points)
+    magnitude = np.abs(icad_coupling(params, w_e, k, w))
+    i = int(np.argmax(magnitude))
+    return float(w[i]), float(20.0 * np.log10(magnitude[i]))
 
 
 def closed_loop(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarray:

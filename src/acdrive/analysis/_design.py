@@ -33,6 +33,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import brentq
 
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import analyse, default_grid
@@ -468,3 +469,25 @@ def propose_controller(
     return Proposal(
         first.controller, first.candidate, first.check, w_c, len(candidates), tuple(notes)
     )
+
+
+def pi_gain_for_crossover(
+    plant, K_I: float, w_c: float, lo: float = 1e-3, hi: float = 1e5
+) -> float:
+    """K_P such that the individual channel c_1 (Amezquita-Brooks (7)) of ``plant`` with the PI
+    K_P + K_I / s on both loops crosses 0 dB at ``w_c`` [rad/s] (the PI family of equal
+    crossover of sec. VII, Fig. 17), found by bisection (brentq) on [``lo``, ``hi``]; an
+    InputError names ``w_c`` if |c_1(j w_c)| does not cross 1 over that range."""
+    plant = as_plant(plant)
+    K_I = require_nonnegative("K_I", K_I)
+    w_c = require_positive("w_c", w_c)
+    w = np.array([w_c])
+    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * w)
+
+    def excess(k_p: float) -> float:
+        k = LTI.pi(k_p, K_I).freqresp(w)
+        return float(abs(icad_quantities(G, k, k)["c"][0, 0])) - 1.0
+
+    if excess(lo) * excess(hi) > 0:
+        raise InputError("w_c", f"no K_P in [{lo:g}, {hi:g}] puts the crossover at {w_c:g} rad/s")
+    return float(brentq(excess, lo, hi, xtol=1e-9))

@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import brentq
 
 from acdrive._jit import njit, prange, serial_twin
 from acdrive.analysis._freqresp import LTI, check_frequency_grid, evaluate_ss
@@ -253,3 +254,33 @@ class PointEvaluator:
             return q if i is None else q[..., i]
 
         return f
+
+
+# ---------------------------------------------------------------------------------------------
+# crossings of the positive real axis by the MSF
+
+#: Frequencies [rad/s] on which ``msf_positive_real_crossing`` looks for crossings.
+MSF_CROSSING_GRID = np.logspace(-1, 5, 3000)
+
+
+def _msf_at(plant: Plant2x2, w: np.ndarray) -> np.ndarray:
+    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * np.asarray(w, dtype=float))
+    return G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
+
+
+def msf_positive_real_crossing(plant, w=MSF_CROSSING_GRID) -> tuple[float, float]:
+    """(x_max, frequency [rad/s]) of the largest crossing x > 0 of the positive real axis by the
+    MSF gamma (4) of ``plant`` for s = jw, w > 0: the conditions of Ugalde-Loo et al. ask that
+    gamma does not reach (1, 0), so x_max < 1 there. Crossings are found as sign changes of
+    Im gamma on the grid ``w`` and refined by bisection (brentq); (0, nan) if there is none."""
+    plant = as_plant(plant)
+    w = check_frequency_grid(w)
+    gam = _msf_at(plant, w)
+    idx = np.flatnonzero((np.sign(gam.imag[:-1]) != np.sign(gam.imag[1:])) & (gam.real[:-1] > 0))
+    best = (0.0, float("nan"))
+    for i in idx:
+        wx = brentq(lambda x: float(_msf_at(plant, [x])[0].imag), w[i], w[i + 1], xtol=1e-10)
+        x = float(_msf_at(plant, [wx])[0].real)
+        if x > best[0]:
+            best = (x, wx)
+    return best

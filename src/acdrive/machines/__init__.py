@@ -33,6 +33,7 @@ __all__, __getattr__, __dir__ = namespace(
         "rotor_current_for": "._dfim",
         "electromagnetic_torque": "._dfim",
         "stator_current_lossless": "._dfim",
+        "lossless_law_torque": "._dfim",
         "delta_z_coefficients": "._dfim",
         "shifted_delta_z_coefficients": "._dfim",
         "electrical_poles": "._dfim",

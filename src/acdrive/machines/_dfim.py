@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive._jit import jit, python_from_python
+from acdrive.errors import InputError, require_finite, require_positive
 from acdrive.machines._dfim_part import (  # noqa: F401 (the model's, here for its users)
     L_R,
     L_S,
@@ -129,6 +130,20 @@ def stator_current_lossless(p, w_e, v_s, tau, Q):
     """Stator current for torque ``tau`` and reactive power ``Q`` when R_s = 0 (Bodson (38));
     with (20) it gives the control law (39)."""
     return _minus_j_over(w_e * tau / (v_s * p[N_P]), Q, v_s)
+
+
+def lossless_law_torque(machine: DFIMParams, w_e: float, v_s: float, tau_com: float) -> float:
+    """The torque [N m] the R_S = 0 law (38)-(39) produces at command ``tau_com`` on a machine
+    whose R_S is not 0: the law sets the real stator current i_S = w_e tau_COM / (v_S n_P) of
+    (38) (with Q_COM = 0; v_R from (20) holds it exactly at any speed), and (31) then gives
+    tau_e = tau_COM - n_P R_S i_S^2 / w_e (Bodson's listing at the end of sec. IV)."""
+    if not isinstance(machine, DFIMParams):
+        raise InputError("machine", f"must be DFIMParams, got {type(machine).__name__}")
+    w_e = require_positive("w_e", w_e)
+    v_s = require_positive("v_s", v_s)
+    tau_com = require_finite("tau_com", tau_com)
+    i_s = w_e * tau_com / (v_s * machine.n_p)
+    return tau_com - machine.n_p * machine.R_s * i_s * i_s / w_e
 
 
 @jit

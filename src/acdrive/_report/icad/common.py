@@ -19,7 +19,7 @@ from acdrive import _verdicts as verdicts
 from acdrive._report import icad_targets as targets
 from acdrive._verdicts import ROUNDOFF_FLOOR, Verdict, below_floor
 from acdrive.analysis._freqresp import LTI, evaluate_ss
-from acdrive.analysis._icad_frequency import icad_quantities
+from acdrive.analysis._icad_frequency import icad_quantities, msf_positive_real_crossing
 
 #: Speeds of the seed-002 families [rad/s, electrical] (0 ... w_r,max = 375).
 SPEEDS_002 = np.array([0.0, 75.0, 150.0, 225.0, 300.0, 375.0])
@@ -83,22 +83,6 @@ def channel_response(plant, k: LTI, w: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def gamma_real_axis_crossing(plant, w=W_NYQ) -> tuple[float, float]:
-    """(x_max, frequency) of the positive-real-axis crossings of gamma (x_max = 0 if none)."""
-    G = evaluate_ss(plant.A, plant.B, plant.C, plant.D, 1j * w)
-    gam = G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
-    idx = np.flatnonzero((np.sign(gam.imag[:-1]) != np.sign(gam.imag[1:])) & (gam.real[:-1] > 0))
-    if idx.size == 0:
-        return 0.0, math.nan
-
-    def im(x):
-        Gx = evaluate_ss(plant.A, plant.B, plant.C, plant.D, np.array([1j * x]))[0]
-        return float((Gx[0, 1] * Gx[1, 0] / (Gx[0, 0] * Gx[1, 1])).imag)
-
-    best = (0.0, math.nan)
-    for i in idx:
-        wx = brentq(im, w[i], w[i + 1], xtol=1e-10)
-        Gx = evaluate_ss(plant.A, plant.B, plant.C, plant.D, np.array([1j * wx]))[0]
-        x = float((Gx[0, 1] * Gx[1, 0] / (Gx[0, 0] * Gx[1, 1])).real)
-        if x > best[0]:
-            best = (x, wx)
-    return best
+    """(x_max, frequency) of the positive-real-axis crossings of gamma (x_max = 0 if none):
+    ``analysis.msf_positive_real_crossing`` on the Nyquist grid."""
+    return msf_positive_real_crossing(plant, w)

@@ -23,7 +23,6 @@ import matplotlib.pyplot as plt
 import numpy as np
 import scipy.linalg
 import scipy.signal
-from scipy.optimize import brentq
 
 from acdrive._figures import save_figure
 from acdrive._report import icad_targets as targets
@@ -38,6 +37,7 @@ from acdrive._report.icad.common import (
 )
 from acdrive._report.markdown import Row, Section, db, fmt
 from acdrive._verdicts import Verdict, at_least, at_most, within_abs
+from acdrive.analysis._design import pi_gain_for_crossover
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._icad import analyse
 from acdrive.analysis._plants import plant_from_params
@@ -105,15 +105,6 @@ def pi_family_trend(gain_300_db, pm_deg) -> Verdict:
     )
 
 
-def _pi_kp_for_crossover(plant, K_I: float, w_t: float) -> float:
-    """K_P such that the channel c_1 with PI (K_P, K_I) on both loops crosses 0 dB at w_t."""
-
-    def f(kp):
-        return abs(channel_response(plant, LTI.pi(kp, K_I), np.array([w_t]))["c"][0, 0]) - 1.0
-
-    return brentq(f, 1e-3, 1e5, xtol=1e-9)
-
-
 def section_pi_comparison(fig_dir: Path, k20: LTI) -> Section:
     """The PI section (``k20`` = controller (20)); Figs. 15, 17-20 are written into ``fig_dir``."""
     s = Section("Seed 002, sec. VI-D and VII: PI comparison (Figs. 15, 17-20)")
@@ -126,7 +117,7 @@ def section_pi_comparison(fig_dir: Path, k20: LTI) -> Section:
     wc20 = a20.channels[0].margins.crossover_rad_s
     # PI family of Fig. 17: the built-in K_P (acdrive.control._lti.FIG17_K_P) re-solved here
     family = list(zip(FIG17_K_I, FIG17_K_P, FIG17_PI_FAMILY, strict=True))
-    resolved = [_pi_kp_for_crossover(plant, ki, wc20) for ki, _, _ in family]
+    resolved = [pi_gain_for_crossover(plant, ki, wc20) for ki, _, _ in family]
     kp_diff = max(abs(kp - r) / r for (_, kp, _), r in zip(family, resolved, strict=True))
     s.text = (
         "w_r = 375 rad/s, `delorenzo-im-13`. The PI family of sec. VII: for each K_I, K_P is "

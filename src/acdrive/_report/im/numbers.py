@@ -26,7 +26,7 @@ from acdrive.analysis._coupling import (
     CouplingResult,
     CouplingSetup,
     hold_delay,
-    icad_coupling,
+    icad_coupling_peak,
     measure_coupling,
     pmsg_pi,
 )
@@ -48,10 +48,9 @@ def run_experiments() -> dict[str, IMOutcome]:
 
 
 def icad_peak_frequency(params, w_e: float, k, lo: float = 100.0, hi: float = 3000.0) -> float:
-    """Frequency [rad/s, rounded to 0.1] of the largest |(10)| on a dense grid: one injection
-    frequency is put there so that the measured peak is the peak of (10)."""
-    w = np.linspace(lo, hi, 29001)
-    return round(float(w[int(np.argmax(np.abs(icad_coupling(params, w_e, k, w))))]), 1)
+    """Frequency [rad/s, rounded to 0.1] of the largest |(10)| (``analysis.icad_coupling_peak``):
+    one injection frequency is put there so that the measured peak is the peak of (10)."""
+    return round(icad_coupling_peak(params, w_e, k, lo, hi)[0], 1)
 
 
 def coupling_setups() -> dict[str, CouplingSetup]:
