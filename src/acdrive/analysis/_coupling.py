@@ -133,7 +133,7 @@ def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarr
 def icad_coupling_peak(
     params, w_e: float, k: LTI, lo: float = 100.0, hi: float = 3000.0, points: int = 29001
 ) -> tuple[float, float]:
-    """(frequency [rad/s], magnitude [dB]) of the largest |y_2 / r_1| of (10)
+    """(frequency [rad/s], magnitude [dB]) of the largest magnitude of y_2 / r_1 of (10)
     (``icad_coupling``) on ``points`` evenly spaced frequencies from ``lo`` to ``hi``."""
     lo = require_positive("lo", lo)
     hi = require_positive("hi", hi)

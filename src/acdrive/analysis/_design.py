@@ -477,7 +477,7 @@ def pi_gain_for_crossover(
     """K_P such that the individual channel c_1 (Amezquita-Brooks (7)) of ``plant`` with the PI
     K_P + K_I / s on both loops crosses 0 dB at ``w_c`` [rad/s] (the PI family of equal
     crossover of sec. VII, Fig. 17), found by bisection (brentq) on [``lo``, ``hi``]; an
-    InputError names ``w_c`` if |c_1(j w_c)| does not cross 1 over that range."""
+    InputError names ``w_c`` if the magnitude of c_1(j w_c) does not cross 1 over that range."""
     plant = as_plant(plant)
     K_I = require_nonnegative("K_I", K_I)
     w_c = require_positive("w_c", w_c)
