@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from acdrive._report.limit_cycle_summary import Shown
 from acdrive.drives.dfim._outcome import MODE_SUFFIX
 
 #: The figures listed for each mode of a run: (summary key, what it measures, unit).
@@ -56,15 +57,20 @@ def run_figure_lines(outcome, summary: dict) -> list[str]:
     tracking = summary["speed_tracking"]
     windows = tracking.get("windows_s") or []
     at_s = summary["speed_max_abs_error_whole_run_at_s"]
-    where = largest_error_where(outcome.main, at_s, windows)
+    where = largest_error_where(outcome.main, float(at_s), windows)
+    # the instant is given where it is known: not inside a step's settling (whose start is
+    # given), and not in a run that limit-cycles (``Shown``: where the largest error falls in
+    # the cycle moves)
+    when = "" if isinstance(at_s, Shown) or where.startswith("in the settling") else (
+        f" at {at_s:.3f} s"
+    )
     first = next(iter(outcome.results))
     mode = f" ({first} command)" if len(outcome.results) > 1 else ""
     lines = [
         f"- {TRACKING_RMS[1]}{mode}: {summary[TRACKING_RMS[0]]:.3f} {TRACKING_RMS[2]} "
         f"(`{TRACKING_RMS[0]}`; {tracking['rule'].removeprefix(RULE_PREFIX)})",
         f"- largest speed error over every sample{mode}: "
-        f"{summary['speed_max_abs_error_whole_run_rpm']:.3f} rpm at "
-        f"{summary['speed_max_abs_error_whole_run_at_s']:.3f} s, {where} "
+        f"{summary['speed_max_abs_error_whole_run_rpm']:.3f} rpm{when}, {where} "
         "(`speed_max_abs_error_whole_run_rpm`)",
         f"- {ROTOR_PEAK[1]}{mode}: {summary[ROTOR_PEAK[0]]:.3f} A (limit {rotor_limit:g} A; "
         f"`{ROTOR_PEAK[0]}`)",
