@@ -576,7 +576,7 @@ def test_fig22_high_gain_flips_at_20_db_for_either_function():
 # --- Bodson report: the regulated runs and the side effect, the R_S = 0 law, run figures ----------
 
 
-def _effect(mode, q_s, motor=0):
+def _q_effect(mode, q_s, motor=0):
     from acdrive.drives.dfim._converter_effect import SideEffect
 
     return SideEffect(mode=mode, motor=motor, samples=100, q_s=q_s, q_com=0.0, tau_com=0.0,
@@ -587,14 +587,14 @@ def test_regulated_runs_sentence_counts_the_runs_that_hold_q_com():
     from acdrive._report.bodson.discussion import Q_LOOP_SCENARIO, regulated_runs_sentence
 
     effects = {
-        "bodson-step": [_effect("voltage", 15.0), _effect("current", 0.001)],
-        Q_LOOP_SCENARIO: [_effect("voltage", 0.5, k) for k in range(3)],
+        "bodson-step": [_q_effect("voltage", 15.0), _q_effect("current", 0.001)],
+        Q_LOOP_SCENARIO: [_q_effect("voltage", 0.5, k) for k in range(3)],
     }
     text = regulated_runs_sentence(effects)
     # the voltage-command run of bodson-step is not regulated: 1 + 3 runs
     assert text.startswith("of their 4 runs with the bench converter, 4 can be judged")
     assert text.endswith("Q_S holds Q_COM in 4 of them: none of them shows the effect.")
-    effects[Q_LOOP_SCENARIO][1] = _effect("voltage", 3.74 * 1.01, 1)
+    effects[Q_LOOP_SCENARIO][1] = _q_effect("voltage", 3.74 * 1.01, 1)
     text = regulated_runs_sentence(effects)
     assert f"in 3 of them; it departs in `{Q_LOOP_SCENARIO}` (voltage, motor 2)." in text
 
