@@ -20,9 +20,9 @@ TRACKING_RMS = (
     "rpm",
 )
 ROTOR_PEAK = ("peak_rotor_current_a", "peak rotor phase current over the run", "A")
+STATOR_PEAK = ("peak_stator_current_a", "peak stator phase current over the run", "A")
 #: How the summary's tracking rule begins (the line names the figure itself).
 RULE_PREFIX = "speed error where tracking is expected: "
-STATOR_PEAK = ("peak_stator_current_a", "peak stator phase current over the run", "A")
 
 
 def largest_error_where(result, at_s: float, windows) -> str:
