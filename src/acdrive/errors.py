@@ -1,5 +1,6 @@
 """Input errors: one line naming the field and the rule it breaks."""
 
+import contextlib
 import re
 
 __all__ = ["InputError", "Notice", "SimulationDiverged"]
@@ -48,6 +49,20 @@ class SimulationDiverged(RuntimeError):
             f"simulation: scenario{which} diverged (state no longer finite) at "
             f"t = {self.time:.6g} s; {hint}"
         )
+
+
+@contextlib.contextmanager
+def named_as(names: dict[str, str]):
+    """Re-raise an ``InputError`` raised inside the block whose field is a key of ``names`` (a
+    Python argument, also as ``key[i]`` or ``key['k']`` for one of its items) as naming
+    ``names[key]`` instead (the CLI flag the user typed), with the same rule."""
+    try:
+        yield
+    except InputError as exc:
+        base = exc.field.split("[", 1)[0]
+        if base not in names:
+            raise
+        raise InputError(names[base], exc.rule) from None
 
 
 def require_finite(field: str, value) -> float:

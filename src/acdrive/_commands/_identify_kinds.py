@@ -99,7 +99,7 @@ def _source(args):
     for flag in MEASURED_ONLY:
         if getattr(args, flag):
             raise InputError(_flag(flag), "is for a measured test; a simulated test makes its own")
-    return builtin_bench(args.kind, args.source)
+    return builtin_bench(args.kind, args.source, "TEST_FILE_OR_SCENARIO")
 
 
 def _bench_plan(args, plan):

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from acdrive._arguments import Text, checked, TEXT
 from acdrive.errors import InputError
 from acdrive.identify._experiment import StandstillPlan
 from acdrive.identify._mechanics import MechanicsPlan
@@ -134,12 +135,14 @@ def _benches() -> dict[str, dict[str, object]]:
 KIND_NOUN = {"pm": "PM machine", "dfim": "DFIM", "mechanics": "speed drive (mechanics)"}
 
 
+@checked(kind=TEXT)
 def builtin_names(kind: str) -> tuple[str, ...]:
     """The names ``acdrive identify NAME --kind KIND`` simulates."""
     return tuple(_benches().get(kind, {}))
 
 
-def builtin_bench(kind: str, name: str, field: str = "TEST_FILE_OR_SCENARIO"):
+@checked(kind=Text(KIND_NOUN), name=TEXT, field=TEXT)
+def builtin_bench(kind: str, name: str, field: str = "name"):
     """The bench of the built-in ``name`` of ``kind``, or an InputError naming ``field`` and
     listing the names of that kind."""
     benches = _benches().get(kind)

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Array, Either, Instance, Text, checked, COUNT, POSITIVE, NONNEGATIVE, optional
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._winding import sampled_response
 
@@ -52,6 +53,7 @@ LEAKAGE_SPLITS = {
 }
 
 
+@checked(R_s=POSITIVE, L_sigma=POSITIVE, R_R=POSITIVE, L_M=POSITIVE)
 @dataclass(frozen=True)
 class InverseGamma:
     """The four standstill-identifiable parameters of a cage IM (module docstring)."""
@@ -78,6 +80,7 @@ class InverseGamma:
         return self.R_R / self.L_M
 
 
+@checked(machine=Instance('acdrive.machines._induction:IMParams'))
 def inverse_gamma(machine) -> InverseGamma:
     """The inverse-Gamma parameters of a T-circuit machine (``IMParams``; module docstring)."""
     a = machine.L_m / machine.L_r
@@ -89,6 +92,7 @@ def inverse_gamma(machine) -> InverseGamma:
     )
 
 
+@checked(params=Instance(InverseGamma), n_p=COUNT, split=Text(LEAKAGE_SPLITS), J=optional(POSITIVE))
 def t_circuit(params: InverseGamma, n_p: int, split: str = "equal", J=None):
     """An ``IMParams`` with the terminal behaviour of ``params``, under an assumed leakage split.
 
@@ -117,6 +121,7 @@ def t_circuit(params: InverseGamma, n_p: int, split: str = "equal", J=None):
     return IMParams(R_s=params.R_s, R_r=R_r, L_s=L_s, L_r=L_r, L_m=L_m, n_p=n_p, J=J)
 
 
+@checked(params=Either(Instance(InverseGamma), Array(1)), w=Array())
 def standstill_impedance(params, w) -> np.ndarray:
     """Z(jw) = R_s + jw L_sigma + jw L_M R_R / (R_R + jw L_M) [ohm] (module docstring); ``params``
     an ``InverseGamma`` or an array (R_s, L_sigma, R_R, L_M)."""
@@ -137,6 +142,7 @@ def standstill_state_space(params) -> tuple[np.ndarray, np.ndarray]:
     return A, B
 
 
+@checked(params=Either(Instance(InverseGamma), Array(1)), w=Array(), hold=POSITIVE, dead_time=NONNEGATIVE)
 def sampled_admittance(params, w, hold: float, dead_time: float = 0.0) -> np.ndarray:
     """Y_d(e^{jwT}) = i_k / v_k [S] of the standstill circuit driven by a voltage held over each
     period ``hold`` = T (zero-order hold, the inverter's latched command) and its current sampled

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Instance, checked, COUNT0, SEED
 from acdrive.errors import InputError
 from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (
@@ -130,6 +131,7 @@ def _solve(V, I, se, start):
     return fit
 
 
+@checked(log=Instance(StandstillLog), seed=SEED, bootstrap=COUNT0)
 def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> DCStepFit:
     """R_s and the inverter voltage error U from a DC-step log (module docstring)."""
     found = plateaus(log)

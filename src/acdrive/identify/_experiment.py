@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, Items, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL, SEED
 from acdrive._frames import K_PEAK
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
@@ -51,6 +52,11 @@ LOG_COLUMNS = {
 }
 
 
+#: the machines a standstill bench takes
+MACHINE = Instance('acdrive.machines._induction:IMParams', PMSGParams, 'acdrive.machines._dfim:DFIMParams', what='an IMParams, PMSGParams or DFIMParams')
+
+
+@checked(time=Array(1), v_a=Array(1), i_a=Array(1), source=Text())
 @dataclass(frozen=True)
 class StandstillLog:
     """One logged test: equal-length arrays ``time`` [s], ``v_a`` [V], ``i_a`` [A]; ``source``
@@ -62,6 +68,7 @@ class StandstillLog:
     source: str = "log"
 
 
+@checked(noise_std=NONNEGATIVE, offset=REAL, lsb=NONNEGATIVE)
 @dataclass(frozen=True)
 class CurrentSensor:
     """The current measurement added after the run (module docstring): Gaussian noise of standard
@@ -72,6 +79,7 @@ class CurrentSensor:
     lsb: float = 20.0 / 4096  # a 12-bit converter over +-10 A
 
 
+@checked(dc_levels=Items(REAL), dc_step=POSITIVE, base_frequency=POSITIVE, tones=Items(COUNT), tone_amplitude=NONNEGATIVE, settle=NONNEGATIVE, periods=COUNT, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
 @dataclass(frozen=True)
 class StandstillPlan:
     """The two standstill tests and the bench they run on (module docstring)."""
@@ -253,12 +261,14 @@ def run_test(machine, plan: StandstillPlan, voltage, duration: float, seed: int,
     return StandstillLog(result.t.copy(), v_a, measured_current(i_a, plan.sensor, rng), source)
 
 
+@checked(machine=MACHINE, plan=Instance(StandstillPlan), seed=SEED)
 def dc_test(machine, plan: StandstillPlan, seed: int = 0) -> StandstillLog:
     """The DC-step test of ``plan`` on ``machine`` (module docstring)."""
     return run_test(machine, plan, lambda t: dc_steps(plan, t), plan.dc_duration(), seed,
                     "simulated DC-step test")  # fmt: skip
 
 
+@checked(machine=MACHINE, plan=Instance(StandstillPlan), seed=SEED)
 def injection_test(machine, plan: StandstillPlan, seed: int = 1) -> StandstillLog:
     """The multisine injection test of ``plan`` on ``machine`` (module docstring)."""
     return run_test(machine, plan, lambda t: multisine(plan, t), plan.injection_duration(), seed,

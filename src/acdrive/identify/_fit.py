@@ -17,12 +17,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Items, Text, checked, RESULT
+
 #: the confidence level of every interval
 LEVEL = 0.95
 #: bootstrap resamples per fit (a modest count: intervals to about 2 digits)
 BOOTSTRAP_COUNT = 200
 
 
+@checked(what=Text(), reason=Text(), residual=RESULT, unit=Text(empty=True))
 class FitNotConverged(RuntimeError):
     """A least-squares fit that stopped without converging: ``what`` was being fitted, the
     solver's ``reason`` and the residual it reached (``residual`` with its ``unit``)."""
@@ -35,6 +38,7 @@ class FitNotConverged(RuntimeError):
         )
 
 
+@checked(name=Text(), unit=Text(empty=True), meaning=Text(empty=True), value=RESULT, jacobian=Items(RESULT), bootstrap=Items(RESULT))
 @dataclass(frozen=True)
 class Estimate:
     """One identified quantity: ``value`` [``unit``] with its 95 % interval from the Jacobian

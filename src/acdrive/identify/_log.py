@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive._arguments import Instance, checked, PATH, TEXT
 from acdrive.errors import InputError
 from acdrive.identify._experiment import LOG_COLUMNS, StandstillLog
 
@@ -118,7 +119,8 @@ def checked_values(columns: dict[str, tuple[str, np.ndarray]], field: str, spec:
     return values
 
 
-def read_log(path, field: str = "TEST_FILE") -> StandstillLog:
+@checked(path=PATH, field=TEXT)
+def read_log(path, field: str = "path") -> StandstillLog:
     """The standstill log in ``path`` (``.csv``, ``.parquet`` or ``.mat``), checked (module
     docstring)."""
     values = read_columns(path, LOG_COLUMNS, "standstill", field)
@@ -199,6 +201,7 @@ def read_columns(path, spec: dict, kind: str, field: str = "TEST_FILE",
     return checked_values(columns, field, spec, kind, optional)
 
 
+@checked(log=Instance(StandstillLog), path=PATH)
 def write_log(log: StandstillLog, path) -> Path:
     """Write the standstill ``log`` (module docstring)."""
     return write_columns({"time": log.time, "v_a": log.v_a, "i_a": log.i_a}, LOG_COLUMNS, path)

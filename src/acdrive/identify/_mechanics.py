@@ -67,6 +67,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, Items, Number, Table, Text, checked, COUNT, COUNT0, FLAG, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
@@ -101,6 +102,7 @@ FRICTION_FLOOR = 0.02
 MAX_HALF_WIDTH = 0.5
 
 
+@checked(time=Array(1), tau_e=Array(1), w=Array(1), source=TEXT)
 @dataclass(frozen=True)
 class MechanicsLog:
     """A speed-step log: equal-length ``time`` [s], ``tau_e`` [N m], ``w`` [rad/s]."""
@@ -111,6 +113,7 @@ class MechanicsLog:
     source: str = "log"
 
 
+@checked(counts_per_rev=COUNT)
 @dataclass(frozen=True)
 class SpeedSensor:
     """The encoder whose counts give the logged speed (module docstring)."""
@@ -126,6 +129,7 @@ def encoder_speed(theta: np.ndarray, h: float, sensor: SpeedSensor, rng) -> np.n
     return np.concatenate(([math.nan], np.diff(counts) * step / h))
 
 
+@checked(levels=Items(REAL), hold=POSITIVE, start=NONNEGATIVE, log_every=COUNT, tau_c=NONNEGATIVE, sensor=Instance(SpeedSensor))
 @dataclass(frozen=True)
 class MechanicsPlan:
     """The speed staircase: ``levels`` [rad/s] of one sign, each held ``hold`` [s], the first
@@ -156,6 +160,7 @@ class MechanicsPlan:
         return points
 
 
+@checked(scenario=Table(), plan=Instance(MechanicsPlan), seed=SEED)
 def speed_step_test(scenario: dict, plan: MechanicsPlan, seed: int = 0) -> MechanicsLog:
     """Run the PM speed-drive ``scenario`` (a parsed scenario table: machine, converter, control,
     J and viscous friction) with the staircase of ``plan`` as its speed reference and the
@@ -188,6 +193,7 @@ def speed_step_test(scenario: dict, plan: MechanicsPlan, seed: int = 0) -> Mecha
                         reading[1:], "simulated speed-step test")  # fmt: skip
 
 
+@checked(values=Array(1), tau_e=Array(1), sign=Number(-1.0, 1.0), h=POSITIVE)
 def predicted_speed(values, tau_e: np.ndarray, sign: float, h: float) -> np.ndarray:
     """The speed the shaft model predicts from the torque record (module docstring);
     ``values`` = (J, B, tau_c, w_0)."""
@@ -239,6 +245,7 @@ def _window(log: MechanicsLog) -> tuple[np.ndarray, np.ndarray, float, float]:
     return tau, w, sign, h
 
 
+@checked(estimates=Items(Instance(Estimate)), residual_rms=RESULT, dof=COUNT0)
 @dataclass(frozen=True)
 class MechanicsFit:
     """J, B, tau_c with their intervals, the residual (rms speed error [rad/s]) and the degrees
@@ -279,6 +286,7 @@ def _start(tau, w, sign, h) -> np.ndarray:
     return np.array([max(J, 1e-9), max(B, 0.0), max(tau_c, 0.0), w[0]])
 
 
+@checked(log=Instance(MechanicsLog), seed=SEED, bootstrap=COUNT0, check=FLAG)
 def fit_mechanics(log: MechanicsLog, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
                   check: bool = True) -> MechanicsFit:  # fmt: skip
     """J, B and tau_c of a speed-step log with their intervals (module docstring)."""
@@ -342,6 +350,7 @@ def check_mechanics(fit: MechanicsFit, torque_max: float, speed_max: float) -> N
                          + "); hold speeds at two levels or more and step between them")  # fmt: skip
 
 
+@checked(fit=Instance(MechanicsFit))
 def mechanics_identifiability(fit: MechanicsFit) -> list[str]:
     """What the speed steps determine, as sentences."""
     return [
@@ -356,7 +365,8 @@ def mechanics_identifiability(fit: MechanicsFit) -> list[str]:
     ]
 
 
-def read_mechanics_log(path, field: str = "TEST_FILE") -> MechanicsLog:
+@checked(path=PATH, field=TEXT)
+def read_mechanics_log(path, field: str = "path") -> MechanicsLog:
     """The speed-step log in ``path`` (CSV, Parquet or .mat with the columns of
     ``MECHANICS_COLUMNS``), every rule of ``identify._log`` checked."""
     from acdrive.identify._log import read_columns
@@ -365,6 +375,7 @@ def read_mechanics_log(path, field: str = "TEST_FILE") -> MechanicsLog:
     return MechanicsLog(values["time"], values["tau_e"], values["w"], field)
 
 
+@checked(log=Instance(MechanicsLog), path=PATH)
 def write_mechanics_log(log: MechanicsLog, path):
     """Write a speed-step log as CSV, Parquet or .mat (by the suffix of ``path``)."""
     from acdrive.identify._log import write_columns

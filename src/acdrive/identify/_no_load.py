@@ -72,6 +72,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Array, Either, Instance, checked, COUNT, COUNT0, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT, optional
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._dc import Z_95
 from acdrive.identify._experiment import CurrentSensor, StandstillPlan, run_test
@@ -97,6 +98,7 @@ SPEED_RTOL = 0.01
 MAX_HALF_WIDTH = 0.5
 
 
+@checked(time=Array(1), v_a=Array(1), i_a=Array(1), w=Array(1), source=TEXT, v_dc=Array(1, optional=True))
 @dataclass(frozen=True)
 class NoLoadLog:
     """A no-load run: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s] and, if
@@ -110,6 +112,7 @@ class NoLoadLog:
     v_dc: np.ndarray | None = None
 
 
+@checked(frequency=POSITIVE, voltage=POSITIVE, settle=NONNEGATIVE, periods=COUNT, slip=REAL, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
 @dataclass(frozen=True)
 class NoLoadPlan:
     """The no-load run (module docstring): ``frequency`` [Hz], phase-peak ``voltage`` [V],
@@ -139,6 +142,7 @@ class NoLoadPlan:
         return self.settle + self.periods / self.frequency
 
 
+@checked(machine=Instance('acdrive.machines._induction:IMParams'), plan=Instance(NoLoadPlan), seed=SEED)
 def no_load_test(machine, plan: NoLoadPlan, seed: int = 3) -> NoLoadLog:
     """The no-load run of ``plan`` on the cage IM ``machine`` (module docstring)."""
     w = 2.0 * math.pi * plan.frequency * (1.0 - plan.slip) / machine.n_p
@@ -148,6 +152,7 @@ def no_load_test(machine, plan: NoLoadPlan, seed: int = 3) -> NoLoadLog:
     return NoLoadLog(log.time, log.v_a, log.i_a, np.full(log.time.size, w), log.source)
 
 
+@checked(params=Either(Instance('acdrive.identify._circuit:InverseGamma'), Array(1)), w_r=REAL, w=Array(), hold=POSITIVE)
 def running_admittance(params, w_r: float, w, hold: float) -> np.ndarray:
     """Y_d(e^{jwT}) [S] of the inverse-Gamma circuit turning at electrical speed ``w_r``
     [rad/s], voltage held over each period T = ``hold``, current sampled at its start
@@ -174,6 +179,7 @@ def _expm_2x2(A: np.ndarray, T: float) -> np.ndarray:
     return np.exp(l2 * T) * np.eye(2) + slope * (A - l2 * np.eye(2))
 
 
+@checked(L_M=Instance(Estimate), frequency=RESULT, speed=RESULT, slip=RESULT, residual=RESULT, link_voltage=optional(RESULT))
 @dataclass(frozen=True)
 class NoLoadFit:
     """L_M of the no-load run with its intervals, the run's frequency [Hz], mean speed [rad/s]
@@ -267,6 +273,7 @@ def _solve_L_M(V, I, variance, known, w_r, w, hold, start, moment=0.0):
     return least_squares(residual, [math.log(start)], method="lm", xtol=1e-12, ftol=1e-12)
 
 
+@checked(log=Instance(NoLoadLog), given=optional(POSITIVE), given_field=TEXT)
 def link_voltage(log: NoLoadLog, given: float | None = None,
                  given_field: str = "v_dc") -> float | None:  # fmt: skip
     """The link voltage [V] of the run (module docstring): the mean of the log's ``v_dc``
@@ -293,6 +300,7 @@ def link_voltage(log: NoLoadLog, given: float | None = None,
     return mean
 
 
+@checked(log=Instance(NoLoadLog), frequency=POSITIVE, settle=NONNEGATIVE, n_p=COUNT, standstill=Instance('acdrive.identify._impedance:ImpedanceFit'), seed=SEED, bootstrap=COUNT0, v_dc=optional(POSITIVE))
 def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, standstill,
                 seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
                 v_dc: float | None = None) -> NoLoadFit:  # fmt: skip
@@ -300,7 +308,7 @@ def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, stand
     ``standstill`` (an ``ImpedanceFit`` of the standstill injection). The link voltage of the
     run, ``v_dc`` [V] or the log's ``v_dc`` column (``link_voltage``), adds the switching
     pattern's second-order term to the model (module docstring); neither leaves it out."""
-    v_dc = link_voltage(log, v_dc)
+    v_dc = link_voltage(log, v_dc, "v_dc")
     V, I, variance, hold, speed = _phasors(log, frequency, settle)
     moment = 0.0
     if v_dc is not None:
@@ -346,7 +354,8 @@ def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, stand
     return NoLoadFit(estimate, frequency, speed, slip, residual, v_dc)
 
 
-def read_no_load_log(path, field: str = "TEST_FILE") -> NoLoadLog:
+@checked(path=PATH, field=TEXT)
+def read_no_load_log(path, field: str = "path") -> NoLoadLog:
     """The no-load log in ``path`` (CSV, Parquet or .mat), every rule of ``identify._log``; the
     column ``v_dc`` [V] may be added (``NO_LOAD_OPTIONAL``)."""
     from acdrive.identify._log import read_columns
@@ -356,6 +365,7 @@ def read_no_load_log(path, field: str = "TEST_FILE") -> NoLoadLog:
                      values.get("v_dc"))  # fmt: skip
 
 
+@checked(log=Instance(NoLoadLog), path=PATH)
 def write_no_load_log(log: NoLoadLog, path):
     """Write a no-load log as CSV, Parquet or .mat (by the suffix of ``path``), with its
     ``v_dc`` column if it has one."""

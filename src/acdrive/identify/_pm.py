@@ -43,6 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, Items, Text, checked, COUNT0, FLAG, NONNEGATIVE, POSITIVE, RESULT, SEED
 from acdrive.errors import InputError
 from acdrive.identify._dc import Z_95, DCStepFit, fit_dc_steps
 from acdrive.identify._experiment import StandstillLog, StandstillPlan, multisine, run_test
@@ -65,6 +66,7 @@ def rl_state_space(values) -> tuple[np.ndarray, np.ndarray]:
     return np.array([[-R / L]]), np.array([1.0 / L])
 
 
+@checked(values=Array(1), w=Array(), hold=POSITIVE, dead_time=NONNEGATIVE)
 def rl_admittance(values, w, hold: float, dead_time: float = 0.0) -> np.ndarray:
     """Y_d(e^{jwT}) = (1 - a) / (R (z - a)), a = exp(-R T / L) [S]: the RL branch driven by a
     voltage held over each period T = ``hold`` and its current sampled at the period starts
@@ -95,6 +97,7 @@ def axis_model(axis: str) -> AdmittanceModel:
                     (f"L_{axis}", f"{axis}-axis inductance"))  # fmt: skip
 
 
+@checked(log=Instance(StandstillLog), holding_torque=RESULT)
 @dataclass(frozen=True)
 class AxisTest:
     """One simulated axis test: its ``log`` and the peak torque the locked shaft held [N m]."""
@@ -103,6 +106,7 @@ class AxisTest:
     holding_torque: float
 
 
+@checked(machine=Instance('acdrive.machines._pmsm:PMSGParams'), plan=Instance(StandstillPlan), axis=Text(('d', 'q')), seed=SEED)
 def axis_test(machine, plan: StandstillPlan, axis: str, seed: int = 1) -> AxisTest:
     """The multisine of ``plan`` on phase a of the PM machine ``machine`` (a ``PMSGParams``)
     with the rotor locked with its ``axis`` ('d' or 'q') on phase a (module docstring)."""
@@ -115,6 +119,7 @@ def axis_test(machine, plan: StandstillPlan, axis: str, seed: int = 1) -> AxisTe
     return AxisTest(log, float(np.max(np.abs(torque[0]))))
 
 
+@checked(d=Instance(ImpedanceFit), q=Instance(ImpedanceFit), dc=Instance(DCStepFit, optional=True), estimates=Items(Instance(Estimate)))
 @dataclass(frozen=True)
 class PMStandstillIdentification:
     """The d- and q-axis fits, the DC-step fit (or None) and the combined estimates
@@ -143,6 +148,7 @@ def combined_resistance(d: ImpedanceFit, q: ImpedanceFit, meaning: str) -> Estim
                     percentile_interval(draws))  # fmt: skip
 
 
+@checked(d_log=Instance(StandstillLog), q_log=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), seed=SEED, bootstrap=COUNT0, dead_time=NONNEGATIVE, check=FLAG)
 def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_frequency: float,
                            settle: float, dc: StandstillLog | None = None, seed: int = 0,
                            bootstrap: int = BOOTSTRAP_COUNT,
@@ -178,6 +184,7 @@ def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_freq
     return PMStandstillIdentification(fits["d"], fits["q"], dc_fit, estimates)
 
 
+@checked(result=Instance(PMStandstillIdentification))
 def pm_identifiability(result: PMStandstillIdentification) -> list[str]:
     """What the PM standstill data determine and what they do not, as sentences."""
     tones = result.d.spectrum.frequency

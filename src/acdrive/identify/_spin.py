@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, Items, checked, COUNT, COUNT0, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._dc import Z_95
 from acdrive.identify._experiment import CurrentSensor, StandstillPlan, run_test
@@ -54,6 +55,7 @@ SAMPLES_PER_PERIOD = 10
 MAX_HALF_WIDTH = 0.5
 
 
+@checked(speeds=Items(POSITIVE), hold=POSITIVE, settle=NONNEGATIVE, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
 @dataclass(frozen=True)
 class SpinPlan:
     """The spin test (module docstring): ``speeds`` [rad/s, mechanical], each held ``hold``
@@ -77,6 +79,7 @@ class SpinPlan:
             raise InputError("settle", "must be >= 0 and shorter than hold")
 
 
+@checked(time=Array(1), v_a=Array(1), i_a=Array(1), w=Array(1), source=TEXT)
 @dataclass(frozen=True)
 class SpinLog:
     """A spin test: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s]."""
@@ -88,6 +91,7 @@ class SpinLog:
     source: str = "log"
 
 
+@checked(log=Instance(SpinLog), braking_torque=RESULT)
 @dataclass(frozen=True)
 class SpinTest:
     """A simulated spin test: its ``log`` and the peak braking torque the dynamometer held."""
@@ -96,6 +100,7 @@ class SpinTest:
     braking_torque: float
 
 
+@checked(machine=Instance('acdrive.machines._pmsm:PMSGParams'), plan=Instance(SpinPlan), seed=SEED)
 def spin_test(machine, plan: SpinPlan, seed: int = 5) -> SpinTest:
     """The short-circuit spin test of ``plan`` on the PM machine ``machine`` (module
     docstring): one run per speed, the logs joined end to end."""
@@ -113,6 +118,7 @@ def spin_test(machine, plan: SpinPlan, seed: int = 5) -> SpinTest:
                     float(max(np.max(np.abs(t)) for t in torque)))  # fmt: skip
 
 
+@checked(values=Array(1), w_r=Array())
 def short_circuit_gain(values, w_r) -> np.ndarray:
     """g(w_r) [A/Wb] = I / psi_m of the module docstring; ``values`` = (R_s, L_d, L_q)."""
     R, L_d, L_q = (float(v) for v in values)
@@ -166,6 +172,7 @@ def plateaus(log: SpinLog, n_p: int, settle: float) -> list[Plateau]:
     return found
 
 
+@checked(psi_m=Instance(Estimate), plateaus=Items(Instance(Plateau)), residual=RESULT)
 @dataclass(frozen=True)
 class SpinFit:
     """psi_m with its intervals, the plateaus and the residual (rms of the amplitudes' errors
@@ -181,6 +188,7 @@ def _psi(amplitude, stderr, gain) -> float:
     return float(np.sum(weight * gain * amplitude) / np.sum(weight * gain * gain))
 
 
+@checked(log=Instance(SpinLog), n_p=COUNT, settle=NONNEGATIVE, standstill=Instance('acdrive.identify._pm:PMStandstillIdentification'), seed=SEED, bootstrap=COUNT0)
 def fit_spin(log: SpinLog, n_p: int, settle: float, standstill, seed: int = 0,
              bootstrap: int = BOOTSTRAP_COUNT) -> SpinFit:  # fmt: skip
     """psi_m of a spin log (module docstring), with R_s, L_d, L_q from ``standstill`` (a
@@ -240,7 +248,8 @@ def _standstill_cov(standstill) -> np.ndarray:
     return cov
 
 
-def read_spin_log(path, field: str = "TEST_FILE") -> SpinLog:
+@checked(path=PATH, field=TEXT)
+def read_spin_log(path, field: str = "path") -> SpinLog:
     """The spin log in ``path`` (CSV, Parquet or .mat), every rule of ``identify._log``."""
     from acdrive.identify._log import read_columns
 
@@ -248,6 +257,7 @@ def read_spin_log(path, field: str = "TEST_FILE") -> SpinLog:
     return SpinLog(values["time"], values["v_a"], values["i_a"], values["w"], field)
 
 
+@checked(log=Instance(SpinLog), path=PATH)
 def write_spin_log(log: SpinLog, path):
     """Write a spin log as CSV, Parquet or .mat (by the suffix of ``path``)."""
     from acdrive.identify._log import write_columns
