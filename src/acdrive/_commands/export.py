@@ -86,7 +86,7 @@ def run_sil(args) -> int:
     from acdrive.export._scenario import DOUBLE_TOLERANCE, compare_in_loop, shortened
     from acdrive.scenarios._loader import load_scenario
 
-    setup = shortened(load_scenario(args.scenario), args.duration)
+    setup = shortened(load_scenario(args.scenario), args.duration, "--duration")
     report = compare_in_loop(setup, args.real)
     if args.json:
         print(strict_json(report))
@@ -116,6 +116,7 @@ def run_sil(args) -> int:
 
 def run_m4(args) -> int:
     from acdrive._output import OutputFolder, strict_json
+    from acdrive.errors import named_as
     from acdrive.export._cost import CASES, report_lines, target_report
     from acdrive.export._sil import find_compiler
     from acdrive.export._target import find_cross_tools
@@ -123,13 +124,14 @@ def run_m4(args) -> int:
     find_compiler()  # every missing tool named before any work
     find_cross_tools()
     targets = args.targets or list(CASES)
-    if args.out is None:
-        report = target_report(targets, args.duration)
-    else:
-        with OutputFolder(args.out, "m4") as output:
-            report = target_report(targets, args.duration, output.staging)
-            (output.staging / "report.json").write_text(strict_json(report))
-            output.publish()
+    with named_as({"duration": "--duration"}):
+        if args.out is None:
+            report = target_report(targets, args.duration)
+        else:
+            with OutputFolder(args.out, "m4") as output:
+                report = target_report(targets, args.duration, output.staging)
+                (output.staging / "report.json").write_text(strict_json(report))
+                output.publish()
     print(strict_json(report) if args.json else "\n".join(report_lines(report)))
     return 0
 

@@ -10,8 +10,22 @@ step on QEMU's board model (``acdrive.export._cost``, ``_target``). docs/guide/e
 describes the files and the checks.
 """
 
+from acdrive._arguments import Instance, Table, Text, checked, FLAG, POSITIVE, TEXT
 from acdrive.export._cost import board_cost, target_report
 from acdrive.export._sil import run_in_loop
-from acdrive.sim._ccode._c_source import CExport, to_c
+from acdrive.sim._ccode import _c_source
+from acdrive.sim._ccode._c_source import CExport
+
+#: the engine's generator (``acdrive.sim._ccode._c_source.to_c``) with its arguments checked
+to_c = checked(
+    system=Instance("acdrive.sim._system:System", what="a System (build it from the parts)"),
+    sample_time=POSITIVE,
+    initial=Table(Table(empty=True), empty=True, optional=True),
+    held=Table(Table(empty=True), empty=True, optional=True),
+    name=TEXT,
+    description=Text(empty=True),
+    open_loop=FLAG,
+    values=FLAG,
+)(_c_source.to_c)
 
 __all__ = ["CExport", "board_cost", "run_in_loop", "target_report", "to_c"]

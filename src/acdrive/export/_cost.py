@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive._arguments import Instance, Items, Table, checked, COUNT, PATH, POSITIVE, TEXT, optional
 from acdrive.errors import InputError
 
 #: the core the papers' rates are read against: a 168 MHz Cortex-M4F, one instruction per cycle
@@ -105,6 +106,7 @@ def case_export(target: str, duration: float | None = None):
     return case, setup, drive, initial, held, export
 
 
+@checked(compiled=Instance('acdrive.sim._compiled:CompiledSystem'), export=Instance('acdrive.sim._ccode._c_source:CExport'), duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT, initial=Table(Table(empty=True), empty=True, optional=True), held=Table(Table(empty=True), empty=True, optional=True), folder=optional(PATH))
 def board_cost(compiled, export, duration: float, sample_time: float, substeps: int = 4,
                initial=None, held=None, folder: Path | None = None) -> list[dict]:  # fmt: skip
     """Per chain of ``export``: the float build's sizes and instructions per step on the
@@ -162,7 +164,7 @@ def measure_case(target: str, duration: float | None = None, folder: Path | None
     case, setup, drive, initial, held, export = case_export(target, duration)
     if round(setup.duration / setup.sample_time) > MAX_SAMPLES:
         samples = round(setup.duration / setup.sample_time)
-        raise InputError("--duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
+        raise InputError("duration", f"gives {samples} samples; at most {MAX_SAMPLES} replay")
     chains = board_cost(drive.system.compile(), export, setup.duration, setup.sample_time,
                         setup.substeps, initial, held, folder)  # fmt: skip
     samples = chains[0]["samples"]
@@ -179,6 +181,7 @@ def measure_case(target: str, duration: float | None = None, folder: Path | None
     }
 
 
+@checked(targets=Items(TEXT), duration=optional(POSITIVE), folder=optional(PATH))
 def target_report(targets: list[str], duration: float | None = None,
                   folder: Path | None = None) -> dict:  # fmt: skip
     """Every target measured, and the voltage-command chain's count against the current-command

@@ -162,7 +162,7 @@ def compare_fmus(setup, duration: float | None = None, parts=PARTS) -> dict:
     from acdrive._jit import STRICT_MATH
     from acdrive.export._scenario import shortened
 
-    setup = shortened(setup, duration)
+    setup = shortened(setup, duration, "--duration")
     drive, initial, held = built(setup)
     system, T_s = drive.system, setup.sample_time
     compiled = system.compile()

@@ -51,14 +51,15 @@ def export_setup(setup, name: str | None = None) -> CExport:
                 description=f"scenario {setup.name}")  # fmt: skip
 
 
-def shortened(setup, duration: float | None):
-    """``setup`` with its run cut to ``duration`` seconds (None: unchanged)."""
+def shortened(setup, duration: float | None, field: str = "duration"):
+    """``setup`` with its run cut to ``duration`` seconds (None: unchanged); an error names
+    ``field``."""
     if duration is None:
         return setup
     if isinstance(duration, bool) or not (math.isfinite(duration) and duration > 0):
-        raise InputError("--duration", "must be a finite number of seconds > 0")
+        raise InputError(field, "must be a finite number of seconds > 0")
     if duration > setup.duration:
-        raise InputError("--duration", f"must not exceed the scenario's ({setup.duration:g} s)")
+        raise InputError(field, f"must not exceed the scenario's ({setup.duration:g} s)")
     return dataclasses.replace(setup, duration=float(duration))
 
 
