@@ -158,17 +158,17 @@ def test_grid_and_monte_carlo_points():
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [
-        ({"params": ("R_x",)}, "--params"),
-        ({"params": ()}, "--params"),
-        ({"points": 1}, "--points"),
-        ({"low": -0.5}, "--low"),
-        ({"low": 2.0, "high": 1.0}, "--high"),
-        ({"severity_max": 0.0}, "--severity-max"),
-        ({"kind": "monte-carlo", "params": ("paper",)}, "--params"),
-        ({"kind": "sobol"}, "--map"),
+        ({"params": ("R_x",)}, "params"),
+        ({"params": ()}, "params"),
+        ({"points": 1}, "points"),
+        ({"low": -0.5}, "low"),
+        ({"low": 2.0, "high": 1.0}, "high"),
+        ({"severity_max": 0.0}, "severity_max"),
+        ({"kind": "monte-carlo", "params": ("paper",)}, "params"),
+        ({"kind": "sobol"}, "kind"),
     ],
 )
-def test_bad_map_specifications_name_the_option(kwargs, field):
+def test_bad_map_specifications_name_the_argument(kwargs, field):
     with pytest.raises(InputError) as exc:
         MapSpec(**kwargs)
     assert exc.value.field == field
@@ -194,6 +194,10 @@ def test_a_negative_perturbation_factor_names_the_field():
         (["--low", "-1"], "--low"),
         (["--current-tolerance", "-0.1"], "--current-tolerance"),
         (["--map", "monte-carlo", "--variants", "0"], "--variants"),
+        (["--map", "monte-carlo", "--seed", "-1"], "--seed"),
+        (["--high", "0.4"], "--high"),
+        (["--severity-max", "nan"], "--severity-max"),
+        (["--tracking-tolerance", "-1"], "--tracking-tolerance"),
     ],
 )
 def test_the_command_refuses_bad_input_in_one_line(tmp_path, capsys, argv, field):

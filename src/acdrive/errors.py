@@ -59,7 +59,7 @@ def named_as(names: dict[str, str]):
     try:
         yield
     except InputError as exc:
-        base = exc.field.split("[", 1)[0]
+        base = exc.field if exc.field in names else exc.field.split("[", 1)[0]
         if base not in names:
             raise
         raise InputError(names[base], exc.rule) from None

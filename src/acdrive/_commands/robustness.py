@@ -56,6 +56,14 @@ def register(subparsers) -> None:
     p.set_defaults(handler=run)
 
 
+#: the Python arguments of MapSpec, robustness_map and design_comparison -> their options
+FLAGS = {"kind": "--map", "params": "--params", "spec.params": "--params", "points": "--points",
+         "variants": "--variants", "low": "--low", "high": "--high",
+         "severity_max": "--severity-max", "seed": "--seed",
+         "tracking_tolerance": "--tracking-tolerance",
+         "current_tolerance": "--current-tolerance", "estimates": "--estimates"}  # fmt: skip
+
+
 def _params(text: str | None, kind: str) -> tuple:
     from acdrive.errors import InputError
 
@@ -112,12 +120,13 @@ def _typed_names(args):
 def _compare(args) -> int:
     from acdrive._commands._options import refuse_unused
     from acdrive._output import strict_json
+    from acdrive.errors import named_as
     from acdrive.robustness._design import design_comparison
 
     refuse_unused(args, MAP_OPTIONS, "--estimates", "it compares two designs of the scenario, "
                   "no map is run (use --json to keep the comparison)")  # fmt: skip
     overrides = _overrides(args)
-    with _typed_names(args):
+    with _typed_names(args), named_as(FLAGS):
         c = design_comparison(args.scenario, args.estimates,
                               tracking_tolerance=args.tracking_tolerance,
                               current_tolerance=args.current_tolerance, overrides=overrides)  # fmt: skip
@@ -129,6 +138,7 @@ def run(args) -> int:
     from pathlib import Path
 
     from acdrive._output import OutputFolder, strict_json
+    from acdrive.errors import named_as
     from acdrive.robustness._map import MapSpec, robustness_map
     from acdrive.robustness._report import report_lines, write_into
 
@@ -146,9 +156,10 @@ def run(args) -> int:
     for dest, value in _map_defaults().items():
         if getattr(args, dest) is None:
             setattr(args, dest, value)
-    spec = MapSpec(kind=args.map, params=_params(args.params, args.map), points=args.points,
-                   variants=args.variants, low=args.low, high=args.high,
-                   severity_max=args.severity_max, seed=args.seed)  # fmt: skip
+    with named_as(FLAGS):
+        spec = MapSpec(kind=args.map, params=_params(args.params, args.map), points=args.points,
+                       variants=args.variants, low=args.low, high=args.high,
+                       severity_max=args.severity_max, seed=args.seed)  # fmt: skip
     overrides = _overrides(args)
     with contextlib.ExitStack() as stack:
         stack.enter_context(_typed_names(args))
@@ -156,9 +167,10 @@ def run(args) -> int:
         if args.out is not None:  # --out is checked here, before any simulation
             name = f"{Path(args.scenario).stem}-robustness"
             folder = stack.enter_context(OutputFolder(args.out, name))
-        m = robustness_map(args.scenario, spec, tracking_tolerance=args.tracking_tolerance,
-                           current_tolerance=args.current_tolerance, linear=args.linear,
-                           overrides=overrides)  # fmt: skip
+        with named_as(FLAGS):
+            m = robustness_map(args.scenario, spec, tracking_tolerance=args.tracking_tolerance,
+                               current_tolerance=args.current_tolerance, linear=args.linear,
+                               overrides=overrides)  # fmt: skip
         if folder is not None:
             write_into(m, folder.staging)
             folder.publish()

@@ -10,6 +10,8 @@ stability criterion is the row's ``stable`` flag (``Drive.verdict`` and a finite
 
 from __future__ import annotations
 
+from acdrive._arguments import Function, Items, Table, Text, checked, NONNEGATIVE, POSITIVE, REAL, TEXT, optional
+
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 CRITERIA = ("tracking", "current_limit", "stability")
 
 
+@checked(name=TEXT, column=TEXT, limit=REAL, unit=Text(empty=True), rule=TEXT)
 @dataclass(frozen=True)
 class Criterion:
     """One stated tolerance: ``name`` (one of ``CRITERIA``), ``column`` of the batch row,
@@ -55,6 +58,7 @@ def finished_finite(row: dict, prefixes: tuple[str, ...]) -> dict:
         if isinstance(v, float) and k.startswith(prefixes))}  # fmt: skip
 
 
+@checked(table=TEXT, fields=Table(TEXT), reducers=Function(), criteria=Function(), derived=Function(optional=True), linear=Function(optional=True), linear_rule=Text(empty=True), design_table=Text(empty=True), design_fields=Items(TEXT, empty=True), design_aliases=Table(TEXT, empty=True, optional=True), design_figures=Function(optional=True), point_analysis=Function(optional=True))
 @dataclass(frozen=True)
 class RobustnessSeam:
     """A drive's answers to a robustness map.
@@ -89,6 +93,7 @@ class RobustnessSeam:
     point_analysis: Callable | None = None
 
 
+@checked(tracking=optional(POSITIVE), current=NONNEGATIVE)
 @dataclass(frozen=True)
 class Tolerances:
     """The stated tolerances of a map: ``tracking`` (the RMS tracking error as a fraction of the

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Either, Flag, Instance, Items, Table, Text, checked, COUNT, NONNEGATIVE, PATH, POSITIVE, SEED, TEXT, optional
 from acdrive.analysis._robustness import PAPER_PERTURBATION as _ICAD_PAPER
 from acdrive.drives._robustness_seam import CRITERIA, Tolerances
 from acdrive.errors import InputError, require_positive
@@ -58,10 +59,11 @@ MAX_VARIANTS = 100_000
 _NOMINAL_TOL = 1e-12
 
 
+@checked(kind=Text(KINDS), params=Items(TEXT, optional=True), points=COUNT, variants=COUNT, low=POSITIVE, high=POSITIVE, severity_max=POSITIVE, seed=SEED)
 @dataclass(frozen=True)
 class MapSpec:
     """What a map varies (module docstring); checked on construction, each error naming the
-    command-line option."""
+    field."""
 
     kind: str = "grid"
     params: tuple | None = None  # None: every parameter (and on a grid the paper axis)
@@ -76,56 +78,56 @@ class MapSpec:
 
     def __post_init__(self):
         if self.kind not in KINDS:
-            raise InputError("--map", f"must be one of {', '.join(KINDS)}, got {self.kind!r}")
+            raise InputError("kind", f"must be one of {', '.join(KINDS)}, got {self.kind!r}")
         if self.params is None:
             object.__setattr__(self, "defaulted", True)
             axes = INDUCTION_PARAMETERS
             object.__setattr__(self, "params", (*axes, PAPER) if self.kind == "grid" else axes)
         if isinstance(self.params, str) or not isinstance(self.params, (tuple, list)):
-            raise InputError("--params", f"must be a list of parameter names, got {self.params!r}")
+            raise InputError("params", f"must be a list of parameter names, got {self.params!r}")
         params = tuple(self.params)
         if not params:
-            raise InputError("--params", "must name at least one parameter")
+            raise InputError("params", "must name at least one parameter")
         known = (*PARAMETERS, PAPER)
         for p in params:
             if p not in known:
-                raise InputError("--params", f"unknown parameter {p!r}; known: {', '.join(known)}")
+                raise InputError("params", f"unknown parameter {p!r}; known: {', '.join(known)}")
         if len(set(params)) < len(params):
-            raise InputError("--params", "must name each parameter once")
+            raise InputError("params", "must name each parameter once")
         if self.kind == "monte-carlo" and PAPER in params:
             raise InputError(
-                "--params",
+                "params",
                 f"{PAPER!r} is a grid axis (one path through the parameters), not a Monte Carlo "
                 "dimension: draw the single parameters instead",
             )
         object.__setattr__(self, "params", params)
-        for name, value in (("--points", self.points), ("--variants", self.variants)):
+        for name, value in (("points", self.points), ("variants", self.variants)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
                 raise InputError(name, f"must be an integer, got {value!r}")
         if self.points < 2:
-            raise InputError("--points", f"must be at least 2 grid points, got {self.points}")
+            raise InputError("points", f"must be at least 2 grid points, got {self.points}")
         if self.variants < 1:
-            raise InputError("--variants", f"must be at least 1, got {self.variants}")
+            raise InputError("variants", f"must be at least 1, got {self.variants}")
         if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
-            raise InputError("--seed", f"must be an integer, got {self.seed!r}")
+            raise InputError("seed", f"must be an integer, got {self.seed!r}")
         if self.seed < 0:
-            raise InputError("--seed", f"must be an integer >= 0, got {self.seed}")
-        require_positive("--low", self.low)
-        require_positive("--high", self.high)
+            raise InputError("seed", f"must be an integer >= 0, got {self.seed}")
+        require_positive("low", self.low)
+        require_positive("high", self.high)
         if not self.low < self.high:
             raise InputError(
-                "--high", f"must be larger than --low ({self.low:g}), got {self.high:g}"
+                "high", f"must be larger than the lowest factor ({self.low:g}), got {self.high:g}"
             )
-        require_positive("--severity-max", self.severity_max)
+        require_positive("severity_max", self.severity_max)
         if self.kind == "grid" and 1 + len(params) * (self.points - 1) > MAX_VARIANTS:
             # counted before any axis is built: the nominal and points - 1 others per axis
             raise InputError(
-                "--points", f"asks for 1 + {len(params)} axes x ({self.points} - 1) = "
+                "points", f"asks for 1 + {len(params)} axes x ({self.points} - 1) = "
                 f"{1 + len(params) * (self.points - 1)} variants (limit {MAX_VARIANTS})"
             )  # fmt: skip
         if self.size > MAX_VARIANTS:
             raise InputError(
-                "--points" if self.kind == "grid" else "--variants",
+                "points" if self.kind == "grid" else "variants",
                 f"the map would run {self.size} variants (limit {MAX_VARIANTS})",
             )
 
@@ -178,6 +180,7 @@ def _with(axis: np.ndarray, value: float, nominal: float) -> list[float]:
     return sorted(x for x in points if abs(x - nominal) >= 1e-12)
 
 
+@checked(severity=NONNEGATIVE)
 def paper_factors(severity: float) -> dict:
     """Factors PAPER_k ** s of the combined axis (s = 1: ``PAPER_PERTURBATION``; s = 0: none)."""
     if severity == 1.0:
@@ -190,6 +193,7 @@ def _log_distance(axis: str, value: float, factors: dict) -> float:
     return max((abs(math.log(f)) for f in factors.values()), default=0.0)
 
 
+@checked(scenario=TEXT, spec=Instance(MapSpec), table=TEXT, criteria=Items(Instance('acdrive.drives._robustness_seam:Criterion'), empty=True), rows=Items(Table(), empty=True), linear_rule=Text(empty=True), wall_time=NONNEGATIVE, batch_wall_time=NONNEGATIVE, linear_time=NONNEGATIVE, summary=Table(empty=True))
 @dataclass
 class RobustnessMap:
     """The rows of a map (one per variant, nominal first) and what is computed from them.
@@ -253,6 +257,7 @@ def _table_value(seam, factors: dict) -> dict:
     return {seam.fields[k]: f for k, f in factors.items()}
 
 
+@checked(scenario=Either(PATH, Table()), spec=Instance(MapSpec, optional=True), tracking_tolerance=optional(POSITIVE), current_tolerance=NONNEGATIVE, linear=Flag(optional=True), overrides=Table(empty=True, optional=True), lockstep=Flag(optional=True))
 def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=None,
                    current_tolerance: float = 0.05, linear: bool | None = None,
                    overrides: dict | None = None, lockstep: bool | None = None) -> RobustnessMap:  # fmt: skip
@@ -273,10 +278,10 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
     if not isinstance(spec, MapSpec):
         raise InputError("spec", "must be a MapSpec")
     if tracking_tolerance is not None:
-        require_positive("--tracking-tolerance", tracking_tolerance)
+        require_positive("tracking_tolerance", tracking_tolerance)
     if current_tolerance is None or current_tolerance < 0 or not math.isfinite(current_tolerance):
         raise InputError(
-            "--current-tolerance", f"must be a finite number >= 0, got {current_tolerance!r}"
+            "current_tolerance", f"must be a finite number >= 0, got {current_tolerance!r}"
         )
     tolerances = Tolerances(tracking=tracking_tolerance, current=float(current_tolerance))
     data, setup = _base_data(scenario)
@@ -287,11 +292,11 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
     spec = spec.for_fields(seam.fields)
     missing = [p for p in spec.params if p != PAPER and p not in seam.fields]
     if missing:
-        raise InputError("--params", f"the drive has no perturbation of {missing[0]!r}")
+        raise InputError("spec.params", f"the drive has no perturbation of {missing[0]!r}")
     if PAPER in spec.params:
         absent = [k for k in PAPER_PERTURBATION if k not in seam.fields]
         if absent:
-            raise InputError("--params", f"{PAPER!r} needs {absent[0]!r}, which the drive lacks")
+            raise InputError("spec.params", f"{PAPER!r} needs {absent[0]!r}, which the drive lacks")
     base = apply_overrides(data, dict(overrides or {}))
     nominal = build_variant_setup(copy.deepcopy(base))  # a bad scenario fails here, before work
     from acdrive.drives import for_setup

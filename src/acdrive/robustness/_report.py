@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from acdrive._arguments import Instance, Text, checked, PATH
 from acdrive._output import REPORT_STAMP, strict_json
 from acdrive.robustness._map import PAPER, RobustnessMap
 
@@ -145,6 +146,7 @@ def draw_map(m: RobustnessMap, path: Path) -> None:
     save_figure(path, fig)
 
 
+@checked(m=Instance(RobustnessMap), out=PATH, name=Text(optional=True))
 def write_map_report(m: RobustnessMap, out, name: str | None = None) -> Path:
     """Write map.json, report.md and map.png into ``out``/``name`` (default the scenario's name)
     through ``_output.OutputFolder`` (a folder acdrive did not write is never replaced)."""
