@@ -133,19 +133,41 @@ def test_invalid_variants_are_reported_with_their_reason_and_the_batch_goes_on()
     variants = [
         {**SHORT, "motor[0].params.M": 20e-3},  # sigma = 1 - M^2/(L_s L_r) < 0
         {**SHORT, "motor[0].params.R_s": -0.5},
-        {**SHORT, "motor[0].no_such_field": 1.0},
         {**SHORT, "part:shaft0.J": 0.0},
         {**SHORT},
     ]
     rows = simulate_batch(BASE, variants).rows
-    assert [r["valid"] for r in rows] == [False, False, False, False, True]
+    assert [r["valid"] for r in rows] == [False, False, False, True]
     assert rows[0]["reason"].startswith("motor[0].params.M:") and "sigma" in rows[0]["reason"]
     assert rows[1]["reason"].startswith("motor[0].params.R_s:")
-    assert rows[2]["reason"].startswith("motor[0].no_such_field:")
-    assert rows[3]["reason"].startswith("shaft0.J:")
+    assert rows[2]["reason"].startswith("shaft0.J:")
     assert math.isnan(rows[0]["speed_rms_error_tracking_rpm"]) and rows[0]["status"] == "invalid"
-    assert rows[4]["status"] == "ok" and rows[4]["stable"] is True
-    assert np.isfinite(rows[4]["speed_rms_error_tracking_rpm"])
+    assert rows[3]["status"] == "ok" and rows[3]["stable"] is True
+    assert np.isfinite(rows[3]["speed_rms_error_tracking_rpm"])
+
+
+@pytest.mark.parametrize(
+    ("key", "rule"),
+    [
+        ("motor[0].no_such_field", "unknown key"),
+        ("simulation.durationx", "unknown key"),
+        ("no_such_table.x", "no_such_table: unknown key"),
+        ("motor[3].load_torque", "the base scenario has no motor[3]"),
+        ("part:no_such_part.w", "part:no_such_part: no part of this name"),
+        ("initial:no_such_part.w", "initial:no_such_part: no part of this name"),
+        ("part:shaft0.no_such_parameter", "shaft0.no_such_parameter: is not declared"),
+        ("initial:shaft0.no_such_state", "shaft0 initial state.no_such_state: is not declared"),
+    ],
+)
+def test_an_override_of_a_field_that_does_not_exist_is_refused_naming_it(key, rule):
+    """A misspelt override is no variant to record as invalid: the batch refuses it, naming
+    the variant and its key, before any variant runs."""
+    from acdrive.errors import InputError
+
+    with pytest.raises(InputError) as refused:
+        simulate_batch(BASE, [dict(SHORT), {**SHORT, key: 1.0}])
+    assert refused.value.field == f"variants[1][{key!r}]"
+    assert refused.value.rule.startswith(rule), refused.value.rule
 
 
 def test_machine_parameter_override_expands_the_built_in_machine():

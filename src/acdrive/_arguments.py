@@ -35,7 +35,7 @@ import numpy as np
 from acdrive.errors import InputError
 
 __all__ = [
-    "Array", "Either", "Flag", "FilePath", "Function", "Instance", "Items", "Number", "Table",
+    "Anything", "Array", "Either", "Flag", "FilePath", "Function", "Instance", "Items", "Number", "Table",
     "Text", "checked", "rules_of", "COUNT", "COUNT0", "FLAG", "NONNEGATIVE", "POSITIVE", "REAL",
     "SEED", "TEXT", "PATH", "RESULT", "FRACTION", "optional",
 ]  # fmt: skip
@@ -172,8 +172,9 @@ class Function(Rule):
 
 
 class Instance(Rule):
-    """An instance of one of ``types`` (classes, or ``"module:Name"`` imported on first use);
-    ``what`` says it in words."""
+    """An instance of one of ``types`` (classes, or ``"module:Name"`` imported on first use; a
+    module that is not installed, an optional extra's, contributes no type); ``what`` says it in
+    words."""
 
     def __init__(self, *types, what: str | None = None, optional: bool = False):
         super().__init__(optional=optional)
@@ -186,7 +187,10 @@ class Instance(Rule):
         for t in self._types:
             if isinstance(t, str):
                 module, _, attribute = t.partition(":")
-                t = getattr(importlib.import_module(module), attribute)
+                try:
+                    t = getattr(importlib.import_module(module), attribute)
+                except ImportError:
+                    continue
             found.append(t)
         return tuple(found)
 
@@ -292,6 +296,21 @@ class Array(Rule):
             self.refuse(name, value, "a NaN or infinite element")
         if self.low is not None and np.any(array < self.low):
             self.refuse(name, value, f"an element below {self.low:g}")
+
+
+class Anything(Rule):
+    """Any value, ``None`` included: the argument of a question such as "is this a setup?"."""
+
+    accepts_nan = accepts_negative = accepts_empty = True
+
+    def __init__(self):
+        super().__init__(optional=True)
+
+    def describe(self) -> str:
+        return "anything"
+
+    def check_value(self, name, value):
+        pass
 
 
 class Either(Rule):

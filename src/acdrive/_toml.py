@@ -15,7 +15,13 @@ import math
 import tomllib
 
 from acdrive.core._profile import Profile
-from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
+from acdrive.errors import (
+    InputError,
+    UnknownField,
+    require_finite,
+    require_nonnegative,
+    require_positive,
+)
 
 
 def constant(value: float) -> Profile:
@@ -117,7 +123,7 @@ class Section:
     def done(self):
         unknown = sorted(set(self.data) - self.used)
         if unknown:
-            raise InputError(self.field(unknown[0]), "unknown key")
+            raise UnknownField(self.field(unknown[0]), "unknown key")
 
 
 def machine_from(

@@ -13,7 +13,9 @@ and initial states) and a list of variants, each a dict of overrides in three fo
   state, e.g. a perturbed speed).
 
 Every variant goes through the same validation as a single run (``scenarios._loader``): a bad one
-is recorded as invalid with the ``InputError`` text and the batch goes on. From ``PREPARE_SHARE``
+is recorded as invalid with the ``InputError`` text and the batch goes on. An override that names
+no field, key or part of the scenario (a misspelt name, ``UnknownField``) is refused instead, as
+``variants[i]['<key>']``, before any variant runs. From ``PREPARE_SHARE``
 variants per core on, forked workers prepare shares of the variants while this process prepares
 the first (``_forked_map``; the same rows in the same order as one process gives). Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
@@ -71,7 +73,7 @@ from acdrive._reducer_parts import (
     _stats_class,
     band_coefficients,
 )
-from acdrive.errors import InputError
+from acdrive.errors import InputError, UnknownField
 from acdrive.sim._loop_source import STATUS_OK
 from acdrive.sim._metrics import (
     SPEED_ERROR_STATES,
@@ -185,12 +187,12 @@ def _walk(data: dict, path: str, create: bool):
             raise InputError(path, "is not inside a table")
         if key not in node:
             if not create or index is not None:
-                raise InputError(path, f"the base scenario has no {key}")
+                raise UnknownField(path, f"the base scenario has no {key}")
             node[key] = {}
         node = node[key]
         if index is not None:
             if not isinstance(node, list) or index >= len(node):
-                raise InputError(path, f"the base scenario has no {key}[{index}]")
+                raise UnknownField(path, f"the base scenario has no {key}[{index}]")
             if last:
                 raise InputError(path, "names a whole table, not a field")
             node = node[index]
@@ -208,7 +210,8 @@ def get_field(data: dict, path: str):
 def apply_overrides(data: dict, overrides: dict) -> dict:
     """A copy of the parsed scenario ``data`` with dotted fields set (``motor[0].load_torque``).
 
-    An unknown field is set as given: the loader then names it as an unknown key."""
+    An unknown field is set as given: the loader then names it as an unknown key
+    (``UnknownField``)."""
     out = copy.deepcopy(data)
     for path, value in overrides.items():
         parent, key = _walk(out, path, create=True)
@@ -299,7 +302,9 @@ def _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data
                       log_every):  # fmt: skip
     """One variant prepared (``prepare_variant``), validated and packed: the picklable outcome
     ``("ok", group key, setup, [(reducer, (part, slot))], (P, X, S, Y))`` or
-    ``("invalid", the InputError text)``, and the variant's system (None if invalid)."""
+    ``("invalid", the InputError text)`` or ``("unknown", field, rule)`` for an override of a
+    field, key or part that does not exist (``UnknownField``), and the variant's system (None
+    if invalid)."""
     if not isinstance(overrides, dict):
         return ("invalid", "variants: each variant must be a dict"), None
     try:
@@ -313,6 +318,8 @@ def _prepared_outcome(overrides, base, reducers, integrator, substeps, base_data
         P, PO = system.pack_params()
         X, S = system.pack_initial(initial)  # validates the initial-state overrides now
         Y = system.pack_held(held)
+    except UnknownField as exc:
+        return ("unknown", exc.field, exc.rule), None
     except InputError as exc:
         return ("invalid", str(exc)), None
     key = (_portable(system.topology()), tuple(PO), setup.duration, setup.sample_time,
@@ -508,15 +515,19 @@ def prepare_variant(base, overrides: dict, reducers=None, integrator: str | None
     if changes:
         setup = dataclasses.replace(setup, **changes)
     drive = _drive_of(setup)
+    names = [p.name for p in drive.system.parts]
+    for prefix, changes in (("part", part_changes), ("initial", initial_changes)):
+        for name in changes:
+            if name not in names:
+                raise UnknownField(f"{prefix}:{name}", f"no part of this name ({', '.join(names)})")
     replaced = {}
     for name, params in part_changes.items():
         try:
             replaced[name] = drive.system.part(name).with_params(**params)
         except TypeError as exc:  # a parameter the part does not declare
-            raise InputError(f"part:{name}", str(exc)) from None
+            raise UnknownField(f"part:{name}", str(exc)) from None
     initial, held = drive.initial()
     for name, values in initial_changes.items():
-        drive.system.part(name)  # names the part if unknown
         initial[name] = {**initial.get(name, {}), **values}
     if reducers is None:
         reducers = default_reducers(setup)
@@ -533,6 +544,21 @@ def _invalid_row(i: int, reason: str, reducers) -> dict:
     for r in () if reducers is None or callable(reducers) else reducers:
         row.update(dict.fromkeys(r.columns(), math.nan))
     return row
+
+
+def _unknown_field(i: int, overrides: dict, field: str, rule: str) -> InputError:
+    """The refusal of variant ``i`` whose override names a field that does not exist: naming
+    the override (``variants[i]['key']``) whose key is, or lies under or above, ``field``; the
+    field itself if no override names it (the base scenario's own unknown key)."""
+    for key in overrides:
+        if key.startswith(("part:", "initial:")):  # the part's own name: "<part>[ ...].<name>"
+            part, _, name = key.partition(":")[2].partition(".")
+            if field.startswith(part) and field.endswith(f".{name}"):
+                return InputError(f"variants[{i}][{key!r}]", f"{field}: {rule}")
+        inside = (field + ".", field + "[", key + ".", key + "[")
+        if key == field or key.startswith(inside[:2]) or field.startswith(inside[2:]):
+            return InputError(f"variants[{i}][{key!r}]", rule if key == field else f"{field}: {rule}")
+    return InputError(field, rule)
 
 
 def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | None = None,
@@ -569,6 +595,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
 
     groups: dict[tuple, list[_Prepared]] = {}
     for i, outcome in enumerate(forked_map(prepare, list(enumerate(variants)), PREPARE_SHARE)):
+        if outcome[0] == "unknown":
+            raise _unknown_field(i, variants[i], *outcome[1:])
         if outcome[0] == "invalid":
             rows[i] = _invalid_row(i, outcome[1], reducers)
             continue

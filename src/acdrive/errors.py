@@ -3,7 +3,7 @@
 import contextlib
 import re
 
-__all__ = ["InputError", "Notice", "SimulationDiverged"]
+__all__ = ["InputError", "Notice", "SimulationDiverged", "UnknownField"]
 
 
 class InputError(ValueError):
@@ -16,6 +16,12 @@ class InputError(ValueError):
         self.field = field
         self.rule = rule
         super().__init__(f"{field}: {rule}")
+
+
+class UnknownField(InputError):
+    """An ``InputError`` for a name that does not exist (a misspelt key, a part or a list entry
+    the scenario does not have), as opposed to a value that breaks its rule: a batch refuses an
+    override naming one instead of running its variant as invalid."""
 
 
 class Notice(UserWarning):

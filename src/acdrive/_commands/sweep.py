@@ -88,7 +88,7 @@ def run(args) -> int:
 
     from acdrive._commands._options import flag, refuse_unused
     from acdrive._output import require_out
-    from acdrive.errors import InputError, Terminated, call_interruptible
+    from acdrive.errors import InputError, Terminated, call_interruptible, named_as
     from acdrive.sweep._engine import run_sweep, sweep_progress
     from acdrive.sweep._spec import MAX_CHUNK, load_sweep
 
@@ -121,11 +121,12 @@ def run(args) -> int:
         )
     command = resume_command(args)
     try:
-        folder = call_interruptible(
-            lambda: run_sweep(spec, out, scheduler=args.scheduler, timeout=args.timeout,
-                              progress=not args.quiet, report=not args.no_report,
-                              command=command)
-        )  # fmt: skip
+        with named_as({"out": "--out", "scheduler": "--scheduler", "timeout": "--timeout"}):
+            folder = call_interruptible(
+                lambda: run_sweep(spec, out, scheduler=args.scheduler, timeout=args.timeout,
+                                  progress=not args.quiet, report=not args.no_report,
+                                  command=command)
+            )  # fmt: skip
     except (KeyboardInterrupt, Terminated):
         state = sweep_progress(out / spec.name)
         done = f"{state[0]} of {state[1]} variants done; " if state else ""

@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+from acdrive._arguments import Array, Instance, Items, Table, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._toml import constant
 from acdrive.analysis._freqresp import evaluate_ss
@@ -88,6 +89,7 @@ def stationary_equivalent(k: LTI, w_e: float) -> LTIMatrix:
     return LTIMatrix.ss(A, B, C, D, name=f"{k.name or 'k'} in dq at w_e = {w_e:g}")
 
 
+@checked(p=Instance(PMSGParams), bandwidth=POSITIVE)
 def pmsg_pi(p: PMSGParams, bandwidth: float) -> LTI:
     """k = a (L_d s + R_s) / s = a L_d + a R_s / s: the PI of the first-order SISO model
     1 / (L_d s + R_s) of Ugalde-Loo (12) without the speed terms, open loop a / s (module
@@ -95,6 +97,7 @@ def pmsg_pi(p: PMSGParams, bandwidth: float) -> LTI:
     return LTI.pi(bandwidth * p.L_d, bandwidth * p.R_s, name=f"PMSG PI, a = {bandwidth:g} rad/s")
 
 
+@checked(hold_samples=COUNT, sample_time=POSITIVE)
 def hold_delay(hold_samples: int, sample_time: float) -> float:
     """Average delay [s] of a sample-and-hold that keeps a command for ``hold_samples`` samples
     of ``sample_time``: N T_s / 2 (module docstring)."""
@@ -119,6 +122,7 @@ def _plant_response(params, w_e: float, w: np.ndarray, delay: float) -> np.ndarr
     return G
 
 
+@checked(params=Instance(IMParams, PMSGParams), w_e=REAL, k=Instance(LTI), w=Array(1, low=0.0), delay=NONNEGATIVE)
 def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarray:
     """y_2 / r_1 of (10) (``analysis._icad_frequency.icad_quantities``) at the frequencies ``w``
     [rad/s] for the plant of ``params`` at electrical speed ``w_e`` with k on both channels, k
@@ -164,6 +168,7 @@ def fit_sinusoid(t: np.ndarray, y: np.ndarray, w: float) -> complex:
     return complex(coef[0], coef[1])
 
 
+@checked(params=Instance(IMParams, PMSGParams), controller=Instance(LTI), w_e=REAL, frequencies=Items(POSITIVE), amplitude=POSITIVE, sample_time=POSITIVE, hold_samples=COUNT, settle=NONNEGATIVE, window=POSITIVE, min_periods=COUNT, substeps=COUNT, name=Text(empty=True))
 @dataclass(frozen=True)
 class CouplingSetup:
     """One coupling measurement: the machine (``IMParams``: stationary frame; ``PMSGParams``: dq
@@ -212,6 +217,7 @@ class CouplingSetup:
         return self.settle + max(self.window_for(w) for w in self.frequencies)
 
 
+@checked(setup=Instance(CouplingSetup), frequencies=Array(1, complex=True, finite=False, empty=True), measured=Array(1, complex=True, finite=False, empty=True), measured_direct=Array(1, complex=True, finite=False, empty=True), icad=Array(1, complex=True, finite=False, empty=True), icad_delayed=Array(1, complex=True, finite=False, empty=True), direct_predicted=Array(1, complex=True, finite=False, empty=True), uncertainty=Array(1, complex=True, finite=False, empty=True), peak_voltage=Array(1, complex=True, finite=False, empty=True), wall_time=NONNEGATIVE, extra=Table(empty=True))
 @dataclass
 class CouplingResult:
     """Per injection frequency: the measured y_2 / r_1 and y_1 / r_1 (complex), (10) without and
@@ -321,6 +327,7 @@ def _rotating_state(part: StationaryCurrentController, v0: complex) -> np.ndarra
     return x
 
 
+@checked(setup=Instance(CouplingSetup))
 def measure_coupling(setup: CouplingSetup) -> CouplingResult:
     """Run the loop once per injection frequency (one batch) and fit the responses (module
     docstring)."""

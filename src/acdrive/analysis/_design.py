@@ -35,10 +35,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from acdrive._arguments import Array, Either, Function, Instance, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL, TEXT
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import analyse, default_grid
 from acdrive.analysis._icad_frequency import icad_quantities, stack_plants
-from acdrive.analysis._plants import Plant2x2, as_plant, plant_for, plant_from_params
+from acdrive.analysis._plants import PLANT, Plant2x2, as_plant, plant_for, plant_from_params
+from acdrive.control._lti import CONTROLLER
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines._dfim import DFIMParams
 from acdrive.machines._induction import IMParams
@@ -47,6 +49,7 @@ from acdrive.machines._pmsm import PMSGParams
 BANDWIDTH_MEASURES = ("crossover", "closed_loop")
 
 
+@checked(bandwidth_rad_s=POSITIVE, gm_db=NONNEGATIVE, pm_deg=NONNEGATIVE, coupling_db=REAL, w_r_min=REAL, w_r_max=REAL, n_speeds=COUNT, structural_gm_db=NONNEGATIVE, bandwidth_measure=Text(BANDWIDTH_MEASURES))
 @dataclass(frozen=True)
 class Specifications:
     """Performance and robustness specifications over a speed range (see module docstring).
@@ -107,6 +110,10 @@ PAPER_SPECS = Specifications()
 
 
 PlantFamily = Callable[[float], Plant2x2]
+
+
+#: the argument rule of a plant family (``plant_family``)
+PLANT_FAMILY = Either(TEXT, Instance(IMParams, PMSGParams, DFIMParams), Function(), PLANT)
 
 
 def plant_family(plant) -> PlantFamily:
@@ -192,6 +199,7 @@ def _worst(values: np.ndarray, speeds: np.ndarray, lower_is_worse: bool):
     return float(v[k]), float(speeds[k])
 
 
+@checked(plant_family_=PLANT_FAMILY, k1=CONTROLLER, k2=CONTROLLER, specs=Instance(Specifications), w=Array(1, low=0.0, optional=True), speeds=Array((0, 1), optional=True))
 def check_controller(
     plant_family_, k1: LTI, k2: LTI, specs: Specifications, *, w=None, speeds=None
 ) -> ControllerCheck:
@@ -393,6 +401,7 @@ def _unit_controller_response(pi_zero, lag, s):
     return k
 
 
+@checked(plant=PLANT_FAMILY, speeds=Array((0, 1), optional=True), specs=Instance(Specifications), w=Array(1, low=0.0, optional=True), max_verify=COUNT)
 def propose_controller(
     plant, speeds=None, specs: Specifications = PAPER_SPECS, *, w=None, max_verify: int = 3
 ) -> Proposal:

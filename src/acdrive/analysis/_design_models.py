@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from acdrive._arguments import Array, Instance, checked, REAL
 from acdrive.analysis._freqresp import LTI, check_frequency_grid
 from acdrive.analysis._plants import Plant2x2, as_plant, plant_from_params
 from acdrive.errors import InputError, require_finite
@@ -127,6 +128,7 @@ class ModelComparison:
     errors: dict[str, ModelError]
 
 
+@checked(params=Instance(IMParams), w_r=REAL, w=Array(1, low=0.0))
 def compare_design_models(params: IMParams, w_r: float, w) -> ModelComparison:
     """Compare the design models B, C, D with the full channel model A (Amezquita-Brooks et al.
     sec. V-A, Fig. 4) at speed w_r on the band ``w``."""

@@ -64,11 +64,21 @@ from fractions import Fraction
 
 import numpy as np
 
+from acdrive._arguments import Anything, Array, Either, Flag, Items, checked, COUNT0, FLAG, NONNEGATIVE, REAL, TEXT
 from acdrive.errors import InputError, require_nonnegative
 
 __all__ = ["HurwitzResult", "complex_hurwitz", "is_hurwitz", "routh_hurwitz"]
 
 
+#: the argument rule of polynomial coefficients (module docstring): an array of real or complex
+#: numbers, or a list whose items are numbers (Fractions too) or (re, im) pairs
+COEFFICIENTS = Either(
+    Array(1, complex=True),
+    Items(Either(REAL, Array(0, complex=True), Items(REAL))),
+)
+
+
+@checked(stable=FLAG, n_rhp=COUNT0, n_imag=COUNT0, marginal=FLAG, first_column=Items(Anything(), empty=True), determinants=Items(Anything(), empty=True), array=Items(Anything(), empty=True), exact=FLAG, method=TEXT)
 @dataclass(frozen=True)
 class HurwitzResult:
     """Outcome of a Hurwitz test.
@@ -323,6 +333,7 @@ def _bilharz_determinants(f0, f1_full, zero):
     return _leading_minors(matrix, range(1, size + 1, 2))
 
 
+@checked(coeffs=COEFFICIENTS, exact=Flag(optional=True), rtol=NONNEGATIVE)
 def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
     """Hurwitz test of a polynomial with complex coefficients (any degree); see module docstring.
 
@@ -358,6 +369,7 @@ def complex_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) ->
 # --- real test -----------------------------------------------------------------------------
 
 
+@checked(coeffs=COEFFICIENTS, exact=Flag(optional=True), rtol=NONNEGATIVE)
 def routh_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> HurwitzResult:
     """Routh-Hurwitz test of a polynomial with real coefficients (any degree).
 
@@ -415,6 +427,7 @@ def routh_hurwitz(coeffs, *, exact: bool | None = None, rtol: float = 1e-9) -> H
     )
 
 
+@checked(coeffs=COEFFICIENTS, exact=Flag(optional=True))
 def is_hurwitz(coeffs, *, exact: bool | None = None) -> bool:
     """True iff every root of the polynomial (real or complex coefficients) has Re < 0."""
     return complex_hurwitz(coeffs, exact=exact).stable

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, Items, checked, FLAG
 from acdrive.analysis._freqresp import LTI, check_frequency_grid
 from acdrive.analysis._icad_conditions import StructureConditions, siso_zeros, structure_conditions
 from acdrive.analysis._icad_frequency import ICADResponse, PointEvaluator, icad_response
@@ -37,8 +38,8 @@ from acdrive.analysis._margins import (
     loop_margins,
     structural_margin,
 )
-from acdrive.analysis._plants import Plant2x2, as_plant
-from acdrive.control._lti import PAPER_20, PAPER_PI, as_lti
+from acdrive.analysis._plants import PLANT, Plant2x2, as_plant
+from acdrive.control._lti import CONTROLLER, PAPER_20, PAPER_PI, as_lti
 from acdrive.errors import InputError, require_finite
 from acdrive.machines._induction import IMParams
 from acdrive.machines._pmsm import PMSGParams
@@ -71,6 +72,7 @@ class ChannelAnalysis:
     channel_stable: bool
 
 
+@checked(plant=Instance(Plant2x2), conditions=Instance(StructureConditions), structural=Instance(StructuralMargin), channels=Items(Instance(ChannelAnalysis)), closed_loop_poles=Array(1, complex=True, finite=False, empty=True), closed_loop_stable=FLAG, b1=FLAG, b2=FLAG, response=Instance(ICADResponse))
 @dataclass(frozen=True)
 class ICADAnalysis:
     """Full ICAD of one plant with a diagonal controller on a frequency grid.
@@ -127,6 +129,7 @@ def default_grid(plant: Plant2x2, k1: LTI, k2: LTI, n: int = 4000) -> np.ndarray
     return np.logspace(np.log10(lo), np.log10(hi), n)
 
 
+@checked(plant=PLANT, k1=CONTROLLER, k2=CONTROLLER, w=Array(1, low=0.0, optional=True), verify=FLAG)
 def analyse(plant, k1: LTI, k2: LTI, w=None, *, verify: bool = True) -> ICADAnalysis:
     """ICAD of a 2x2 plant with diagonal controller diag(k1, k2).
 
@@ -294,6 +297,7 @@ def summarize(analyses: Sequence[ICADAnalysis]) -> SweepSummary:
     )
 
 
+@checked(plants=Items(PLANT), k1=CONTROLLER, k2=CONTROLLER, w=Array(1, low=0.0, optional=True), verify=FLAG)
 def sweep(plants: Sequence, k1: LTI, k2: LTI, w=None, *, verify: bool = False):
     """``analyse`` over plants (e.g. ``plants_for(machine, speeds)``); returns (list, summary)."""
     analyses = [analyse(p, k1, k2, w, verify=verify) for p in plants]

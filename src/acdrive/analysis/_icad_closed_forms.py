@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from acdrive._arguments import Array, Instance, checked, REAL
 from acdrive.errors import InputError, require_finite
 from acdrive.machines._induction import IMParams
 from acdrive.machines._pmsm import PMSGParams
@@ -18,6 +19,7 @@ from acdrive.machines._pmsm import PMSGParams
 # closed forms of the papers
 
 
+@checked(p=Instance(IMParams), w_r=REAL, w=Array())
 def im_msf_closed_form(p: IMParams, w_r: float, w) -> np.ndarray:
     """gamma(j w) of the IM, Ugalde-Loo et al. (60)-(61) (real numerator over d_gamma^2)."""
     w_r = require_finite("w_r", w_r)
@@ -27,6 +29,7 @@ def im_msf_closed_form(p: IMParams, w_r: float, w) -> np.ndarray:
     return Lr**2 * Lm**4 * Rr**2 * w_r**2 * w**2 / (re + 1j * im) ** 2
 
 
+@checked(p=Instance(IMParams), w_r=REAL, w=Array())
 def im_dgamma_re_im(p: IMParams, w_r: float, w):
     """(Re, Im) of d_gamma(j w), Ugalde-Loo et al. (61), the denominator of the IM's
     multivariable structure function (60); ``w`` a number or an array."""
@@ -48,6 +51,7 @@ def im_dgamma_re_im(p: IMParams, w_r: float, w):
     return re, im
 
 
+@checked(p=Instance(IMParams), w_r=REAL)
 def im_msf_at_rotor_speed(p: IMParams, w_r: float) -> complex:
     """gamma(j w_r) of the IM, Amezquita-Brooks et al. (14)."""
     w_r = require_finite("w_r", w_r)
@@ -57,6 +61,7 @@ def im_msf_at_rotor_speed(p: IMParams, w_r: float) -> complex:
     return Lr**2 * Lm**4 * w_r**4 / complex(re, im) ** 2
 
 
+@checked(p=Instance(IMParams), w_r=REAL)
 def im_msf_magnitude_at_rotor_speed(p: IMParams, w_r: float) -> float:
     """|gamma(j w_r)| of the IM, Amezquita-Brooks et al. (18)."""
     w_r = require_finite("w_r", w_r)
@@ -66,6 +71,7 @@ def im_msf_magnitude_at_rotor_speed(p: IMParams, w_r: float) -> float:
     return Lr**2 * Lm**4 * w_r**4 / math.sqrt((re**2 - im**2) ** 2 + 4 * re**2 * im**2)
 
 
+@checked(p=Instance(IMParams), w_r=REAL)
 def im_msf_positive_crossing(p: IMParams, w_r: float) -> tuple[float, float]:
     """(w, gamma(j w)) where the IM's MSF crosses the positive real axis (w_r != 0).
 
@@ -85,6 +91,7 @@ def im_msf_positive_crossing(p: IMParams, w_r: float) -> tuple[float, float]:
     return w, float(im_msf_closed_form(p, w_r, np.array([w]))[0].real)
 
 
+@checked(p=Instance(IMParams))
 def gm_min(p: IMParams) -> float:
     """Structural gain-margin lower bound G_M,min of the IM, Amezquita-Brooks et al. (19)."""
     sig, Ls, Lr, Lm = p.sigma, p.L_s, p.L_r, p.L_m
@@ -93,6 +100,7 @@ def gm_min(p: IMParams) -> float:
     )
 
 
+@checked(p=Instance(PMSGParams), w_r=REAL, s=Array(complex=True))
 def pmsg_msf(p: PMSGParams, w_r: float, s) -> np.ndarray:
     """gamma(s) of the PMSG, Ugalde-Loo et al. (18): -L_d L_q w_r^2 / ((L_q s + R_s)(L_d s + R_s))."""
     w_r = require_finite("w_r", w_r)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import checked, FLAG
 from acdrive.analysis._freqresp import evaluate_ss
 from acdrive.analysis._icad_frequency import PointEvaluator
 from acdrive.analysis._icad_roots import (
@@ -21,7 +22,7 @@ from acdrive.analysis._icad_roots import (
     relative_degree,
     scalar_d,
 )
-from acdrive.analysis._plants import Plant2x2, as_plant
+from acdrive.analysis._plants import PLANT, Plant2x2, as_plant
 from acdrive.errors import InputError
 
 # ---------------------------------------------------------------------------------------------
@@ -81,6 +82,7 @@ def siso_zeros(plant: Plant2x2, i: int, j: int) -> np.ndarray:
     return invariant_zeros(A, b, c, d)
 
 
+@checked(plant=PLANT, verify=FLAG)
 def structure_conditions(plant, *, verify: bool = True) -> StructureConditions:
     """Check conditions i-iv for a 2x2 plant (exact counts; ``verify`` adds the contour check)."""
     plant = as_plant(plant)

@@ -21,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from acdrive._arguments import Array, Either, Items, checked
 from acdrive._jit import njit, prange, serial_twin
 from acdrive.analysis._freqresp import LTI, check_frequency_grid, evaluate_ss
-from acdrive.analysis._plants import Plant2x2, as_plant
-from acdrive.control._lti import as_lti
+from acdrive.analysis._plants import PLANT, Plant2x2, as_plant
+from acdrive.control._lti import CONTROLLER, as_lti
 from acdrive.errors import InputError, call_interruptible
 
 # ---------------------------------------------------------------------------------------------
@@ -129,6 +130,7 @@ def _kernel_outputs(G, k1, k2):
     return G, k1, k2, gamma.reshape(shape), h.reshape(two), c.reshape(two), coupling.reshape(two)
 
 
+@checked(G=Array(complex=True), k1=Array(complex=True), k2=Array(complex=True))
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
     """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...):
     the quantities of Ugalde-Loo et al. (1)-(6) = Amezquita-Brooks et al. (5)-(10).
@@ -145,6 +147,7 @@ def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, 
     return out
 
 
+@checked(w=Array(1, finite=False, empty=True), speeds=Array(1, finite=False, empty=True), G=Array(4, complex=True, finite=False, empty=True), k=Array(2, complex=True, finite=False, empty=True), gamma=Array(2, complex=True, finite=False, empty=True), h=Array(3, complex=True, finite=False, empty=True), c=Array(3, complex=True, finite=False, empty=True), coupling=Array(3, complex=True, finite=False, empty=True))
 @dataclass(frozen=True)
 class ICADResponse:
     """ICAD frequency data over a (plant, frequency) grid.
@@ -222,6 +225,7 @@ def icad_response_arrays(A, B, C, D, k1: LTI, k2: LTI, w, speeds=None) -> ICADRe
     return ICADResponse(w=w, speeds=speeds, G=G, k=kv, gamma=gamma, h=h, c=c, coupling=coupling)
 
 
+@checked(plants=Either(PLANT, Items(PLANT)), k1=CONTROLLER, k2=CONTROLLER, w=Array(1, low=0.0))
 def icad_response(plants, k1: LTI, k2: LTI, w) -> ICADResponse:
     """Batched ICAD frequency data for one plant or a sequence of plants on grid w [rad/s]."""
     A, B, C, D, speeds = stack_plants(plants)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from acdrive._arguments import Array, checked
 from acdrive.analysis._freqresp import LTI
 from acdrive.analysis._margins import winding_number
 from acdrive.errors import InputError
@@ -74,6 +75,7 @@ def relative_degree(A, b, c, d) -> int | None:
     return None
 
 
+@checked(A=Array(2, empty=True), B=Array(2, empty=True), C=Array(2, empty=True), D=Array(2))
 def invariant_zeros(A, B, C, D) -> np.ndarray:
     """Finite invariant zeros of a square system: finite eigenvalues of the Rosenbrock pencil.
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Array, Either, Instance, Items, Table, Text, checked, POSITIVE, REAL, TEXT, optional
 from acdrive.errors import InputError, require_finite
 from acdrive.machines import _registry as registry
 from acdrive.machines._dfim import DFIMParams
@@ -49,6 +50,7 @@ def _real_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.n
     return arr
 
 
+@checked(A=Array(2, empty=True), B=Array(2, empty=True), C=Array(2, empty=True), D=Array(2), inputs=Items(TEXT), outputs=Items(TEXT), speed=optional(REAL), name=Text(empty=True), meta=Table(empty=True))
 @dataclass(frozen=True)
 class Plant2x2:
     """A real 2x2 linear plant x' = A x + B u, y = C x + D u (Ugalde-Loo et al. (9)).
@@ -119,6 +121,15 @@ class Plant2x2:
         return self.A, self.B[:, j : j + 1], self.C[i : i + 1, :], self.D[i : i + 1, j : j + 1]
 
 
+#: the argument rule of a plant: a Plant2x2, its (A, B, C, D) or a python-control LTI system
+PLANT = Either(
+    Instance(Plant2x2),
+    Items(Array(2, empty=True)),
+    Instance("control:LTI"),
+)
+
+
+@checked(obj=PLANT, speed=optional(REAL))
 def as_plant(obj, speed: float | None = None) -> Plant2x2:
     """Coerce a Plant2x2, an (A, B, C, D) tuple or a python-control StateSpace to Plant2x2."""
     if isinstance(obj, Plant2x2):
@@ -178,6 +189,7 @@ MACHINES = registry.MACHINES
 machine_params = registry.machine_params
 
 
+@checked(params=Instance(IMParams, PMSGParams, DFIMParams), speed=REAL, w_e=POSITIVE, name=Text(empty=True))
 def plant_from_params(params, speed: float, *, w_e: float = W_E_60HZ, name: str = "") -> Plant2x2:
     """Current-subsystem plant of a machine given by its parameters, at electrical speed ``speed``.
 
@@ -213,11 +225,13 @@ def plant_from_params(params, speed: float, *, w_e: float = W_E_60HZ, name: str 
     raise InputError("params", f"unsupported machine parameters {type(params).__name__}")
 
 
+@checked(machine=TEXT, speed=REAL, w_e=POSITIVE)
 def plant_for(machine: str, speed: float, *, w_e: float = W_E_60HZ) -> Plant2x2:
     """Current-subsystem plant of a built-in machine (see ``MACHINES``) at electrical speed."""
     return plant_from_params(machine_params(machine), speed, w_e=w_e, name=machine)
 
 
+@checked(machine=TEXT, speeds=Array((0, 1)), w_e=POSITIVE)
 def plants_for(machine: str, speeds, *, w_e: float = W_E_60HZ) -> list[Plant2x2]:
     """``plant_for`` over a sequence of speeds (NaN or empty -> InputError)."""
     speeds = np.atleast_1d(np.asarray(speeds, dtype=float))

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from acdrive._arguments import Instance
 from acdrive.errors import InputError, require_finite
 
 # ---------------------------------------------------------------------------------------------
@@ -271,6 +272,12 @@ def to_control_ss(A, B, C, D, dt, name: str):
     C = np.asarray(C, dtype=float).reshape(p, n)
     kwargs = {"name": name} if name else {}
     return control.ss(np.asarray(A, dtype=float).reshape(n, n), B, C, D, dt, **kwargs)
+
+
+#: the argument rule of a controller: what ``as_lti`` takes
+CONTROLLER = Instance(
+    LTI, "control:LTI", what="an LTI controller or a python-control TransferFunction/StateSpace"
+)
 
 
 def as_lti(controller, field_name: str = "controller") -> LTI:

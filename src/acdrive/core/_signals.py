@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from acdrive.core._profile import ACCEPTED, Profile
-from acdrive.errors import InputError
+from acdrive.errors import InputError, UnknownField
 
 KINDS = ("real", "complex", "table")
 #: value rules a real quantity or a table's values may declare, checked whenever values are
@@ -244,7 +244,7 @@ class Layout:
         merged.update(values)
         unknown = sorted(set(merged) - self._by_name.keys())
         if unknown:
-            raise InputError(
+            raise UnknownField(
                 f"{owner}.{unknown[0]}",
                 f"is not declared by {owner} ({', '.join(v.name for v in self.vars)})",
             )

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import importlib
 
+from acdrive._arguments import TEXT, Anything, Function, Instance, Table, checked
 from acdrive.errors import InputError
 
 #: the scenario's ``drive`` value -> the module defining that built-in drive's ``DRIVE``
@@ -31,6 +32,7 @@ DEFAULT_KIND = "dfim"
 _REGISTERED: dict[str, Drive] = {}
 
 
+@checked()
 class Drive:
     """One drive kind: the answers the command line, batches, sweeps and reports need.
 
@@ -122,25 +124,44 @@ class Drive:
         return f"<{type(self).__name__} kind={self.kind!r}>"
 
 
+class Setup(Instance):
+    """The argument rule of a drive setup: an instance of a registered drive's ``setup_types``
+    (the registry asked at each check, so a drive registered later counts)."""
+
+    def __init__(self, *, optional: bool = False):
+        super().__init__(optional=optional)
+
+    @property
+    def types(self) -> tuple[type, ...]:
+        return tuple(t for kind in kinds() for t in get(kind).setup_types)
+
+    def describe(self) -> str:
+        return f"the setup of a registered drive ({', '.join(t.__name__ for t in self.types)})"
+
+    def check_value(self, name, value):
+        if _owner(value) is None:
+            self.refuse(name, value)
+
+
+@checked(drive=Instance(Drive))
 def register(drive: Drive) -> Drive:
     """Register ``drive`` under ``drive.kind`` (a scenario's ``drive = "<kind>"`` then selects
-    it); returns it. A kind already taken by another drive is refused (``ValueError``)."""
+    it); returns it. A kind already taken by another drive is refused (``InputError``)."""
     kind = getattr(drive, "kind", None)
     if not isinstance(kind, str) or not kind:
-        raise ValueError("a drive needs a non-empty string kind")
-    if not isinstance(drive, Drive):
-        raise TypeError(f"drive {kind!r} must be an acdrive.drives.Drive")
+        raise InputError("drive", "needs a non-empty string kind")
     taken = _REGISTERED.get(kind)
     if (taken is not None and taken is not drive) or (taken is None and kind in BUILTIN):
-        raise ValueError(f"drive kind {kind!r} is registered already")
+        raise InputError("drive", f"kind {kind!r} is registered already")
     _REGISTERED[kind] = drive
     return drive
 
 
+@checked(kind=TEXT)
 def unregister(kind: str) -> None:
     """Remove a drive registered with ``register`` (built-in drives stay)."""
     if kind in BUILTIN:
-        raise ValueError(f"drive kind {kind!r} is built in")
+        raise InputError("kind", f"{kind!r} is a built-in drive, which stays registered")
     _REGISTERED.pop(kind, None)
 
 
@@ -150,14 +171,21 @@ def builtin_packages() -> list[str]:
     return [module.rsplit(".", 1)[0] for module in BUILTIN.values()]
 
 
+@checked()
 def kinds() -> list[str]:
     """Every drive kind a scenario can name, built-in first."""
     return list(BUILTIN) + sorted(k for k in _REGISTERED if k not in BUILTIN)
 
 
+@checked(kind=TEXT)
 def get(kind: str) -> Drive:
-    """The drive of ``kind`` (a built-in is imported now); an ``InputError`` on field ``drive``
-    naming the kinds if there is none."""
+    """The drive of ``kind`` (a built-in is imported now); an ``InputError`` naming ``kind`` and
+    the kinds if there is none."""
+    return _drive(kind, "kind")
+
+
+def _drive(kind: str, field: str) -> Drive:
+    """The drive of ``kind``, or an ``InputError`` naming ``field`` and the kinds."""
     drive = _REGISTERED.get(kind) if isinstance(kind, str) else None
     if drive is not None:
         return drive
@@ -166,44 +194,45 @@ def get(kind: str) -> Drive:
         _REGISTERED[kind] = drive
         return drive
     names = ", ".join(f'"{k}"' for k in kinds())
-    raise InputError("drive", f'must be one of {names} (omitted: "{DEFAULT_KIND}")')
+    raise InputError(field, f'must be one of {names} (omitted: "{DEFAULT_KIND}")')
 
 
+@checked(data=Table(empty=True))
 def for_data(data) -> Drive:
-    """The drive of a parsed scenario: its ``drive`` value, ``DEFAULT_KIND`` if absent."""
-    kind = data.get("drive", DEFAULT_KIND) if isinstance(data, dict) else DEFAULT_KIND
-    return get(kind)
+    """The drive of a parsed scenario: its ``drive`` value (an error names that field),
+    ``DEFAULT_KIND`` if absent."""
+    return _drive(data.get("drive", DEFAULT_KIND), "drive")
 
 
+@checked(setup=Setup())
 def for_setup(setup) -> Drive:
     """The drive whose ``load`` made ``setup`` (``InputError`` if no registered drive owns it)."""
+    return _owner(setup)
+
+
+def _owner(setup) -> Drive | None:
+    """The registered drive that owns ``setup``, else None."""
     for kind in kinds():
         drive = get(kind)
         if drive.owns(setup):
             return drive
-    raise InputError("setup", "must be the setup of a registered drive (what "
-                     f"acdrive.scenarios.load_scenario returns), got {type(setup).__name__}")
+    return None
 
 
+@checked(value=Anything())
 def is_setup(value) -> bool:
     """True if ``value`` is the setup of a registered drive."""
-    try:
-        for_setup(value)
-    except InputError:
-        return False
-    return True
+    return _owner(value) is not None
 
 
+@checked(setup=Setup(), on_run=Function(optional=True))
 def run_scenario(setup, on_run=None):
     """Simulate the setup of any registered drive (what ``acdrive.scenarios.load_scenario``
     returns) with that drive's ``run`` and return its outcome: the object ``acdrive run`` writes,
     with ``results`` (label -> result) and ``summary`` (summary.json's figures). ``on_run(label)``,
     if given, is called before each simulation (a progress display). A value that is not a
     registered drive's setup is an ``InputError`` on ``setup``, before any work."""
-    drive = for_setup(setup)
-    if on_run is not None and not callable(on_run):
-        raise InputError("on_run", f"must be callable or None, got {type(on_run).__name__}")
-    return drive.run(setup, on_run)
+    return _owner(setup).run(setup, on_run)
 
 
 def require_setup(setup, setup_types: tuple[type, ...], function: str, argument: str = "setup"):
@@ -214,8 +243,9 @@ def require_setup(setup, setup_types: tuple[type, ...], function: str, argument:
     if isinstance(setup, setup_types):
         return setup
     wanted = " or ".join(t.__name__ for t in setup_types)
-    if is_setup(setup):
-        kind = for_setup(setup).kind
+    owner = _owner(setup)
+    if owner is not None:
+        kind = owner.kind
         raise InputError(argument, f'is the setup of drive "{kind}" ({type(setup).__name__}); '
                          f"{function} takes {wanted} only: acdrive.drives.run_scenario({argument}) "
                          "runs the setup of any drive")  # fmt: skip

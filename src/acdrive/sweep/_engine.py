@@ -42,6 +42,7 @@ import shutil
 import sys
 from pathlib import Path
 
+from acdrive._arguments import Instance, Text, checked, COUNT0, FLAG, PATH, POSITIVE, optional
 from acdrive.errors import InputError
 from acdrive.sweep import _variants as V
 from acdrive.sweep._spec import SweepSpec, spec_from_payload
@@ -204,6 +205,7 @@ def _base_timing(spec: SweepSpec) -> tuple[float, float]:
     return float(duration), float(sample_time)
 
 
+@checked(spec=Instance(SweepSpec), n=optional(COUNT0))
 def estimate(spec: SweepSpec, n: int | None = None) -> dict:
     """Bytes of the table, of the traces and of memory, estimated before anything runs."""
     n = V.count(spec) if n is None else n
@@ -300,17 +302,17 @@ def _open_folder(folder: Path) -> None:
     from acdrive._output import MARKER, is_acdrive_folder, not_ours
 
     if folder.is_symlink():
-        raise InputError("--out", f"{folder} is a symbolic link; refusing to write through it")
+        raise InputError("out", f"{folder} is a symbolic link; refusing to write through it")
     if folder.exists() and not folder.is_dir():
-        raise InputError("--out", f"{folder} exists and is not a folder")
+        raise InputError("out", f"{folder} exists and is not a folder")
     if folder.exists() and not is_acdrive_folder(folder):
         legacy = (folder / MANIFEST).is_file()
         if not legacy and any(folder.iterdir()):
-            raise not_ours("--out", folder)
+            raise not_ours("out", folder)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise InputError("--out", f"cannot create {folder} ({exc.strerror})") from None
+        raise InputError("out", f"cannot create {folder} ({exc.strerror})") from None
     if not (folder / MARKER).exists():
         from acdrive._output import write_marker
 
@@ -333,8 +335,8 @@ class _Lock:
             holder = os.read(self._fd, 32).decode(errors="replace").strip() or "unknown"
             os.close(self._fd)
             raise InputError(
-                "--out", f"{folder} is in use by another sweep (process {holder}): wait for it to "
-                "finish or choose another --out"
+                "out", f"{folder} is in use by another sweep (process {holder}): wait for it to "
+                "finish or choose another folder"
             ) from None  # fmt: skip
         os.ftruncate(self._fd, 0)
         os.write(self._fd, str(os.getpid()).encode())
@@ -398,15 +400,15 @@ def _prepare_folder(spec: SweepSpec, folder: Path, n: int, command: str | None =
         try:
             old = json.loads(manifest.read_text())
         except (OSError, ValueError):
-            raise InputError("--out", f"{manifest} is unreadable: choose another --out") from None
+            raise InputError("out", f"{manifest} is unreadable: choose another folder") from None
         started = any((folder / "table").glob("chunk-*.parquet"))
         if old.get("digest") == spec.digest() and old.get("variants") == n:
             chunk = int(old["chunk"])
         elif started:
             hint = resume_hint(folder)
             raise InputError(
-                "--out", f"{folder} holds a different sweep (its file or base scenario changed): "
-                "choose another --out or delete that folder"
+                "out", f"{folder} holds a different sweep (its file or base scenario changed): "
+                "choose another folder or delete that one"
                 + (f" (that sweep is unfinished: {hint})" if hint else "")
             )  # fmt: skip
         if chunk is not None and command and old.get("command") != command:
@@ -450,6 +452,7 @@ def finished_chunks(spec: SweepSpec, folder: Path, n: int) -> set[int]:
     return done
 
 
+@checked(folder=PATH)
 def read_table(folder: Path):
     """The sweep's table: every finished chunk, in variant order. A folder with unfinished chunks
     gives its finished variants and a :class:`~acdrive.errors.Notice` saying how to resume."""
@@ -489,12 +492,12 @@ def connect(address: str, timeout: float = CONNECT_TIMEOUT_S):
     """A ``distributed.Client`` of the scheduler at ``address``, or a one-line ``InputError``
     after at most ``timeout`` seconds."""
     if not isinstance(address, str) or not address.startswith(("tcp://", "tls://", "inproc://")):
-        raise InputError("--scheduler", "must be an address such as tcp://host:8786")
+        raise InputError("scheduler", "must be an address such as tcp://host:8786")
     try:
         from distributed import Client
     except ImportError:
         raise InputError(
-            "--scheduler", "needs dask.distributed: pip install 'acdrive[dask]'"
+            "scheduler", "needs dask.distributed: pip install 'acdrive[dask]'"
         ) from None
     import logging
 
@@ -503,7 +506,7 @@ def connect(address: str, timeout: float = CONNECT_TIMEOUT_S):
         return Client(address, timeout=f"{timeout}s", set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise InputError(
-            "--scheduler",
+            "scheduler",
             f"no Dask scheduler answered at {address} within {timeout:g} s ({type(exc).__name__})",
         ) from None
 
@@ -537,6 +540,7 @@ def _dask(payload, pending, client):
 # --- the sweep -------------------------------------------------------------------------------
 
 
+@checked(spec=Instance(SweepSpec), out=PATH, scheduler=Text(optional=True), timeout=POSITIVE, progress=FLAG, report=FLAG, command=Text(optional=True))
 def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
               timeout: float = CONNECT_TIMEOUT_S, progress: bool = True,
               report: bool = True, command: str | None = None) -> Path:  # fmt: skip
@@ -545,7 +549,7 @@ def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
     every later message about the unfinished folder can quote it."""
     from acdrive._output import require_out
 
-    folder = require_out("--out", out) / spec.name
+    folder = require_out("out", out) / spec.name
     n = V.count(spec)
     if n < 1:
         raise InputError("vary", "gives no variant")

@@ -67,6 +67,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
+from acdrive._arguments import Instance, Items, Table, Text, checked, COUNT, COUNT0, FLAG, NONNEGATIVE, PATH, SEED, TEXT, optional
 from acdrive._toml import Section
 from acdrive.errors import InputError, require_safe_name
 
@@ -76,6 +77,7 @@ MAX_CHUNK = 5000
 LIMIT_DEFAULTS = {"max_variants": 1_000_000, "max_table_mb": 1024.0, "max_memory_mb": 1024.0}
 
 
+@checked()
 def builtin_sweeps() -> list[str]:
     folder = resources.files("acdrive.sweep") / "builtin"
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
@@ -148,6 +150,7 @@ class Vary:
         return len(self.values) if self.values is not None else self.points
 
 
+@checked(name=TEXT, description=Text(empty=True), base=TEXT, base_data=Table(), method=Text(METHODS), samples=COUNT0, seed=SEED, chunk=COUNT, vary=Items(Instance(Vary), empty=True), fixed=Table(empty=True), integrator=Text(('rk4', 'rk6'), optional=True), substeps=optional(COUNT), default_metrics=FLAG, reducers=Items(Instance('acdrive.batch:Reducer'), empty=True), summary=Items(TEXT, empty=True), traces=Items(TEXT, empty=True), trace_every=COUNT0, worst=Text(optional=True), worst_count=COUNT0, limits=Table(NONNEGATIVE, empty=True), crosscheck=Table(empty=True, optional=True))
 @dataclass(frozen=True)
 class SweepSpec:
     name: str
@@ -220,6 +223,7 @@ def read_sweep_text(source: str) -> tuple[str, Path | None]:
         raise InputError("sweep", f"cannot read {path} ({exc})") from None
 
 
+@checked(source=PATH)
 def load_sweep(source: str) -> SweepSpec:
     """Read and validate a sweep file (or built-in sweep name)."""
     from acdrive._toml import parse_toml

@@ -8,11 +8,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Instance, Table, checked
 from acdrive.drives.cage_im._drive import IMDrive
 from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import IMDriveSetup
 
 
+@checked(setup=Instance(IMDriveSetup), results=Table(Instance(IMDriveResult)), summary=Table(empty=True))
 @dataclass
 class IMOutcome:
     """The runs of one scenario (label -> result) and its summary (summary.json)."""
@@ -34,6 +36,7 @@ COMPARED = {
 }
 
 
+@checked(setup=Instance(IMDriveSetup))
 def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
     """Simulate every run of ``setup`` (compiled systems are shared between runs of the same
     topology) and summarise: the first run's metrics at the top level, every run's under

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from acdrive._arguments import Function, Instance, Table, checked
+from acdrive.drives._registry import Setup
 from acdrive.drives.dfim._period import control_period_warnings
 from acdrive.drives.dfim._recovery import speed_outcome
 from acdrive.drives.dfim._result import DriveResult
@@ -167,6 +169,7 @@ def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> 
                           closed, rule)[1]  # fmt: skip
 
 
+@checked(setup=Instance(DriveSetup), results=Table(Instance(DriveResult)), summary=Table(empty=True))
 @dataclass
 class ScenarioOutcome:
     setup: DriveSetup
@@ -182,6 +185,7 @@ def synchronous_rpm(setup: DriveSetup) -> float:
     return 60.0 * float(setup.supply.frequency_hz[1][0]) / setup.motors[0].machine.n_p
 
 
+@checked(setup=Setup(), on_run=Function(optional=True))
 def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
     """Simulate the DFIM ``setup`` (once per mode if it compares modes) and summarise.
     ``on_run(mode)``, if given, is called before each simulation (a progress display). Another

@@ -10,6 +10,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
+from acdrive._arguments import checked, REAL
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): space-vector magnitude per peak
 from acdrive._toml import constant
 from acdrive.drives.dfim._setup import DriveSetup
@@ -20,6 +21,7 @@ RAD_S_PER_RPM = math.pi / 30.0
 SPEED_LOOPS = ("closed", "open", "frozen")
 
 
+@checked(speed=REAL, load_torque=REAL)
 @dataclass(frozen=True)
 class OperatingPoint:
     """Shaft speed [rad/s] and load torque [N m] (the non-inertial load of (26), friction apart)."""
