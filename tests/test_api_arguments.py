@@ -30,11 +30,18 @@ MODULES = ("acdrive.identify", "acdrive.export", "acdrive.robustness", "acdrive.
 
 #: the one public class left unchecked, and why
 UNCHECKED = {
-    "acdrive.export.CExport": "the engine's record of generated C (acdrive.sim), which to_c returns",
+    "acdrive.export.CExport": "the engine's record of generated C (acdrive.sim) to_c returns",
 }
 
 
+#: ``acdrive.analysis``'s ``linearize``, ``stability_map`` and ``max_stable_bandwidth`` hand every
+#: argument after the study to the drive's own linearisation: the default drive's is driven too
+DISPATCHED = ("linearize", "stability_map", "max_stable_bandwidth")
+
+
 def _public_callables():
+    from acdrive.analysis._drive_linearisation import default_linearisation
+
     found = []
     for module_name in MODULES:
         module = importlib.import_module(module_name)
@@ -42,6 +49,9 @@ def _public_callables():
             obj = getattr(module, name)
             if callable(obj) and f"{module_name}.{name}" not in UNCHECKED:
                 found.append(pytest.param(obj, id=f"{module_name}.{name}"))
+    linearisation = default_linearisation()
+    for name in DISPATCHED:
+        found.append(pytest.param(getattr(linearisation, name), id=f"default drive's {name}"))
     return found
 
 
@@ -211,3 +221,46 @@ def test_drawn_misuses_are_refused_by_name(target, data):
         value_for, accepts = MISUSES[misuse]
         value, accepted = value_for(rule), accepts(rule)
     _assert_contract(target, parameter.name, value, accepted, misuse)
+
+
+def _sweep_spec():
+    from acdrive.sweep import load_sweep
+
+    return load_sweep("dfim-bandwidth")
+
+
+#: misuses of the API found by hand, each with the argument its refusal must name
+SEEN = [
+    ("read_log(None)", lambda m: m.identify.read_log(None), "path"),
+    ("read_log of a missing file", lambda m: m.identify.read_log("no-such-log.csv"), "path"),
+    ("fit_impedance(None)", lambda m: m.identify.fit_impedance(None, 1.0, 0.0), "log"),
+    ("t_circuit with an unknown split",
+     lambda m: m.identify.t_circuit(m.identify.InverseGamma(1.0, 1.0, 1.0, 1.0), 2, "none"),
+     "split"),
+    ("builtin_bench of an unknown name", lambda m: m.identify.builtin_bench("pm", "none"), "name"),
+    ("simulate(dict)", lambda m: m.drives.simulate({}), "setup"),
+    ("run_scenario(None)", lambda m: m.drives.run_scenario(None), "setup"),
+    ("get of an unknown kind", lambda m: m.drives.get("no-such-drive"), "kind"),
+    ("paper_factors(nan)", lambda m: m.robustness.paper_factors(math.nan), "severity"),
+    ("MapSpec(points=1)", lambda m: m.robustness.MapSpec(points=1), "points"),
+    ("MapSpec(kind='sobol')", lambda m: m.robustness.MapSpec(kind="sobol"), "kind"),
+    ("robustness_map with a negative tolerance",
+     lambda m: m.robustness.robustness_map("bodson-ramp", tracking_tolerance=-1.0),
+     "tracking_tolerance"),
+    ("target_report('pm-foc')", lambda m: m.export.target_report("pm-foc"), "targets"),
+    ("run_sweep to an empty folder name", lambda m: m.sweep.run_sweep(_sweep_spec(), ""), "out"),
+]
+
+
+@pytest.mark.parametrize(("call", "field"), [pytest.param(c, f, id=i) for i, c, f in SEEN])
+def test_the_misuses_seen_are_refused_naming_the_argument(call, field):
+    import acdrive.analysis
+    import acdrive.drives
+    import acdrive.export
+    import acdrive.identify
+    import acdrive.robustness
+    import acdrive.sweep
+
+    with pytest.raises(InputError) as refused:
+        call(acdrive)
+    assert refused.value.field == field, str(refused.value)

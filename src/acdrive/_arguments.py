@@ -35,9 +35,9 @@ import numpy as np
 from acdrive.errors import InputError
 
 __all__ = [
-    "Anything", "Array", "Either", "Flag", "FilePath", "Function", "Instance", "Items", "Number", "Table",
-    "Text", "checked", "rules_of", "COUNT", "COUNT0", "FLAG", "NONNEGATIVE", "POSITIVE", "REAL",
-    "SEED", "TEXT", "PATH", "RESULT", "FRACTION", "optional",
+    "COUNT", "COUNT0", "FLAG", "FRACTION", "NONNEGATIVE", "PATH", "POSITIVE", "REAL", "RESULT",
+    "SEED", "TEXT", "Anything", "Array", "Either", "FilePath", "Flag", "Function", "Instance",
+    "Items", "Number", "Table", "Text", "check_call", "checked", "optional", "rules_of",
 ]  # fmt: skip
 
 #: the attribute a checked callable (or a checked class's ``__init__``) keeps its rules in

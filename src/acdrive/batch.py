@@ -557,7 +557,8 @@ def _unknown_field(i: int, overrides: dict, field: str, rule: str) -> InputError
                 return InputError(f"variants[{i}][{key!r}]", f"{field}: {rule}")
         inside = (field + ".", field + "[", key + ".", key + "[")
         if key == field or key.startswith(inside[:2]) or field.startswith(inside[2:]):
-            return InputError(f"variants[{i}][{key!r}]", rule if key == field else f"{field}: {rule}")
+            said = rule if key == field else f"{field}: {rule}"
+            return InputError(f"variants[{i}][{key!r}]", said)
     return InputError(field, rule)
 
 

@@ -52,7 +52,18 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
-from acdrive._arguments import Array, Instance, Items, Table, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    POSITIVE,
+    REAL,
+    Array,
+    Instance,
+    Items,
+    Table,
+    Text,
+    checked,
+)
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._toml import constant
 from acdrive.analysis._freqresp import evaluate_ss
@@ -122,7 +133,10 @@ def _plant_response(params, w_e: float, w: np.ndarray, delay: float) -> np.ndarr
     return G
 
 
-@checked(params=Instance(IMParams, PMSGParams), w_e=REAL, k=Instance(LTI), w=Array(1, low=0.0), delay=NONNEGATIVE)
+@checked(
+    params=Instance(IMParams, PMSGParams), w_e=REAL, k=Instance(LTI), w=Array(1, low=0.0),
+    delay=NONNEGATIVE,
+)
 def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarray:
     """y_2 / r_1 of (10) (``analysis._icad_frequency.icad_quantities``) at the frequencies ``w``
     [rad/s] for the plant of ``params`` at electrical speed ``w_e`` with k on both channels, k
@@ -168,7 +182,11 @@ def fit_sinusoid(t: np.ndarray, y: np.ndarray, w: float) -> complex:
     return complex(coef[0], coef[1])
 
 
-@checked(params=Instance(IMParams, PMSGParams), controller=Instance(LTI), w_e=REAL, frequencies=Items(POSITIVE), amplitude=POSITIVE, sample_time=POSITIVE, hold_samples=COUNT, settle=NONNEGATIVE, window=POSITIVE, min_periods=COUNT, substeps=COUNT, name=Text(empty=True))
+@checked(
+    params=Instance(IMParams, PMSGParams), controller=Instance(LTI), w_e=REAL,
+    frequencies=Items(POSITIVE), amplitude=POSITIVE, sample_time=POSITIVE, hold_samples=COUNT,
+    settle=NONNEGATIVE, window=POSITIVE, min_periods=COUNT, substeps=COUNT, name=Text(empty=True),
+)
 @dataclass(frozen=True)
 class CouplingSetup:
     """One coupling measurement: the machine (``IMParams``: stationary frame; ``PMSGParams``: dq
@@ -217,7 +235,17 @@ class CouplingSetup:
         return self.settle + max(self.window_for(w) for w in self.frequencies)
 
 
-@checked(setup=Instance(CouplingSetup), frequencies=Array(1, complex=True, finite=False, empty=True), measured=Array(1, complex=True, finite=False, empty=True), measured_direct=Array(1, complex=True, finite=False, empty=True), icad=Array(1, complex=True, finite=False, empty=True), icad_delayed=Array(1, complex=True, finite=False, empty=True), direct_predicted=Array(1, complex=True, finite=False, empty=True), uncertainty=Array(1, complex=True, finite=False, empty=True), peak_voltage=Array(1, complex=True, finite=False, empty=True), wall_time=NONNEGATIVE, extra=Table(empty=True))
+@checked(
+    setup=Instance(CouplingSetup), frequencies=Array(1, complex=True, finite=False, empty=True),
+    measured=Array(1, complex=True, finite=False, empty=True),
+    measured_direct=Array(1, complex=True, finite=False, empty=True),
+    icad=Array(1, complex=True, finite=False, empty=True),
+    icad_delayed=Array(1, complex=True, finite=False, empty=True),
+    direct_predicted=Array(1, complex=True, finite=False, empty=True),
+    uncertainty=Array(1, complex=True, finite=False, empty=True),
+    peak_voltage=Array(1, complex=True, finite=False, empty=True), wall_time=NONNEGATIVE,
+    extra=Table(empty=True),
+)
 @dataclass
 class CouplingResult:
     """Per injection frequency: the measured y_2 / r_1 and y_1 / r_1 (complex), (10) without and

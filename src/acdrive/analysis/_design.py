@@ -35,7 +35,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from acdrive._arguments import Array, Either, Function, Instance, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL, TEXT
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    POSITIVE,
+    REAL,
+    TEXT,
+    Array,
+    Either,
+    Function,
+    Instance,
+    Text,
+    checked,
+)
 from acdrive.analysis._freqresp import LTI, evaluate_ss
 from acdrive.analysis._icad import analyse, default_grid
 from acdrive.analysis._icad_frequency import icad_quantities, stack_plants
@@ -49,7 +61,11 @@ from acdrive.machines._pmsm import PMSGParams
 BANDWIDTH_MEASURES = ("crossover", "closed_loop")
 
 
-@checked(bandwidth_rad_s=POSITIVE, gm_db=NONNEGATIVE, pm_deg=NONNEGATIVE, coupling_db=REAL, w_r_min=REAL, w_r_max=REAL, n_speeds=COUNT, structural_gm_db=NONNEGATIVE, bandwidth_measure=Text(BANDWIDTH_MEASURES))
+@checked(
+    bandwidth_rad_s=POSITIVE, gm_db=NONNEGATIVE, pm_deg=NONNEGATIVE, coupling_db=REAL, w_r_min=REAL,
+    w_r_max=REAL, n_speeds=COUNT, structural_gm_db=NONNEGATIVE,
+    bandwidth_measure=Text(BANDWIDTH_MEASURES),
+)
 @dataclass(frozen=True)
 class Specifications:
     """Performance and robustness specifications over a speed range (see module docstring).
@@ -199,7 +215,10 @@ def _worst(values: np.ndarray, speeds: np.ndarray, lower_is_worse: bool):
     return float(v[k]), float(speeds[k])
 
 
-@checked(plant_family_=PLANT_FAMILY, k1=CONTROLLER, k2=CONTROLLER, specs=Instance(Specifications), w=Array(1, low=0.0, optional=True), speeds=Array((0, 1), optional=True))
+@checked(
+    plant_family_=PLANT_FAMILY, k1=CONTROLLER, k2=CONTROLLER, specs=Instance(Specifications),
+    w=Array(1, low=0.0, optional=True), speeds=Array((0, 1), optional=True),
+)
 def check_controller(
     plant_family_, k1: LTI, k2: LTI, specs: Specifications, *, w=None, speeds=None
 ) -> ControllerCheck:
@@ -401,7 +420,10 @@ def _unit_controller_response(pi_zero, lag, s):
     return k
 
 
-@checked(plant=PLANT_FAMILY, speeds=Array((0, 1), optional=True), specs=Instance(Specifications), w=Array(1, low=0.0, optional=True), max_verify=COUNT)
+@checked(
+    plant=PLANT_FAMILY, speeds=Array((0, 1), optional=True), specs=Instance(Specifications),
+    w=Array(1, low=0.0, optional=True), max_verify=COUNT,
+)
 def propose_controller(
     plant, speeds=None, specs: Specifications = PAPER_SPECS, *, w=None, max_verify: int = 3
 ) -> Proposal:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from acdrive._arguments import Array, Instance, checked, REAL
+from acdrive._arguments import REAL, Array, Instance, checked
 from acdrive.analysis._freqresp import LTI, check_frequency_grid
 from acdrive.analysis._plants import Plant2x2, as_plant, plant_from_params
 from acdrive.errors import InputError, require_finite

@@ -64,7 +64,19 @@ from fractions import Fraction
 
 import numpy as np
 
-from acdrive._arguments import Anything, Array, Either, Flag, Items, checked, COUNT0, FLAG, NONNEGATIVE, REAL, TEXT
+from acdrive._arguments import (
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    REAL,
+    TEXT,
+    Anything,
+    Array,
+    Either,
+    Flag,
+    Items,
+    checked,
+)
 from acdrive.errors import InputError, require_nonnegative
 
 __all__ = ["HurwitzResult", "complex_hurwitz", "is_hurwitz", "routh_hurwitz"]
@@ -78,7 +90,11 @@ COEFFICIENTS = Either(
 )
 
 
-@checked(stable=FLAG, n_rhp=COUNT0, n_imag=COUNT0, marginal=FLAG, first_column=Items(Anything(), empty=True), determinants=Items(Anything(), empty=True), array=Items(Anything(), empty=True), exact=FLAG, method=TEXT)
+@checked(
+    stable=FLAG, n_rhp=COUNT0, n_imag=COUNT0, marginal=FLAG,
+    first_column=Items(Anything(), empty=True), determinants=Items(Anything(), empty=True),
+    array=Items(Anything(), empty=True), exact=FLAG, method=TEXT,
+)
 @dataclass(frozen=True)
 class HurwitzResult:
     """Outcome of a Hurwitz test.

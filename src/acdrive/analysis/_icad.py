@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, checked, FLAG
+from acdrive._arguments import FLAG, Array, Instance, Items, checked
 from acdrive.analysis._freqresp import LTI, check_frequency_grid
 from acdrive.analysis._icad_conditions import StructureConditions, siso_zeros, structure_conditions
 from acdrive.analysis._icad_frequency import ICADResponse, PointEvaluator, icad_response
@@ -72,7 +72,12 @@ class ChannelAnalysis:
     channel_stable: bool
 
 
-@checked(plant=Instance(Plant2x2), conditions=Instance(StructureConditions), structural=Instance(StructuralMargin), channels=Items(Instance(ChannelAnalysis)), closed_loop_poles=Array(1, complex=True, finite=False, empty=True), closed_loop_stable=FLAG, b1=FLAG, b2=FLAG, response=Instance(ICADResponse))
+@checked(
+    plant=Instance(Plant2x2), conditions=Instance(StructureConditions),
+    structural=Instance(StructuralMargin), channels=Items(Instance(ChannelAnalysis)),
+    closed_loop_poles=Array(1, complex=True, finite=False, empty=True), closed_loop_stable=FLAG,
+    b1=FLAG, b2=FLAG, response=Instance(ICADResponse),
+)
 @dataclass(frozen=True)
 class ICADAnalysis:
     """Full ICAD of one plant with a diagonal controller on a frequency grid.
@@ -297,7 +302,10 @@ def summarize(analyses: Sequence[ICADAnalysis]) -> SweepSummary:
     )
 
 
-@checked(plants=Items(PLANT), k1=CONTROLLER, k2=CONTROLLER, w=Array(1, low=0.0, optional=True), verify=FLAG)
+@checked(
+    plants=Items(PLANT), k1=CONTROLLER, k2=CONTROLLER, w=Array(1, low=0.0, optional=True),
+    verify=FLAG,
+)
 def sweep(plants: Sequence, k1: LTI, k2: LTI, w=None, *, verify: bool = False):
     """``analyse`` over plants (e.g. ``plants_for(machine, speeds)``); returns (list, summary)."""
     analyses = [analyse(p, k1, k2, w, verify=verify) for p in plants]

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, checked, REAL
+from acdrive._arguments import REAL, Array, Instance, checked
 from acdrive.errors import InputError, require_finite
 from acdrive.machines._induction import IMParams
 from acdrive.machines._pmsm import PMSGParams

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import checked, FLAG
+from acdrive._arguments import FLAG, checked
 from acdrive.analysis._freqresp import evaluate_ss
 from acdrive.analysis._icad_frequency import PointEvaluator
 from acdrive.analysis._icad_roots import (

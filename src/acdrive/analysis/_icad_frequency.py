@@ -147,7 +147,15 @@ def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, 
     return out
 
 
-@checked(w=Array(1, finite=False, empty=True), speeds=Array(1, finite=False, empty=True), G=Array(4, complex=True, finite=False, empty=True), k=Array(2, complex=True, finite=False, empty=True), gamma=Array(2, complex=True, finite=False, empty=True), h=Array(3, complex=True, finite=False, empty=True), c=Array(3, complex=True, finite=False, empty=True), coupling=Array(3, complex=True, finite=False, empty=True))
+@checked(
+    w=Array(1, finite=False, empty=True), speeds=Array(1, finite=False, empty=True),
+    G=Array(4, complex=True, finite=False, empty=True),
+    k=Array(2, complex=True, finite=False, empty=True),
+    gamma=Array(2, complex=True, finite=False, empty=True),
+    h=Array(3, complex=True, finite=False, empty=True),
+    c=Array(3, complex=True, finite=False, empty=True),
+    coupling=Array(3, complex=True, finite=False, empty=True),
+)
 @dataclass(frozen=True)
 class ICADResponse:
     """ICAD frequency data over a (plant, frequency) grid.

@@ -20,7 +20,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Either, Instance, Items, Table, Text, checked, POSITIVE, REAL, TEXT, optional
+from acdrive._arguments import (
+    POSITIVE,
+    REAL,
+    TEXT,
+    Array,
+    Either,
+    Instance,
+    Items,
+    Table,
+    Text,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError, require_finite
 from acdrive.machines import _registry as registry
 from acdrive.machines._dfim import DFIMParams
@@ -50,7 +62,11 @@ def _real_matrix(name: str, value, shape: tuple[int | None, int | None]) -> np.n
     return arr
 
 
-@checked(A=Array(2, empty=True), B=Array(2, empty=True), C=Array(2, empty=True), D=Array(2), inputs=Items(TEXT), outputs=Items(TEXT), speed=optional(REAL), name=Text(empty=True), meta=Table(empty=True))
+@checked(
+    A=Array(2, empty=True), B=Array(2, empty=True), C=Array(2, empty=True), D=Array(2),
+    inputs=Items(TEXT), outputs=Items(TEXT), speed=optional(REAL), name=Text(empty=True),
+    meta=Table(empty=True),
+)
 @dataclass(frozen=True)
 class Plant2x2:
     """A real 2x2 linear plant x' = A x + B u, y = C x + D u (Ugalde-Loo et al. (9)).
@@ -189,7 +205,10 @@ MACHINES = registry.MACHINES
 machine_params = registry.machine_params
 
 
-@checked(params=Instance(IMParams, PMSGParams, DFIMParams), speed=REAL, w_e=POSITIVE, name=Text(empty=True))
+@checked(
+    params=Instance(IMParams, PMSGParams, DFIMParams), speed=REAL, w_e=POSITIVE,
+    name=Text(empty=True),
+)
 def plant_from_params(params, speed: float, *, w_e: float = W_E_60HZ, name: str = "") -> Plant2x2:
     """Current-subsystem plant of a machine given by its parameters, at electrical speed ``speed``.
 

@@ -19,7 +19,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, Text, checked, COUNT, NONNEGATIVE, POSITIVE, SEED, TEXT
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    POSITIVE,
+    SEED,
+    TEXT,
+    Array,
+    Instance,
+    Items,
+    Text,
+    checked,
+)
 from acdrive.analysis._design import PLANT_FAMILY, loop_gain_margin_db, plant_family
 from acdrive.control._lti import CONTROLLER
 from acdrive.analysis._freqresp import LTI
@@ -30,7 +41,9 @@ from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._induction import IMParams
 
 
-@checked(R_s=POSITIVE, R_r=POSITIVE, L_s=POSITIVE, L_r=POSITIVE, L_m=POSITIVE, label=Text(empty=True))
+@checked(
+    R_s=POSITIVE, R_r=POSITIVE, L_s=POSITIVE, L_r=POSITIVE, L_m=POSITIVE, label=Text(empty=True),
+)
 @dataclass(frozen=True)
 class Perturbation:
     """Multiplicative factors on R_s, R_r, L_s, L_r, L_m of an IM, with a label."""
@@ -66,7 +79,10 @@ NOMINAL = Perturbation(label="nominal")
 PAPER_PERTURBATION = Perturbation(2.0, 2.0, 0.6, 0.6, 0.59, label="R x 2, L x 0.6 (paper)")
 
 
-@checked(n=COUNT, seed=SEED, r_range=Items(POSITIVE), l_range=Items(POSITIVE), l_spread=NONNEGATIVE, params=Instance(IMParams, optional=True), max_draws=COUNT)
+@checked(
+    n=COUNT, seed=SEED, r_range=Items(POSITIVE), l_range=Items(POSITIVE), l_spread=NONNEGATIVE,
+    params=Instance(IMParams, optional=True), max_draws=COUNT,
+)
 def random_perturbations(
     n: int,
     seed: int = 0,
@@ -244,7 +260,10 @@ def _grid(plant, k1, k2, w):
     return default_grid(plant, k1, k2, n=2000) if w is None else w
 
 
-@checked(plant=PLANT_FAMILY, k1=CONTROLLER, k2=CONTROLLER, speeds=Array((0, 1)), w=Array(1, low=0.0, optional=True), case=TEXT)
+@checked(
+    plant=PLANT_FAMILY, k1=CONTROLLER, k2=CONTROLLER, speeds=Array((0, 1)),
+    w=Array(1, low=0.0, optional=True), case=TEXT,
+)
 def speed_sweep(plant, k1: LTI, k2: LTI, speeds, *, w=None, case: str = "nominal"):
     """ICAD at every speed of ``speeds`` for a machine name, parameters or plant family."""
     speeds = _speeds(speeds)
@@ -259,7 +278,10 @@ def speed_sweep(plant, k1: LTI, k2: LTI, speeds, *, w=None, case: str = "nominal
     return summarize_cases([_case_result(case, p, params, k1, k2, w) for p in plants])
 
 
-@checked(params=Instance(IMParams), k1=CONTROLLER, k2=CONTROLLER, speeds=Array((0, 1)), perturbations=Items(Instance(Perturbation)), w=Array(1, low=0.0, optional=True))
+@checked(
+    params=Instance(IMParams), k1=CONTROLLER, k2=CONTROLLER, speeds=Array((0, 1)),
+    perturbations=Items(Instance(Perturbation)), w=Array(1, low=0.0, optional=True),
+)
 def perturbation_sweep(
     params: IMParams,
     k1: LTI,

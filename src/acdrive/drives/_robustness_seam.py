@@ -10,7 +10,18 @@ stability criterion is the row's ``stable`` flag (``Drive.verdict`` and a finite
 
 from __future__ import annotations
 
-from acdrive._arguments import Function, Items, Table, Text, checked, NONNEGATIVE, POSITIVE, REAL, TEXT, optional
+from acdrive._arguments import (
+    NONNEGATIVE,
+    POSITIVE,
+    REAL,
+    TEXT,
+    Function,
+    Items,
+    Table,
+    Text,
+    checked,
+    optional,
+)
 
 import math
 from collections.abc import Callable
@@ -58,7 +69,13 @@ def finished_finite(row: dict, prefixes: tuple[str, ...]) -> dict:
         if isinstance(v, float) and k.startswith(prefixes))}  # fmt: skip
 
 
-@checked(table=TEXT, fields=Table(TEXT), reducers=Function(), criteria=Function(), derived=Function(optional=True), linear=Function(optional=True), linear_rule=Text(empty=True), design_table=Text(empty=True), design_fields=Items(TEXT, empty=True), design_aliases=Table(TEXT, empty=True, optional=True), design_figures=Function(optional=True), point_analysis=Function(optional=True))
+@checked(
+    table=TEXT, fields=Table(TEXT), reducers=Function(), criteria=Function(),
+    derived=Function(optional=True), linear=Function(optional=True), linear_rule=Text(empty=True),
+    design_table=Text(empty=True), design_fields=Items(TEXT, empty=True),
+    design_aliases=Table(TEXT, empty=True, optional=True), design_figures=Function(optional=True),
+    point_analysis=Function(optional=True),
+)
 @dataclass(frozen=True)
 class RobustnessSeam:
     """A drive's answers to a robustness map.

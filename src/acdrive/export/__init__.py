@@ -10,7 +10,7 @@ step on QEMU's board model (``acdrive.export._cost``, ``_target``). docs/guide/e
 describes the files and the checks.
 """
 
-from acdrive._arguments import Instance, Table, Text, checked, FLAG, POSITIVE, TEXT
+from acdrive._arguments import FLAG, POSITIVE, TEXT, Instance, Table, Text, checked
 from acdrive.export._cost import board_cost, target_report
 from acdrive.export._sil import run_in_loop
 from acdrive.sim._ccode import _c_source

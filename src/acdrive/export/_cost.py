@@ -18,7 +18,17 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._arguments import Instance, Items, Table, checked, COUNT, PATH, POSITIVE, TEXT, optional
+from acdrive._arguments import (
+    COUNT,
+    PATH,
+    POSITIVE,
+    TEXT,
+    Instance,
+    Items,
+    Table,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError
 
 #: the core the papers' rates are read against: a 168 MHz Cortex-M4F, one instruction per cycle
@@ -106,7 +116,13 @@ def case_export(target: str, duration: float | None = None):
     return case, setup, drive, initial, held, export
 
 
-@checked(compiled=Instance('acdrive.sim._compiled:CompiledSystem'), export=Instance('acdrive.sim._ccode._c_source:CExport'), duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT, initial=Table(Table(empty=True), empty=True, optional=True), held=Table(Table(empty=True), empty=True, optional=True), folder=optional(PATH))
+@checked(
+    compiled=Instance("acdrive.sim._compiled:CompiledSystem"),
+    export=Instance("acdrive.sim._ccode._c_source:CExport"), duration=POSITIVE,
+    sample_time=POSITIVE, substeps=COUNT,
+    initial=Table(Table(empty=True), empty=True, optional=True),
+    held=Table(Table(empty=True), empty=True, optional=True), folder=optional(PATH),
+)
 def board_cost(compiled, export, duration: float, sample_time: float, substeps: int = 4,
                initial=None, held=None, folder: Path | None = None) -> list[dict]:  # fmt: skip
     """Per chain of ``export``: the float build's sizes and instructions per step on the

@@ -20,7 +20,20 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._arguments import Function, Instance, Items, Table, Text, checked, COUNT, FLAG, PATH, POSITIVE, REAL, optional
+from acdrive._arguments import (
+    COUNT,
+    FLAG,
+    PATH,
+    POSITIVE,
+    REAL,
+    Function,
+    Instance,
+    Items,
+    Table,
+    Text,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError
 from acdrive.sim._ccode._c_source import CExport, ChainModel, Member
 
@@ -167,7 +180,15 @@ def _copy_out(chain: _LoadedChain, Y: np.ndarray, E: np.ndarray) -> None:
         E[i] = getattr(chain.outputs, field) if field is not None else 0
 
 
-@checked(compiled=Instance('acdrive.sim._compiled:CompiledSystem'), export=Instance(CExport), duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT, initial=Table(Table(empty=True), empty=True, optional=True), held=Table(Table(empty=True), empty=True, optional=True), log=Items(Instance('acdrive.core._parts:Port'), optional=True), log_every=COUNT, t0=REAL, real=Text(('double', 'float')), folder=optional(PATH), on_inputs=Function(optional=True), float_inputs=FLAG)
+@checked(
+    compiled=Instance("acdrive.sim._compiled:CompiledSystem"), export=Instance(CExport),
+    duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT,
+    initial=Table(Table(empty=True), empty=True, optional=True),
+    held=Table(Table(empty=True), empty=True, optional=True),
+    log=Items(Instance("acdrive.core._parts:Port"), optional=True), log_every=COUNT, t0=REAL,
+    real=Text(("double", "float")), folder=optional(PATH), on_inputs=Function(optional=True),
+    float_inputs=FLAG,
+)
 def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
                 substeps: int = 4, initial=None, held=None, log=None, log_every: int = 1,
                 t0: float = 0.0, real: str = "double", folder=None,

@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from acdrive._arguments import Text, checked, TEXT
+from acdrive._arguments import TEXT, Text, checked
 from acdrive.errors import InputError
 from acdrive.identify._experiment import StandstillPlan
 from acdrive.identify._mechanics import MechanicsPlan

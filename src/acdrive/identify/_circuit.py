@@ -32,7 +32,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Array, Either, Instance, Text, checked, COUNT, POSITIVE, NONNEGATIVE, optional
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    POSITIVE,
+    Array,
+    Either,
+    Instance,
+    Text,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._winding import sampled_response
 
@@ -80,7 +90,7 @@ class InverseGamma:
         return self.R_R / self.L_M
 
 
-@checked(machine=Instance('acdrive.machines._induction:IMParams'))
+@checked(machine=Instance("acdrive.machines._induction:IMParams"))
 def inverse_gamma(machine) -> InverseGamma:
     """The inverse-Gamma parameters of a T-circuit machine (``IMParams``; module docstring)."""
     a = machine.L_m / machine.L_r
@@ -142,7 +152,10 @@ def standstill_state_space(params) -> tuple[np.ndarray, np.ndarray]:
     return A, B
 
 
-@checked(params=Either(Instance(InverseGamma), Array(1)), w=Array(), hold=POSITIVE, dead_time=NONNEGATIVE)
+@checked(
+    params=Either(Instance(InverseGamma), Array(1)), w=Array(), hold=POSITIVE,
+    dead_time=NONNEGATIVE,
+)
 def sampled_admittance(params, w, hold: float, dead_time: float = 0.0) -> np.ndarray:
     """Y_d(e^{jwT}) = i_k / v_k [S] of the standstill circuit driven by a voltage held over each
     period ``hold`` = T (zero-order hold, the inverter's latched command) and its current sampled

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from acdrive._arguments import Instance, Table, checked, COUNT, COUNT0, FLAG, RESULT, SEED
+from acdrive._arguments import COUNT, COUNT0, FLAG, RESULT, SEED, Instance, Table, checked
 from acdrive.errors import InputError
 from acdrive.identify._circuit import NAMES, inverse_gamma
 from acdrive.identify._experiment import (
@@ -35,7 +35,10 @@ from acdrive.identify._fit import BOOTSTRAP_COUNT
 from acdrive.identify._standstill import identify_standstill
 
 
-@checked(repetitions=COUNT, jacobian=Table(RESULT), bootstrap=Table(RESULT), bias=Table(RESULT), half_width=Table(RESULT))
+@checked(
+    repetitions=COUNT, jacobian=Table(RESULT), bootstrap=Table(RESULT), bias=Table(RESULT),
+    half_width=Table(RESULT),
+)
 @dataclass(frozen=True)
 class Coverage:
     """Per parameter (``_circuit.NAMES`` order): the fraction of repetitions whose Jacobian and
@@ -56,7 +59,10 @@ def reading(log: StandstillLog, sensor: CurrentSensor, seed: int) -> StandstillL
     return StandstillLog(log.time, log.v_a, current, log.source)
 
 
-@checked(machine=Instance('acdrive.machines._induction:IMParams'), plan=Instance(StandstillPlan), repetitions=COUNT, seed=SEED, bootstrap=COUNT0, compensate=FLAG)
+@checked(
+    machine=Instance("acdrive.machines._induction:IMParams"), plan=Instance(StandstillPlan),
+    repetitions=COUNT, seed=SEED, bootstrap=COUNT0, compensate=FLAG,
+)
 def coverage(machine, plan: StandstillPlan, repetitions: int, seed: int = 0,
              bootstrap: int = BOOTSTRAP_COUNT, compensate: bool = True) -> Coverage:  # fmt: skip
     """Repeat the simulated standstill tests of ``plan`` on ``machine`` (module docstring)."""

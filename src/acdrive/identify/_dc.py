@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Instance, checked, COUNT0, SEED
+from acdrive._arguments import COUNT0, SEED, Instance, checked
 from acdrive.errors import InputError
 from acdrive.identify._experiment import StandstillLog
 from acdrive.identify._fit import (

@@ -41,7 +41,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Instance, Items, Text, checked, COUNT0, FLAG, NONNEGATIVE, POSITIVE, RESULT, SEED, optional
+from acdrive._arguments import (
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    POSITIVE,
+    RESULT,
+    SEED,
+    Instance,
+    Items,
+    Text,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._circuit import standstill_state_space
 from acdrive.identify._dc import Z_95, DCStepFit, fit_dc_steps
@@ -84,7 +96,10 @@ SHORTED_MODEL = winding_model(
 )
 
 
-@checked(machine=Instance('acdrive.machines._dfim:DFIMParams'), plan=Instance(StandstillPlan), stator=Text(('open', 'shorted')), kind=Text(('dc', 'injection')), seed=SEED)
+@checked(
+    machine=Instance("acdrive.machines._dfim:DFIMParams"), plan=Instance(StandstillPlan),
+    stator=Text(("open", "shorted")), kind=Text(("dc", "injection")), seed=SEED,
+)
 def dfim_test(machine, plan: StandstillPlan, stator: str, kind: str, seed: int = 1):
     """The ``kind`` ('dc' or 'injection') test of ``plan`` from the rotor converter of the DFIM
     ``machine`` (a ``DFIMParams``) at standstill with its stator ``stator`` ('open' or
@@ -99,7 +114,10 @@ def dfim_test(machine, plan: StandstillPlan, stator: str, kind: str, seed: int =
                     f"simulated {kind} test, stator {stator}", stator=stator)  # fmt: skip
 
 
-@checked(open=Instance(ImpedanceFit), shorted=Instance(ImpedanceFit), dc=Instance(DCStepFit, optional=True), estimates=Items(Instance(Estimate)), consistency=RESULT)
+@checked(
+    open=Instance(ImpedanceFit), shorted=Instance(ImpedanceFit),
+    dc=Instance(DCStepFit, optional=True), estimates=Items(Instance(Estimate)), consistency=RESULT,
+)
 @dataclass(frozen=True)
 class DFIMIdentification:
     """The open- and shorted-stator fits, the open-stator DC fit (or None), the estimates
@@ -122,7 +140,11 @@ def _stator_side(values) -> np.ndarray:
     return np.array([L_M * math.sqrt(R_s / R_S), L_M * R_s / R_S])
 
 
-@checked(open_log=Instance(StandstillLog), shorted_log=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), R_s=optional(POSITIVE), R_s_std=NONNEGATIVE, seed=SEED, bootstrap=COUNT0, dead_time=NONNEGATIVE, check=FLAG)
+@checked(
+    open_log=Instance(StandstillLog), shorted_log=Instance(StandstillLog), base_frequency=POSITIVE,
+    settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), R_s=optional(POSITIVE),
+    R_s_std=NONNEGATIVE, seed=SEED, bootstrap=COUNT0, dead_time=NONNEGATIVE, check=FLAG,
+)
 def identify_dfim(open_log: StandstillLog, shorted_log: StandstillLog, base_frequency: float,
                   settle: float, dc: StandstillLog | None = None, R_s: float | None = None,
                   R_s_std: float = 0.0, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,

@@ -38,11 +38,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, Text, checked, COUNT, NONNEGATIVE, POSITIVE, REAL, SEED
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    POSITIVE,
+    REAL,
+    SEED,
+    Array,
+    Instance,
+    Items,
+    Text,
+    checked,
+)
 from acdrive._frames import K_PEAK
 from acdrive.core._profile import Profile
 from acdrive.errors import InputError, require_finite, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSGParams
+from acdrive.machines._registry import MACHINE_RECORD
 
 #: the log's columns: name -> (unit, meaning); the one declaration readers and writers use
 LOG_COLUMNS = {
@@ -53,7 +65,7 @@ LOG_COLUMNS = {
 
 
 #: the machines a standstill bench takes
-MACHINE = Instance('acdrive.machines._induction:IMParams', PMSGParams, 'acdrive.machines._dfim:DFIMParams', what='an IMParams, PMSGParams or DFIMParams')
+MACHINE = MACHINE_RECORD
 
 
 @checked(time=Array(1), v_a=Array(1), i_a=Array(1), source=Text())
@@ -79,7 +91,11 @@ class CurrentSensor:
     lsb: float = 20.0 / 4096  # a 12-bit converter over +-10 A
 
 
-@checked(dc_levels=Items(REAL), dc_step=POSITIVE, base_frequency=POSITIVE, tones=Items(COUNT), tone_amplitude=NONNEGATIVE, settle=NONNEGATIVE, periods=COUNT, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
+@checked(
+    dc_levels=Items(REAL), dc_step=POSITIVE, base_frequency=POSITIVE, tones=Items(COUNT),
+    tone_amplitude=NONNEGATIVE, settle=NONNEGATIVE, periods=COUNT, f_pwm=POSITIVE, v_dc=POSITIVE,
+    t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor),
+)
 @dataclass(frozen=True)
 class StandstillPlan:
     """The two standstill tests and the bench they run on (module docstring)."""

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Items, Text, checked, RESULT
+from acdrive._arguments import RESULT, Items, Text, checked
 
 #: the confidence level of every interval
 LEVEL = 0.95
@@ -38,7 +38,10 @@ class FitNotConverged(RuntimeError):
         )
 
 
-@checked(name=Text(), unit=Text(empty=True), meaning=Text(empty=True), value=RESULT, jacobian=Items(RESULT), bootstrap=Items(RESULT))
+@checked(
+    name=Text(), unit=Text(empty=True), meaning=Text(empty=True), value=RESULT,
+    jacobian=Items(RESULT), bootstrap=Items(RESULT),
+)
 @dataclass(frozen=True)
 class Estimate:
     """One identified quantity: ``value`` [``unit``] with its 95 % interval from the Jacobian

@@ -75,7 +75,20 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from acdrive._arguments import Function, Instance, Items, checked, COUNT0, FLAG, NONNEGATIVE, POSITIVE, REAL, SEED, TEXT, optional
+from acdrive._arguments import (
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    POSITIVE,
+    REAL,
+    SEED,
+    TEXT,
+    Function,
+    Instance,
+    Items,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.identify._circuit import (
     INVERSE_GAMMA,
@@ -254,7 +267,10 @@ def _start(spec: Spectrum) -> np.ndarray:
     return np.log([R_s, L_sigma, R_R, L_M])
 
 
-@checked(fields=Items(Items(TEXT)), admittance=Function(), start=Function(), record=Function(), dead_time=NONNEGATIVE, state_space=Function(optional=True))
+@checked(
+    fields=Items(Items(TEXT)), admittance=Function(), start=Function(), record=Function(),
+    dead_time=NONNEGATIVE, state_space=Function(optional=True),
+)
 @dataclass(frozen=True)
 class AdmittanceModel:
     """A winding at standstill as the fit sees it: its parameters ``fields`` ((name, unit,
@@ -320,7 +336,11 @@ def _solve(spec: Spectrum, theta0, tolerance: float = 1e-12, model=INVERSE_GAMMA
 BOOTSTRAP_TOLERANCE = 1e-8
 
 
-@checked(log=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE, voltage_error=optional(REAL), seed=SEED, bootstrap=COUNT0, check=FLAG, voltage_error_std=NONNEGATIVE, model=Instance(AdmittanceModel), dead_time=NONNEGATIVE)
+@checked(
+    log=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE,
+    voltage_error=optional(REAL), seed=SEED, bootstrap=COUNT0, check=FLAG,
+    voltage_error_std=NONNEGATIVE, model=Instance(AdmittanceModel), dead_time=NONNEGATIVE,
+)
 def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                   voltage_error: float | None = None, seed: int = 0,
                   bootstrap: int = BOOTSTRAP_COUNT, check: bool = True,

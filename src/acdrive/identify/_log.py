@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._arguments import Instance, checked, PATH, TEXT
+from acdrive._arguments import PATH, TEXT, Instance, checked
 from acdrive.errors import InputError
 from acdrive.identify._experiment import LOG_COLUMNS, StandstillLog
 

@@ -67,7 +67,24 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, Number, Table, Text, checked, COUNT, COUNT0, FLAG, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT
+from acdrive._arguments import (
+    COUNT,
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    PATH,
+    POSITIVE,
+    REAL,
+    RESULT,
+    SEED,
+    TEXT,
+    Array,
+    Instance,
+    Items,
+    Number,
+    Table,
+    checked,
+)
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._fit import (
     BOOTSTRAP_COUNT,
@@ -129,7 +146,10 @@ def encoder_speed(theta: np.ndarray, h: float, sensor: SpeedSensor, rng) -> np.n
     return np.concatenate(([math.nan], np.diff(counts) * step / h))
 
 
-@checked(levels=Items(REAL), hold=POSITIVE, start=NONNEGATIVE, log_every=COUNT, tau_c=NONNEGATIVE, sensor=Instance(SpeedSensor))
+@checked(
+    levels=Items(REAL), hold=POSITIVE, start=NONNEGATIVE, log_every=COUNT, tau_c=NONNEGATIVE,
+    sensor=Instance(SpeedSensor),
+)
 @dataclass(frozen=True)
 class MechanicsPlan:
     """The speed staircase: ``levels`` [rad/s] of one sign, each held ``hold`` [s], the first

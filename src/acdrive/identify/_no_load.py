@@ -72,7 +72,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Either, Instance, checked, COUNT, COUNT0, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT, optional
+from acdrive._arguments import (
+    COUNT,
+    COUNT0,
+    NONNEGATIVE,
+    PATH,
+    POSITIVE,
+    REAL,
+    RESULT,
+    SEED,
+    TEXT,
+    Array,
+    Either,
+    Instance,
+    checked,
+    optional,
+)
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._dc import Z_95
 from acdrive.identify._experiment import CurrentSensor, StandstillPlan, run_test
@@ -98,7 +113,10 @@ SPEED_RTOL = 0.01
 MAX_HALF_WIDTH = 0.5
 
 
-@checked(time=Array(1), v_a=Array(1), i_a=Array(1), w=Array(1), source=TEXT, v_dc=Array(1, optional=True))
+@checked(
+    time=Array(1), v_a=Array(1), i_a=Array(1), w=Array(1), source=TEXT,
+    v_dc=Array(1, optional=True),
+)
 @dataclass(frozen=True)
 class NoLoadLog:
     """A no-load run: equal-length ``time`` [s], ``v_a`` [V], ``i_a`` [A], ``w`` [rad/s] and, if
@@ -112,7 +130,11 @@ class NoLoadLog:
     v_dc: np.ndarray | None = None
 
 
-@checked(frequency=POSITIVE, voltage=POSITIVE, settle=NONNEGATIVE, periods=COUNT, slip=REAL, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
+@checked(
+    frequency=POSITIVE, voltage=POSITIVE, settle=NONNEGATIVE, periods=COUNT, slip=REAL,
+    f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE,
+    sensor=Instance(CurrentSensor),
+)
 @dataclass(frozen=True)
 class NoLoadPlan:
     """The no-load run (module docstring): ``frequency`` [Hz], phase-peak ``voltage`` [V],
@@ -142,7 +164,9 @@ class NoLoadPlan:
         return self.settle + self.periods / self.frequency
 
 
-@checked(machine=Instance('acdrive.machines._induction:IMParams'), plan=Instance(NoLoadPlan), seed=SEED)
+@checked(
+    machine=Instance("acdrive.machines._induction:IMParams"), plan=Instance(NoLoadPlan), seed=SEED,
+)
 def no_load_test(machine, plan: NoLoadPlan, seed: int = 3) -> NoLoadLog:
     """The no-load run of ``plan`` on the cage IM ``machine`` (module docstring)."""
     w = 2.0 * math.pi * plan.frequency * (1.0 - plan.slip) / machine.n_p
@@ -152,7 +176,10 @@ def no_load_test(machine, plan: NoLoadPlan, seed: int = 3) -> NoLoadLog:
     return NoLoadLog(log.time, log.v_a, log.i_a, np.full(log.time.size, w), log.source)
 
 
-@checked(params=Either(Instance('acdrive.identify._circuit:InverseGamma'), Array(1)), w_r=REAL, w=Array(), hold=POSITIVE)
+@checked(
+    params=Either(Instance("acdrive.identify._circuit:InverseGamma"), Array(1)), w_r=REAL,
+    w=Array(), hold=POSITIVE,
+)
 def running_admittance(params, w_r: float, w, hold: float) -> np.ndarray:
     """Y_d(e^{jwT}) [S] of the inverse-Gamma circuit turning at electrical speed ``w_r``
     [rad/s], voltage held over each period T = ``hold``, current sampled at its start
@@ -179,7 +206,10 @@ def _expm_2x2(A: np.ndarray, T: float) -> np.ndarray:
     return np.exp(l2 * T) * np.eye(2) + slope * (A - l2 * np.eye(2))
 
 
-@checked(L_M=Instance(Estimate), frequency=RESULT, speed=RESULT, slip=RESULT, residual=RESULT, link_voltage=optional(RESULT))
+@checked(
+    L_M=Instance(Estimate), frequency=RESULT, speed=RESULT, slip=RESULT, residual=RESULT,
+    link_voltage=optional(RESULT),
+)
 @dataclass(frozen=True)
 class NoLoadFit:
     """L_M of the no-load run with its intervals, the run's frequency [Hz], mean speed [rad/s]
@@ -300,7 +330,11 @@ def link_voltage(log: NoLoadLog, given: float | None = None,
     return mean
 
 
-@checked(log=Instance(NoLoadLog), frequency=POSITIVE, settle=NONNEGATIVE, n_p=COUNT, standstill=Instance('acdrive.identify._impedance:ImpedanceFit'), seed=SEED, bootstrap=COUNT0, v_dc=optional(POSITIVE))
+@checked(
+    log=Instance(NoLoadLog), frequency=POSITIVE, settle=NONNEGATIVE, n_p=COUNT,
+    standstill=Instance("acdrive.identify._impedance:ImpedanceFit"), seed=SEED, bootstrap=COUNT0,
+    v_dc=optional(POSITIVE),
+)
 def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, standstill,
                 seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
                 v_dc: float | None = None) -> NoLoadFit:  # fmt: skip

@@ -43,7 +43,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, Text, checked, COUNT0, FLAG, NONNEGATIVE, POSITIVE, RESULT, SEED
+from acdrive._arguments import (
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    POSITIVE,
+    RESULT,
+    SEED,
+    Array,
+    Instance,
+    Items,
+    Text,
+    checked,
+)
 from acdrive.errors import InputError
 from acdrive.identify._dc import Z_95, DCStepFit, fit_dc_steps
 from acdrive.identify._experiment import StandstillLog, StandstillPlan, multisine, run_test
@@ -106,7 +118,10 @@ class AxisTest:
     holding_torque: float
 
 
-@checked(machine=Instance('acdrive.machines._pmsm:PMSGParams'), plan=Instance(StandstillPlan), axis=Text(('d', 'q')), seed=SEED)
+@checked(
+    machine=Instance("acdrive.machines._pmsm:PMSGParams"), plan=Instance(StandstillPlan),
+    axis=Text(("d", "q")), seed=SEED,
+)
 def axis_test(machine, plan: StandstillPlan, axis: str, seed: int = 1) -> AxisTest:
     """The multisine of ``plan`` on phase a of the PM machine ``machine`` (a ``PMSGParams``)
     with the rotor locked with its ``axis`` ('d' or 'q') on phase a (module docstring)."""
@@ -119,7 +134,10 @@ def axis_test(machine, plan: StandstillPlan, axis: str, seed: int = 1) -> AxisTe
     return AxisTest(log, float(np.max(np.abs(torque[0]))))
 
 
-@checked(d=Instance(ImpedanceFit), q=Instance(ImpedanceFit), dc=Instance(DCStepFit, optional=True), estimates=Items(Instance(Estimate)))
+@checked(
+    d=Instance(ImpedanceFit), q=Instance(ImpedanceFit), dc=Instance(DCStepFit, optional=True),
+    estimates=Items(Instance(Estimate)),
+)
 @dataclass(frozen=True)
 class PMStandstillIdentification:
     """The d- and q-axis fits, the DC-step fit (or None) and the combined estimates
@@ -148,7 +166,11 @@ def combined_resistance(d: ImpedanceFit, q: ImpedanceFit, meaning: str) -> Estim
                     percentile_interval(draws))  # fmt: skip
 
 
-@checked(d_log=Instance(StandstillLog), q_log=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), seed=SEED, bootstrap=COUNT0, dead_time=NONNEGATIVE, check=FLAG)
+@checked(
+    d_log=Instance(StandstillLog), q_log=Instance(StandstillLog), base_frequency=POSITIVE,
+    settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), seed=SEED, bootstrap=COUNT0,
+    dead_time=NONNEGATIVE, check=FLAG,
+)
 def identify_pm_standstill(d_log: StandstillLog, q_log: StandstillLog, base_frequency: float,
                            settle: float, dc: StandstillLog | None = None, seed: int = 0,
                            bootstrap: int = BOOTSTRAP_COUNT,

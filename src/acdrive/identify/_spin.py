@@ -40,7 +40,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Instance, Items, checked, COUNT, COUNT0, NONNEGATIVE, PATH, POSITIVE, REAL, RESULT, SEED, TEXT
+from acdrive._arguments import (
+    COUNT,
+    COUNT0,
+    NONNEGATIVE,
+    PATH,
+    POSITIVE,
+    RESULT,
+    SEED,
+    TEXT,
+    Array,
+    Instance,
+    Items,
+    checked,
+)
 from acdrive.errors import InputError, require_positive
 from acdrive.identify._dc import Z_95
 from acdrive.identify._experiment import CurrentSensor, StandstillPlan, run_test
@@ -55,7 +68,10 @@ SAMPLES_PER_PERIOD = 10
 MAX_HALF_WIDTH = 0.5
 
 
-@checked(speeds=Items(POSITIVE), hold=POSITIVE, settle=NONNEGATIVE, f_pwm=POSITIVE, v_dc=POSITIVE, t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor))
+@checked(
+    speeds=Items(POSITIVE), hold=POSITIVE, settle=NONNEGATIVE, f_pwm=POSITIVE, v_dc=POSITIVE,
+    t_d=NONNEGATIVE, v_drop=NONNEGATIVE, sensor=Instance(CurrentSensor),
+)
 @dataclass(frozen=True)
 class SpinPlan:
     """The spin test (module docstring): ``speeds`` [rad/s, mechanical], each held ``hold``
@@ -100,7 +116,7 @@ class SpinTest:
     braking_torque: float
 
 
-@checked(machine=Instance('acdrive.machines._pmsm:PMSGParams'), plan=Instance(SpinPlan), seed=SEED)
+@checked(machine=Instance("acdrive.machines._pmsm:PMSGParams"), plan=Instance(SpinPlan), seed=SEED)
 def spin_test(machine, plan: SpinPlan, seed: int = 5) -> SpinTest:
     """The short-circuit spin test of ``plan`` on the PM machine ``machine`` (module
     docstring): one run per speed, the logs joined end to end."""
@@ -188,7 +204,11 @@ def _psi(amplitude, stderr, gain) -> float:
     return float(np.sum(weight * gain * amplitude) / np.sum(weight * gain * gain))
 
 
-@checked(log=Instance(SpinLog), n_p=COUNT, settle=NONNEGATIVE, standstill=Instance('acdrive.identify._pm:PMStandstillIdentification'), seed=SEED, bootstrap=COUNT0)
+@checked(
+    log=Instance(SpinLog), n_p=COUNT, settle=NONNEGATIVE,
+    standstill=Instance("acdrive.identify._pm:PMStandstillIdentification"), seed=SEED,
+    bootstrap=COUNT0,
+)
 def fit_spin(log: SpinLog, n_p: int, settle: float, standstill, seed: int = 0,
              bootstrap: int = BOOTSTRAP_COUNT) -> SpinFit:  # fmt: skip
     """psi_m of a spin log (module docstring), with R_s, L_d, L_q from ``standstill`` (a

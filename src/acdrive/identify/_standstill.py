@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Instance, Text, checked, COUNT, COUNT0, NONNEGATIVE, POSITIVE, SEED
+from acdrive._arguments import COUNT, COUNT0, NONNEGATIVE, POSITIVE, SEED, Instance, Text, checked
 from acdrive.identify._circuit import LEAKAGE_SPLITS, InverseGamma, t_circuit
 from acdrive.identify._dc import DCStepFit, fit_dc_steps
 from acdrive.identify._experiment import StandstillLog
@@ -69,7 +69,11 @@ def _t_values(values, n_p: int, split: str) -> np.ndarray:
     return np.array([getattr(machine, name) for name, _, _ in T_FIELDS])
 
 
-@checked(injection=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE, dc=Instance(StandstillLog, optional=True), n_p=COUNT, split=Text(LEAKAGE_SPLITS), seed=SEED, bootstrap=COUNT0, dead_time=NONNEGATIVE)
+@checked(
+    injection=Instance(StandstillLog), base_frequency=POSITIVE, settle=NONNEGATIVE,
+    dc=Instance(StandstillLog, optional=True), n_p=COUNT, split=Text(LEAKAGE_SPLITS), seed=SEED,
+    bootstrap=COUNT0, dead_time=NONNEGATIVE,
+)
 def identify_standstill(injection: StandstillLog, base_frequency: float, settle: float,
                         dc: StandstillLog | None = None, n_p: int = 1, split: str = "equal",
                         seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,

@@ -12,6 +12,7 @@ inertia and friction go to a ``plant.Shaft``).
 
 from __future__ import annotations
 
+from acdrive._arguments import Instance
 from acdrive.errors import InputError
 from acdrive.machines._dfim import BODSON_DFIM, DFIMParams
 from acdrive.machines._induction import DELORENZO_IM, DELORENZO_IM_13, UGALDE_IM_300W, IMParams
@@ -24,6 +25,9 @@ MACHINES: dict[str, IMParams | PMSGParams | DFIMParams] = {
     "pmsg-2mw": PMSG_2MW,
     "bodson-dfim": BODSON_DFIM,
 }
+
+#: the argument rule of a machine record (acdrive._arguments)
+MACHINE_RECORD = Instance(IMParams, PMSGParams, DFIMParams)
 
 
 def names(kind: type | None = None) -> tuple[str, ...]:

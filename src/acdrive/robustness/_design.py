@@ -20,12 +20,29 @@ import copy
 import os
 from dataclasses import dataclass
 
-from acdrive._arguments import Either, Instance, Items, Number, Table, Text, checked, NONNEGATIVE, PATH, POSITIVE, TEXT, optional
+from acdrive._arguments import (
+    NONNEGATIVE,
+    PATH,
+    POSITIVE,
+    TEXT,
+    Either,
+    Instance,
+    Items,
+    Number,
+    Table,
+    checked,
+    optional,
+)
 from acdrive.drives._robustness_seam import Tolerances
 from acdrive.errors import InputError
+from acdrive.machines._registry import MACHINE_RECORD
 
 
-@checked(scenario=TEXT, criteria=Items(Instance('acdrive.drives._robustness_seam:Criterion'), empty=True), rows=Table(Table()), from_estimates=Items(TEXT, empty=True), table=TEXT)
+@checked(
+    scenario=TEXT,
+    criteria=Items(Instance("acdrive.drives._robustness_seam:Criterion"), empty=True),
+    rows=Table(Table()), from_estimates=Items(TEXT, empty=True), table=TEXT,
+)
 @dataclass
 class DesignComparison:
     """``rows``: label ("truth", "estimates") -> {figures of the batch row, ``verdicts``,
@@ -99,7 +116,12 @@ def _estimates_table(estimates, seam) -> dict:
     return {"params": {k: float(v) if k != "n_p" else int(v) for k, v in values.items()}}
 
 
-@checked(scenario=Either(PATH, Table()), estimates=Either(PATH, Table(Number()), Instance('acdrive.machines._induction:IMParams', 'acdrive.machines._pmsm:PMSGParams', 'acdrive.machines._dfim:DFIMParams')), tracking_tolerance=optional(POSITIVE), current_tolerance=NONNEGATIVE, overrides=Table(empty=True, optional=True))
+@checked(
+    scenario=Either(PATH, Table()),
+    estimates=Either(PATH, Table(Number()), MACHINE_RECORD),
+    tracking_tolerance=optional(POSITIVE), current_tolerance=NONNEGATIVE,
+    overrides=Table(empty=True, optional=True),
+)
 def design_comparison(scenario, estimates, *, tracking_tolerance=None,
                       current_tolerance: float = 0.05, overrides: dict | None = None) -> DesignComparison:  # fmt: skip
     """Run ``scenario`` designed on the truth and on ``estimates`` (module docstring)."""

@@ -31,7 +31,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Either, Flag, Instance, Items, Table, Text, checked, COUNT, NONNEGATIVE, PATH, POSITIVE, SEED, TEXT, optional
+from acdrive._arguments import (
+    COUNT,
+    NONNEGATIVE,
+    PATH,
+    POSITIVE,
+    SEED,
+    TEXT,
+    Either,
+    Flag,
+    Instance,
+    Items,
+    Table,
+    Text,
+    checked,
+    optional,
+)
 from acdrive.analysis._robustness import PAPER_PERTURBATION as _ICAD_PAPER
 from acdrive.drives._robustness_seam import CRITERIA, Tolerances
 from acdrive.errors import InputError, require_positive
@@ -59,7 +74,10 @@ MAX_VARIANTS = 100_000
 _NOMINAL_TOL = 1e-12
 
 
-@checked(kind=Text(KINDS), params=Items(TEXT, optional=True), points=COUNT, variants=COUNT, low=POSITIVE, high=POSITIVE, severity_max=POSITIVE, seed=SEED)
+@checked(
+    kind=Text(KINDS), params=Items(TEXT, optional=True), points=COUNT, variants=COUNT, low=POSITIVE,
+    high=POSITIVE, severity_max=POSITIVE, seed=SEED,
+)
 @dataclass(frozen=True)
 class MapSpec:
     """What a map varies (module docstring); checked on construction, each error naming the
@@ -193,7 +211,12 @@ def _log_distance(axis: str, value: float, factors: dict) -> float:
     return max((abs(math.log(f)) for f in factors.values()), default=0.0)
 
 
-@checked(scenario=TEXT, spec=Instance(MapSpec), table=TEXT, criteria=Items(Instance('acdrive.drives._robustness_seam:Criterion'), empty=True), rows=Items(Table(), empty=True), linear_rule=Text(empty=True), wall_time=NONNEGATIVE, batch_wall_time=NONNEGATIVE, linear_time=NONNEGATIVE, summary=Table(empty=True))
+@checked(
+    scenario=TEXT, spec=Instance(MapSpec), table=TEXT,
+    criteria=Items(Instance("acdrive.drives._robustness_seam:Criterion"), empty=True),
+    rows=Items(Table(), empty=True), linear_rule=Text(empty=True), wall_time=NONNEGATIVE,
+    batch_wall_time=NONNEGATIVE, linear_time=NONNEGATIVE, summary=Table(empty=True),
+)
 @dataclass
 class RobustnessMap:
     """The rows of a map (one per variant, nominal first) and what is computed from them.
@@ -257,7 +280,12 @@ def _table_value(seam, factors: dict) -> dict:
     return {seam.fields[k]: f for k, f in factors.items()}
 
 
-@checked(scenario=Either(PATH, Table()), spec=Instance(MapSpec, optional=True), tracking_tolerance=optional(POSITIVE), current_tolerance=NONNEGATIVE, linear=Flag(optional=True), overrides=Table(empty=True, optional=True), lockstep=Flag(optional=True))
+@checked(
+    scenario=Either(PATH, Table()), spec=Instance(MapSpec, optional=True),
+    tracking_tolerance=optional(POSITIVE), current_tolerance=NONNEGATIVE,
+    linear=Flag(optional=True), overrides=Table(empty=True, optional=True),
+    lockstep=Flag(optional=True),
+)
 def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=None,
                    current_tolerance: float = 0.05, linear: bool | None = None,
                    overrides: dict | None = None, lockstep: bool | None = None) -> RobustnessMap:  # fmt: skip

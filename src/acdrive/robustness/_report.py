@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._arguments import Instance, Text, checked, PATH
+from acdrive._arguments import PATH, Instance, Text, checked
 from acdrive._output import REPORT_STAMP, strict_json
 from acdrive.robustness._map import PAPER, RobustnessMap
 

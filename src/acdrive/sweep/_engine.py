@@ -42,7 +42,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from acdrive._arguments import Instance, Text, checked, COUNT0, FLAG, PATH, POSITIVE, optional
+from acdrive._arguments import COUNT0, FLAG, PATH, POSITIVE, Instance, Text, checked, optional
 from acdrive.errors import InputError
 from acdrive.sweep import _variants as V
 from acdrive.sweep._spec import SweepSpec, spec_from_payload
@@ -540,7 +540,10 @@ def _dask(payload, pending, client):
 # --- the sweep -------------------------------------------------------------------------------
 
 
-@checked(spec=Instance(SweepSpec), out=PATH, scheduler=Text(optional=True), timeout=POSITIVE, progress=FLAG, report=FLAG, command=Text(optional=True))
+@checked(
+    spec=Instance(SweepSpec), out=PATH, scheduler=Text(optional=True), timeout=POSITIVE,
+    progress=FLAG, report=FLAG, command=Text(optional=True),
+)
 def run_sweep(spec: SweepSpec, out: Path, *, scheduler: str | None = None,
               timeout: float = CONNECT_TIMEOUT_S, progress: bool = True,
               report: bool = True, command: str | None = None) -> Path:  # fmt: skip

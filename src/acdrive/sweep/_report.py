@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._arguments import Instance, checked, PATH
+from acdrive._arguments import PATH, Instance, checked
 from acdrive.sweep._grid_figures import sweep_labels, write_grid_figures
 from acdrive.sweep._spec import SweepSpec
 
@@ -154,7 +154,9 @@ def crosscheck(spec: SweepSpec, table) -> tuple[list[dict], bool | None]:
     return rows, (all(r["agree"] for r in rows) if rows else None)
 
 
-@checked(spec=Instance('acdrive.sweep._spec:SweepSpec'), folder=PATH, table=Instance('pandas:DataFrame'))
+@checked(
+    spec=Instance("acdrive.sweep._spec:SweepSpec"), folder=PATH, table=Instance("pandas:DataFrame"),
+)
 def write_report(spec: SweepSpec, folder: Path, table) -> Path:
     """Write ``report.md`` and its figures into the sweep folder ``folder`` (one acdrive wrote:
     its marker, else InputError naming ``folder``); returns the report's path."""

@@ -67,7 +67,21 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
-from acdrive._arguments import Instance, Items, Table, Text, checked, COUNT, COUNT0, FLAG, NONNEGATIVE, PATH, SEED, TEXT, optional
+from acdrive._arguments import (
+    COUNT,
+    COUNT0,
+    FLAG,
+    NONNEGATIVE,
+    PATH,
+    SEED,
+    TEXT,
+    Instance,
+    Items,
+    Table,
+    Text,
+    checked,
+    optional,
+)
 from acdrive._toml import Section
 from acdrive.errors import InputError, require_safe_name
 
@@ -150,7 +164,16 @@ class Vary:
         return len(self.values) if self.values is not None else self.points
 
 
-@checked(name=TEXT, description=Text(empty=True), base=TEXT, base_data=Table(), method=Text(METHODS), samples=COUNT0, seed=SEED, chunk=COUNT, vary=Items(Instance(Vary), empty=True), fixed=Table(empty=True), integrator=Text(('rk4', 'rk6'), optional=True), substeps=optional(COUNT), default_metrics=FLAG, reducers=Items(Instance('acdrive.batch:Reducer'), empty=True), summary=Items(TEXT, empty=True), traces=Items(TEXT, empty=True), trace_every=COUNT0, worst=Text(optional=True), worst_count=COUNT0, limits=Table(NONNEGATIVE, empty=True), crosscheck=Table(empty=True, optional=True))
+@checked(
+    name=TEXT, description=Text(empty=True), base=TEXT, base_data=Table(), method=Text(METHODS),
+    samples=COUNT0, seed=SEED, chunk=COUNT, vary=Items(Instance(Vary), empty=True),
+    fixed=Table(empty=True), integrator=Text(("rk4", "rk6"), optional=True),
+    substeps=optional(COUNT), default_metrics=FLAG,
+    reducers=Items(Instance("acdrive.batch:Reducer"), empty=True), summary=Items(TEXT, empty=True),
+    traces=Items(TEXT, empty=True), trace_every=COUNT0, worst=Text(optional=True),
+    worst_count=COUNT0, limits=Table(NONNEGATIVE, empty=True),
+    crosscheck=Table(empty=True, optional=True),
+)
 @dataclass(frozen=True)
 class SweepSpec:
     name: str

@@ -14,7 +14,9 @@ from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import IMDriveSetup
 
 
-@checked(setup=Instance(IMDriveSetup), results=Table(Instance(IMDriveResult)), summary=Table(empty=True))
+@checked(
+    setup=Instance(IMDriveSetup), results=Table(Instance(IMDriveResult)), summary=Table(empty=True),
+)
 @dataclass
 class IMOutcome:
     """The runs of one scenario (label -> result) and its summary (summary.json)."""

@@ -9,7 +9,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Array, Flag, Instance, Number, Table, Text, checked, COUNT0, NONNEGATIVE, TEXT
+from acdrive._arguments import (
+    COUNT0,
+    NONNEGATIVE,
+    TEXT,
+    Array,
+    Flag,
+    Instance,
+    Number,
+    Table,
+    Text,
+    checked,
+)
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.drives.cage_im._physics import foc_voltage, modulation_signals
 from acdrive.drives.cage_im._setup import (
@@ -34,7 +45,14 @@ def _steady_mask(t: np.ndarray) -> np.ndarray:
     return t >= t[-1] - span
 
 
-@checked(setup=Instance(IMDriveSetup), label=TEXT, t=Array(1, finite=False, empty=True), signals=Table(Array(1, complex=True, finite=False, empty=True), empty=True), units=Table(Text(empty=True), empty=True), events=Table(Number(0, integer=True), empty=True), flags=Table(Array(1, finite=False, empty=True), empty=True), wall_time=NONNEGATIVE, steps=COUNT0, compile_time=NONNEGATIVE, compiled_now=Flag(), tier=Text(empty=True), descriptions=Table(Text(empty=True), empty=True))
+@checked(
+    setup=Instance(IMDriveSetup), label=TEXT, t=Array(1, finite=False, empty=True),
+    signals=Table(Array(1, complex=True, finite=False, empty=True), empty=True),
+    units=Table(Text(empty=True), empty=True), events=Table(Number(0, integer=True), empty=True),
+    flags=Table(Array(1, finite=False, empty=True), empty=True), wall_time=NONNEGATIVE,
+    steps=COUNT0, compile_time=NONNEGATIVE, compiled_now=Flag(), tier=Text(empty=True),
+    descriptions=Table(Text(empty=True), empty=True),
+)
 @dataclass(eq=False, repr=False)
 class IMDriveResult(Result):
     """The cage-IM drive's view of a run (``sim._result.Result``): its signals by name

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Instance, Items, Text, checked, COUNT, NONNEGATIVE, POSITIVE, TEXT
+from acdrive._arguments import COUNT, NONNEGATIVE, POSITIVE, TEXT, Instance, Items, Text, checked
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._toml import constant
 from acdrive.control._foc import (
@@ -231,7 +231,19 @@ class SensorSetup:
     speed_filter_tau: float = 0.0
 
 
-@checked(mode=Text(MODES), machine=Instance(IMParams), plant=Instance(IMParams), mechanics=Instance(Mechanics), inverter=Instance(InverterSetup), current_control=Instance(CurrentControl), current_reference=Instance(CurrentReference, optional=True), speed_reference=Instance(Profile, optional=True), position_reference=Instance(Profile, optional=True), foc=Instance(FOCSetup), speed_p=Instance(SpeedPSetup), speed_pi=Instance(SpeedPISetup), position=Instance(PositionSetup), sensors=Instance(SensorSetup), duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT, integrator=Text(('rk4', 'rk6')), log_every=COUNT, name=TEXT, description=Text(empty=True), note=Text(empty=True), compare_controllers=Items(Items(TEXT), empty=True), metrics_from=NONNEGATIVE)
+@checked(
+    mode=Text(MODES), machine=Instance(IMParams), plant=Instance(IMParams),
+    mechanics=Instance(Mechanics), inverter=Instance(InverterSetup),
+    current_control=Instance(CurrentControl),
+    current_reference=Instance(CurrentReference, optional=True),
+    speed_reference=Instance(Profile, optional=True),
+    position_reference=Instance(Profile, optional=True), foc=Instance(FOCSetup),
+    speed_p=Instance(SpeedPSetup), speed_pi=Instance(SpeedPISetup),
+    position=Instance(PositionSetup), sensors=Instance(SensorSetup), duration=POSITIVE,
+    sample_time=POSITIVE, substeps=COUNT, integrator=Text(("rk4", "rk6")), log_every=COUNT,
+    name=TEXT, description=Text(empty=True), note=Text(empty=True),
+    compare_controllers=Items(Items(TEXT), empty=True), metrics_from=NONNEGATIVE,
+)
 @dataclass(frozen=True)
 class IMDriveSetup:
     """A complete cage-IM drive simulation.

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive._arguments import Function, Instance, Table, Text, checked, POSITIVE
+from acdrive._arguments import POSITIVE, Function, Instance, Table, Text, checked
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._frames import complex_to_abc
 from acdrive.control import _bodson as bodson
@@ -162,7 +162,7 @@ def _motor_wires(k: int, p: dict, grid, bus) -> list:
     ]  # fmt: skip
 
 
-@checked(setup=Instance('acdrive.drives.dfim._setup:DriveSetup'))
+@checked(setup=Instance("acdrive.drives.dfim._setup:DriveSetup"))
 class DFIMDrive:
     """The parts, wiring, initial state and logged signals of one ``DriveSetup``."""
 
@@ -327,7 +327,11 @@ def simulate(setup, divergence_hint=None) -> DriveResult:
     return drive.drive_result(result)
 
 
-@checked(setup=Instance('acdrive.drives.dfim._setup:DriveSetup'), method=Text(('RK4', 'RK45', 'RK23', 'DOP853', 'Radau', 'BDF', 'LSODA')), python_steps=Table(Function(), empty=True, optional=True), rtol=POSITIVE, atol=POSITIVE)
+@checked(
+    setup=Instance("acdrive.drives.dfim._setup:DriveSetup"),
+    method=Text(("RK4", "RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")),
+    python_steps=Table(Function(), empty=True, optional=True), rtol=POSITIVE, atol=POSITIVE,
+)
 def simulate_slow(setup, method: str = "RK4", python_steps: dict | None = None,
                   rtol: float = 1e-10, atol: float = 1e-12) -> DriveResult:  # fmt: skip
     """Run ``setup`` on the slow path (``sim._reference``): the same compiled pieces stepped from

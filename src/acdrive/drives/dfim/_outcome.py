@@ -169,7 +169,9 @@ def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> 
                           closed, rule)[1]  # fmt: skip
 
 
-@checked(setup=Instance(DriveSetup), results=Table(Instance(DriveResult)), summary=Table(empty=True))
+@checked(
+    setup=Instance(DriveSetup), results=Table(Instance(DriveResult)), summary=Table(empty=True),
+)
 @dataclass
 class ScenarioOutcome:
     setup: DriveSetup

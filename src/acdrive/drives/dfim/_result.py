@@ -6,7 +6,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Array, Flag, Instance, Items, Text, checked, NONNEGATIVE, POSITIVE, TEXT
+from acdrive._arguments import (
+    NONNEGATIVE,
+    POSITIVE,
+    TEXT,
+    Array,
+    Flag,
+    Instance,
+    Items,
+    Text,
+    checked,
+)
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8)
 from acdrive.columns import Column
 from acdrive.control._dfim import EVENT_NAMES
@@ -71,7 +81,12 @@ SIGNALS = {log: (unit, text.replace(_PK, _MAG) if scale != 1.0 else text)
            for _, log, scale, unit, text in FILE_COLUMNS}  # fmt: skip
 
 
-@checked(name=TEXT, t=Array(1, finite=False, empty=True), signals=Array(3, finite=False, empty=True), sample_time=POSITIVE, final_state=Array(finite=False, empty=True), wall_time=NONNEGATIVE, compile_time=NONNEGATIVE, compiled_now=Flag(), tier=Text(empty=True), tracking=Items(Instance(TrackingRule), optional=True))
+@checked(
+    name=TEXT, t=Array(1, finite=False, empty=True), signals=Array(3, finite=False, empty=True),
+    sample_time=POSITIVE, final_state=Array(finite=False, empty=True), wall_time=NONNEGATIVE,
+    compile_time=NONNEGATIVE, compiled_now=Flag(), tier=Text(empty=True),
+    tracking=Items(Instance(TrackingRule), optional=True),
+)
 @dataclass(eq=False, repr=False)
 class DriveResult(Result):
     """The DFIM drive's view of a run (``sim._result.Result``): every motor's signals at every

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Instance, Items, Text, checked, COUNT, POSITIVE, TEXT
+from acdrive._arguments import COUNT, POSITIVE, TEXT, Instance, Items, Text, checked
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive._toml import constant
 from acdrive.control import _dfim as ctl
@@ -128,7 +128,11 @@ class MotorSetup:
         return float(np.min(self.dc_link_profile[1]))
 
 
-@checked(motors=Items(Instance(MotorSetup)), supply=Instance(Supply), duration=POSITIVE, sample_time=POSITIVE, substeps=COUNT, integrator=Text(('rk4', 'rk6')), log_every=COUNT, name=TEXT, compare_modes=Items(Text(('voltage', 'current')), empty=True), note=Text(empty=True))
+@checked(
+    motors=Items(Instance(MotorSetup)), supply=Instance(Supply), duration=POSITIVE,
+    sample_time=POSITIVE, substeps=COUNT, integrator=Text(("rk4", "rk6")), log_every=COUNT,
+    name=TEXT, compare_modes=Items(Text(("voltage", "current")), empty=True), note=Text(empty=True),
+)
 @dataclass(frozen=True)
 class DriveSetup:
     """A complete simulation: motors on one supply, sample time and duration."""

@@ -49,7 +49,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from acdrive._arguments import Either, Instance, Number, Text, checked, COUNT, FRACTION, NONNEGATIVE, POSITIVE, optional
+from acdrive._arguments import (
+    COUNT,
+    FRACTION,
+    NONNEGATIVE,
+    POSITIVE,
+    Either,
+    Instance,
+    Number,
+    Text,
+    checked,
+    optional,
+)
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): space-vector magnitude per peak
 from acdrive.analysis._linearise import (
     fixed_point,
@@ -91,7 +102,15 @@ KINDS = ("continuous", "sampled")
 Z_ZERO = 1e-9
 
 
-@checked(mode=Text(MODES), machine=Instance(DFIMParams), controller_params=Instance(DFIMParams, optional=True), speed_bandwidth=POSITIVE, design_inertia=optional(POSITIVE), K_F=FRACTION, current_bandwidth=POSITIVE, R_T=POSITIVE, supply_voltage_pk=POSITIVE, supply_frequency_hz=POSITIVE, supply_resistance=NONNEGATIVE, supply_inductance=NONNEGATIVE, speed_filter_tau=NONNEGATIVE, current_limit_pk=POSITIVE, speed_loop=Text(SPEED_LOOPS), sample_time=POSITIVE, substeps=COUNT, delay_samples=Number(0, 1, integer=True), converter_loss=NONNEGATIVE)
+@checked(
+    mode=Text(MODES), machine=Instance(DFIMParams),
+    controller_params=Instance(DFIMParams, optional=True), speed_bandwidth=POSITIVE,
+    design_inertia=optional(POSITIVE), K_F=FRACTION, current_bandwidth=POSITIVE, R_T=POSITIVE,
+    supply_voltage_pk=POSITIVE, supply_frequency_hz=POSITIVE, supply_resistance=NONNEGATIVE,
+    supply_inductance=NONNEGATIVE, speed_filter_tau=NONNEGATIVE, current_limit_pk=POSITIVE,
+    speed_loop=Text(SPEED_LOOPS), sample_time=POSITIVE, substeps=COUNT,
+    delay_samples=Number(0, 1, integer=True), converter_loss=NONNEGATIVE,
+)
 @dataclass(frozen=True)
 class DriveModel:
     """A parameter study's shorthand for a one-motor DFIM drive on Bodson's bench: it builds the
@@ -343,7 +362,11 @@ def _rotor_voltage_limit(drive: DFIMDrive) -> float:
 # ---------------------------------------------------------------------------------------------
 
 
-@checked(setup=Either(Instance(DriveSetup), Instance(DriveModel)), point=Instance(OperatingPoint, optional=True), kind=Text(KINDS), speed_loop=Text(SPEED_LOOPS, optional=True))
+@checked(
+    setup=Either(Instance(DriveSetup), Instance(DriveModel)),
+    point=Instance(OperatingPoint, optional=True), kind=Text(KINDS),
+    speed_loop=Text(SPEED_LOOPS, optional=True),
+)
 def linearize(
     setup, point: OperatingPoint | None = None, kind: str = "continuous",
     speed_loop: str | None = None,

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive._arguments import Array, Either, Instance, Number, Text, checked, POSITIVE
+from acdrive._arguments import POSITIVE, Array, Either, Instance, Number, Text, checked
 from acdrive.control._speed import SpeedPIGains
 from acdrive.drives.dfim._linearisation._stability import (
     KINDS,
@@ -62,7 +62,10 @@ def default_grid(model, n_speed: int = 13, n_load: int = 7, fraction: float = 0.
     return speeds, loads
 
 
-@checked(model=Either(Instance(DriveSetup), Instance(DriveModel)), speeds_rpm=Array(1), loads_nm=Array(1), kind=Text(KINDS))
+@checked(
+    model=Either(Instance(DriveSetup), Instance(DriveModel)), speeds_rpm=Array(1),
+    loads_nm=Array(1), kind=Text(KINDS),
+)
 def stability_map(model, speeds_rpm, loads_nm, kind: str = "continuous") -> StabilityMap:
     """Linearise ``model`` (a DFIM ``DriveSetup`` or a :class:`DriveModel`) at every
     (speed, load) of the grid."""
@@ -99,7 +102,10 @@ def with_speed_bandwidth(study, bandwidth: float):
     return dataclasses.replace(study, motors=(motor, *study.motors[1:]))
 
 
-@checked(mode=Text(MODES), speeds_rpm=Array(1, optional=True), loads_nm=Array(1, optional=True), kind=Text(KINDS), lower=POSITIVE, upper=POSITIVE, tol=POSITIVE, ratio=Number(1.0, above=True))
+@checked(
+    mode=Text(MODES), speeds_rpm=Array(1, optional=True), loads_nm=Array(1, optional=True),
+    kind=Text(KINDS), lower=POSITIVE, upper=POSITIVE, tol=POSITIVE, ratio=Number(1.0, above=True),
+)
 def max_stable_bandwidth(
     mode="voltage",
     speeds_rpm=None,

@@ -10,7 +10,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from acdrive._arguments import checked, REAL
+from acdrive._arguments import REAL, checked
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): space-vector magnitude per peak
 from acdrive._toml import constant
 from acdrive.drives.dfim._setup import DriveSetup
