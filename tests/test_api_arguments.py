@@ -248,6 +248,8 @@ SEEN = [
      lambda m: m.robustness.robustness_map("bodson-ramp", tracking_tolerance=-1.0),
      "tracking_tolerance"),
     ("target_report('pm-foc')", lambda m: m.export.target_report("pm-foc"), "targets"),
+    ("linearize at a point that is a string",
+     lambda m: m.analysis.linearize(m.analysis.DriveModel(), "fast"), "point"),
     ("run_sweep to an empty folder name", lambda m: m.sweep.run_sweep(_sweep_spec(), ""), "out"),
 ]
 

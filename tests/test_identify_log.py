@@ -56,17 +56,17 @@ ROWS = list(zip(LOG.time, LOG.v_a, LOG.i_a, strict=True))
 )  # fmt: skip
 def test_a_bad_log_is_refused_naming_the_column_and_the_rule(tmp_path, header, rows, message):
     path = write_csv(tmp_path / "log.csv", header, rows)
-    with pytest.raises(InputError, match=r"^TEST_FILE: " + message):
+    with pytest.raises(InputError, match=r"^path: " + message):
         read_log(path)
 
 
 def test_a_file_of_another_kind_or_missing_is_refused(tmp_path):
-    with pytest.raises(InputError, match=r"^TEST_FILE: must be a .csv, .parquet, .mat file"):
+    with pytest.raises(InputError, match=r"^path: must be a .csv, .parquet, .mat file"):
         read_log(tmp_path / "log.txt")
     (tmp_path / "junk.mat").write_text("not a MATLAB file")
-    with pytest.raises(InputError, match=r"^TEST_FILE: '.*junk.mat' is not a readable .mat file"):
+    with pytest.raises(InputError, match=r"^path: '.*junk.mat' is not a readable .mat file"):
         read_log(tmp_path / "junk.mat")
-    with pytest.raises(InputError, match=r"^TEST_FILE: '.*nothing.csv' is not a readable file"):
+    with pytest.raises(InputError, match=r"^path: '.*nothing.csv' is not a readable file"):
         read_log(tmp_path / "nothing.csv")
 
 
@@ -93,5 +93,5 @@ def test_a_mat_log_carries_its_units_in_a_struct_and_is_checked_like_the_others(
     data = {"time": LOG.time, "v_a": LOG.v_a, "i_a": LOG.i_a, **columns}
     data = {k: v for k, v in data.items() if v is not None}
     path = write_mat(tmp_path / "log.mat", units, **data)
-    with pytest.raises(InputError, match=r"^TEST_FILE: " + message):
+    with pytest.raises(InputError, match=r"^path: " + message):
         read_log(path)

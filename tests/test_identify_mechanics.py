@@ -92,6 +92,6 @@ def test_a_log_the_model_cannot_use_is_refused_naming_the_column(log, message):
 def test_a_mechanics_file_is_checked_like_every_log(tmp_path):
     path = tmp_path / "steps.csv"
     path.write_text("time [s],tau_e [N m],w [rpm]\n" + "\n".join(f"{t},0.01,100" for t in T))
-    with pytest.raises(InputError, match=r"^TEST_FILE: column 'w': must be in rad/s, got 'rpm'"):
+    with pytest.raises(InputError, match=r"^path: column 'w': must be in rad/s, got 'rpm'"):
         read_mechanics_log(path)
     assert set(MECHANICS_COLUMNS) == {"time", "tau_e", "w"}

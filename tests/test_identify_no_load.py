@@ -116,7 +116,7 @@ def test_a_run_the_estimator_cannot_use_is_refused_naming_the_column(log, freque
 def test_a_no_load_file_needs_the_speed_column(tmp_path):
     path = tmp_path / "run.csv"
     write_log(LOG, path)  # the standstill columns only
-    with pytest.raises(InputError, match=r"^TEST_FILE: column 'w': is missing; a no-load log has"):
+    with pytest.raises(InputError, match=r"^path: column 'w': is missing; a no-load log has"):
         read_no_load_log(path)
     assert isinstance(read_no_load_log(write_no_load_log(LOG, tmp_path / "run.mat")), NoLoadLog)
 

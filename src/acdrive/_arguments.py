@@ -9,7 +9,10 @@ Every call then binds its arguments to the signature and checks each argument it
 against its parameter's rule, in the signature's order, before the body runs; the first argument
 that breaks its rule raises ``InputError("<parameter>", "<rule>, got <what>")``, naming the
 Python parameter (an item of a sequence as ``name[i]``, of a table as ``name['key']``). Defaults
-are not checked (they are the function's own). A parameter without a rule is a programming error,
+are not checked (they are the function's own), nor are the calls a checked function makes to
+other checked functions while it runs (its own intermediate values: a fit's trial parameters, a
+record it builds), which would cost time in inner loops and could name an argument the user never
+gave; a dispatcher that hands its other arguments on declares itself with ``forwarding``. A parameter without a rule is a programming error,
 refused when the module is imported, so no public argument goes unchecked. On a class the rules
 apply to ``__init__`` (a dataclass's fields). ``rules_of`` returns the rules of a checked
 callable; the CLI, which names its flags instead, renames the fields with
@@ -22,6 +25,7 @@ text, sequence, table or array only if ``empty``.
 
 from __future__ import annotations
 
+import contextvars
 import functools
 import importlib
 import inspect
@@ -37,7 +41,7 @@ from acdrive.errors import InputError
 __all__ = [
     "COUNT", "COUNT0", "FLAG", "FRACTION", "NONNEGATIVE", "PATH", "POSITIVE", "REAL", "RESULT",
     "SEED", "TEXT", "Anything", "Array", "Either", "FilePath", "Flag", "Function", "Instance",
-    "Items", "Number", "Table", "Text", "check_call", "checked", "optional", "rules_of",
+    "Items", "Number", "Table", "Text", "check_call", "checked", "forwarding", "optional", "rules_of",
 ]  # fmt: skip
 
 #: the attribute a checked callable (or a checked class's ``__init__``) keeps its rules in
@@ -366,10 +370,23 @@ def _check(signature: inspect.Signature, rules: dict, args, kwargs) -> None:
             rule.check(name, value)
 
 
+#: True while a checked call runs: the calls the API makes to itself are not checked again
+_INSIDE = contextvars.ContextVar("acdrive_arguments_inside", default=False)
+
+
 def checked(**rules: Rule):
     """Decorate a function or class so that every call checks its arguments by ``rules``
     (parameter name -> rule; module docstring) before it runs."""
+    return _decorator(rules, forwards=False)
 
+
+def forwarding(**rules: Rule):
+    """``checked`` for a function that hands the arguments it has no rule for (``*args``,
+    ``**kwargs``) to another checked function: that one checks them."""
+    return _decorator(rules, forwards=True)
+
+
+def _decorator(rules: dict, forwards: bool):
     def decorate(target):
         function = target.__init__ if isinstance(target, type) else target
         signature = inspect.signature(function)
@@ -387,8 +404,16 @@ def checked(**rules: Rule):
 
         @functools.wraps(function)
         def with_checks(*args, **kwargs):
+            if _INSIDE.get():  # called by the API itself, on arguments it made
+                return function(*args, **kwargs)
             _check(signature, rules, args, kwargs)
-            return function(*args, **kwargs)
+            if forwards:
+                return function(*args, **kwargs)
+            token = _INSIDE.set(True)
+            try:
+                return function(*args, **kwargs)
+            finally:
+                _INSIDE.reset(token)
 
         setattr(with_checks, RULES, dict(rules))
         if isinstance(target, type):

@@ -11,7 +11,7 @@ are the default drive's.
 
 from __future__ import annotations
 
-from acdrive._arguments import Anything, Instance, checked
+from acdrive._arguments import Anything, Instance, forwarding
 from acdrive.errors import InputError
 
 
@@ -50,20 +50,20 @@ class Study(Instance):
         return "the setup of a registered drive or a DriveModel"
 
 
-@checked(setup=Study(), point=Anything())
+@forwarding(setup=Study(), point=Anything())
 def linearize(setup, point=None, *args, **kwargs):
     """Linearise the closed drive ``setup`` at ``point``: its drive's ``linearize`` (the DFIM's:
     ``acdrive.drives.dfim._linearisation.linearize``, Bodson's closed speed loop)."""
     return linearisation_of(setup).linearize(setup, point, *args, **kwargs)
 
 
-@checked(model=Study())
+@forwarding(model=Study())
 def stability_map(model, *args, **kwargs):
     """The eigenvalue map over an operating-point grid, by the drive of ``model``."""
     return linearisation_of(model).stability_map(model, *args, **kwargs)
 
 
-@checked()
+@forwarding()
 def max_stable_bandwidth(*args, **kwargs):
     """The largest stable speed-loop bandwidth, by the drive of the first argument."""
     study = args[0] if args else kwargs.get("mode")

@@ -10,7 +10,6 @@ convenience on a validated grid.
 
 from __future__ import annotations
 
-from acdrive._arguments import Array, checked
 from acdrive.control._lti import LTI, _canonical, _group, _real_section, _series
 from acdrive.control._lti_matrix import LTIMatrix
 from acdrive.control._ss_frequency import (
@@ -19,15 +18,8 @@ from acdrive.control._ss_frequency import (
     _hessenberg_solve,
     _modal_sum,
     check_frequency_grid,
+    evaluate_ss,
 )
-from acdrive.control._ss_frequency import evaluate_ss as _evaluate_ss
-
-#: G(s) of batched state-space data (``acdrive.control._ss_frequency.evaluate_ss``), its
-#: arguments checked (a model without states has empty A, B, C)
-evaluate_ss = checked(
-    A=Array(empty=True), B=Array(empty=True), C=Array(empty=True), D=Array(),
-    s=Array((0, 1), complex=True),
-)(_evaluate_ss)
 
 __all__ = [
     "CANCEL_LIMIT",

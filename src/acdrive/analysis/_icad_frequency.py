@@ -130,7 +130,6 @@ def _kernel_outputs(G, k1, k2):
     return G, k1, k2, gamma.reshape(shape), h.reshape(two), c.reshape(two), coupling.reshape(two)
 
 
-@checked(G=Array(complex=True), k1=Array(complex=True), k2=Array(complex=True))
 def icad_quantities(G: np.ndarray, k1: np.ndarray, k2: np.ndarray) -> dict[str, np.ndarray]:
     """ICAD frequency data from plant values G (..., 2, 2) and controller values k1, k2 (...):
     the quantities of Ugalde-Loo et al. (1)-(6) = Amezquita-Brooks et al. (5)-(10).
