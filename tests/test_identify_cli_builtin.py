@@ -123,3 +123,12 @@ def test_an_unknown_name_is_one_line_listing_the_kinds_names(tmp_path, capsys, k
 )  # fmt: skip
 def test_an_option_a_built_in_bench_cannot_take_is_one_line(tmp_path, capsys, argv, message):
     one_line_error(capsys, ["identify", *argv, "--out", str(tmp_path / "x.toml")], message)
+
+
+@pytest.mark.parametrize("kind", ["cage-im", "pm", "dfim", "mechanics"])
+def test_a_negative_seed_is_one_line_naming_it_before_any_work(tmp_path, capsys, kind):
+    name = {"cage-im": "delorenzo-im", "pm": "bly171d", "dfim": "bodson-dfim"}.get(kind, "bly171d")
+    out = tmp_path / "x.toml"
+    one_line_error(capsys, ["identify", name, "--kind", kind, "--seed", "-1", "--out", str(out)],
+                   r"^acdrive: error: --seed: must be an integer >= 0, got -1$")  # fmt: skip
+    assert not out.exists()
