@@ -16,6 +16,7 @@ from __future__ import annotations
 import importlib
 import inspect
 import math
+import types
 
 import numpy as np
 import pytest
@@ -86,6 +87,8 @@ def _example(rule):
         return "x.csv"
     if isinstance(rule, a.Function):
         return lambda *args, **kwargs: None
+    if isinstance(rule, a.Attributes):
+        return types.SimpleNamespace(**dict.fromkeys(rule.names))
     if isinstance(rule, a.Instance):
         kind = rule.types[0]
         return object.__new__(kind) if kind.__new__ is object.__new__ else kind.__new__(kind)

@@ -87,5 +87,5 @@ def test_the_sampled_admittance_is_the_zoh_discretised_machine_model(machine, ho
 def test_a_parameter_that_is_not_positive_is_refused():
     with pytest.raises(InputError, match=r"^L_M: must be > 0"):
         InverseGamma(1.0, 0.1, 1.0, 0.0)
-    with pytest.raises(InputError, match=r"^leakage_split: must be one of equal, rotor-only"):
+    with pytest.raises(InputError, match=r"^split: must be one of 'equal', 'rotor-only'"):
         t_circuit(InverseGamma(1.0, 0.1, 1.0, 1.0), 1, "stator-only")

@@ -40,7 +40,7 @@ from acdrive.errors import InputError
 
 __all__ = [
     "COUNT", "COUNT0", "FLAG", "FRACTION", "NONNEGATIVE", "PATH", "POSITIVE", "REAL", "RESULT",
-    "SEED", "TEXT", "Anything", "Array", "Either", "FilePath", "Flag", "Function", "Instance",
+    "SEED", "TEXT", "Anything", "Array", "Attributes", "Either", "FilePath", "Flag", "Function", "Instance",
     "Items", "Number", "Table", "Text", "check_call", "checked", "forwarding", "optional", "rules_of",
 ]  # fmt: skip
 
@@ -100,6 +100,8 @@ class Number(Rule):
 
     def describe(self) -> str:
         what = "an integer" if self.integer else "a finite number" if self.finite else "a number"
+        if self.low is not None and self.high is not None and not self.above:
+            return f"{what} between {self.low:g} and {self.high:g}"
         bounds = []
         if self.low is not None:
             bounds.append(f"{'>' if self.above else '>='} {self.low:g}")
@@ -110,14 +112,15 @@ class Number(Rule):
     def check_value(self, name, value):
         kind = numbers.Integral if self.integer else numbers.Real
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, kind):
-            self.refuse(name, value)
+            self.refuse(name, value)  # "must be a finite number > 0, got 'x'"
         if not math.isfinite(value):
             if self.finite:
-                self.refuse(name, value)
+                raise InputError(name, "must be finite (not NaN or infinite)")
             return
         low_ok = self.low is None or (value > self.low if self.above else value >= self.low)
         if not low_ok or (self.high is not None and value > self.high):
-            self.refuse(name, value)
+            bounds = self.describe().removeprefix("a finite number ")
+            raise InputError(name, f"must be {bounds}, got {value:g}")  # as errors.require_*
 
 
 class Flag(Rule):
@@ -203,6 +206,22 @@ class Instance(Rule):
 
     def check_value(self, name, value):
         if not isinstance(value, self.types):
+            self.refuse(name, value)
+
+
+class Attributes(Rule):
+    """Any object with the attributes ``names`` (what the function reads of it: a record or a
+    stand-in for one); ``what`` says it in words."""
+
+    def __init__(self, *names: str, what: str, optional: bool = False):
+        super().__init__(optional=optional)
+        self.names, self.what = names, what
+
+    def describe(self) -> str:
+        return f"{self.what} (with {', '.join(self.names)})"
+
+    def check_value(self, name, value):
+        if not all(hasattr(value, n) for n in self.names):
             self.refuse(name, value)
 
 

@@ -110,7 +110,8 @@ def run(args) -> int:
     args.out = DEFAULT_OUT if args.out is None else args.out
     args.timeout = DEFAULT_TIMEOUT if args.timeout is None else args.timeout
     out = require_out("--out", args.out)  # before anything else: "" would mean "here"
-    spec = load_sweep(args.sweep)
+    with named_as({"source": "sweep"}):
+        spec = load_sweep(args.sweep)
     if args.chunk is not None:
         if not 1 <= args.chunk <= MAX_CHUNK:
             raise InputError("--chunk", f"must be an integer from 1 to {MAX_CHUNK}")

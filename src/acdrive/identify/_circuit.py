@@ -119,7 +119,7 @@ def t_circuit(params: InverseGamma, n_p: int, split: str = "equal", J=None):
     from acdrive.machines._induction import IMParams
 
     if split not in LEAKAGE_SPLITS:
-        raise InputError("leakage_split", f"must be one of {', '.join(LEAKAGE_SPLITS)}")
+        raise InputError("split", f"must be one of {', '.join(LEAKAGE_SPLITS)}")
     L_s = params.L_sigma + params.L_M
     if split == "equal":
         L_r = L_s

@@ -83,6 +83,7 @@ from acdrive._arguments import (
     SEED,
     TEXT,
     Array,
+    Attributes,
     Either,
     Instance,
     checked,
@@ -332,8 +333,8 @@ def link_voltage(log: NoLoadLog, given: float | None = None,
 
 @checked(
     log=Instance(NoLoadLog), frequency=POSITIVE, settle=NONNEGATIVE, n_p=COUNT,
-    standstill=Instance("acdrive.identify._impedance:ImpedanceFit"), seed=SEED, bootstrap=COUNT0,
-    v_dc=optional(POSITIVE),
+    standstill=Attributes("params", "cov", "draws", what="the standstill test's ImpedanceFit"),
+    seed=SEED, bootstrap=COUNT0, v_dc=optional(POSITIVE),
 )
 def fit_no_load(log: NoLoadLog, frequency: float, settle: float, n_p: int, standstill,
                 seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT,
