@@ -11,12 +11,12 @@ that breaks its rule raises ``InputError("<parameter>", "<rule>, got <what>")``,
 Python parameter (an item of a sequence as ``name[i]``, of a table as ``name['key']``). Defaults
 are not checked (they are the function's own), nor are the calls a checked function makes to
 other checked functions while it runs (its own intermediate values: a fit's trial parameters, a
-record it builds), which would cost time in inner loops and could name an argument the user never
-gave; a dispatcher that hands its other arguments on declares itself with ``forwarding``. A parameter without a rule is a programming error,
-refused when the module is imported, so no public argument goes unchecked. On a class the rules
-apply to ``__init__`` (a dataclass's fields). ``rules_of`` returns the rules of a checked
-callable; the CLI, which names its flags instead, renames the fields with
-``acdrive.errors.named_as``.
+record it builds), which would cost time in inner loops and could name an argument the user
+never gave; a dispatcher that hands its other arguments on declares itself with ``forwarding``.
+A parameter without a rule is a programming error, refused when the module is imported, so no
+public argument goes unchecked. On a class the rules apply to ``__init__`` (a dataclass's
+fields). ``rules_of`` returns the rules of a checked callable; the CLI, which names its flags
+instead, renames the fields with ``acdrive.errors.named_as``.
 
 A rule says what it accepts: ``None`` only if ``optional``; NaN or infinity never (but for an
 ``Array(finite=False)`` of results); a negative number only without a lower bound; an empty
@@ -40,8 +40,9 @@ from acdrive.errors import InputError
 
 __all__ = [
     "COUNT", "COUNT0", "FLAG", "FRACTION", "NONNEGATIVE", "PATH", "POSITIVE", "REAL", "RESULT",
-    "SEED", "TEXT", "Anything", "Array", "Attributes", "Either", "FilePath", "Flag", "Function", "Instance",
-    "Items", "Number", "Table", "Text", "check_call", "checked", "forwarding", "optional", "rules_of",
+    "SEED", "TEXT", "Anything", "Array", "Attributes", "Either", "FilePath", "Flag", "Function",
+    "Instance", "Items", "Number", "Table", "Text", "check_call", "checked", "forwarding",
+    "optional", "rules_of",
 ]  # fmt: skip
 
 #: the attribute a checked callable (or a checked class's ``__init__``) keeps its rules in
@@ -49,9 +50,18 @@ RULES = "__acdrive_arguments__"
 
 
 def _shown(value) -> str:
-    """What a refused value was, short: its repr when short, else its type."""
-    text = repr(value)
-    return text if len(text) <= 40 else f"a {type(value).__name__}"
+    """What a refused value was, short: a float as ``:g`` formats it, else its repr when short,
+    else its type."""
+    text = f"{value:g}" if isinstance(value, float) else repr(value)
+    return text if len(text) <= 40 else f"a value of type {type(value).__name__}"
+
+
+def _finite(value) -> bool:
+    """``math.isfinite`` of a real number; an exact one too large for a float is finite."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return True
 
 
 class Rule:
@@ -113,14 +123,14 @@ class Number(Rule):
         kind = numbers.Integral if self.integer else numbers.Real
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, kind):
             self.refuse(name, value)  # "must be a finite number > 0, got 'x'"
-        if not math.isfinite(value):
+        if not isinstance(value, numbers.Integral) and not _finite(value):
             if self.finite:
                 raise InputError(name, "must be finite (not NaN or infinite)")
             return
         low_ok = self.low is None or (value > self.low if self.above else value >= self.low)
         if not low_ok or (self.high is not None and value > self.high):
             bounds = self.describe().removeprefix("a finite number ")
-            raise InputError(name, f"must be {bounds}, got {value:g}")  # as errors.require_*
+            raise InputError(name, f"must be {bounds}, got {_shown(value)}")  # as require_*
 
 
 class Flag(Rule):
@@ -202,7 +212,9 @@ class Instance(Rule):
         return tuple(found)
 
     def describe(self) -> str:
-        return self.what or " or ".join(f"a {t.__name__}" for t in self.types)
+        return self.what or " or ".join(
+            f"{'an' if t.__name__[0] in 'AEIOU' else 'a'} {t.__name__}" for t in self.types
+        )
 
     def check_value(self, name, value):
         if not isinstance(value, self.types):

@@ -306,7 +306,7 @@ def _solve_L_M(V, I, variance, known, w_r, w, hold, start, moment=0.0):
 
 @checked(log=Instance(NoLoadLog), given=optional(POSITIVE), given_field=TEXT)
 def link_voltage(log: NoLoadLog, given: float | None = None,
-                 given_field: str = "v_dc") -> float | None:  # fmt: skip
+                 given_field: str = "given") -> float | None:  # fmt: skip
     """The link voltage [V] of the run (module docstring): the mean of the log's ``v_dc``
     column, checked to stay within ``LINK_RTOL`` of it and, if a voltage is ``given`` (named
     ``given_field`` in messages), to agree with it within ``LINK_RTOL``; else ``given``

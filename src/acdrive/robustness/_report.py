@@ -152,7 +152,7 @@ def write_map_report(m: RobustnessMap, out, name: str | None = None) -> Path:
     through ``_output.OutputFolder`` (a folder acdrive did not write is never replaced)."""
     from acdrive._output import OutputFolder
 
-    with OutputFolder(out, name or f"{m.scenario}-robustness") as folder:
+    with OutputFolder(out, name or f"{m.scenario}-robustness", "out") as folder:
         write_into(m, folder.staging)
         return folder.publish()
 
