@@ -152,7 +152,7 @@ def test_a_current_that_is_absent_or_reversed_is_refused_before_the_fit():
 def test_a_test_plan_with_a_bad_field_is_refused_naming_it():
     from acdrive.identify import StandstillPlan
 
-    with pytest.raises(InputError, match=r"^tones: must be integer multiples >= 1"):
+    with pytest.raises(InputError, match=r"^tones\[1\]: must be an integer >= 1, got 2.5"):
         StandstillPlan(tones=(1, 2.5))
     with pytest.raises(InputError, match=r"^dc_step: must be > 0"):
         StandstillPlan(dc_step=0.0)

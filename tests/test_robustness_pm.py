@@ -41,7 +41,7 @@ def test_the_default_axes_are_the_pm_parameters():
     assert given.for_fields(seam.fields) is given
     with pytest.raises(InputError) as exc:
         robustness_map(SCENARIO, MapSpec(params=("R_r",), points=2))
-    assert exc.value.field == "--params"
+    assert exc.value.field == "spec.params"
 
 
 def test_zero_error_gives_the_nominal_run_exactly_and_a_point_is_its_single_run():

@@ -18,7 +18,11 @@ from acdrive.sim._ccode._c_source import CExport
 
 #: the engine's generator (``acdrive.sim._ccode._c_source.to_c``) with its arguments checked
 to_c = checked(
-    system=Instance("acdrive.sim._system:System", what="a System (build it from the parts)"),
+    system=Instance(
+        "acdrive.sim._system:System",
+        what="a System (acdrive.sim.System): the export reads the chain's inputs and commands "
+        "from the System's wiring, which a list of parts has not; build one from the parts first",
+    ),
     sample_time=POSITIVE,
     initial=Table(Table(empty=True), empty=True, optional=True),
     held=Table(Table(empty=True), empty=True, optional=True),
