@@ -340,10 +340,12 @@ ONE_DRIVE_MODULES = {
     "acdrive._report.bodson.experiments": "Bodson reproduction",
     "acdrive._report.bodson.verdicts": "Bodson reproduction",
     "acdrive._report.bodson.numbers": "Bodson reproduction",
+    "acdrive._report.bodson.run_figures": "Bodson reproduction",
     "acdrive._report.limit_cycle_summary": "Bodson reproduction",
     "acdrive._report.speed_overshoot": "Bodson reproduction",
     "acdrive._report.im.figures": "cage-IM paper reproduction",
     "acdrive._report.im.numbers": "cage-IM paper reproduction",
+    "acdrive._report.im.sections": "cage-IM paper reproduction",
 }
 
 

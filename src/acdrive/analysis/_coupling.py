@@ -148,6 +148,10 @@ def icad_coupling(params, w_e: float, k: LTI, w, delay: float = 0.0) -> np.ndarr
     return icad_quantities(G, kv, kv)["coupling"][:, 1]
 
 
+@checked(
+    params=Instance(IMParams, PMSGParams), w_e=REAL, k=Instance(LTI), lo=POSITIVE, hi=POSITIVE,
+    points=COUNT,
+)
 def icad_coupling_peak(
     params, w_e: float, k: LTI, lo: float = 100.0, hi: float = 3000.0, points: int = 29001
 ) -> tuple[float, float]:

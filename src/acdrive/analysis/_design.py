@@ -502,6 +502,7 @@ def propose_controller(
     )
 
 
+@checked(plant=PLANT, K_I=NONNEGATIVE, w_c=POSITIVE, lo=POSITIVE, hi=POSITIVE)
 def pi_gain_for_crossover(
     plant, K_I: float, w_c: float, lo: float = 1e-3, hi: float = 1e5
 ) -> float:

@@ -279,6 +279,7 @@ def _msf_at(plant: Plant2x2, w: np.ndarray) -> np.ndarray:
     return G[:, 0, 1] * G[:, 1, 0] / (G[:, 0, 0] * G[:, 1, 1])
 
 
+@checked(plant=PLANT, w=Array(1, low=0.0))
 def msf_positive_real_crossing(plant, w=MSF_CROSSING_GRID) -> tuple[float, float]:
     """(x_max, frequency [rad/s]) of the largest crossing x > 0 of the positive real axis by the
     MSF gamma (4) of ``plant`` for s = jw, w > 0: the conditions of Ugalde-Loo et al. ask that

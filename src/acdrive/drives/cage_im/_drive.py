@@ -91,7 +91,8 @@ import math
 
 import numpy as np
 
-from acdrive._arguments import Instance, checked
+from acdrive._arguments import checked
+from acdrive.drives._registry import Setup
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive.control._bodson import SpeedEstimator
 from acdrive.control._current import (
@@ -143,7 +144,7 @@ def _reference_tables(ref: CurrentReference, duration: float, T_s: float) -> dic
     return {"re": Profile(t, i.real), "im": Profile(t, i.imag)}
 
 
-@checked(setup=Instance(IMDriveSetup))
+@checked(setup=Setup())  # any drive's: require_setup names the drive
 class IMDrive:
     """The parts, wiring, initial state and logged signals of one ``IMDriveSetup`` run (its
     ``current_control.controller``; ``IMDriveSetup.runs`` splits a comparison)."""

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._arguments import Instance, Table, checked
+from acdrive.drives._registry import Setup
 from acdrive.drives.cage_im._drive import IMDrive
 from acdrive.drives.cage_im._result import IMDriveResult
 from acdrive.drives.cage_im._setup import IMDriveSetup
@@ -38,7 +39,7 @@ COMPARED = {
 }
 
 
-@checked(setup=Instance(IMDriveSetup))
+@checked(setup=Setup())  # any drive's: require_setup names the drive
 def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
     """Simulate every run of ``setup`` (compiled systems are shared between runs of the same
     topology) and summarise: the first run's metrics at the top level, every run's under

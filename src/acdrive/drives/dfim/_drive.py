@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from acdrive._arguments import POSITIVE, Function, Instance, Table, Text, checked
+from acdrive._arguments import POSITIVE, Function, Table, Text, checked
+from acdrive.drives._registry import Setup
 from acdrive._frames import K_PEAK as SQRT_3_2
 from acdrive._frames import complex_to_abc
 from acdrive.control import _bodson as bodson
@@ -162,7 +163,7 @@ def _motor_wires(k: int, p: dict, grid, bus) -> list:
     ]  # fmt: skip
 
 
-@checked(setup=Instance("acdrive.drives.dfim._setup:DriveSetup"))
+@checked(setup=Setup())  # any drive's: require_setup names the drive
 class DFIMDrive:
     """The parts, wiring, initial state and logged signals of one ``DriveSetup``."""
 
@@ -328,7 +329,7 @@ def simulate(setup, divergence_hint=None) -> DriveResult:
 
 
 @checked(
-    setup=Instance("acdrive.drives.dfim._setup:DriveSetup"),
+    setup=Setup(),  # any drive's: require_setup names the drive
     method=Text(("RK4", "RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")),
     python_steps=Table(Function(), empty=True, optional=True), rtol=POSITIVE, atol=POSITIVE,
 )

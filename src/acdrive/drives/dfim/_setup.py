@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._arguments import COUNT, POSITIVE, TEXT, Instance, Items, Text, checked
+from acdrive.drives._registry import Setup
 from acdrive._frames import K_PEAK as SQRT_3_2  # Bodson (8): complex magnitude per peak value
 from acdrive._toml import constant
 from acdrive.control import _dfim as ctl
@@ -228,7 +229,7 @@ def divergence_hint(setup: DriveSetup) -> str:
     )
 
 
-@checked(setup=Instance(DriveSetup))
+@checked(setup=Setup())  # any drive's: require_setup names the drive
 def simulate(setup: DriveSetup) -> DriveResult:
     """Run ``setup`` on its parts-built system (``drives.dfim._drive``) and return its typed result.
     A DFIM setup only: another drive's setup is an ``InputError`` on ``setup`` pointing to
