@@ -1,23 +1,25 @@
 #!/usr/bin/env bash
 # Installs the cross tools that `acdrive export m4` and tests/test_export_target.py need:
 # the Cortex-M compiler (gcc-arm-none-eabi), its C library (libnewlib-arm-none-eabi) and the
-# Arm board models of QEMU (qemu-system-arm). Debian/Ubuntu (apt-get). Does nothing when all
-# three tools are already present; as root it installs them, otherwise through sudo.
+# Arm board models of QEMU (qemu-system-arm); and clang, the second host compiler the exported
+# C is checked with (tests/test_export_compilers.py). Debian/Ubuntu (apt-get). Does nothing when
+# all four tools are already present; as root it installs them, otherwise through sudo.
 set -euo pipefail
 
-packages=(gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm)
+packages=(gcc-arm-none-eabi libnewlib-arm-none-eabi qemu-system-arm clang)
 newlib_math=/usr/lib/arm-none-eabi/newlib/thumb/v7e-m+fp/hard/libm.a
 
 present() {
     command -v arm-none-eabi-gcc >/dev/null 2>&1 \
         && command -v arm-none-eabi-size >/dev/null 2>&1 \
         && command -v qemu-system-arm >/dev/null 2>&1 \
+        && command -v clang >/dev/null 2>&1 \
         && { [ -e "$newlib_math" ] || arm-none-eabi-gcc -mcpu=cortex-m4 -mfpu=fpv4-sp-d16 \
             -mfloat-abi=hard -print-file-name=libm.a | grep -q /; }
 }
 
 if present; then
-    echo "cross tools present: arm-none-eabi-gcc, newlib, qemu-system-arm (nothing to install)"
+    echo "cross tools present: arm-none-eabi-gcc, newlib, qemu-system-arm, clang (nothing to install)"
     exit 0
 fi
 if ! command -v apt-get >/dev/null 2>&1; then

@@ -7,6 +7,8 @@ C and plant C, the second implementation of the parts' numba kernels.
   as ``C_MODULE``;
 * ``_prelude``: the C text every generated file starts with (the real type, the math functions
   by precision, complex arithmetic);
+* ``_helpers``: the helpers a generated file holds, those its code calls (no ``static``
+  function left unused, a warning on clang);
 * ``_chain``: a system's controller chains (its sampled parts, grouped by their wiring);
 * ``_c_source``: the C99 header and source of the controller chains (``to_c``);
 * ``_plant_source``: the C99 header and source of the plant, with acdrive's integrator

@@ -9,7 +9,8 @@ parameters), ``<chain>_state`` (each part's discrete state and held outputs),
 ``<chain>_inputs`` (the plant outputs it reads), ``<chain>_outputs`` (its commands and each
 part's event bits), and four functions: ``<chain>_step``, ``<chain>_set_params`` (the values of
 the exported system), ``<chain>_reset`` (its initial states and held outputs) and nothing
-else: no global variables, no dynamic memory, no recursion, loops with fixed bounds.
+else: no global variables, no dynamic memory, no recursion, loops with fixed bounds. Above them
+the source holds the helpers they call and no other (``_helpers``).
 
 The export writes this text into files (``acdrive.export.to_c``); the native tier of the loop
 (``sim._native``) compiles the same text into its library.
@@ -26,6 +27,7 @@ import numpy as np
 from acdrive.core._parts import SampledPart
 from acdrive.errors import InputError
 from acdrive.sim._ccode._chain import Chain, chains_of
+from acdrive.sim._ccode._helpers import helper_text
 from acdrive.sim._ccode._kinds import CStep, CSupport, c_step_of
 from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
 
@@ -158,7 +160,8 @@ def _declaration(m: Member, kind: str = "") -> str:
     return f"{m.spec[1]} {m.name};"
 
 
-def _support_order(kinds) -> list[CSupport]:
+def _support_order(kinds, extra: tuple[CSupport, ...] = ()) -> list[CSupport]:
+    """The support pieces of ``kinds`` and ``extra``, each after the pieces it needs."""
     seen, order = set(), []
 
     def visit(support):
@@ -172,7 +175,16 @@ def _support_order(kinds) -> list[CSupport]:
     for entry in kinds.values():
         for support in entry.step.support:
             visit(support)
+    for support in extra:
+        visit(support)
     return order
+
+
+def helpers_of(kinds, code: list[str], extra: tuple[CSupport, ...] = ()) -> str:
+    """The helpers the lines ``code`` call (``_helpers``), drawn from the prelude's and from
+    the support of ``kinds`` and ``extra`` (with what each piece needs)."""
+    pieces = [HELPERS] + [support.code for support in _support_order(kinds, extra)]
+    return helper_text(pieces, "\n".join(code), PRELUDE)
 
 
 def _step_signature(entry: KindTypes) -> str:
@@ -454,10 +466,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         ]
     H.append(f"#endif /* {guard} */")
 
-    C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
-    for support in _support_order(kinds):
-        C.append(support.code.strip("\n"))
-        C.append("")
+    C = []  # the kinds' steps and the chains' functions; the helpers they call go above
     for entry in kinds.values():
         C.append(f"/* {entry.cls.__name__}.step: {entry.step.source} */")
         C.append(_step_signature(entry))
@@ -479,6 +488,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         C += ["}", "", f"void {c}_reset({c}_state *s)", "{"]
         C += ["    " + line for line in _reset_lines(system, model, S, Y)]
         C += ["}", ""]
+    C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", "", helpers_of(kinds, C), "", *C]
     return CExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, models)
 
 

@@ -47,8 +47,8 @@ from acdrive.sim._ccode._c_source import (
     _comment,
     _port_name,
     _struct_lines,
-    _support_order,
     _value_lines,
+    helpers_of,
     kind_declarations,
     kind_types,
     literal,
@@ -56,7 +56,7 @@ from acdrive.sim._ccode._c_source import (
     require_c_name,
 )
 from acdrive.sim._ccode._kinds import PLANT_ROLES, plant_c_of
-from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
+from acdrive.sim._ccode._prelude import PRELUDE
 from acdrive.sim._ccode._kinds.common import TABLE_NEXT_TIME
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 from acdrive.sim._loop_source import profile_parts
@@ -342,6 +342,14 @@ def _integrate_lines(system, kinds, modulators, name: str) -> list[str]:
     return L
 
 
+def _source(stamp: list[str], name: str, kinds, code: list[str]) -> str:
+    """The plant's source: ``code`` below the helpers it calls (``_helpers``; the profile
+    break look-up of ``_advance_lines`` among the pieces it may call)."""
+    helpers = helpers_of(kinds, code, (TABLE_NEXT_TIME,))
+    return "\n".join([*stamp, f'#include "{name}.h"', "", "#include <math.h>", "", helpers, "",
+                      *code]) + "\n"  # fmt: skip
+
+
 def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=None,
                name: str = "acdrive_plant", description: str = "",
                values: bool = True) -> PlantExport:  # fmt: skip
@@ -411,13 +419,7 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
         "", f"#endif /* {guard} */",
     ]  # fmt: skip
 
-    C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", HELPERS]
-    supports = _support_order(kinds)
-    if profile_parts(system) and TABLE_NEXT_TIME not in supports:
-        supports.append(TABLE_NEXT_TIME)
-    for support in supports:
-        C += [support.code.strip("\n"), ""]
-    C += _kind_functions(kinds, [*continuous, *modulators])
+    C = _kind_functions(kinds, [*continuous, *modulators])  # the helpers they call go above
     C += [f"/* the continuous states as one array, for the integrator ({n_x} reals) */",
           f"typedef union {{ {name}_continuous x; ACDRIVE_REAL v[{n_x}]; }} {name}_vector;",
           (f"typedef char {name}_states_are_reals[(sizeof({name}_continuous) == {n_x} * "
@@ -475,8 +477,8 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
            f"{name}_state *s, {in_arg})"),
           "{", *projections, f"    {name}_state_outputs(t, p, &s->x, in, &s->y);", "}", ""]  # fmt: skip
     if not values:
-        return PlantExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, continuous,
-                           modulators, inputs, outputs)  # fmt: skip
+        return PlantExport(name, "\n".join(H) + "\n", _source(stamp, name, kinds, C), kinds,
+                           continuous, modulators, inputs, outputs)  # fmt: skip
     C += [f"void {name}_set_params({name}_params *p)", "{",
           f"    p->sample_time = {literal(sample_time, 'sample_time')};",
           f"    p->substeps = {int(substeps)};"]  # fmt: skip
@@ -508,5 +510,5 @@ def to_plant_c(system, sample_time: float, substeps: int, initial=None, held=Non
         if part.EVENTS:
             C.append(f"    s->{part.name}_events = 0u;")
     C += [f"    {name}_update_outputs(t, p, s, in);", "}", ""]
-    return PlantExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, continuous,
-                       modulators, inputs, outputs)  # fmt: skip
+    return PlantExport(name, "\n".join(H) + "\n", _source(stamp, name, kinds, C), kinds,
+                       continuous, modulators, inputs, outputs)  # fmt: skip

@@ -3,9 +3,17 @@ precision, the complex space vector and its arithmetic.
 
 ``ACDRIVE_REAL`` is ``double`` unless the file is compiled with ``-DACDRIVE_FLOAT``, which makes
 it ``float`` and switches every math function to its ``f`` form (sinf, sqrtf, ...) so that a
-Cortex-M4F's single-precision FPU does all the work. Only functions of C99 <math.h> that
-newlib's libm also provides are used: sqrt, sin, cos, atan2, acos, hypot, exp, log, floor, fmod, fabs,
-nextafter.
+Cortex-M4F's single-precision FPU does all the work. Of C99 <math.h> the files of the built-in
+scenarios call, all of it in newlib's libm: the controller chains call ``acos, atan2, exp,
+fabs, floor, fmod, log, sqrt``, and in the float build also ``cos, hypot, sin``; the plant calls
+``floor, nextafter, sqrt, tanh``, in the double build also ``fabs``, and in the float build also
+``cos, hypot, sin`` (the double build's sine, cosine and magnitude are acdrive's own, below,
+whose reduction calls ``fabs`` and ``floor``). These are the calls
+compiled into the objects, not a list kept by hand: ``tests/test_export_compilers.py`` compiles
+every built-in scenario's files and compares.
+
+A file holds only the helpers below that its code calls (``_helpers``): an unused ``static``
+function is a warning on clang, ``static inline`` too.
 
 The complex helpers repeat, operation for operation, what numba compiles for the kernels'
 Python complex numbers (CPython's algorithms): a product is (ac - bd) + j(ad + bc), a quotient

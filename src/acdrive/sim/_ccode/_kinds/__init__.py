@@ -34,8 +34,10 @@ from acdrive.errors import InputError
 
 @dataclass(frozen=True)
 class CSupport:
-    """A piece of C (static functions, constants) that step bodies call, written once per file
-    whatever the number of kinds that use it; ``needs`` lists the support it calls in turn."""
+    """A piece of C (static functions, macros) that step bodies may call; ``needs`` lists the
+    pieces it calls in turn. A kind's ``support`` and a piece's ``needs`` say where a file may
+    draw its helpers from; the file holds, once whatever the number of kinds that use it, each
+    definition of them its code calls, and no other (``sim._ccode._helpers``)."""
 
     name: str
     code: str

@@ -23,7 +23,7 @@ from acdrive.plant._sources import DCSource, ThreePhaseSource
 from acdrive.sim._ccode._kinds import CStep, CSupport, PlantC, register, register_plant
 from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 
-#: tanh by precision (newlib's libm has both); the prelude lists only what controllers call
+#: tanh by precision (newlib's libm has both), for the shaft's Coulomb friction
 TANH = CSupport(
     "tanh",
     """
