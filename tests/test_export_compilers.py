@@ -28,7 +28,9 @@ from acdrive.export._cost import one_run
 from acdrive.export._scenario import built, c_name, export_setup, shortened
 from acdrive.scenarios import builtin_names, load_scenario
 from acdrive.sim._ccode import _prelude
+from acdrive.sim._ccode._helpers import helper_text
 from acdrive.sim._ccode._plant_source import to_plant_c
+from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
 
 ROOT = Path(__file__).resolve().parents[1]
 FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Werror", "-O0")
@@ -114,6 +116,16 @@ def _compile(compiler: str, source: Path, flags) -> subprocess.CompletedProcess:
     )  # fmt: skip
 
 
+def test_a_file_holds_the_helpers_its_code_calls_and_no_other():
+    """Through the prelude's macros (ACD_SIN is acd_sin in the double build) and through the
+    helpers (acd_sin calls acd_sincos): the cosine, the complex arithmetic and the rest stay
+    out."""
+    text = helper_text([HELPERS], "y = ACD_SIN(x) * acd_cabs(z);", PRELUDE)
+    defined = set(re.findall(r"^static inline \w+ (\w+)\(", text, re.MULTILINE))
+    assert defined == {"acd_sincos", "acd_sin", "acd_cabs"}
+    assert text.count("#ifndef ACDRIVE_FLOAT") == 2  # each double-only helper under its guard
+
+
 def test_every_built_in_scenario_is_compiled(generated):
     """The scenarios `export c` takes (all but those comparing runs) are all there, and the
     runs bring the kinds found only in comparisons."""
@@ -146,8 +158,9 @@ def _documented(text: str, what: str) -> tuple[frozenset[str], frozenset[str]]:
     names) as ``text`` lists them for ``what`` ("the controller chains call", "the plant
     calls"): "<what> A, in the double build also D (...), and in the float build also F"."""
     flat = " ".join(text.replace("`", "").split())
-    m = re.search(rf"{what} ([a-z0-9, ]+?)(?:, in the double build also ([a-z0-9, ]+?)"
-                  r"(?: \([^)]*\))?)?, and in the float build also ([a-z0-9, ]+)", flat)  # fmt: skip
+    pattern = (rf"{what} ([a-z0-9, ]+?)(?:, in the double build also ([a-z0-9, ]+?)"
+               r"(?: \([^)]*\))?)?, and in the float build also ([a-z0-9, ]+)")
+    m = re.search(pattern, flat)
     assert m, f"no list of the functions {what}"
     both = _names(m.group(1))
     return both | _names(m.group(2)), both | _names(m.group(3))
