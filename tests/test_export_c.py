@@ -23,7 +23,8 @@ from acdrive.sim._system import System
 
 needs_gcc = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
 #: C99 <math.h> functions newlib's libm also has: the only ones the export may call
-MCU_LIBM = {"sqrt", "sin", "cos", "atan2", "acos", "hypot", "exp", "log", "floor", "fmod", "fabs"}
+MCU_LIBM = {"sqrt", "sin", "cos", "atan2", "acos", "hypot", "exp", "log", "floor", "fmod", "fabs",
+            "nextafter"}
 
 
 @pytest.fixture(scope="module")
