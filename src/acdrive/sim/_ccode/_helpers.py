@@ -15,8 +15,8 @@ struct member (after ``.`` or ``->``) names no definition.
 
 Why: an unused ``static`` function is a warning (``-Wunused-function``: gcc's for ``static``,
 clang's also for ``static inline``), and an exported file must compile clean with ``-Werror``
-on any C99 compiler (docs/guide/export.md); which helpers a file needs follows from what it
-calls, so no list is kept by hand.
+on any C99 compiler (docs/guide/export.md). Which of the pool's definitions a file holds
+follows from what it calls, not from a list kept by hand (the pool is what the kinds name).
 """
 
 from __future__ import annotations
