@@ -115,7 +115,9 @@ def test_a_run_the_estimator_cannot_use_is_refused_naming_the_column(log, freque
 
 def test_a_no_load_file_needs_the_speed_column(tmp_path):
     path = tmp_path / "run.csv"
-    write_log(LOG, path)  # the standstill columns only
+    from acdrive.identify._experiment import StandstillLog
+
+    write_log(StandstillLog(LOG.time, LOG.v_a, LOG.i_a), path)  # the standstill columns only
     with pytest.raises(InputError, match=r"^path: column 'w': is missing; a no-load log has"):
         read_no_load_log(path)
     assert isinstance(read_no_load_log(write_no_load_log(LOG, tmp_path / "run.mat")), NoLoadLog)

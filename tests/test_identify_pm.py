@@ -138,7 +138,10 @@ def test_the_spin_test_recovers_the_magnet_flux_within_its_intervals(machine, pl
 
 def test_a_spin_log_that_is_not_a_short_circuit_or_too_short_is_refused(tmp_path):
     test = spin_test(BLY171D, dataclasses.replace(BLY_SPIN, speeds=(20.0,)))
-    standstill = None  # refused before the standstill values are needed
+    from acdrive.identify._pm import PMStandstillIdentification
+
+    # refused before the standstill values are needed: a record without them
+    standstill = PMStandstillIdentification.__new__(PMStandstillIdentification)
     log = dataclasses.replace(test.log, v_a=test.log.v_a + 0.1, source="x")
     with pytest.raises(InputError, match=r"^x: column 'v_a': a short-circuit spin test commands"):
         fit_spin(log, BLY171D.n_p, BLY_SPIN.settle, standstill)

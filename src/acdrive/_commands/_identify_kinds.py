@@ -151,7 +151,8 @@ def _pole_pairs(args, required: bool):
 
     if args.pole_pairs is None:
         return _required(args, "pole_pairs") if required else None
-    return require_between("--pole-pairs", args.pole_pairs, 1, 1000)
+    require_between("--pole-pairs", args.pole_pairs, 1, 1000)
+    return args.pole_pairs  # an int (argparse), which require_between returns as a float
 
 
 def _measured_logs(args, second: str, pole_pairs_required: bool = False):

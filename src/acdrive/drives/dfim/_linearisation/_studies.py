@@ -103,7 +103,8 @@ def with_speed_bandwidth(study, bandwidth: float):
 
 
 @checked(
-    mode=Text(MODES), speeds_rpm=Array(1, optional=True), loads_nm=Array(1, optional=True),
+    mode=Either(Text(MODES), Instance(DriveSetup)), speeds_rpm=Array(1, optional=True),
+    loads_nm=Array(1, optional=True),
     kind=Text(KINDS), lower=POSITIVE, upper=POSITIVE, tol=POSITIVE, ratio=Number(1.0, above=True),
 )
 def max_stable_bandwidth(
