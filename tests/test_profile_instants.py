@@ -21,7 +21,7 @@ from acdrive.errors import InputError
 from acdrive.sim import _native
 from acdrive.sim._lockstep_source import LANES
 from acdrive.sim._reference import simulate_reference
-from tests.test_mechanics import cage_drive
+from test_mechanics import cage_drive
 from acdrive.machines import UGALDE_IM_300W
 from acdrive.plant import Shaft
 
