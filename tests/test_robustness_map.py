@@ -166,6 +166,9 @@ def test_grid_and_monte_carlo_points():
         ({"severity_max": 0.0}, "severity_max"),
         ({"kind": "monte-carlo", "params": ("paper",)}, "params"),
         ({"kind": "sobol"}, "kind"),
+        ({"resolution": 0.0}, "resolution"),
+        ({"resolution": 1e-12}, "resolution"),
+        ({"resolution": float("nan")}, "resolution"),
     ],
 )
 def test_bad_map_specifications_name_the_argument(kwargs, field):
@@ -195,6 +198,8 @@ def test_a_negative_perturbation_factor_names_the_field():
         (["--current-tolerance", "-0.1"], "--current-tolerance"),
         (["--map", "monte-carlo", "--variants", "0"], "--variants"),
         (["--map", "monte-carlo", "--seed", "-1"], "--seed"),
+        (["--resolution", "0"], "--resolution"),
+        (["--map", "monte-carlo", "--resolution", "0.01"], "--resolution"),
     ],
 )
 def test_the_command_refuses_bad_input_in_one_line(tmp_path, capsys, argv, field):
@@ -307,3 +312,77 @@ def test_the_command_writes_its_report_and_json(tmp_path, capsys):
         code = exc.code
     assert code == 2 and "--out" in capsys.readouterr().err
     assert (users / "im-perturbed-robustness" / "notes.txt").read_text() == "mine"
+
+
+def _synthetic_rows(axis: str, values, breaks_from: float) -> list[dict]:
+    """Judged rows of one axis whose single criterion passes below ``breaks_from`` (a factor,
+    or a severity on the paper axis) and breaks from it on: a boundary known exactly."""
+    from acdrive.robustness._map import _log_distance, paper_factors
+
+    def row(value):
+        factors = {} if value is None else (
+            paper_factors(value) if axis == "paper" else {axis: value})
+        passes = value is None or (value < breaks_from if value >= (0 if axis == "paper" else 1)
+                                   else True)  # fmt: skip
+        return {"axis": "nominal" if value is None else axis,
+                "value": 1.0 if value is None else value, "factors": factors,
+                "log_distance": _log_distance(axis, value, factors), "valid": True,
+                "verdicts": {"current_limit": passes}}  # fmt: skip
+
+    return [row(None), *(row(v) for v in values)]
+
+
+@pytest.mark.parametrize(("axis", "grid", "boundary"), [
+    ("L_m", [0.5, 0.8, 1.25, 2.0], 1.2345),
+    ("paper", [0.5, 1.0, 1.5, 2.0], 1.2345),
+])  # fmt: skip
+def test_bisection_closes_on_a_known_boundary(axis, grid, boundary):
+    """The refinement's own rule on a criterion that breaks exactly from ``boundary`` on: each
+    round's midpoints judged and added, the reported pair brackets the boundary and is no wider
+    than the resolution (in ln f, or in severity on the paper axis), in
+    ceil(log2(grid spacing / resolution)) rounds."""
+    from acdrive.robustness._map import _boundaries, _midpoints
+
+    class Criterion:
+        name = "current_limit"
+
+    rows = _synthetic_rows(axis, grid, boundary)
+    first = _boundaries(rows, axis, "current_limit")["above"]
+    assert first["breaks"] == (1.25 if axis == "L_m" else 1.5)  # the grid's first breaking point
+    rounds = 0
+    while points := _midpoints(rows, [Criterion()], 1e-4):
+        rounds += 1
+        rows += _synthetic_rows(axis, [v for _, v, _ in points], boundary)[1:]
+    b = _boundaries(rows, axis, "current_limit")["above"]
+    assert b["passes"] < boundary <= b["breaks"]
+    x = (lambda v: v) if axis == "paper" else math.log
+    assert b["width"] == pytest.approx(x(b["breaks"]) - x(b["passes"])) and b["width"] <= 1e-4
+    assert rounds == math.ceil(math.log2(first["width"] / 1e-4))
+    if axis == "L_m":
+        assert _boundaries(rows, axis, "current_limit")["below"] is None  # below: passes
+
+
+def test_the_current_limit_boundary_is_found_between_grid_points():
+    """``bodson-ramp``'s current limit on L_m: on a 3-point grid (0.9, 1.013, 1.14) the first
+    breaking point is 1.14; the map bisects (1.013, 1.14] to 1e-3 in ln f, and runs of the two ends
+    alone confirm the pair: the peak phase current is within 1.05 x the limit at the passing
+    factor and above it at the breaking one."""
+    seam = for_data(read_scenario("bodson-ramp")).robustness()
+    m = robustness_map("bodson-ramp", MapSpec(params=("L_m",), points=3, low=0.9, high=1.14),
+                       linear=False)  # fmt: skip
+    b = m.summary["axes"]["L_m"]["boundary_above"]["current_limit"]
+    assert 1.013 < b["passes"] < b["breaks"] < 1.14
+    assert b["width"] <= 1e-3 and b["width"] == pytest.approx(math.log(b["breaks"] / b["passes"]))
+    assert m.summary["first_to_break"]["current_limit"] == {
+        "parameter": "L_m", "factor": b["breaks"], "passes_at": b["passes"]}
+    ends = simulate_batch("bodson-ramp", [{seam.table: {seam.fields["L_m"]: b["passes"]}},
+                                          {seam.table: {seam.fields["L_m"]: b["breaks"]}}],
+                          reducers=seam.reducers).rows  # fmt: skip
+    from acdrive.batch import build_variant_setup
+
+    nominal = build_variant_setup(read_scenario("bodson-ramp"))
+    peaks = [seam.derived(nominal, row)["peak_phase_current_over_limit"] for row in ends]
+    assert peaks[0] <= 1.05 < peaks[1]  # the criterion's stated tolerance, 5 % over the limit
+    refined = [r for r in m.rows if r["refined"]]
+    assert refined and len(m.rows) == 4 + len(refined)
+    assert [r["variant"] for r in m.rows] == list(range(len(m.rows)))

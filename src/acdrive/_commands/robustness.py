@@ -1,7 +1,7 @@
 """``acdrive robustness SCENARIO``: a robustness map of plant-parameter errors.
 
 ``acdrive robustness SCENARIO [--map grid|monte-carlo] [--params R_s,R_r,...,paper]
-[--points N] [--variants N] [--low F] [--high F] [--severity-max S] [--seed N]
+[--points N] [--variants N] [--low F] [--high F] [--severity-max S] [--seed N] [--resolution R]
 [--tracking-tolerance X] [--current-tolerance X] [--duration S] [--linear|--no-linear]
 [--out DIR] [--json]`` runs ``acdrive.robustness.robustness_map`` and prints its findings (or
 the JSON of every row with ``--json``); ``--out`` writes map.json, report.md and map.png.
@@ -39,6 +39,9 @@ def register(subparsers) -> None:
     p.add_argument("--severity-max", type=float, default=None,
                    help="largest severity s of the paper axis (factors PAPER^s) [2]")  # fmt: skip
     p.add_argument("--seed", type=int, default=None, help="monte-carlo seed [1]")
+    p.add_argument("--resolution", type=float, default=None,
+                   help="a grid's boundaries are bisected until the passing and the breaking "
+                        "variant are this close, in |ln f| (severity on the paper axis) [0.001]")  # fmt: skip
     p.add_argument("--tracking-tolerance", type=float, default=None,
                    help="tracking criterion's fraction (default: the drive's)")  # fmt: skip
     p.add_argument("--current-tolerance", type=float, default=0.05,
@@ -59,7 +62,7 @@ def register(subparsers) -> None:
 #: the Python arguments of MapSpec, robustness_map and design_comparison -> their options
 FLAGS = {"kind": "--map", "params": "--params", "spec.params": "--params", "points": "--points",
          "variants": "--variants", "low": "--low", "high": "--high",
-         "severity_max": "--severity-max", "seed": "--seed",
+         "severity_max": "--severity-max", "seed": "--seed", "resolution": "--resolution",
          "tracking_tolerance": "--tracking-tolerance",
          "current_tolerance": "--current-tolerance", "estimates": "--estimates"}  # fmt: skip
 
@@ -77,15 +80,15 @@ def _params(text: str | None, kind: str) -> tuple:
 
 #: the options of a map, unused by --estimates (a design comparison runs the scenario twice)
 MAP_OPTIONS = ("map", "params", "points", "variants", "low", "high", "severity_max", "seed",
-               "linear", "out")  # fmt: skip
+               "resolution", "linear", "out")  # fmt: skip
 
 
 def _map_defaults() -> dict:
     """The values of the map options not given."""
-    from acdrive.robustness._map import DEFAULT_POINTS, DEFAULT_VARIANTS
+    from acdrive.robustness._map import DEFAULT_POINTS, DEFAULT_RESOLUTION, DEFAULT_VARIANTS
 
     return {"map": "grid", "points": DEFAULT_POINTS, "variants": DEFAULT_VARIANTS, "low": 0.5,
-            "high": 2.0, "severity_max": 2.0, "seed": 1}
+            "high": 2.0, "severity_max": 2.0, "seed": 1, "resolution": DEFAULT_RESOLUTION}
 
 
 def _overrides(args) -> dict:
@@ -151,15 +154,16 @@ def run(args) -> int:
         refuse_unused(args, ("variants", "seed"), "a grid map (--map grid, the default)",
                       "--variants and --seed draw a --map monte-carlo")  # fmt: skip
     else:
-        refuse_unused(args, ("points", "severity_max"), "--map monte-carlo",
-                      "--points and --severity-max set the axes of a grid")  # fmt: skip
+        refuse_unused(args, ("points", "severity_max", "resolution"), "--map monte-carlo",
+                      "--points, --severity-max and --resolution set the axes of a grid")  # fmt: skip
     for dest, value in _map_defaults().items():
         if getattr(args, dest) is None:
             setattr(args, dest, value)
     with named_as(FLAGS):
         spec = MapSpec(kind=args.map, params=_params(args.params, args.map), points=args.points,
                        variants=args.variants, low=args.low, high=args.high,
-                       severity_max=args.severity_max, seed=args.seed)  # fmt: skip
+                       severity_max=args.severity_max, seed=args.seed,
+                       resolution=args.resolution)  # fmt: skip
     overrides = _overrides(args)
     with contextlib.ExitStack() as stack:
         stack.enter_context(_typed_names(args))

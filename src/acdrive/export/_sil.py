@@ -35,7 +35,7 @@ from acdrive._arguments import (
     optional,
 )
 from acdrive.errors import InputError
-from acdrive.sim._ccode._c_source import CExport, ChainModel, Member
+from acdrive.sim._ccode._c_source import GUARD_MACRO, CExport, ChainModel, Member
 
 #: gcc flags of the library: -ffp-contract=off keeps every product and sum rounded on its own
 #: (no fused multiply-add), as numba compiles the kernels (no ``contract`` among
@@ -50,17 +50,20 @@ def find_compiler(name: str = "gcc", purpose: str = "running the exported C in t
     return path
 
 
-def build_library(export: CExport, folder: Path, real: str = "double") -> Path:
+def build_library(export: CExport, folder: Path, real: str = "double",
+                  guard: bool = False) -> Path:  # fmt: skip
     """Write the export into ``folder`` and compile it into a shared library (``real``:
-    "double" or "float", the latter with -DACDRIVE_FLOAT)."""
+    "double" or "float", the latter with -DACDRIVE_FLOAT; ``guard``: with the input guard,
+    -DACDRIVE_GUARD_INPUTS)."""
     if real not in ("double", "float"):
         raise InputError("real", 'must be "double" or "float"')
     compiler = find_compiler()
     folder = Path(folder)
     (folder / export.header_name).write_text(export.header)
     (folder / export.source_name).write_text(export.source)
-    library = folder / f"lib{export.name}_{real}.so"
-    flags = [*CFLAGS, *(["-DACDRIVE_FLOAT"] if real == "float" else [])]
+    library = folder / f"lib{export.name}_{real}{'_guarded' if guard else ''}.so"
+    flags = [*CFLAGS, *(["-DACDRIVE_FLOAT"] if real == "float" else []),
+             *([f"-D{GUARD_MACRO}"] if guard else [])]  # fmt: skip
     done = subprocess.run(
         [compiler, *flags, "-o", str(library), str(folder / export.source_name), "-lm"],
         capture_output=True,
@@ -91,9 +94,9 @@ def _structure(name: str, fields):
     return type(name, (ctypes.Structure,), {"_fields_": fields})
 
 
-def ctypes_mirror(export: CExport, real: str = "double") -> dict:
+def ctypes_mirror(export: CExport, real: str = "double", guard: bool = False) -> dict:
     """ctypes classes of every struct of the export, by C type name, from the same model the
-    C text was generated from."""
+    C text was generated from (``guard``: the state structs of a build with the input guard)."""
     c_real = ctypes.c_double if real == "double" else ctypes.c_float
     types: dict = {"acd_complex": _structure("acd_complex", [("re", c_real), ("im", c_real)])}
     for entry in export.kinds.values():
@@ -104,13 +107,15 @@ def ctypes_mirror(export: CExport, real: str = "double") -> dict:
                 types[name] = _structure(name, fields)
     for model in export.chains:
         c = model.chain.name
-        for role, members in (("params", model.params), ("state", model.state),
-                              ("inputs", model.inputs), ("outputs", model.outputs)):  # fmt: skip
+        for role, members in (("params", model.params), ("inputs", model.inputs),
+                              ("state", model.state), ("outputs", model.outputs)):  # fmt: skip
             if not members:
                 continue
-            types[f"{c}_{role}"] = _structure(
-                f"{c}_{role}", [(m.name, _ctype(m, c_real, types)) for m in members]
-            )
+            fields = [(m.name, _ctype(m, c_real, types)) for m in members]
+            if role == "state" and guard:  # after the inputs' struct (the header's order)
+                fields += [("last_finite", types[f"{c}_inputs"]),
+                           ("input_faults", ctypes.c_uint32)]  # fmt: skip
+            types[f"{c}_{role}"] = _structure(f"{c}_{role}", fields)
     return types
 
 
@@ -127,9 +132,10 @@ class _LoadedChain:
     events: list  # (index in E, outputs field or None)
 
 
-def _load(export: CExport, library: Path, real: str, system) -> list[_LoadedChain]:
+def _load(export: CExport, library: Path, real: str, system,
+          guard: bool = False) -> list[_LoadedChain]:  # fmt: skip
     lib = ctypes.CDLL(str(library))
-    types = ctypes_mirror(export, real)
+    types = ctypes_mirror(export, real, guard)
     c_real = ctypes.c_double if real == "double" else ctypes.c_float
     index = {p.name: i for i, p in enumerate(system.sampled)}
     loaded = []
@@ -187,12 +193,12 @@ def _copy_out(chain: _LoadedChain, Y: np.ndarray, E: np.ndarray) -> None:
     held=Table(Table(empty=True), empty=True, optional=True),
     log=Items(Instance("acdrive.core._parts:Port"), optional=True), log_every=COUNT, t0=REAL,
     real=Text(("double", "float")), folder=optional(PATH), on_inputs=Function(optional=True),
-    float_inputs=FLAG,
+    float_inputs=FLAG, guard=FLAG,
 )
 def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
                 substeps: int = 4, initial=None, held=None, log=None, log_every: int = 1,
                 t0: float = 0.0, real: str = "double", folder=None,
-                on_inputs=None, float_inputs: bool = False):  # fmt: skip
+                on_inputs=None, float_inputs: bool = False, guard: bool = False):  # fmt: skip
     """Run ``compiled`` (a CompiledSystem) with the C chains of ``export`` in place of its
     sampled parts; returns the same result type as ``compiled.run`` with the same arguments.
     ``export`` must have been generated from ``compiled.system`` with the same ``initial``,
@@ -201,7 +207,8 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
     ``on_inputs(chain_index, inputs)``, if given, sees each chain's inputs struct (ctypes) just
     before its step (the replay of ``acdrive export m4``); ``float_inputs`` rounds every input to
     float32 before the step (the perturbation the float bound is derived from,
-    ``export._scenario.float_bound``)."""
+    ``export._scenario.float_bound``); ``guard``: the library is built with the input guard
+    (``-DACDRIVE_GUARD_INPUTS``, docs/guide/export.md)."""
     system = compiled.system
     covered = {p.name for m in export.chains for p in m.chain.parts}
     if covered != {p.name for p in system.sampled}:
@@ -210,8 +217,8 @@ def run_in_loop(compiled, export: CExport, duration: float, sample_time: float,
     columns, rows = compiled._log_setup(log, n_steps, log_every)
     module = compiled.module
     with tempfile.TemporaryDirectory(prefix="acdrive-sil-") as scratch:
-        library = build_library(export, Path(folder or scratch), real)
-        chains = _load(export, library, real, system)
+        library = build_library(export, Path(folder or scratch), real, guard)
+        chains = _load(export, library, real, system, guard)
         P, PO = system.pack_params()
         X, S = system.pack_initial(initial)
         Y, U = system.pack_held(held), np.zeros(system.sizes["u"])

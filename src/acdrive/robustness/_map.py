@@ -19,6 +19,14 @@ Two kinds of map (``MapSpec``):
 Every variant is judged by the drive's criteria (``RobustnessSeam.criteria``: tracking, current
 limit, stability, each a stated tolerance on a figure of the batch row) and, where the drive has
 one, by its linearised prediction of stability beside the simulated verdict.
+
+Where a grid's verdict changes between two neighbouring points (the last variant that passes a
+criterion and the first valid one that breaks it, walking out from the nominal), the map bisects
+that interval with further runs (in ln f; in severity on the paper axis) until the two are
+``MapSpec.resolution`` apart, and reports the boundary as that pair (``_boundaries``): the
+breaking factor with its resolution, not the first breaking grid point. Bisection finds one
+crossing inside the grid interval; a criterion that passes again between two grid points (not
+monotone there) may have others the grid cannot show.
 """
 
 from __future__ import annotations
@@ -70,13 +78,18 @@ DEFAULT_POINTS = 145
 DEFAULT_VARIANTS = 1000
 #: the most variants one map runs (memory of the rows, minutes of a 2-core machine)
 MAX_VARIANTS = 100_000
+#: default resolution of a grid's refined boundaries: 1e-3 in |ln f| (0.1 % of the factor), and
+#: 1e-3 in severity on the paper axis
+DEFAULT_RESOLUTION = 1e-3
+#: the most bisection rounds of one map (a grid spacing of 1 refined to 1e-9 takes 30)
+MAX_REFINEMENT_ROUNDS = 40
 #: |ln f| below which a factor is the nominal one
 _NOMINAL_TOL = 1e-12
 
 
 @checked(
     kind=Text(KINDS), params=Items(TEXT, optional=True), points=COUNT, variants=COUNT, low=POSITIVE,
-    high=POSITIVE, severity_max=POSITIVE, seed=SEED,
+    high=POSITIVE, severity_max=POSITIVE, seed=SEED, resolution=optional(POSITIVE),
 )
 @dataclass(frozen=True)
 class MapSpec:
@@ -91,6 +104,9 @@ class MapSpec:
     high: float = 2.0
     severity_max: float = 2.0
     seed: int = 1
+    #: a grid's boundaries are refined until the passing and the breaking variant are this close
+    #: (in |ln f| on a parameter axis, in severity on the paper axis); None: the grid alone
+    resolution: float | None = DEFAULT_RESOLUTION
     #: True when ``params`` was not given (the drive's own parameters are then used)
     defaulted: bool = field(default=False, init=False, compare=False)
 
@@ -137,6 +153,13 @@ class MapSpec:
                 "high", f"must be larger than the lowest factor ({self.low:g}), got {self.high:g}"
             )
         require_positive("severity_max", self.severity_max)
+        if self.resolution is not None:
+            require_positive("resolution", self.resolution)
+            if self.resolution < 1e-9:
+                raise InputError(
+                    "resolution", f"must be at least 1e-9 (a finer boundary is below the runs' "
+                    f"own rounding), got {self.resolution:g}"
+                )  # fmt: skip
         if self.kind == "grid" and 1 + len(params) * (self.points - 1) > MAX_VARIANTS:
             # counted before any axis is built: the nominal and points - 1 others per axis
             raise InputError(
@@ -299,7 +322,7 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
     fields set in every variant (e.g. ``{"simulation.duration": 2.0}``), as ``simulate_batch``.
     All input is checked before any simulation.
     """
-    from acdrive.batch import _base_data, apply_overrides, build_variant_setup, simulate_batch
+    from acdrive.batch import _base_data, apply_overrides, build_variant_setup
 
     start = time.perf_counter()
     spec = spec if spec is not None else MapSpec()
@@ -331,29 +354,19 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
 
     for_setup(nominal).build(nominal)  # a setup no batch can run (several runs) fails here
     criteria = seam.criteria(nominal, tolerances)
-    points = spec.points_of()
-    variants = [{seam.table: _table_value(seam, f)} for _, _, f in points]
-    result = simulate_batch(base, variants, reducers=seam.reducers, lockstep=lockstep)
     linear = (spec.kind == "grid") if linear is None else bool(linear)
-    rows, linear_time = [], 0.0
-    for (axis, value, factors), variant, row in zip(points, variants, result.rows, strict=True):
-        out = {"axis": axis, "value": value, "factors": factors,
-               "log_distance": _log_distance(axis, value, factors), **row}  # fmt: skip
-        if row["valid"] and seam.derived is not None:
-            out.update(seam.derived(nominal, row))
-        out["verdicts"] = (
-            {c.name: c.passes(out) for c in criteria} if row["valid"] else dict.fromkeys(CRITERIA)
-        )
-        if linear and row["valid"] and seam.linear is not None:
-            t0 = time.perf_counter()
-            setup = build_variant_setup(apply_overrides(base, variant))
-            out["linear"] = seam.linear(setup)
-            linear_time += time.perf_counter() - t0
-        rows.append(out)
+    judge = _Judge(base, seam, nominal, criteria, linear, lockstep)
+    rows = judge.rows(spec.points_of(), refined=False)
+    if spec.kind == "grid" and spec.resolution is not None:
+        for _ in range(MAX_REFINEMENT_ROUNDS):
+            points = _midpoints(rows, criteria, spec.resolution)
+            if not points:
+                break
+            rows += judge.rows(points, refined=True, first_index=len(rows))
     m = RobustnessMap(
         scenario=name, spec=spec, table=seam.table, criteria=criteria, rows=rows,
         linear_rule=seam.linear_rule if linear else "", wall_time=0.0,
-        batch_wall_time=result.wall_time, linear_time=linear_time,
+        batch_wall_time=judge.batch_wall_time, linear_time=judge.linear_time,
     )  # fmt: skip
     m.summary = summarise(m)
     point = m.summary.get("paper_point")
@@ -361,6 +374,112 @@ def robustness_map(scenario, spec: MapSpec | None = None, *, tracking_tolerance=
         point["analysis"] = seam.point_analysis(nominal, dict(PAPER_PERTURBATION))
     m.wall_time = time.perf_counter() - start
     return m
+
+
+class _Judge:
+    """Runs map points in the batch loop and judges each row by the criteria (and, with
+    ``linear``, adds the drive's prediction), keeping the time spent in each."""
+
+    def __init__(self, base, seam, nominal, criteria, linear: bool, lockstep):
+        self.base, self.seam, self.nominal, self.criteria = base, seam, nominal, criteria
+        self.linear, self.lockstep = linear, lockstep
+        self.batch_wall_time = self.linear_time = 0.0
+
+    def rows(self, points: list, *, refined: bool, first_index: int = 0) -> list[dict]:
+        """One judged row per (axis, value, factors) of ``points``; ``variant`` numbers the row
+        in the map (``first_index`` on)."""
+        from acdrive.batch import apply_overrides, build_variant_setup, simulate_batch
+
+        seam = self.seam
+        variants = [{seam.table: _table_value(seam, f)} for _, _, f in points]
+        result = simulate_batch(self.base, variants, reducers=seam.reducers,
+                                lockstep=self.lockstep)  # fmt: skip
+        self.batch_wall_time += result.wall_time
+        rows = []
+        for (axis, value, factors), variant, row in zip(points, variants, result.rows,
+                                                        strict=True):  # fmt: skip
+            out = {"axis": axis, "value": value, "factors": factors,
+                   "log_distance": _log_distance(axis, value, factors), **row,
+                   "variant": first_index + row["variant"], "refined": refined}  # fmt: skip
+            if row["valid"] and seam.derived is not None:
+                out.update(seam.derived(self.nominal, row))
+            out["verdicts"] = (
+                {c.name: c.passes(out) for c in self.criteria}
+                if row["valid"]
+                else dict.fromkeys(CRITERIA)
+            )
+            if self.linear and row["valid"] and seam.linear is not None:
+                t0 = time.perf_counter()
+                setup = build_variant_setup(apply_overrides(self.base, variant))
+                out["linear"] = seam.linear(setup)
+                self.linear_time += time.perf_counter() - t0
+            rows.append(out)
+        return rows
+
+
+# --- boundaries -------------------------------------------------------------------------------
+
+
+def _coordinate(axis: str, value: float) -> float:
+    """Where a grid value lies on its axis for bisection: ln f on a parameter axis, the
+    severity itself on the paper axis (the nominal is 0 on both)."""
+    return value if axis == PAPER else math.log(value)
+
+
+def _value(axis: str, x: float) -> float:
+    return x if axis == PAPER else math.exp(x)
+
+
+def _boundaries(rows: list, axis: str, criterion: str) -> dict:
+    """The boundary of ``criterion`` on each side of the nominal along ``axis`` (sides "below"
+    and "above"; the paper axis has only "above"): walking out from the nominal over the axis's
+    rows (grid and refined), the last variant that passes and the first that does not.
+
+    Each side is ``{"passes": value, "breaks": value, "width": |x_breaks - x_passes|}`` (x as
+    ``_coordinate``: the width is in ln f, or in severity) when the first variant that does not
+    pass is a valid run that breaks the criterion; None when every variant on the side passes,
+    when the nominal itself does not pass, or when the first that does not pass was refused (the
+    scenario's checks end that side first: ``first_refused_*``)."""
+    nominal = rows[0]
+    out = {}
+    for side in ("below", "above") if axis != PAPER else ("above",):
+        mine = sorted(
+            (r for r in rows if r["axis"] == axis
+             and (_coordinate(axis, r["value"]) < 0) == (side == "below")),
+            key=lambda r: abs(_coordinate(axis, r["value"])),
+        )  # fmt: skip
+        found = None
+        last = {**nominal, "value": 0.0 if axis == PAPER else 1.0}
+        for r in [last, *mine] if nominal["verdicts"].get(criterion) is True else []:
+            if r["valid"] and r["verdicts"][criterion] is True:
+                last = r
+                continue
+            if r["valid"] and r["verdicts"][criterion] is False:
+                found = {"passes": last["value"], "breaks": r["value"],
+                         "width": abs(_coordinate(axis, r["value"])
+                                      - _coordinate(axis, last["value"]))}  # fmt: skip
+            break
+        out[side] = found
+    return out
+
+
+def _midpoints(rows: list, criteria: list, resolution: float) -> list[tuple[str, float, dict]]:
+    """The next bisection points of every boundary wider than ``resolution`` (``_boundaries``),
+    one per (axis, value): the mean of the two ends in ``_coordinate``."""
+    axes = dict.fromkeys(r["axis"] for r in rows[1:])
+    points = {}
+    for axis in axes:
+        for c in criteria:
+            for b in _boundaries(rows, axis, c.name).values():
+                if b is None or b["width"] <= resolution:
+                    continue
+                x = 0.5 * (_coordinate(axis, b["passes"]) + _coordinate(axis, b["breaks"]))
+                value = _value(axis, x)
+                if value in (b["passes"], b["breaks"]):
+                    continue  # the two ends are adjacent floats
+                factors = paper_factors(value) if axis == PAPER else {axis: value}
+                points[(axis, value)] = (axis, value, factors)
+    return list(points.values())
 
 
 # --- findings ---------------------------------------------------------------------------------
@@ -408,10 +527,12 @@ def summarise(m: RobustnessMap) -> dict:
     """The map's findings, every one computed from the rows here.
 
     ``nominal``: the nominal run's verdicts. Grid: per axis, per criterion, the breaking factor
-    nearest the nominal below and above 1 (severity on the ``paper`` axis) and the refused
-    variant nearest the nominal on each side with the scenario's reason;
-    ``first_to_break``: per criterion, the single parameter whose break is nearest the nominal
-    in |ln f|. Monte Carlo: per criterion, the broken fraction of the valid variants with its
+    nearest the nominal below and above 1 (severity on the ``paper`` axis), the refined
+    boundary on each side (``_boundaries``: the passing and the breaking value and their
+    distance) and the refused variant nearest the nominal on each side with the scenario's
+    reason; ``first_to_break``: per criterion, the single parameter whose break is nearest the
+    nominal in |ln f| (the refined breaking factor where there is one, with the passing factor
+    beside it). Monte Carlo: per criterion, the broken fraction of the valid variants with its
     95 % Wilson interval and, per parameter, the median |ln f| of the broken and of the passing
     variants (a parameter whose errors are larger where the criterion breaks drives it).
     Both: ``linear_vs_simulation``, the count of valid variants where the prediction and the
@@ -443,6 +564,9 @@ def summarise(m: RobustnessMap) -> dict:
                 "first_break_above": {n: _first_break(ok, n, None if axis == PAPER else False)
                                       for n in names},
             }  # fmt: skip
+            sides = {n: _boundaries(rows, axis, n) for n in names}
+            axes[axis]["boundary_below"] = {n: sides[n].get("below") for n in names}
+            axes[axis]["boundary_above"] = {n: sides[n]["above"] for n in names}
         out["axes"] = axes
         first = {}
         for n in names:
@@ -450,11 +574,15 @@ def summarise(m: RobustnessMap) -> dict:
             for axis, a in axes.items():
                 if axis == PAPER:
                     continue
-                for side in ("first_break_below", "first_break_above"):
-                    v = a[side][n]
+                for side in ("below", "above"):
+                    b = a[f"boundary_{side}"][n]
+                    v = a[f"first_break_{side}"][n] if b is None else b["breaks"]
                     if v is not None and (best is None or abs(math.log(v)) < best[2]):
-                        best = (axis, v, abs(math.log(v)))
-            first[n] = None if best is None else {"parameter": best[0], "factor": best[1]}
+                        best = (axis, v, abs(math.log(v)), b)
+            first[n] = None if best is None else {
+                "parameter": best[0], "factor": best[1],
+                "passes_at": None if best[3] is None else best[3]["passes"],
+            }  # fmt: skip
         out["first_to_break"] = first
         paper = [r for r in rows if r["axis"] == PAPER and r["value"] == 1.0]
         if paper:

@@ -21,6 +21,23 @@ def _fmt(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
+def _pair(passes: float, breaks: float) -> tuple[str, str]:
+    """The two ends of a boundary with digits enough to tell them apart."""
+    width = abs(math.log(breaks / passes)) if passes > 0 < breaks else abs(breaks - passes)
+    digits = max(4, 2 + math.ceil(-math.log10(max(width, 1e-15))))
+    return f"{passes:.{digits}g}", f"{breaks:.{digits}g}"
+
+
+def _side(axis: dict, side: str, criterion: str) -> str:
+    """One side of a boundary cell: ``passes -> breaks`` where the map refined it, else the
+    first breaking grid value (or none)."""
+    b = axis[f"boundary_{side}"][criterion]
+    if b is not None:
+        passes, breaks = _pair(b["passes"], b["breaks"])
+        return f"{passes} -> {breaks}"
+    return _fmt(axis[f"first_break_{side}"][criterion])
+
+
 def report_lines(m: RobustnessMap) -> list[str]:
     """The report's Markdown, every number read from ``m.summary`` or ``m.criteria``."""
     s = m.summary
@@ -39,7 +56,11 @@ def report_lines(m: RobustnessMap) -> list[str]:
               (f"{s['valid_variants']} variants ran, {s['refused_variants']} were refused by the "
               "scenario's checks (not a machine, or a pre-check; reasons in map.json)."), ""]  # fmt: skip
     if m.spec.kind == "grid":
-        lines += ["## First factor that breaks each criterion", "",
+        lines += ["## Where each criterion breaks", "",
+                  ("A boundary is the pair passes -> breaks of the two nearest variants on "
+                   "either side of it (the grid refined by bisection"
+                   + (f" to {m.spec.resolution:g} in |ln f| or severity" if m.spec.resolution
+                      else ", here not refined") + "); a single value is a grid point."), "",
                   "| axis | valid range | " + " | ".join(f"{c.name} below / above" for c in m.criteria) + " |",
                   "| --- | --- |" + " --- |" * len(m.criteria)]  # fmt: skip
         for axis, a in s["axes"].items():
@@ -48,7 +69,7 @@ def report_lines(m: RobustnessMap) -> list[str]:
                 if a["valid_range"] is None
                 else f"{_fmt(a['valid_range'][0])} to {_fmt(a['valid_range'][1])}"
             )
-            cells = [f"{_fmt(a['first_break_below'][c.name])} / {_fmt(a['first_break_above'][c.name])}"
+            cells = [f"{_side(a, 'below', c.name)} / {_side(a, 'above', c.name)}"
                      for c in m.criteria]  # fmt: skip
             label = "paper (severity s)" if axis == PAPER else axis
             lines.append(f"| {label} | {rng} | " + " | ".join(cells) + " |")
@@ -68,9 +89,15 @@ def report_lines(m: RobustnessMap) -> list[str]:
         lines.append("")
         for c in m.criteria:
             f = s["first_to_break"][c.name]
-            lines.append(f"- {c.name}: " + ("no single-parameter error in the map breaks it" if f is None
-                         else f"breaks first on {f['parameter']} at f = {_fmt(f['factor'])} "
-                              f"(nearest the nominal in |ln f|)"))  # fmt: skip
+            if f is None:
+                lines.append(f"- {c.name}: no single-parameter error in the map breaks it")
+                continue
+            at = _fmt(f["factor"])
+            if f.get("passes_at") is not None:
+                passes, at = _pair(f["passes_at"], f["factor"])
+                at += f" (passes at {passes})"
+            lines.append(f"- {c.name}: breaks first on {f['parameter']} at f = {at}, nearest the "
+                         "nominal in |ln f|")  # fmt: skip
         if "paper_point" in s:
             p = s["paper_point"]
             verdicts = ", ".join(f"{k} {'passes' if v else 'breaks' if v is False else 'refused'}"

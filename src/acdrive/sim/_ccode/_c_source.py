@@ -337,6 +337,49 @@ def _chain_step_lines(model: ChainModel, kinds, source_of) -> list[str]:
     return lines
 
 
+#: the compile-time switch of the input guard (docs/guide/export.md, "Non-finite inputs")
+GUARD_MACRO = "ACDRIVE_GUARD_INPUTS"
+
+
+def _guard_members(chain_name: str) -> list[str]:
+    """The state members of the input guard, compiled only with ``-DACDRIVE_GUARD_INPUTS``."""
+    return [f"#ifdef {GUARD_MACRO}",
+            f"    {chain_name}_inputs last_finite; /* the input guard: each input's last finite "
+            "value (0 before the first) */",
+            "    uint32_t input_faults; /* the input guard: bit k set when input k (in the order "
+            f"of {chain_name}_inputs; bit 31 for 31 and later) was not finite at the last step "
+            "and its last finite value was used */",
+            "#endif"]  # fmt: skip
+
+
+def _guard_lines(model: ChainModel) -> list[str]:
+    """Start of ``<chain>_step`` with ``-DACDRIVE_GUARD_INPUTS``: every input that is not finite
+    (NaN or infinite; a complex one if either part is) is replaced by its last finite value and
+    flagged in ``s->input_faults``; a finite one becomes the last finite value. The step then
+    reads the guarded copy. Without the macro the step reads ``in`` as given."""
+    c = model.chain.name
+    lines = [f"#ifdef {GUARD_MACRO}", f"{c}_inputs guarded = *in;", "s->input_faults = 0u;"]
+    for k, m in enumerate(model.inputs):
+        bit = f"(1u << {min(k, 31)})"
+        finite = (f"isfinite(guarded.{m.name}.re) && isfinite(guarded.{m.name}.im)"
+                  if m.spec == "complex" else f"isfinite(guarded.{m.name})")  # fmt: skip
+        lines += [f"if ({finite}) {{", f"    s->last_finite.{m.name} = guarded.{m.name};",
+                  "} else {", f"    guarded.{m.name} = s->last_finite.{m.name};",
+                  f"    s->input_faults |= {bit};", "}"]  # fmt: skip
+    return [*lines, "in = &guarded;", "#endif"]
+
+
+def _guard_reset_lines(model: ChainModel) -> list[str]:
+    """``<chain>_reset``'s part of the input guard: no fault, every last finite value 0."""
+    lines = [f"#ifdef {GUARD_MACRO}", "s->input_faults = 0u;"]
+    for m in model.inputs:
+        if m.spec == "complex":
+            lines += [f"s->last_finite.{m.name}.re = 0;", f"s->last_finite.{m.name}.im = 0;"]
+        else:
+            lines.append(f"s->last_finite.{m.name} = 0;")
+    return [*lines, "#endif"]
+
+
 def _step_prototype(model: ChainModel) -> str:
     c = model.chain.name
     out = f", {c}_outputs *out" if model.outputs else ""
@@ -449,11 +492,14 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         parts = ", ".join(p.name for p in model.chain.parts)
         H.append(f"/* ==== chain {c}: {parts} ==== */")
         for role, members, what in (("params", model.params, "parameters"),
-                                    ("state", model.state, "discrete states and held outputs"),
                                     ("inputs", model.inputs, "plant outputs read at each sample"),
+                                    ("state", model.state, "discrete states and held outputs"),
                                     ("outputs", model.outputs, "commands and event bits")):  # fmt: skip
             if members:  # a chain that commands nothing (estimators only) has no outputs
-                H += _struct_lines(f"{c}_{role}", members, f"{c}: {what}")
+                lines = _struct_lines(f"{c}_{role}", members, f"{c}: {what}")
+                if role == "state":
+                    lines[-1:-1] = _guard_members(c)
+                H += lines
         H += [
             "/* one sample at time t [s]: reads in, updates s, writes out; call every",
             f"   p->sample_time seconds, first with the state from {c}_reset */",
@@ -479,6 +525,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         c = model.chain.name
         C.append(_step_prototype(model))
         C.append("{")
+        C += ["    " + line for line in _guard_lines(model)]
         C += ["    " + line for line in _chain_step_lines(model, kinds, system.source_of)]
         C += ["}", ""]
         if not values:
@@ -487,6 +534,7 @@ def to_c(system, sample_time: float, initial=None, held=None, name: str = "acdri
         C += ["    " + line for line in _set_params_lines(model, sample_time)]
         C += ["}", "", f"void {c}_reset({c}_state *s)", "{"]
         C += ["    " + line for line in _reset_lines(system, model, S, Y)]
+        C += ["    " + line for line in _guard_reset_lines(model)]
         C += ["}", ""]
     C = [*stamp, f'#include "{name}.h"', "", "#include <math.h>", "", helpers_of(kinds, C), "", *C]
     return CExport(name, "\n".join(H) + "\n", "\n".join(C) + "\n", kinds, models)
