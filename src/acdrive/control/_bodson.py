@@ -141,7 +141,7 @@ class SupplyFrequencyEstimator(SampledPart):
 
 SYNC_PARAMS = Layout(
     *ESTIMATES,
-    real("enabled", "", "1: start with the stator open and synchronise; 0: start closed"),
+    real("enabled", "", "1: start with the stator open and synchronise; 0: start closed", "flag"),
     real("gain", "1/s", "rate of the theta_adj and ln m_adj adjustments", "nonnegative"),
     real("tol_magnitude", "", "|rho - 1| below which the magnitudes agree", "nonnegative"),
     real("tol_phase", "rad", "|phi| below which the phases agree", "nonnegative"),
@@ -287,12 +287,12 @@ CTRL_PARAMS = Layout(
         "stator voltage magnitude below which the supply counts as lost",
         "nonnegative",
     ),
-    real("mode", "", "0 voltage command, 1 current command"),
+    real("mode", "", "0 voltage command, 1 current command", "flag"),
     real("K_PC", "ohm", "rotor current loop proportional gain (49)", "nonnegative"),
     real("K_IC", "ohm/s", "rotor current loop integral gain (49)", "nonnegative"),
     real("R_T", "ohm", "virtual resistance of the rotor current loop (47)", "nonnegative"),
     real("v_r_max", "V", "rotor voltage the converter can apply (anti-windup)", "positive"),
-    real("lossless", "", "1: the R_s = 0 law (38)-(39) with the case-2 limits (40)-(42)"),
+    real("lossless", "", "1: the R_s = 0 law (38)-(39) with the case-2 limits (40)-(42)", "flag"),
 )
 CTRL_STATES = Layout(
     real("started", "", "1 once the first sample has run"),

@@ -73,10 +73,12 @@ FIXED_PARAMS = (
     real(
         "v_max", "V", "magnitude limit of the voltage command (unless v_dc is an input)", "positive"
     ),
-    real("aw_gain", "", "anti-windup tracking gain gamma (1: conditioning, 0: off)", "nonnegative"),
-    real("T_s", "s", "sample period the matrices were computed for", "positive"),
-    real("v_dc_input", "", "1 if the limit is v_dc / sqrt(2) from the input v_dc", "nonnegative"),
-    real("order", "", "controller order n (number of states)", "nonnegative"),
+    real("aw_gain", "", "anti-windup tracking gain gamma (1: conditioning, 0: off)", "nonnegative",
+         derived=True),  # enters K_aw only
+    real("T_s", "s", "sample period the matrices were computed for", "positive", derived=True),
+    real("v_dc_input", "", "1 if the limit is v_dc / sqrt(2) from the input v_dc", "flag",
+         derived=True),
+    real("order", "", "controller order n (number of states)", "whole", derived=True),
 )
 _FIXED = Layout(*FIXED_PARAMS)
 _V_MAX, _T_S, _FROM_INPUT, _ORDER = (
@@ -112,7 +114,8 @@ def _matrix_names(n: int) -> list[tuple[str, int, int]]:
 
 def _params_layout(n: int) -> Layout:
     entries = [
-        real(f"{name}_{i}_{j}", "", f"{name}[{i}, {j}] of the discrete controller (derived)")
+        real(f"{name}_{i}_{j}", "", f"{name}[{i}, {j}] of the discrete controller (derived)",
+             derived=True)
         for name, rows, cols in _matrix_names(n)
         for i in range(rows)
         for j in range(cols)

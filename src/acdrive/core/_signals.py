@@ -36,13 +36,19 @@ RULES = {
     "positive": "must be > 0",
     "nonnegative": "must be >= 0",
     "count": "must be a positive integer",
+    "whole": "must be an integer >= 0",
+    "flag": "must be 0 or 1",
     "fraction": "must be between 0 and 1",
 }
+#: the rules whose values are integers (an export declares such a quantity an Integer)
+INTEGER_RULES = ("count", "whole", "flag")
 #: whether a value obeys each rule (the empty rule holds for every value)
 _RULE_HOLDS: dict[str, Callable[[float], bool]] = {
     "positive": lambda x: x > 0.0,
     "nonnegative": lambda x: x >= 0.0,
     "count": lambda x: x >= 1.0 and x == int(x),
+    "whole": lambda x: x >= 0.0 and x == int(x),
+    "flag": lambda x: x in (0.0, 1.0),
     "fraction": lambda x: 0.0 <= x <= 1.0,
 }
 
@@ -51,13 +57,19 @@ _RULE_HOLDS: dict[str, Callable[[float], bool]] = {
 class Var:
     """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
     ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity or a table
-    (each of its values), a value ``rule`` (one of ``RULES``) that packing enforces."""
+    (each of its values), a value ``rule`` (one of ``RULES``) that packing enforces.
+
+    ``derived`` marks a parameter that is not a free number of the built part: computed when
+    the part is constructed (a discretised matrix, an order) or read only then (a gain that
+    enters those matrices). Its kernels hold it fixed; an export shows it as calculated, not
+    settable (changing it alone would change nothing, or break what it was computed with)."""
 
     name: str
     unit: str
     doc: str
     kind: str = "real"
     rule: str = ""
+    derived: bool = False
 
     def __post_init__(self):
         if not self.name.isidentifier():
@@ -105,12 +117,15 @@ class Relation:
     ``holds`` tells, from the values of ``fields`` in that order, whether it is met; ``blame``
     (same arguments) names the field out of proportion, ``fields[-1]`` if not given. A broken
     relation is an InputError naming that field, the rule and the values of every field in it.
+    ``c`` is the same condition in C, each field written ``{name}`` (an export checks it there);
+    empty if the relation has none.
     """
 
     fields: tuple[str, ...]
     rule: str
     holds: Callable[..., bool]
     blame: Callable[..., str] | None = None
+    c: str = ""
 
     def check(self, owner: str, values: dict, units: dict) -> None:
         """Raise InputError (field ``owner.<field>``, or ``<field>`` if ``owner`` is empty)
@@ -126,8 +141,8 @@ class Relation:
         raise InputError(f"{owner}.{named}" if owner else named, f"{self.rule} ({given})")
 
 
-def real(name: str, unit: str, doc: str, rule: str = "") -> Var:
-    return Var(name, unit, doc, "real", rule)
+def real(name: str, unit: str, doc: str, rule: str = "", derived: bool = False) -> Var:
+    return Var(name, unit, doc, "real", rule, derived)
 
 
 def cplx(name: str, unit: str, doc: str) -> Var:

@@ -36,6 +36,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from acdrive.core._parts import Part
+from acdrive.core._signals import INTEGER_RULES, RULES
 from acdrive.errors import InputError
 from acdrive.export._fmi2 import FMI2_WRAPPER
 from acdrive.export._sil import CFLAGS, find_compiler
@@ -72,19 +73,46 @@ def si_exponents(unit: str) -> dict[str, int] | None:
     return {k: e for k, e in total.items() if e != 0}
 
 
+#: each value rule of ``core._signals.RULES`` as a C condition on ``value`` (a double)
+RULE_C = {
+    "positive": "value > 0.0",
+    "nonnegative": "value >= 0.0",
+    "count": "value >= 1.0 && value == floor(value)",
+    "whole": "value >= 0.0 && value == floor(value)",
+    "flag": "value == 0.0 || value == 1.0",
+    "fraction": "value >= 0.0 && value <= 1.0",
+}
+#: each rule's bounds as FMI ``min``/``max`` attributes (only bounds a value may equal)
+RULE_BOUNDS = {"nonnegative": (0, None), "count": (1, None), "whole": (0, None),
+               "flag": (0, 1), "fraction": (0, 1)}  # fmt: skip
+NOT_FINITE = "must be finite (not NaN or infinite)"
+
+
 @dataclass
 class Variable:
-    """One FMU variable: ``c`` is its C lvalue in the model struct ``m``."""
+    """One FMU variable: ``c`` is its C lvalue in the model struct ``m``; ``rule`` the declared
+    value rule of a parameter (``core._signals.RULES``)."""
 
     name: str
     type: str  # "Real" or "Integer"
-    causality: str  # "input", "output", "parameter"
+    causality: str  # "input", "output", "parameter", "calculatedParameter"
     variability: str  # "continuous", "discrete", "fixed"
     c: str
     unit: str = ""
     description: str = ""
     start: float | None = None
     vr: int = 0
+    rule: str = ""
+
+
+@dataclass
+class RelationCheck:
+    """A rule over several parameters of one part (``core._signals.Relation``) as the FMU
+    checks it when initialisation ends: ``condition`` in C, ``names`` the FMU variables."""
+
+    rule: str
+    condition: str
+    names: tuple[str, ...]
 
 
 def _scalars(name: str, var, c: str, values, **kw) -> list[Variable]:
@@ -103,14 +131,38 @@ def _scalars(name: str, var, c: str, values, **kw) -> list[Variable]:
 
 
 def _parameters(parts, prefix) -> list[Variable]:
+    """Every real and space-vector parameter of ``parts``: a free one a ``parameter`` (settable
+    until initialisation ends, checked against its declared rule), a derived one
+    (``Var.derived``) a ``calculatedParameter`` (read only, no start); one whose rule makes it
+    an integer (``INTEGER_RULES``) an ``Integer``."""
     out = []
     for part in parts:
         for v in part.PARAMS:
             if v.kind == "table":
                 continue
             k = part.PARAMS.slot(v.name)
-            out += _scalars(f"{part.name}.{v.name}", v, f"{prefix}{part.name}.{v.name}",
-                            part.p[k : k + v.width], causality="parameter", variability="fixed")  # fmt: skip
+            causality = "calculatedParameter" if v.derived else "parameter"
+            values = None if v.derived else part.p[k : k + v.width]
+            scalars = _scalars(f"{part.name}.{v.name}", v, f"{prefix}{part.name}.{v.name}",
+                               values, causality=causality, variability="fixed")  # fmt: skip
+            for scalar in scalars:
+                scalar.rule = v.rule
+                if v.rule in INTEGER_RULES:
+                    scalar.type = "Integer"
+            out += scalars
+    return out
+
+
+def _relations(parts, prefix) -> list[RelationCheck]:
+    """The relations over the parameters of ``parts`` that declare their C (``Relation.c``)."""
+    out = []
+    for part in parts:
+        for relation in part.PARAMS.relations:
+            if relation.c:
+                lvalues = {f: f"({prefix}{part.name}.{f})" for f in relation.fields}
+                out.append(RelationCheck(f"{part.name}: {relation.rule}",
+                                         relation.c.format(**lvalues),
+                                         tuple(f"{part.name}.{f}" for f in relation.fields)))  # fmt: skip
     return out
 
 
@@ -131,6 +183,7 @@ class FMUModel:
     glue: str  # C of the model struct and the acd_fmu_* functions
     sample_time: float
     stop_time: float
+    relations: list[RelationCheck]
 
 
 def controller_model(export: CExport, sample_time: float, stop_time: float,
@@ -138,6 +191,7 @@ def controller_model(export: CExport, sample_time: float, stop_time: float,
     """The controller FMU of ``export`` (every chain of it in one FMU; ``sample_time`` the
     period ``to_c`` was given)."""
     variables: list[Variable] = []
+    relations: list[RelationCheck] = []
     fields, defaults, start, advance = [], [], [], []
     read_by: dict[str, str] = {}  # plant output path -> the inputs member that holds it
     for model in export.chains:
@@ -169,6 +223,7 @@ def controller_model(export: CExport, sample_time: float, stop_time: float,
                 variables.append(_events(part, f"m->out_{c}.{part.name}_events"))
                 start.append(f"    m->out_{c}.{part.name}_events = 0u;")
         variables += _parameters(model.chain.parts, f"m->p_{c}.")
+        relations += _relations(model.chain.parts, f"m->p_{c}.")
     first = export.chains[0].chain.name
     glue = "\n".join([
         f'#include "{export.header_name}"', "",
@@ -182,7 +237,8 @@ def controller_model(export: CExport, sample_time: float, stop_time: float,
         "    (void)t_next;", *advance, "}", "",
     ])  # fmt: skip
     files = {export.header_name: export.header, export.source_name: export.source}
-    return FMUModel(export.name, description, variables, files, glue, sample_time, stop_time)
+    return FMUModel(export.name, description, variables, files, glue, sample_time, stop_time,
+                    relations)
 
 
 def plant_model(export: PlantExport, system, held, sample_time: float, stop_time: float,
@@ -211,6 +267,7 @@ def plant_model(export: PlantExport, system, held, sample_time: float, stop_time
         if part.EVENTS:
             variables.append(_events(part, f"m->s.{part.name}_events"))
     variables += _parameters([*export.continuous, *export.modulators], "m->p.")
+    relations = _relations([*export.continuous, *export.modulators], "m->p.")
     inputs = "&m->in" if export.inputs else "NULL"
     glue = "\n".join([
         f'#include "{export.header_name}"', "",
@@ -225,7 +282,7 @@ def plant_model(export: PlantExport, system, held, sample_time: float, stop_time
         f"    {n}_update_outputs(t_next, &m->p, &m->s, {inputs});", "}", "",
     ])  # fmt: skip
     files = {export.header_name: export.header, export.source_name: export.source}
-    return FMUModel(n, description, variables, files, glue, sample_time, stop_time)
+    return FMUModel(n, description, variables, files, glue, sample_time, stop_time, relations)
 
 
 def _number(x: float) -> str:
@@ -273,43 +330,106 @@ def model_description(model: FMUModel, guid: str) -> str:
             attrs += f' start="{_number(v.start) if v.type == "Real" else int(v.start)}"'
         if v.unit:
             attrs += f" unit={quoteattr(v.unit)}"
+        for key, bound in zip(("min", "max"), RULE_BOUNDS.get(v.rule, (None, None)), strict=True):
+            if bound is not None:
+                attrs += f' {key}="{_number(bound) if v.type == "Real" else bound}"'
         L += [f"      <{v.type}{attrs}/>", "    </ScalarVariable>"]
     L += ["  </ModelVariables>", "  <ModelStructure>"]
     outputs = [i for i, v in enumerate(model.variables, 1) if v.causality == "output"]
+    # what the FMU computes in initialisation: its outputs and its calculated parameters (fixed
+    # when it was built: they depend on no variable a master sets)
+    initial = [i for i, v in enumerate(model.variables, 1)
+               if v.causality in ("output", "calculatedParameter")]  # fmt: skip
     if outputs:
         L.append("    <Outputs>")
         L += [f'      <Unknown index="{i}" dependencies=""/>' for i in outputs]
-        L += ["    </Outputs>", "    <InitialUnknowns>"]
-        L += [f'      <Unknown index="{i}"/>' for i in outputs]
+        L.append("    </Outputs>")
+    if initial:
+        L.append("    <InitialUnknowns>")
+        L += [f'      <Unknown index="{i}" dependencies=""/>'
+              if model.variables[i - 1].causality == "calculatedParameter"
+              else f'      <Unknown index="{i}"/>' for i in initial]  # fmt: skip
         L.append("    </InitialUnknowns>")
     L += ["  </ModelStructure>", "</fmiModelDescription>"]
     return "\n".join(L) + "\n"
 
 
+#: the access code of each causality in the generated ``acd_fmu_access`` table
+ACCESS = {"output": 1, "input": 2, "parameter": 3, "calculatedParameter": 4}
+
+
+def _c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
 def fmi2_source(model: FMUModel, guid: str) -> str:
-    """``<id>_fmi2.c``: the model glue, the value-reference tables and the FMI functions."""
+    """``<id>_fmi2.c``: the model glue, the value-reference tables (access, names, the outputs
+    checked finite, the parameters' rules and relations) and the FMI functions."""
     reals = [v for v in model.variables if v.type == "Real"]
     integers = [v for v in model.variables if v.type == "Integer"]
-    access = {"output": 1, "input": 2, "parameter": 3}
+    settable_integers = [v for v in integers if v.causality == "parameter"]
     table = ["0"] * (len(model.variables) + 1)
+    names = ['""'] * (len(model.variables) + 1)
     for v in model.variables:
-        table[v.vr] = str(access[v.causality]) if v.type == "Real" else "1"
+        table[v.vr] = str(ACCESS[v.causality])
+        names[v.vr] = _c_string(v.name)
+    outputs = [str(v.vr) for v in reals if v.causality == "output"]
+    checked = [v for v in model.variables if v.causality == "parameter"]
+    widest = max([len(r.names) for r in model.relations] + [1])
     L = [f"/* Generated by acdrive.export (FMI 2.0 co-simulation): {model.description}.",
          (" * Build: cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I<FMI 2.0 headers> "
-         "*.c -lm */"), "", "#include <math.h>", '#include "fmi2Functions.h"', "",
-         "#ifdef ACDRIVE_FLOAT", "#error \"the FMU reals are fmi2Real: build it in double\"",
+         "*.c -lm */"), "", "#include <float.h>", "#include <math.h>", '#include "fmi2Functions.h"',
+         "", "#ifdef ACDRIVE_FLOAT", "#error \"the FMU reals are fmi2Real: build it in double\"",
          "#endif", "", f'#define ACD_FMU_GUID "{guid}"', "", model.glue,
-         "/* 1: output (read only), 2: input, 3: fixed parameter; by value reference */",
+         f"#define ACD_FMU_VARIABLES {len(model.variables)}",
+         ("/* by value reference: 1 output (read only), 2 input, 3 parameter (settable until "
+          "initialisation ends),"), " * 4 calculated parameter (read only) */",
          f"static const unsigned char acd_fmu_access[{len(table)}] = {{{', '.join(table)}}};", "",
+         f"static const char *const acd_fmu_names[{len(names)}] = {{", *(f"    {n}," for n in names),
+         "};", "", "/* the Real outputs, each checked finite after every period */",
+         f"static const size_t acd_fmu_real_output_count = {len(outputs)};",
+         (f"static const fmi2ValueReference acd_fmu_real_outputs[{len(outputs) + 1}] = "
+          f"{{{', '.join([*outputs, '0'])}}};"), "",
          "static fmi2Real *acd_fmu_real(acd_fmu_model *m, fmi2ValueReference vr)", "{",
          "    switch (vr) {"]  # fmt: skip
     L += [f"    case {v.vr}: return &{v.c}; /* {v.name} */" for v in reals]
     L += ["    default: return NULL;", "    }", "}", "",
-          ("static int acd_fmu_integer(const acd_fmu_model *m, fmi2ValueReference vr, "
+          ("static int acd_fmu_get_integer(const acd_fmu_model *m, fmi2ValueReference vr, "
           "fmi2Integer *value)"), "{", "    switch (vr) {"]  # fmt: skip
     L += [f"    case {v.vr}: *value = (fmi2Integer){v.c}; return 1; /* {v.name} */"
           for v in integers]  # fmt: skip
-    L += ["    default: (void)m; (void)value; return 0;", "    }", "}", FMI2_WRAPPER]
+    L += ["    default: (void)m; (void)value; return 0;", "    }", "}", "",
+          "/* an Integer parameter, stored as a real of the generated C */",
+          ("static int acd_fmu_set_integer(acd_fmu_model *m, fmi2ValueReference vr, "
+          "fmi2Integer value)"), "{", "    switch (vr) {"]  # fmt: skip
+    L += [f"    case {v.vr}: {v.c} = (double)value; return 1; /* {v.name} */"
+          for v in settable_integers]  # fmt: skip
+    L += ["    default: (void)m; (void)value; return 0;", "    }", "}", "",
+          "/* the declared rule a parameter's value breaks (core._signals.RULES), NULL if none */",
+          "static const char *acd_fmu_broken_rule(fmi2ValueReference vr, double value)", "{",
+          "    if (!isfinite(value)) {", f"        return {_c_string(NOT_FINITE)};", "    }",
+          "    switch (vr) {"]  # fmt: skip
+    for v in checked:
+        if v.rule:
+            L.append(f"    case {v.vr}: /* {v.name} */")
+            L.append(f"        return {RULE_C[v.rule]} ? NULL : {_c_string(RULES[v.rule])};")
+    L += ["    default: return NULL;", "    }", "}", "",
+          "/* the rules over several parameters of one part (core._signals.Relation), checked "
+          "when",
+          " * initialisation ends: the rule, its parameters' value references, whether it holds */",
+          "typedef struct {", "    const char *rule;", "    unsigned n;",
+          f"    fmi2ValueReference vr[{widest}];", "} acd_fmu_relation;", "",
+          f"#define ACD_FMU_RELATIONS {len(model.relations)}",
+          f"static const acd_fmu_relation acd_fmu_relations[{len(model.relations) + 1}] = {{"]  # fmt: skip
+    vr_of = {v.name: v.vr for v in model.variables}
+    for r in model.relations:
+        refs = ", ".join(str(vr_of[n]) for n in r.names)
+        L.append(f"    {{{_c_string(r.rule)}, {len(r.names)}u, {{{refs}}}}},")
+    L += ["    {NULL, 0u, {0}},", "};", "",
+          "static int acd_fmu_relation_holds(const acd_fmu_model *m, int i)", "{",
+          "    switch (i) {"]  # fmt: skip
+    L += [f"    case {i}: return {r.condition};" for i, r in enumerate(model.relations)]
+    L += ["    default: (void)m; return 1;", "    }", "}", FMI2_WRAPPER]
     return "\n".join(L) + "\n"
 
 

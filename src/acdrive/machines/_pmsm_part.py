@@ -66,6 +66,7 @@ PARAMS = Layout(
             ("L_d", "L_q", "psi_m"),
             "torque needs a magnet or saliency: psi_m > 0 or L_d != L_q",
             lambda L_d, L_q, psi_m: psi_m > 0.0 or L_d != L_q,
+            c="{psi_m} > 0.0 || {L_d} != {L_q}",
         ),
     ),
 )

@@ -34,6 +34,7 @@ def winding_params(mutual: str, mutual_doc: str) -> Layout:
         f"leakage factor sigma = 1 - {mutual}^2/(L_s L_r) must be > 0",
         lambda L_s, L_r, L_mutual: leakage_factor(L_s, L_r, L_mutual) > 0.0,
         _out_of_proportion(mutual),
+        c=f"1.0 - {{{mutual}}} * {{{mutual}}} / ({{L_s}} * {{L_r}}) > 0.0",
     )
     return Layout(
         real("R_s", "ohm", "stator resistance", "positive"),

@@ -70,7 +70,7 @@ class Encoder(SampledPart):
 
 
 CURRENT_PARAMS = Layout(
-    real("fails", "", "1: the measurement fails at fault_time, 0: never"),
+    real("fails", "", "1: the measurement fails at fault_time, 0: never", "flag"),
     real("fault_time", "s", "time from which the measurement fails", "nonnegative"),
 )
 CURRENT_INPUTS = Layout(
@@ -113,7 +113,7 @@ class CurrentSensors(SampledPart):
 
 VOLTAGE_PARAMS = Layout(
     real("gain", "", "measured / true (1: exact; a calibration error otherwise)", "positive"),
-    real("fails", "", "1: the measurement fails at fault_time, 0: never"),
+    real("fails", "", "1: the measurement fails at fault_time, 0: never", "flag"),
     real("fault_time", "s", "time from which the measurement fails", "nonnegative"),
 )
 VOLTAGE_INPUTS = Layout(cplx("v", "V", "voltage space vector"))
