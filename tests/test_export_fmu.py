@@ -473,15 +473,22 @@ def test_a_broken_relation_is_refused_when_initialisation_ends(fmus):
     """Rules over several parameters (core._signals.Relation) are judged when initialisation
     ends: L_m = 2 H is a valid inductance alone, but with L_s = 1.44 H and L_r = 1.5 H the
     leakage factor 1 - L_m^2/(L_s L_r) is negative; fmi2ExitInitializationMode is fmi2Error,
-    its message the rule and the three values."""
+    its message the rule and the three values. The same for the IFOC's estimates, L_m = 1.6 H
+    above L_r = 1.5 H."""
     messages: list = []
     slave, vr = _slave(fmus["plant"], messages)
     slave.setReal([vr["machine.L_m"]], [2.0])
     assert _status(slave.exitInitializationMode) == 3
-    assert messages == [(3, "fmi2ExitInitializationMode: machine: leakage factor sigma = 1 - "
+    assert messages == [(3, "fmi2ExitInitializationMode: machine.L_m: leakage factor sigma = 1 - "
                             "L_m^2/(L_s L_r) must be > 0 (machine.L_s = 1.4399999999999999, "
                             "machine.L_r = 1.5, machine.L_m = 2)")]  # fmt: skip
-    _free(slave)
+    messages.clear()
+    controller, vr = _slave(fmus["controller"], messages)
+    controller.setReal([vr["ifoc.L_m"]], [1.6])  # the IFOC's estimate: L_m <= L_r = 1.5 H
+    assert _status(controller.exitInitializationMode) == 3
+    assert messages == [(3, "fmi2ExitInitializationMode: ifoc.L_m: must not exceed L_r (L_r = "
+                            "L_m + rotor leakage) (ifoc.L_r = 1.5, ifoc.L_m = 1.6000000000000001)")]
+    _free(slave, controller)
 
 
 def test_every_rule_has_its_c_and_they_agree():
@@ -493,7 +500,7 @@ def test_every_rule_has_its_c_and_they_agree():
     assert set(RULE_C) == set(RULES) - {""}
     values = (-2.0, -1.0, -0.5, -1e-300, 0.0, 1e-300, 0.5, 1.0, 1.5, 2.0, 3.0, 1e300)
     program = ["#include <math.h>", "#include <stdio.h>", "int main(void)", "{",
-               f"    static const double values[{len(values)}] = {{{', '.join(map(repr, values))}}};",
+               f"    static const double values[] = {{{', '.join(map(repr, values))}}};",
                "    int i;", f"    for (i = 0; i < {len(values)}; ++i) {{",
                "        double value = values[i];",
                *(f'        printf("%d ", ({c}) ? 1 : 0);' for c in RULE_C.values()),
@@ -522,7 +529,8 @@ def test_a_non_finite_output_is_an_error(fmus):
     assert _status(lambda: plant.doStep(T_s, T_s)) == 3
     assert _status(lambda: plant.doStep(2 * T_s, T_s)) == 3
     first = messages[0][1]
-    assert first.startswith("fmi2DoStep: output ") and " is NaN at 4.0000000000000003e-05 s" in first
+    assert first.startswith("fmi2DoStep: output ")
+    assert " is NaN at 4.0000000000000003e-05 s" in first
     assert messages[1][1].startswith("fmi2DoStep: the FMU stopped at an error")
     plant.reset()
     plant.setupExperiment(startTime=0.0)

@@ -160,8 +160,9 @@ def _against_acdrive(setup, paths: dict, master: dict, from_zero: bool, changes=
 
     drive, initial, held = built(setup)
     system = drive.system
-    changed = [p.with_params(**{k: v for k, v in (changes or {}).items() if k in p.PARAMS})
-               for p in system.parts if set(changes or {}) & {v.name for v in p.PARAMS}]  # fmt: skip
+    changes = changes or {}
+    changed = [p.with_params(**{k: v for k, v in changes.items() if k in p.PARAMS})
+               for p in system.parts if any(k in p.PARAMS for k in changes)]  # fmt: skip
     result = jacobi_system(system, held, from_zero).compile().run(
         setup.duration, setup.sample_time, setup.substeps, initial=initial, held=held,
         parts=changed,

@@ -59,7 +59,7 @@ import numpy as np
 from acdrive._jit import jit
 from acdrive.control._speed import SpeedPIGains, speed_pi
 from acdrive.core._parts import SampledPart
-from acdrive.core._signals import Layout, cplx, real, table
+from acdrive.core._signals import Layout, Relation, cplx, real, table
 from acdrive.core._tables import table_at
 from acdrive.errors import InputError
 from acdrive.machines._cage_part import CageInductionMachine
@@ -162,6 +162,14 @@ IFOC_PARAMS = Layout(
     real("i_max", "A", "stator current magnitude limit (space vector)", "positive"),
     real("psi_min", "Wb", "flux estimate below which no torque current is given", "nonnegative"),
     table("psi_ref", "Wb", "rotor-flux reference profile"),
+    relations=(
+        Relation(
+            ("L_r", "L_m"),
+            "must not exceed L_r (L_r = L_m + rotor leakage)",
+            lambda L_r, L_m: L_m <= L_r,
+            c="{L_m} <= {L_r}",
+        ),
+    ),
 )
 IFOC_STATES = Layout(
     real("theta_slip", "rad", "integrated slip angle (wrapped to [-pi, pi))"),
@@ -259,9 +267,6 @@ class IndirectFOC(SampledPart):
     step = ifoc_step
 
     def check(self):
-        v = self.values
-        if v["L_m"] > v["L_r"]:
-            raise InputError(f"{self.name}.L_m", "must not exceed L_r (L_r = L_m + rotor leakage)")
         start = self.PARAMS.table_start
         n = int(self.p[start])
         if np.any(self.p[start + 1 + n : start + 1 + 2 * n] <= 0.0):

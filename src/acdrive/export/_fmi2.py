@@ -25,13 +25,13 @@ compared with the FMU's times within ``acd_fmu_time_tolerance``: a master that a
 at every step (fmpy's SSP master does) is off by the rounding of those sums, at most half an ulp
 of t per sum (eps |t| / 2, eps = DBL_EPSILON), so at most k eps |t| / 2 after k steps; the
 tolerance is four times that, 2 (k + 1) eps max(|t|, T_s), never below 1e-9 of a period (the
-rounding of h itself), never above a quarter period (so a point or a step end that lies nearer another period, a step of 1.5
-periods, is always refused). A refused step, a parameter value that breaks its declared rule, a
-relation broken when initialisation ends, an output that is not finite after a period: each is
-``fmi2Error`` with one message to the logger naming the variable and the rule. After a
-non-finite output the instance refuses further steps (``fmi2Reset`` starts it again). No FMU
-state (get/set/serialise), no directional derivatives, no input derivatives: the capability
-flags say so and those functions return ``fmi2Error``.
+rounding of h itself), never above a quarter period (so a point or a step end that lies nearer
+another period, a step of 1.5 periods, is always refused). A refused step, a parameter value
+that breaks its declared rule, a relation broken when initialisation ends, an output that is
+not finite after a period: each is ``fmi2Error`` with one message to the logger naming the
+variable and the rule. After a non-finite output the instance refuses further steps
+(``fmi2Reset`` starts it again). No FMU state (get/set/serialise), no directional derivatives,
+no input derivatives: the capability flags say so and those functions return ``fmi2Error``.
 """
 
 FMI2_WRAPPER = r"""

@@ -15,10 +15,15 @@ after the plant part's output; its outputs the commands, named after the sampled
 (``latch.v_ref.re``), and each part's event bits (``<part>.events``, Integer). The plant FMU's
 inputs are those commands, under the same names; its outputs every output of its parts and the
 modulators' event bits. So the two FMUs connect by equal names. Parameters are every real and
-space-vector parameter of the parts (causality parameter, variability fixed, start the
-exported value; a table parameter is not exposed, it stays the exported profile). Changing a
-parameter changes that number only: a value derived from it at design time (the discretised
-controller's matrices) is not recomputed.
+space-vector parameter of the parts (a table parameter is not exposed, it stays the exported
+profile): a free one causality parameter, variability fixed, start the exported value, its
+declared rule (``core._signals.RULES``) as ``min``/``max`` where the rule has such bounds and
+checked in C when it is set (``RULE_C``); a derived one (``Var.derived``: the discretised
+controller's matrices, its order, T_s) causality calculatedParameter, read only. A parameter
+whose rule makes it an integer (``INTEGER_RULES``: pole pairs, an order, a 0/1 flag) is an
+``Integer``. The relations over several parameters that declare their C (``Relation.c``) are
+checked when initialisation ends. Changing a parameter changes that number only: nothing derived
+from it is recomputed (which is why the derived numbers are not settable).
 """
 
 from __future__ import annotations
@@ -160,9 +165,10 @@ def _relations(parts, prefix) -> list[RelationCheck]:
         for relation in part.PARAMS.relations:
             if relation.c:
                 lvalues = {f: f"({prefix}{part.name}.{f})" for f in relation.fields}
-                out.append(RelationCheck(f"{part.name}: {relation.rule}",
-                                         relation.c.format(**lvalues),
-                                         tuple(f"{part.name}.{f}" for f in relation.fields)))  # fmt: skip
+                names = tuple(f"{part.name}.{f}" for f in relation.fields)
+                # named after its last field (a relation's own blame is Python, not C)
+                out.append(RelationCheck(f"{part.name}.{relation.fields[-1]}: {relation.rule}",
+                                         relation.c.format(**lvalues), names))  # fmt: skip
     return out
 
 
@@ -385,7 +391,8 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
          ("/* by value reference: 1 output (read only), 2 input, 3 parameter (settable until "
           "initialisation ends),"), " * 4 calculated parameter (read only) */",
          f"static const unsigned char acd_fmu_access[{len(table)}] = {{{', '.join(table)}}};", "",
-         f"static const char *const acd_fmu_names[{len(names)}] = {{", *(f"    {n}," for n in names),
+         f"static const char *const acd_fmu_names[{len(names)}] = {{",
+         *(f"    {n}," for n in names),
          "};", "", "/* the Real outputs, each checked finite after every period */",
          f"static const size_t acd_fmu_real_output_count = {len(outputs)};",
          (f"static const fmi2ValueReference acd_fmu_real_outputs[{len(outputs) + 1}] = "
@@ -420,7 +427,8 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
           "typedef struct {", "    const char *rule;", "    unsigned n;",
           f"    fmi2ValueReference vr[{widest}];", "} acd_fmu_relation;", "",
           f"#define ACD_FMU_RELATIONS {len(model.relations)}",
-          f"static const acd_fmu_relation acd_fmu_relations[{len(model.relations) + 1}] = {{"]  # fmt: skip
+          (f"static const acd_fmu_relation acd_fmu_relations[{len(model.relations) + 1}]"
+           " = {")]  # fmt: skip
     vr_of = {v.name: v.vr for v in model.variables}
     for r in model.relations:
         refs = ", ".join(str(vr_of[n]) for n in r.names)
