@@ -43,13 +43,16 @@ def register(subparsers):
     m.add_argument("--json", action="store_true", help="print JSON")
     m.set_defaults(handler=run_m4)
     f = sub.add_parser(
-        "fmu", help="write FMI 2.0 co-simulation FMUs of a scenario's controller and plant"
+        "fmu", help="write FMI 2.0 (or 3.0) co-simulation FMUs of a scenario's controller "
+        "and plant"
     )
     f.add_argument("scenario", help="built-in scenario name or TOML file")
     f.add_argument("--part", choices=("controller", "plant", "both"), default="both",
                    help="which FMU (default: both)")  # fmt: skip
     f.add_argument("--out", default="export", help="output folder (default: export/)")
     f.add_argument("--name", default=None, help="C prefix (default: the scenario's)")
+    f.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                   help="FMI version of the FMUs (default: 2)")  # fmt: skip
     f.set_defaults(handler=run_fmu)
     k = sub.add_parser(
         "fmu-check", help="build both FMUs and compare them with acdrive's run (fmpy)"
@@ -152,7 +155,7 @@ def run_fmu(args) -> int:
     # built in a scratch folder first: every error (a part without C, feedthrough, no
     # compiler) comes before the output folder is touched
     with tempfile.TemporaryDirectory(prefix="acdrive-fmu-") as scratch:
-        built = scenario_fmus(setup, parts, Path(scratch), args.name)
+        built = scenario_fmus(setup, parts, Path(scratch), args.name, args.fmi)
         with OutputFolder(args.out, f"{setup.name}-fmu") as output:
             for path in built.values():
                 (output.staging / path.name).write_bytes(path.read_bytes())

@@ -1,5 +1,5 @@
-"""FMI 2.0 co-simulation FMUs of a system's controller chains and of its plant, built from the
-generated C (docs/guide/fmu.md).
+"""FMI 2.0 (and 3.0) co-simulation FMUs of a system's controller chains and of its plant, built
+from the generated C (docs/guide/fmu.md).
 
 An FMU is a zip: ``modelDescription.xml`` (written here from the parts' declarations: every
 variable with its causality, variability, unit, start value and description; the units in
@@ -7,7 +7,9 @@ variable with its causality, variability, unit, start value and description; the
 plant's header and source, and ``<id>_fmi2.c``, the model glue plus the FMI 2.0 functions of
 ``_fmi2``) and ``binaries/linux64/<id>.so`` compiled from those sources with gcc against the
 FMI 2.0 headers fmpy ships (``fmpy/c-code``; the headers are not copied into the FMU, an
-importing tool has its own).
+importing tool has its own). An FMI 3.0 FMU (``version=3``) has the same variables as
+``Float64``/``Int32`` and the independent ``time`` (``model_description3``), ``<id>_fmi3.c``
+with the FMI 3.0 functions of ``_fmi3`` and ``binaries/x86_64-linux/<id>.so``.
 
 Variables. A real quantity is one ``Real``; a space vector two, ``<name>.re`` and ``<name>.im``.
 The controller FMU's inputs are the plant outputs its chains read, named ``<part>.<output>``
@@ -44,11 +46,11 @@ from acdrive.core._parts import Part
 from acdrive.core._signals import INTEGER_RULES, RULES
 from acdrive.errors import InputError
 from acdrive.export._fmi2 import FMI2_WRAPPER
+from acdrive.export._fmi3 import FMI3_WRAPPER
 from acdrive.export._sil import CFLAGS, find_compiler
 from acdrive.sim._ccode._c_source import CExport, _port_name, _value_lines
 from acdrive.sim._ccode._plant_source import PlantExport
 
-PLATFORM = "linux64"
 
 #: SI base-unit exponents (kg, m, s, A, K, mol, cd, rad) of the unit words acdrive declares
 _SI = {
@@ -295,6 +297,23 @@ def _number(x: float) -> str:
     return repr(float(x))
 
 
+def _unit_definitions(units) -> list[str]:
+    """The ``UnitDefinitions`` element of ``units``, each with its SI exponents (the same in
+    FMI 2.0 and 3.0)."""
+    if not units:
+        return []
+    L = ["  <UnitDefinitions>"]
+    for unit in units:
+        exponents = si_exponents(unit)
+        if exponents:
+            attrs = " ".join(f'{k}="{e}"' for k, e in exponents.items())
+            L += [f"    <Unit name={quoteattr(unit)}>", f"      <BaseUnit {attrs}/>",
+                  "    </Unit>"]  # fmt: skip
+        else:
+            L.append(f"    <Unit name={quoteattr(unit)}/>")
+    return [*L, "  </UnitDefinitions>"]
+
+
 def model_description(model: FMUModel, guid: str) -> str:
     """modelDescription.xml of ``model`` (FMI 2.0, co-simulation)."""
     from acdrive import __version__
@@ -311,17 +330,7 @@ def model_description(model: FMUModel, guid: str) -> str:
          'canSerializeFMUstate="false" providesDirectionalDerivative="false">'),
          "    <SourceFiles>", *(f'      <File name="{f}"/>' for f in sources if f.endswith(".c")),
          "    </SourceFiles>", "  </CoSimulation>"]  # fmt: skip
-    if units:
-        L.append("  <UnitDefinitions>")
-        for unit in units:
-            exponents = si_exponents(unit)
-            if exponents:
-                attrs = " ".join(f'{k}="{e}"' for k, e in exponents.items())
-                L += [f"    <Unit name={quoteattr(unit)}>", f"      <BaseUnit {attrs}/>",
-                      "    </Unit>"]  # fmt: skip
-            else:
-                L.append(f"    <Unit name={quoteattr(unit)}/>")
-        L.append("  </UnitDefinitions>")
+    L += _unit_definitions(units)
     L += ["  <LogCategories>",
           '    <Category name="logStatusError" description="errors: a refused call, why"/>',
           '    <Category name="logAll" description="every message"/>', "  </LogCategories>",
@@ -360,6 +369,53 @@ def model_description(model: FMUModel, guid: str) -> str:
     return "\n".join(L) + "\n"
 
 
+def model_description3(model: FMUModel, token: str) -> str:
+    """modelDescription.xml of ``model`` (FMI 3.0, co-simulation): the variables of the FMI 2.0
+    description as ``Float64``/``Int32``, and ``time`` (value reference 0), the independent
+    variable FMI 3.0 requires."""
+    from acdrive import __version__
+
+    units = sorted({v.unit for v in model.variables if v.unit} | {"s"})
+    L = ['<?xml version="1.0" encoding="UTF-8"?>',
+         (f'<fmiModelDescription fmiVersion="3.0" modelName={quoteattr(model.identifier)} '
+          f'instantiationToken="{token}" description={quoteattr(model.description)} '
+          f'generationTool="acdrive {__version__}" variableNamingConvention="flat">'),
+         (f'  <CoSimulation modelIdentifier="{model.identifier}" '
+          'canHandleVariableCommunicationStepSize="true" canGetAndSetFMUState="false" '
+          'canSerializeFMUState="false" providesDirectionalDerivatives="false" '
+          'providesAdjointDerivatives="false" hasEventMode="false" '
+          f'fixedInternalStepSize="{_number(model.sample_time)}"/>')]  # fmt: skip
+    L += _unit_definitions(units)
+    L += ["  <LogCategories>",
+          '    <Category name="logStatusError" description="errors: a refused call, why"/>',
+          '    <Category name="logAll" description="every message"/>', "  </LogCategories>",
+          (f'  <DefaultExperiment startTime="0.0" stopTime="{_number(model.stop_time)}" '
+           f'stepSize="{_number(model.sample_time)}"/>'), "  <ModelVariables>",
+          ('    <Float64 name="time" valueReference="0" causality="independent" '
+           'variability="continuous" description="simulation time" unit="s"/>')]  # fmt: skip
+    for v in model.variables:
+        element = "Float64" if v.type == "Real" else "Int32"
+        attrs = (f"name={quoteattr(v.name)} valueReference=\"{v.vr}\" "
+                 f"description={quoteattr(v.description)} causality=\"{v.causality}\" "
+                 f"variability=\"{v.variability}\"")  # fmt: skip
+        if v.start is not None:
+            attrs += f' start="{_number(v.start) if v.type == "Real" else int(v.start)}"'
+        if v.unit and element == "Float64":
+            attrs += f" unit={quoteattr(v.unit)}"
+        for key, bound in zip(("min", "max"), RULE_BOUNDS.get(v.rule, (None, None)), strict=True):
+            if bound is not None:
+                attrs += f' {key}="{_number(bound) if v.type == "Real" else bound}"'
+        L.append(f"    <{element} {attrs}/>")
+    L += ["  </ModelVariables>", "  <ModelStructure>"]
+    L += [f'    <Output valueReference="{v.vr}" dependencies=""/>'
+          for v in model.variables if v.causality == "output"]  # fmt: skip
+    L += [f'    <InitialUnknown valueReference="{v.vr}"'
+          + (' dependencies=""/>' if v.causality == "calculatedParameter" else "/>")
+          for v in model.variables if v.causality in ("output", "calculatedParameter")]  # fmt: skip
+    L += ["  </ModelStructure>", "</fmiModelDescription>"]
+    return "\n".join(L) + "\n"
+
+
 #: the access code of each causality in the generated ``acd_fmu_access`` table
 ACCESS = {"output": 1, "input": 2, "parameter": 3, "calculatedParameter": 4}
 
@@ -368,9 +424,21 @@ def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def fmi2_source(model: FMUModel, guid: str) -> str:
-    """``<id>_fmi2.c``: the model glue, the value-reference tables (access, names, the outputs
-    checked finite, the parameters' rules and relations) and the FMI functions."""
+#: per FMI version: the C types of a Real, an Integer and a value reference, the header, the
+#: functions, the folder of the linux binary
+VERSIONS = {
+    2: {"real": "fmi2Real", "integer": "fmi2Integer", "vr": "fmi2ValueReference",
+        "header": "fmi2Functions.h", "wrapper": FMI2_WRAPPER, "platform": "linux64"},
+    3: {"real": "fmi3Float64", "integer": "fmi3Int32", "vr": "fmi3ValueReference",
+        "header": "fmi3Functions.h", "wrapper": FMI3_WRAPPER, "platform": "x86_64-linux"},
+}  # fmt: skip
+
+
+def fmi_source(model: FMUModel, guid: str, version: int = 2) -> str:
+    """``<id>_fmi<version>.c``: the model glue, the value-reference tables (access, names, the
+    outputs checked finite, the parameters' rules and relations) and the FMI functions of FMI
+    ``version`` (2 or 3)."""
+    kind = VERSIONS[version]
     reals = [v for v in model.variables if v.type == "Real"]
     integers = [v for v in model.variables if v.type == "Integer"]
     settable_integers = [v for v in integers if v.causality == "parameter"]
@@ -382,10 +450,11 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
     outputs = [str(v.vr) for v in reals if v.causality == "output"]
     checked = [v for v in model.variables if v.causality == "parameter"]
     widest = max([len(r.names) for r in model.relations] + [1])
-    L = [f"/* Generated by acdrive.export (FMI 2.0 co-simulation): {model.description}.",
-         (" * Build: cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I<FMI 2.0 headers> "
-         "*.c -lm */"), "", "#include <float.h>", "#include <math.h>", '#include "fmi2Functions.h"',
-         "", "#ifdef ACDRIVE_FLOAT", "#error \"the FMU reals are fmi2Real: build it in double\"",
+    L = [f"/* Generated by acdrive.export (FMI {version}.0 co-simulation): {model.description}.",
+         (f" * Build: cc -std=c99 -O2 -ffp-contract=off -fPIC -shared -I<FMI {version}.0 headers>"
+         " *.c -lm */"), "", "#include <float.h>", "#include <math.h>",
+         f'#include "{kind["header"]}"', "", "#ifdef ACDRIVE_FLOAT",
+         "#error \"the FMU reals are doubles: build it in double\"",
          "#endif", "", f'#define ACD_FMU_GUID "{guid}"', "", model.glue,
          f"#define ACD_FMU_VARIABLES {len(model.variables)}",
          ("/* by value reference: 1 output (read only), 2 input, 3 parameter (settable until "
@@ -395,25 +464,25 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
          *(f"    {n}," for n in names),
          "};", "", "/* the Real outputs, each checked finite after every period */",
          f"static const size_t acd_fmu_real_output_count = {len(outputs)};",
-         (f"static const fmi2ValueReference acd_fmu_real_outputs[{len(outputs) + 1}] = "
+         (f"static const {kind['vr']} acd_fmu_real_outputs[{len(outputs) + 1}] = "
           f"{{{', '.join([*outputs, '0'])}}};"), "",
-         "static fmi2Real *acd_fmu_real(acd_fmu_model *m, fmi2ValueReference vr)", "{",
+         f"static {kind['real']} *acd_fmu_real(acd_fmu_model *m, {kind['vr']} vr)", "{",
          "    switch (vr) {"]  # fmt: skip
     L += [f"    case {v.vr}: return &{v.c}; /* {v.name} */" for v in reals]
     L += ["    default: return NULL;", "    }", "}", "",
-          ("static int acd_fmu_get_integer(const acd_fmu_model *m, fmi2ValueReference vr, "
-          "fmi2Integer *value)"), "{", "    switch (vr) {"]  # fmt: skip
-    L += [f"    case {v.vr}: *value = (fmi2Integer){v.c}; return 1; /* {v.name} */"
+          (f"static int acd_fmu_get_integer(const acd_fmu_model *m, {kind['vr']} vr, "
+          f"{kind['integer']} *value)"), "{", "    switch (vr) {"]  # fmt: skip
+    L += [f"    case {v.vr}: *value = ({kind['integer']}){v.c}; return 1; /* {v.name} */"
           for v in integers]  # fmt: skip
     L += ["    default: (void)m; (void)value; return 0;", "    }", "}", "",
           "/* an Integer parameter, stored as a real of the generated C */",
-          ("static int acd_fmu_set_integer(acd_fmu_model *m, fmi2ValueReference vr, "
-          "fmi2Integer value)"), "{", "    switch (vr) {"]  # fmt: skip
+          (f"static int acd_fmu_set_integer(acd_fmu_model *m, {kind['vr']} vr, "
+          f"{kind['integer']} value)"), "{", "    switch (vr) {"]  # fmt: skip
     L += [f"    case {v.vr}: {v.c} = (double)value; return 1; /* {v.name} */"
           for v in settable_integers]  # fmt: skip
     L += ["    default: (void)m; (void)value; return 0;", "    }", "}", "",
           "/* the declared rule a parameter's value breaks (core._signals.RULES), NULL if none */",
-          "static const char *acd_fmu_broken_rule(fmi2ValueReference vr, double value)", "{",
+          f"static const char *acd_fmu_broken_rule({kind['vr']} vr, double value)", "{",
           "    if (!isfinite(value)) {", f"        return {_c_string(NOT_FINITE)};", "    }",
           "    switch (vr) {"]  # fmt: skip
     for v in checked:
@@ -425,7 +494,7 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
           "when",
           " * initialisation ends: the rule, its parameters' value references, whether it holds */",
           "typedef struct {", "    const char *rule;", "    unsigned n;",
-          f"    fmi2ValueReference vr[{widest}];", "} acd_fmu_relation;", "",
+          f"    {kind['vr']} vr[{widest}];", "} acd_fmu_relation;", "",
           f"#define ACD_FMU_RELATIONS {len(model.relations)}",
           (f"static const acd_fmu_relation acd_fmu_relations[{len(model.relations) + 1}]"
            " = {")]  # fmt: skip
@@ -437,24 +506,26 @@ def fmi2_source(model: FMUModel, guid: str) -> str:
           "static int acd_fmu_relation_holds(const acd_fmu_model *m, int i)", "{",
           "    switch (i) {"]  # fmt: skip
     L += [f"    case {i}: return {r.condition};" for i, r in enumerate(model.relations)]
-    L += ["    default: (void)m; return 1;", "    }", "}", FMI2_WRAPPER]
+    L += ["    default: (void)m; return 1;", "    }", "}", kind["wrapper"]]
     return "\n".join(L) + "\n"
 
 
 def fmi_headers() -> Path:
-    """The folder of the FMI 2.0 headers fmpy ships, or an InputError saying fmpy is needed."""
+    """The folder of the FMI 2.0 and 3.0 headers fmpy ships, or an InputError saying fmpy is
+    needed."""
     spec = importlib.util.find_spec("fmpy")
     folder = Path(spec.origin).parent / "c-code" if spec and spec.origin else None
-    if folder is None or not (folder / "fmi2Functions.h").is_file():
-        raise InputError("fmpy", "is not installed: building an FMU needs the FMI 2.0 headers "
-                         "it ships (pip install 'acdrive[fmu]')")  # fmt: skip
+    if folder is None or not all((folder / f"{v['header']}").is_file() for v in VERSIONS.values()):
+        raise InputError("fmpy", "is not installed: building an FMU needs the FMI 2.0 and 3.0 "
+                         "headers it ships (pip install 'acdrive[fmu]')")  # fmt: skip
     return folder
 
 
-def build_fmu(model: FMUModel, path: Path) -> Path:
-    """Write the FMU of ``model`` to ``path`` (a .fmu zip): sources, the linux64 binary compiled
-    from them, modelDescription.xml. Built in a temporary folder; the zip is written beside
-    ``path`` under a hidden name and renamed into place, so ``path`` is whole or untouched."""
+def build_fmu(model: FMUModel, path: Path, version: int = 2) -> Path:
+    """Write the FMI ``version`` (2 or 3) FMU of ``model`` to ``path`` (a .fmu zip): sources,
+    the linux binary compiled from them, modelDescription.xml. Built in a temporary folder; the
+    zip is written beside ``path`` under a hidden name and renamed into place, so ``path`` is
+    whole or untouched."""
     compiler, headers = find_compiler("gcc", "building an FMU's binary"), fmi_headers()
     path = Path(path)
     for i, v in enumerate(model.variables, 1):
@@ -462,13 +533,14 @@ def build_fmu(model: FMUModel, path: Path) -> Path:
     body = "".join(f"{v.name}|{v.type}|{v.causality}|{v.c}\n" for v in model.variables)
     digest = hashlib.sha256((model.glue + body + "".join(model.files.values())).encode())
     guid = "{" + str(uuid.UUID(digest.hexdigest()[:32])) + "}"
-    files = {**model.files, f"{model.identifier}_fmi2.c": fmi2_source(model, guid)}
+    files = {**model.files,
+             f"{model.identifier}_fmi{version}.c": fmi_source(model, guid, version)}  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="acdrive-fmu-build-") as scratch:
         work = Path(scratch)
         (work / "sources").mkdir()
         for name, text in files.items():
             (work / "sources" / name).write_text(text)
-        binary = work / "binaries" / PLATFORM / f"{model.identifier}.so"
+        binary = work / "binaries" / VERSIONS[version]["platform"] / f"{model.identifier}.so"
         binary.parent.mkdir(parents=True)
         sources = [str(work / "sources" / f) for f in files if f.endswith(".c")]
         flags = [*CFLAGS, "-fvisibility=default", f"-I{headers}", f"-I{work / 'sources'}"]
@@ -477,7 +549,8 @@ def build_fmu(model: FMUModel, path: Path) -> Path:
         if done.returncode != 0:
             first = (done.stderr.strip().splitlines() or ["(no message)"])[0]
             raise InputError("compiler", f"{compiler} could not compile the FMU's sources: {first}")
-        (work / "modelDescription.xml").write_text(model_description(model, guid))
+        describe = model_description if version == 2 else model_description3
+        (work / "modelDescription.xml").write_text(describe(model, guid))
         partial = path.with_name(f".{path.name}.partial")
         try:
             with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as fmu:

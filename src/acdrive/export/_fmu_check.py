@@ -46,9 +46,11 @@ PLANT_TOLERANCE = 1e-9
 PARTS = ("controller", "plant")
 
 
-def scenario_fmus(setup, parts, folder: Path, name: str | None = None) -> dict[str, Path]:
-    """Build the FMUs ``parts`` (of ``PARTS``) of ``setup`` into ``folder``: part -> path.
-    Every error (a part without C, feedthrough, no compiler, no fmpy) comes before any file."""
+def scenario_fmus(setup, parts, folder: Path, name: str | None = None,
+                  version: int = 2) -> dict[str, Path]:  # fmt: skip
+    """Build the FMI ``version`` (2 or 3) FMUs ``parts`` (of ``PARTS``) of ``setup`` into
+    ``folder``: part -> path. Every error (a part without C, feedthrough, no compiler, no
+    fmpy) comes before any file."""
     from acdrive.export._fmu import fmi_headers
     from acdrive.export._sil import find_compiler
 
@@ -71,7 +73,8 @@ def scenario_fmus(setup, parts, folder: Path, name: str | None = None) -> dict[s
                             name=f"{base}_plant", description=what)  # fmt: skip
         models["plant"] = plant_model(export, drive.system, held, setup.sample_time,
                                       setup.duration, f"plant of {what}")  # fmt: skip
-    return {part: build_fmu(m, Path(folder) / f"{m.identifier}.fmu") for part, m in models.items()}
+    return {part: build_fmu(m, Path(folder) / f"{m.identifier}.fmu", version)
+            for part, m in models.items()}  # fmt: skip
 
 
 def _signals(names, reference: dict, other: dict) -> dict:
