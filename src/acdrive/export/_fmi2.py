@@ -19,6 +19,9 @@ It is written against a small model interface the generator writes per FMU (``_f
   rules over several parameters (``core._signals.Relation``) that declare their C;
 * ``acd_fmu_real_outputs``: the Real outputs.
 
+The C that does the work (the checks below, the stepping) is ``_fmi_core``, shared with the
+FMI 3.0 interface (``_fmi3``); this module adds the FMI 2.0 functions around it.
+
 ``fmi2DoStep`` advances whole periods; the time of period k is ``t0 + k T_s`` from the FMU's own
 count, as in acdrive's loop. A master's communication point t and the end of its step t + h are
 compared with the FMU's times within ``acd_fmu_time_tolerance``: a master that adds h to its time
@@ -34,12 +37,23 @@ variable and the rule. After a non-finite output the instance refuses further st
 no input derivatives: the capability flags say so and those functions return ``fmi2Error``.
 """
 
-FMI2_WRAPPER = r"""
+from acdrive.export._fmi_core import FMI_CORE
+
+FMI2_WRAPPER = (
+    r"""
 /* ---- FMI 2.0 co-simulation interface (acdrive.export._fmi2) ---- */
 
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+
+typedef fmi2Status acd_fmu_status;
+typedef fmi2ValueReference acd_fmu_vr;
+typedef fmi2Integer acd_fmu_int;
+#define ACD_FMU_OK fmi2OK
+#define ACD_FMU_ERROR fmi2Error
+#define ACD_FMU_API "fmi2"
+#define ACD_FMU_NAME0 "(no such variable)"
 
 typedef enum {
     ACD_INSTANTIATED, ACD_INITIALISING, ACD_STEPPING, ACD_FAILED, ACD_TERMINATED
@@ -69,74 +83,9 @@ static void acd_fmu_log(acd_fmu_instance *c, fmi2Status status, const char *form
                          status == fmi2OK ? "logAll" : "logStatusError", "%s", message);
 }
 
-/* the name of variable vr for a message */
-static const char *acd_fmu_name(fmi2ValueReference vr)
-{
-    return vr >= 1 && vr <= ACD_FMU_VARIABLES ? acd_fmu_names[vr] : "(no such variable)";
-}
-
-static int acd_fmu_access_of(fmi2ValueReference vr)
-{
-    return vr >= 1 && vr <= ACD_FMU_VARIABLES ? acd_fmu_access[vr] : 0;
-}
-
-/* The difference accepted between a master's time and the FMU's own time t after k periods
-   (module docstring of acdrive.export._fmi2): 2 (k + 1) eps max(|t|, T_s), four times the
-   rounding a master adding its step k times accumulates, at least 1e-9 T_s, at most T_s / 4. */
-static double acd_fmu_time_tolerance(double period, double k, double t)
-{
-    const double scale = fabs(t) > period ? fabs(t) : period;
-    double tolerance = 2.0 * (k + 1.0) * DBL_EPSILON * scale;
-    if (tolerance < 1e-9 * period) {
-        tolerance = 1e-9 * period;
-    }
-    if (tolerance > 0.25 * period) {
-        tolerance = 0.25 * period;
-    }
-    return tolerance;
-}
-
-/* fmi2OK if a parameter's value obeys its declared rule, else fmi2Error with the message */
-static fmi2Status acd_fmu_check_value(acd_fmu_instance *c, const char *function,
-                                      fmi2ValueReference vr, double value)
-{
-    const char *rule = acd_fmu_broken_rule(vr, value);
-    if (rule == NULL) {
-        return fmi2OK;
-    }
-    acd_fmu_log(c, fmi2Error, "%s: %s = %.17g refused: %s", function, acd_fmu_name(vr), value,
-                rule);
-    return fmi2Error;
-}
-
-/* fmi2OK if variable vr may be set now by fmi2Set<type>, else fmi2Error with the message */
-static fmi2Status acd_fmu_settable(acd_fmu_instance *c, const char *function,
-                                   fmi2ValueReference vr)
-{
-    switch (acd_fmu_access_of(vr)) {
-    case 1:
-        acd_fmu_log(c, fmi2Error, "%s: %s is an output: not settable", function,
-                    acd_fmu_name(vr));
-        return fmi2Error;
-    case 2:
-        return fmi2OK;
-    case 3:
-        if (c->phase == ACD_INSTANTIATED || c->phase == ACD_INITIALISING) {
-            return fmi2OK;
-        }
-        acd_fmu_log(c, fmi2Error, "%s: %s is a fixed parameter: set it before "
-                    "fmi2ExitInitializationMode", function, acd_fmu_name(vr));
-        return fmi2Error;
-    case 4:
-        acd_fmu_log(c, fmi2Error, "%s: %s is a calculated parameter (derived when the FMU was "
-                    "built from the scenario): not settable", function, acd_fmu_name(vr));
-        return fmi2Error;
-    default:
-        acd_fmu_log(c, fmi2Error, "%s: no variable of value reference %u", function, vr);
-        return fmi2Error;
-    }
-}
-
+"""
+    + FMI_CORE
+    + r"""
 const char *fmi2GetTypesPlatform(void)
 {
     return fmi2TypesPlatform;
@@ -222,28 +171,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    int i;
-    for (i = 0; i < ACD_FMU_RELATIONS; ++i) {
-        const acd_fmu_relation *relation = &acd_fmu_relations[i];
-        char values[256];
-        size_t used = 0;
-        unsigned j;
-        if (acd_fmu_relation_holds(&instance->model, i)) {
-            continue;
-        }
-        values[0] = '\0';
-        for (j = 0; j < relation->n && used < sizeof values; ++j) {
-            const fmi2Real *value = acd_fmu_real(&instance->model, relation->vr[j]);
-            int written = snprintf(values + used, sizeof values - used, "%s%s = %.17g",
-                                   j > 0 ? ", " : "", acd_fmu_name(relation->vr[j]),
-                                   value != NULL ? *value : 0.0);
-            if (written < 0) {
-                break;
-            }
-            used += (size_t)written;
-        }
-        acd_fmu_log(instance, fmi2Error, "fmi2ExitInitializationMode: %s (%s)", relation->rule,
-                    values);
+    if (acd_fmu_check_relations(instance) != fmi2OK) {
         return fmi2Error;
     }
     instance->phase = ACD_STEPPING;
@@ -269,33 +197,13 @@ fmi2Status fmi2Reset(fmi2Component c)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
-    acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    size_t i;
-    for (i = 0; i < nvr; ++i) {
-        fmi2Real *ref = acd_fmu_real(&instance->model, vr[i]);
-        if (ref == NULL) {
-            acd_fmu_log(instance, fmi2Error, "fmi2GetReal: %u (%s) is not a Real variable",
-                        vr[i], acd_fmu_name(vr[i]));
-            return fmi2Error;
-        }
-        value[i] = *ref;
-    }
-    return fmi2OK;
+    return acd_fmu_get_reals((acd_fmu_instance *)c, "fmi2GetReal", vr, nvr, value);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Integer value[])
 {
-    acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    size_t i;
-    for (i = 0; i < nvr; ++i) {
-        if (!acd_fmu_get_integer(&instance->model, vr[i], &value[i])) {
-            acd_fmu_log(instance, fmi2Error, "fmi2GetInteger: %u (%s) is not an Integer variable",
-                        vr[i], acd_fmu_name(vr[i]));
-            return fmi2Error;
-        }
-    }
-    return fmi2OK;
+    return acd_fmu_get_integers((acd_fmu_instance *)c, "fmi2GetInteger", vr, nvr, value);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -325,57 +233,13 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
-    acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    int restart = 0;
-    size_t i;
-    for (i = 0; i < nvr; ++i) { /* every value checked before any is set */
-        if (acd_fmu_real(&instance->model, vr[i]) == NULL) {
-            acd_fmu_log(instance, fmi2Error, "fmi2SetReal: %u (%s) is not a Real variable",
-                        vr[i], acd_fmu_name(vr[i]));
-            return fmi2Error;
-        }
-        if (acd_fmu_settable(instance, "fmi2SetReal", vr[i]) != fmi2OK) {
-            return fmi2Error;
-        }
-        if (acd_fmu_access[vr[i]] == 3
-            && acd_fmu_check_value(instance, "fmi2SetReal", vr[i], value[i]) != fmi2OK) {
-            return fmi2Error;
-        }
-    }
-    for (i = 0; i < nvr; ++i) {
-        *acd_fmu_real(&instance->model, vr[i]) = value[i];
-        restart |= acd_fmu_access[vr[i]] == 3;
-    }
-    if (restart && instance->phase == ACD_INITIALISING) {
-        acd_fmu_start(&instance->model, instance->t0); /* outputs of the new parameters */
-    }
-    return fmi2OK;
+    return acd_fmu_set_reals((acd_fmu_instance *)c, "fmi2SetReal", vr, nvr, value);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[])
 {
-    acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    fmi2Integer held;
-    size_t i;
-    for (i = 0; i < nvr; ++i) { /* every value checked before any is set */
-        if (!acd_fmu_get_integer(&instance->model, vr[i], &held)) {
-            acd_fmu_log(instance, fmi2Error, "fmi2SetInteger: %u (%s) is not an Integer variable",
-                        vr[i], acd_fmu_name(vr[i]));
-            return fmi2Error;
-        }
-        if (acd_fmu_settable(instance, "fmi2SetInteger", vr[i]) != fmi2OK
-            || acd_fmu_check_value(instance, "fmi2SetInteger", vr[i], (double)value[i]) != fmi2OK) {
-            return fmi2Error;
-        }
-    }
-    for (i = 0; i < nvr; ++i) {
-        (void)acd_fmu_set_integer(&instance->model, vr[i], value[i]);
-    }
-    if (nvr > 0 && instance->phase == ACD_INITIALISING) {
-        acd_fmu_start(&instance->model, instance->t0); /* outputs of the new parameters */
-    }
-    return fmi2OK;
+    return acd_fmu_set_integers((acd_fmu_instance *)c, "fmi2SetInteger", vr, nvr, value);
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -399,12 +263,6 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
         return fmi2OK;
     }
     acd_fmu_log((acd_fmu_instance *)c, fmi2Error, "fmi2SetString: the FMU has no String");
-    return fmi2Error;
-}
-
-static fmi2Status acd_fmu_unsupported(fmi2Component c, const char *what)
-{
-    acd_fmu_log((acd_fmu_instance *)c, fmi2Error, "%s is not supported by this FMU", what);
     return fmi2Error;
 }
 
@@ -491,60 +349,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    acd_fmu_instance *instance = (acd_fmu_instance *)c;
-    const double period = acd_fmu_period(&instance->model);
-    const double k = (double)instance->k;
-    const double now = instance->t0 + k * period;
-    const double n = floor(communicationStepSize / period + 0.5);
-    const double end = instance->t0 + (k + n) * period;
-    double step_end;
-    unsigned long i;
-    size_t j;
+    int failed;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance->phase == ACD_FAILED) {
-        acd_fmu_log(instance, fmi2Error, "fmi2DoStep: the FMU stopped at an error at %.17g s: "
-                    "fmi2Reset starts it again", now);
-        return fmi2Error;
-    }
-    if (instance->phase != ACD_STEPPING) {
-        acd_fmu_log(instance, fmi2Error, "fmi2DoStep: the FMU is not initialised");
-        return fmi2Error;
-    }
-    if (!(fabs(currentCommunicationPoint - now) <= acd_fmu_time_tolerance(period, k, now))) {
-        acd_fmu_log(instance, fmi2Error,
-                    "fmi2DoStep: the communication point %.17g s is not the FMU's time "
-                    "%.17g s (the start of period %lu) within %.3g s", currentCommunicationPoint,
-                    now, instance->k, acd_fmu_time_tolerance(period, k, now));
-        return fmi2Error;
-    }
-    step_end = currentCommunicationPoint + communicationStepSize;
-    if (!(n >= 1.0 && n < 1e15
-          && fabs(step_end - end) <= acd_fmu_time_tolerance(period, k + n, end))) {
-        acd_fmu_log(instance, fmi2Error,
-                    "fmi2DoStep: the communication step %.17g s is not a whole number of the "
-                    "control period %.17g s (it ends at %.17g s, not at the start of a period)",
-                    communicationStepSize, period, step_end);
-        return fmi2Error;
-    }
-    for (i = 0; i < (unsigned long)n; ++i) {
-        double t = instance->t0 + (double)instance->k * period;
-        double t_next = instance->t0 + (double)(instance->k + 1) * period;
-        acd_fmu_advance(&instance->model, t, t_next);
-        instance->k += 1;
-        for (j = 0; j < acd_fmu_real_output_count; ++j) {
-            const fmi2ValueReference vr = acd_fmu_real_outputs[j];
-            const double value = *acd_fmu_real(&instance->model, vr);
-            if (!isfinite(value)) {
-                instance->phase = ACD_FAILED;
-                acd_fmu_log(instance, fmi2Error,
-                            "fmi2DoStep: output %s is %s at %.17g s (after the period from "
-                            "%.17g s): the run cannot go on", acd_fmu_name(vr),
-                            isnan(value) ? "NaN" : "infinite", t_next, t);
-                return fmi2Error;
-            }
-        }
-    }
-    return fmi2OK;
+    return acd_fmu_step((acd_fmu_instance *)c, currentCommunicationPoint, communicationStepSize,
+                        &failed);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
@@ -594,3 +402,4 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
     return acd_fmu_no_status(c, "fmi2GetStringStatus");
 }
 """
+)

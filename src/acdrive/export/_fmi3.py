@@ -13,6 +13,8 @@ and ``fmi3InstantiateScheduledExecution`` return NULL, the other functions of th
 return ``fmi3Error`` with a message, and the capability flags say so.
 """
 
+from acdrive.export._fmi_core import FMI_CORE
+
 #: the functions of the features the FMU does not have: (name, parameters after the instance)
 _UNSUPPORTED = (
     ("fmi3EnterEventMode", ""),
@@ -146,6 +148,14 @@ FMI3_WRAPPER = (
 #include <stdlib.h>
 #include <string.h>
 
+typedef fmi3Status acd_fmu_status;
+typedef fmi3ValueReference acd_fmu_vr;
+typedef fmi3Int32 acd_fmu_int;
+#define ACD_FMU_OK fmi3OK
+#define ACD_FMU_ERROR fmi3Error
+#define ACD_FMU_API "fmi3"
+#define ACD_FMU_NAME0 "time"
+
 typedef enum {
     ACD_INSTANTIATED, ACD_INITIALISING, ACD_STEPPING, ACD_FAILED, ACD_TERMINATED
 } acd_fmu_phase;
@@ -174,80 +184,12 @@ static void acd_fmu_log(acd_fmu_instance *c, fmi3Status status, const char *form
                    message);
 }
 
-static const char *acd_fmu_name(fmi3ValueReference vr)
-{
-    return vr >= 1 && vr <= ACD_FMU_VARIABLES ? acd_fmu_names[vr] : "(no such variable)";
-}
-
-static int acd_fmu_access_of(fmi3ValueReference vr)
-{
-    return vr >= 1 && vr <= ACD_FMU_VARIABLES ? acd_fmu_access[vr] : 0;
-}
-
-/* The difference accepted between a master's time and the FMU's own time t after k periods
-   (acdrive.export._fmi2): 2 (k + 1) eps max(|t|, T_s), at least 1e-9 T_s, at most T_s / 4. */
-static double acd_fmu_time_tolerance(double period, double k, double t)
-{
-    const double scale = fabs(t) > period ? fabs(t) : period;
-    double tolerance = 2.0 * (k + 1.0) * DBL_EPSILON * scale;
-    if (tolerance < 1e-9 * period) {
-        tolerance = 1e-9 * period;
-    }
-    if (tolerance > 0.25 * period) {
-        tolerance = 0.25 * period;
-    }
-    return tolerance;
-}
-
+"""
+    + FMI_CORE
+    + r"""
 static double acd_fmu_time(const acd_fmu_instance *c)
 {
     return c->t0 + (double)c->k * acd_fmu_period(&c->model);
-}
-
-static fmi3Status acd_fmu_check_value(acd_fmu_instance *c, const char *function,
-                                      fmi3ValueReference vr, double value)
-{
-    const char *rule = acd_fmu_broken_rule(vr, value);
-    if (rule == NULL) {
-        return fmi3OK;
-    }
-    acd_fmu_log(c, fmi3Error, "%s: %s = %.17g refused: %s", function, acd_fmu_name(vr), value,
-                rule);
-    return fmi3Error;
-}
-
-static fmi3Status acd_fmu_settable(acd_fmu_instance *c, const char *function,
-                                   fmi3ValueReference vr)
-{
-    switch (acd_fmu_access_of(vr)) {
-    case 1:
-        acd_fmu_log(c, fmi3Error, "%s: %s is an output: not settable", function,
-                    acd_fmu_name(vr));
-        return fmi3Error;
-    case 2:
-        return fmi3OK;
-    case 3:
-        if (c->phase == ACD_INSTANTIATED || c->phase == ACD_INITIALISING) {
-            return fmi3OK;
-        }
-        acd_fmu_log(c, fmi3Error, "%s: %s is a fixed parameter: set it before "
-                    "fmi3ExitInitializationMode", function, acd_fmu_name(vr));
-        return fmi3Error;
-    case 4:
-        acd_fmu_log(c, fmi3Error, "%s: %s is a calculated parameter (derived when the FMU was "
-                    "built from the scenario): not settable", function, acd_fmu_name(vr));
-        return fmi3Error;
-    default:
-        acd_fmu_log(c, fmi3Error, "%s: no settable variable of value reference %u", function,
-                    (unsigned)vr);
-        return fmi3Error;
-    }
-}
-
-static fmi3Status acd_fmu_unsupported(fmi3Instance c, const char *what)
-{
-    acd_fmu_log((acd_fmu_instance *)c, fmi3Error, "%s is not supported by this FMU", what);
-    return fmi3Error;
 }
 
 static fmi3Status acd_fmu_absent(fmi3Instance c, const char *what, size_t n)
@@ -382,27 +324,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance)
 {
     acd_fmu_instance *c = (acd_fmu_instance *)instance;
-    int i;
-    for (i = 0; i < ACD_FMU_RELATIONS; ++i) {
-        const acd_fmu_relation *relation = &acd_fmu_relations[i];
-        char values[256];
-        size_t used = 0;
-        unsigned j;
-        if (acd_fmu_relation_holds(&c->model, i)) {
-            continue;
-        }
-        values[0] = '\0';
-        for (j = 0; j < relation->n && used < sizeof values; ++j) {
-            const fmi3Float64 *value = acd_fmu_real(&c->model, relation->vr[j]);
-            int written = snprintf(values + used, sizeof values - used, "%s%s = %.17g",
-                                   j > 0 ? ", " : "", acd_fmu_name(relation->vr[j]),
-                                   value != NULL ? *value : 0.0);
-            if (written < 0) {
-                break;
-            }
-            used += (size_t)written;
-        }
-        acd_fmu_log(c, fmi3Error, "fmi3ExitInitializationMode: %s (%s)", relation->rule, values);
+    if (acd_fmu_check_relations(c) != fmi3OK) {
         return fmi3Error;
     }
     c->phase = ACD_STEPPING;
@@ -439,18 +361,12 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
     size_t i;
     (void)nValues;
     for (i = 0; i < nValueReferences; ++i) {
-        fmi3Float64 *ref;
         if (valueReferences[i] == 0) { /* time */
             values[i] = acd_fmu_time(c);
-            continue;
-        }
-        ref = acd_fmu_real(&c->model, valueReferences[i]);
-        if (ref == NULL) {
-            acd_fmu_log(c, fmi3Error, "fmi3GetFloat64: %u (%s) is not a Float64 variable",
-                        (unsigned)valueReferences[i], acd_fmu_name(valueReferences[i]));
+        } else if (acd_fmu_get_reals(c, "fmi3GetFloat64", &valueReferences[i], 1, &values[i])
+                   != fmi3OK) {
             return fmi3Error;
         }
-        values[i] = *ref;
     }
     return fmi3OK;
 }
@@ -458,77 +374,25 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Int32 values[], size_t nValues)
 {
-    acd_fmu_instance *c = (acd_fmu_instance *)instance;
-    size_t i;
     (void)nValues;
-    for (i = 0; i < nValueReferences; ++i) {
-        if (!acd_fmu_get_integer(&c->model, valueReferences[i], &values[i])) {
-            acd_fmu_log(c, fmi3Error, "fmi3GetInt32: %u (%s) is not an Int32 variable",
-                        (unsigned)valueReferences[i], acd_fmu_name(valueReferences[i]));
-            return fmi3Error;
-        }
-    }
-    return fmi3OK;
+    return acd_fmu_get_integers((acd_fmu_instance *)instance, "fmi3GetInt32", valueReferences,
+                                nValueReferences, values);
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues)
 {
-    acd_fmu_instance *c = (acd_fmu_instance *)instance;
-    int restart = 0;
-    size_t i;
     (void)nValues;
-    for (i = 0; i < nValueReferences; ++i) { /* every value checked before any is set */
-        const fmi3ValueReference vr = valueReferences[i];
-        if (vr == 0 || acd_fmu_real(&c->model, vr) == NULL) {
-            acd_fmu_log(c, fmi3Error, "fmi3SetFloat64: %u (%s) is not a settable Float64 "
-                        "variable", (unsigned)vr, vr == 0 ? "time" : acd_fmu_name(vr));
-            return fmi3Error;
-        }
-        if (acd_fmu_settable(c, "fmi3SetFloat64", vr) != fmi3OK) {
-            return fmi3Error;
-        }
-        if (acd_fmu_access[vr] == 3
-            && acd_fmu_check_value(c, "fmi3SetFloat64", vr, values[i]) != fmi3OK) {
-            return fmi3Error;
-        }
-    }
-    for (i = 0; i < nValueReferences; ++i) {
-        *acd_fmu_real(&c->model, valueReferences[i]) = values[i];
-        restart |= acd_fmu_access[valueReferences[i]] == 3;
-    }
-    if (restart && c->phase == ACD_INITIALISING) {
-        acd_fmu_start(&c->model, c->t0); /* outputs of the new parameters */
-    }
-    return fmi3OK;
+    return acd_fmu_set_reals((acd_fmu_instance *)instance, "fmi3SetFloat64", valueReferences,
+                             nValueReferences, values);
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Int32 values[], size_t nValues)
 {
-    acd_fmu_instance *c = (acd_fmu_instance *)instance;
-    fmi3Int32 held;
-    size_t i;
     (void)nValues;
-    for (i = 0; i < nValueReferences; ++i) { /* every value checked before any is set */
-        const fmi3ValueReference vr = valueReferences[i];
-        if (!acd_fmu_get_integer(&c->model, vr, &held)) {
-            acd_fmu_log(c, fmi3Error, "fmi3SetInt32: %u (%s) is not an Int32 variable",
-                        (unsigned)vr, acd_fmu_name(vr));
-            return fmi3Error;
-        }
-        if (acd_fmu_settable(c, "fmi3SetInt32", vr) != fmi3OK
-            || acd_fmu_check_value(c, "fmi3SetInt32", vr, (double)values[i]) != fmi3OK) {
-            return fmi3Error;
-        }
-    }
-    for (i = 0; i < nValueReferences; ++i) {
-        (void)acd_fmu_set_integer(&c->model, valueReferences[i], values[i]);
-    }
-    if (nValueReferences > 0 && c->phase == ACD_INITIALISING) {
-        acd_fmu_start(&c->model, c->t0); /* outputs of the new parameters */
-    }
-    return fmi3OK;
+    return acd_fmu_set_integers((acd_fmu_instance *)instance, "fmi3SetInt32", valueReferences,
+                                nValueReferences, values);
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -538,65 +402,15 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime)
 {
     acd_fmu_instance *c = (acd_fmu_instance *)instance;
-    const double period = acd_fmu_period(&c->model);
-    const double k = (double)c->k;
-    const double now = c->t0 + k * period;
-    const double n = floor(communicationStepSize / period + 0.5);
-    const double end = c->t0 + (k + n) * period;
-    double step_end;
-    unsigned long i;
-    size_t j;
+    int failed;
+    fmi3Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
+    status = acd_fmu_step(c, currentCommunicationPoint, communicationStepSize, &failed);
     *eventHandlingNeeded = fmi3False;
-    *terminateSimulation = fmi3False;
+    *terminateSimulation = failed ? fmi3True : fmi3False;
     *earlyReturn = fmi3False;
-    *lastSuccessfulTime = now;
-    if (c->phase == ACD_FAILED) {
-        acd_fmu_log(c, fmi3Error, "fmi3DoStep: the FMU stopped at an error at %.17g s: "
-                    "fmi3Reset starts it again", now);
-        return fmi3Error;
-    }
-    if (c->phase != ACD_STEPPING) {
-        acd_fmu_log(c, fmi3Error, "fmi3DoStep: the FMU is not initialised");
-        return fmi3Error;
-    }
-    if (!(fabs(currentCommunicationPoint - now) <= acd_fmu_time_tolerance(period, k, now))) {
-        acd_fmu_log(c, fmi3Error,
-                    "fmi3DoStep: the communication point %.17g s is not the FMU's time "
-                    "%.17g s (the start of period %lu) within %.3g s", currentCommunicationPoint,
-                    now, c->k, acd_fmu_time_tolerance(period, k, now));
-        return fmi3Error;
-    }
-    step_end = currentCommunicationPoint + communicationStepSize;
-    if (!(n >= 1.0 && n < 1e15
-          && fabs(step_end - end) <= acd_fmu_time_tolerance(period, k + n, end))) {
-        acd_fmu_log(c, fmi3Error,
-                    "fmi3DoStep: the communication step %.17g s is not a whole number of the "
-                    "control period %.17g s (it ends at %.17g s, not at the start of a period)",
-                    communicationStepSize, period, step_end);
-        return fmi3Error;
-    }
-    for (i = 0; i < (unsigned long)n; ++i) {
-        double t = c->t0 + (double)c->k * period;
-        double t_next = c->t0 + (double)(c->k + 1) * period;
-        acd_fmu_advance(&c->model, t, t_next);
-        c->k += 1;
-        *lastSuccessfulTime = t_next;
-        for (j = 0; j < acd_fmu_real_output_count; ++j) {
-            const fmi3ValueReference vr = acd_fmu_real_outputs[j];
-            const double value = *acd_fmu_real(&c->model, vr);
-            if (!isfinite(value)) {
-                c->phase = ACD_FAILED;
-                *terminateSimulation = fmi3True;
-                acd_fmu_log(c, fmi3Error,
-                            "fmi3DoStep: output %s is %s at %.17g s (after the period from "
-                            "%.17g s): the run cannot go on", acd_fmu_name(vr),
-                            isnan(value) ? "NaN" : "infinite", t_next, t);
-                return fmi3Error;
-            }
-        }
-    }
-    return fmi3OK;
+    *lastSuccessfulTime = acd_fmu_time(c);
+    return status;
 }
 
 """
