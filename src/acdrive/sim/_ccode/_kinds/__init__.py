@@ -1,8 +1,11 @@
 """The C implementation of each part kind: registries keyed by the part's class.
 
-Each entry is a :class:`CStep`: the body of the kind's step function in C (the second
-implementation of its numba ``step`` kernel, kept equal to it by the software-in-the-loop tests,
-``tests/test_export_sil.py``) and the support code it calls. The generator writes the function's
+Each entry is a :class:`CStep`: the body of the kind's step function in C and the support code
+it calls. A kind whose kernel is in the kernel language has its C generated from the kernel
+(``sim._ccode._translate.c_step``, ``from_kernel``; ``tests/test_kernel_translation.py`` checks
+C against kernel bit for bit on random draws); the others carry a hand-written body, a second
+implementation of the kernel kept equal to it by the software-in-the-loop and native-tier tests
+(``tests/test_export_sil.py``, ``tests/test_native_tier.py``). The generator writes the function's
 signature from the kind's declarations, so the body reads its inputs as ``u->name``, its
 parameters as ``p->name``, its discrete state as ``s->name`` and writes its outputs as
 ``y->name`` (a complex quantity is an ``acd_complex`` with ``.re`` and ``.im``; a table
@@ -54,6 +57,8 @@ class CStep:
     body: object
     source: str
     support: tuple[CSupport, ...] = ()
+    #: True when ``body`` is generated from the kind's kernel (``sim._ccode._translate``)
+    from_kernel: bool = False
 
 
 @dataclass(frozen=True)

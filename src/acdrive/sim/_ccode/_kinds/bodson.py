@@ -14,6 +14,7 @@ from acdrive.control._bodson import (
     Synchroniser,
 )
 from acdrive.control._dfim import MIN_SUPPLY_FREQUENCY
+from acdrive.sim._ccode._translate import c_step
 from acdrive.sim._ccode._kinds import CStep, CSupport, register
 from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, SPEED_PI, WRAP
 
@@ -175,22 +176,9 @@ static void acd_dfim_torque_limit_case2(ACD_DFIM_ESTIMATE_ARGS, ACDRIVE_REAL w_e
 
 register(
     SpeedEstimator,
-    CStep(
+    c_step(
+        SpeedEstimator,
         source="Bodson IV-A: speed from the encoder, backward difference, first-order filter",
-        body=r"""
-    ACDRIVE_REAL theta = u->theta;
-    if (s->started == ACD_R(0.0)) {
-        s->started = ACD_R(1.0);
-        s->theta_prev = theta;
-        s->w = ACD_R(0.0);
-    } else {
-        ACDRIVE_REAL w_raw = (theta - s->theta_prev) / T_s;
-        s->theta_prev = theta;
-        s->w += T_s / (p->tau + T_s) * (w_raw - s->w);
-    }
-    y->w = s->w;
-    return 0u;
-""",
     ),
 )
 

@@ -20,7 +20,8 @@ from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
-from acdrive.sim._ccode._kinds import CStep, CSupport, PlantC, register, register_plant
+from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._kinds import CSupport, PlantC, register, register_plant
 from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, TABLE_AT
 
 #: tanh by precision (newlib's libm has both), for the shaft's Coulomb friction
@@ -302,22 +303,10 @@ register_plant(
 
 register(
     CarrierLatch,
-    CStep(
+    c_step(
+        CarrierLatch,
         source="the PWM unit's shadow register, N = max(1, round(1 / (f_pwm T_s))) samples "
         "(plant._inverter.latch_step)",
-        body=r"""
-    ACDRIVE_REAL n = acd_max(ACD_R(1.0), ACD_FLOOR(ACD_R(1.0) / (p->f_pwm * T_s) + ACD_R(0.5)));
-    ACDRIVE_REAL j = s->k;
-    if (j < ACD_R(0.0) || j >= n) {
-        j = ACD_R(0.0);
-    }
-    if (j == ACD_R(0.0)) {
-        s->v = u->v_ref;
-    }
-    s->k = (j + ACD_R(1.0) < n) ? j + ACD_R(1.0) : ACD_R(0.0);
-    y->v_ref = s->v;
-    return 0u;
-""",
     ),
 )
 

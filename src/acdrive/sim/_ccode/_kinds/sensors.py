@@ -1,6 +1,8 @@
 """C steps of the sensors (``acdrive.plant._sensors``), the forced relay and the relay command
 (``plant._network``), the speed reference profile (``acdrive.control._speed``) and the open-loop
-voltage programs (``acdrive.control._open_loop``); each body mirrors its kernel line for line."""
+voltage programs (``acdrive.control._open_loop``). The sensors, the speed reference and the relays
+are generated from their kernels (``sim._ccode._translate``); each remaining body mirrors its
+kernel line for line."""
 
 from __future__ import annotations
 
@@ -11,87 +13,47 @@ from acdrive.control._open_loop import ComplexProgram, VoltageProgram
 from acdrive.control._speed import SpeedReference
 from acdrive.plant._network import ForcedRelay, RelayCommand
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
+from acdrive.sim._ccode._translate import c_step
 from acdrive.sim._ccode._kinds import CStep, register
 from acdrive.sim._ccode._kinds.common import TABLE_AT
 
 register(
     Encoder,
-    CStep(
+    c_step(
+        Encoder,
         source="Bodson IV-A: incremental encoder (plant._sensors.encoder_angle)",
-        body=r"""
-    ACDRIVE_REAL reading = u->theta + p->offset;
-    if (p->counts_per_rev <= ACD_R(0.0)) {
-        y->theta = reading;
-    } else {
-        ACDRIVE_REAL count = ACD_R(2.0) * ACD_PI / p->counts_per_rev;
-        y->theta = ACD_FLOOR(reading / count) * count;
-    }
-    return 0u;
-""",
     ),
 )
 
 register(
     CurrentSensors,
-    CStep(
+    c_step(
+        CurrentSensors,
         source="Bodson IV-A: current sensors, lost from fault_time (plant._sensors)",
-        body=r"""
-    if (p->fails != ACD_R(0.0) && t >= p->fault_time) {
-        y->valid = ACD_R(0.0); /* the currents keep their last values */
-        return ACD_CURRENT_SENSORS_LOST;
-    }
-    y->i_s = u->i_s;
-    y->i_r = u->i_r;
-    y->valid = ACD_R(1.0);
-    return 0u;
-""",
     ),
 )
 
 register(
     VoltageSensor,
-    CStep(
+    c_step(
+        VoltageSensor,
         source="voltage sensor with a gain error, lost from fault_time (plant._sensors)",
-        body=r"""
-    if (p->fails != ACD_R(0.0) && t >= p->fault_time) {
-        y->valid = ACD_R(0.0); /* the voltage keeps its last value */
-        return ACD_VOLTAGE_SENSOR_LOST;
-    }
-    y->v = acd_c(p->gain * u->v.re, p->gain * u->v.im);
-    y->valid = ACD_R(1.0);
-    return 0u;
-""",
     ),
 )
 
 register(
     SpeedReference,
-    CStep(
+    c_step(
+        SpeedReference,
         source="speed reference profile (control._speed, core._tables.table_at)",
-        body=r"""
-    y->w_ref = acd_table_at(p->w.n, p->w.t, p->w.v, t);
-    return 0u;
-""",
-        support=(TABLE_AT,),
     ),
 )
 
 register(
     ForcedRelay,
-    CStep(
+    c_step(
+        ForcedRelay,
         source="a relay closed from close_at whatever its command (plant._network)",
-        body=r"""
-    if (u->command != ACD_R(0.0)) {
-        y->closed = ACD_R(1.0);
-        return 0u;
-    }
-    if (t >= p->close_at) {
-        y->closed = ACD_R(1.0);
-        return ACD_FORCED_RELAY_FORCED;
-    }
-    y->closed = ACD_R(0.0);
-    return 0u;
-""",
     ),
 )
 
@@ -121,12 +83,9 @@ register(
 
 register(
     RelayCommand,
-    CStep(
+    c_step(
+        RelayCommand,
         source="relay command at a set time (plant._network.relay_command_step)",
-        body=r"""
-    y->closed = (t >= p->close_at) ? ACD_R(1.0) : ACD_R(0.0);
-    return 0u;
-""",
     ),
 )
 

@@ -1,0 +1,762 @@
+"""C generated from a part kind's numba kernel: the kernel is the one place its equations are
+written, and its C (native tier, export, SIL, FMU) is derived from it.
+
+The kernel language is the subset of Python the part kernels are written in (docs/guide/parts.md):
+
+* **arrays by role**: the kernel's array arguments are its part's layouts, read and written at
+  slots that are constants of the module (``y[_F_O_IS]``, ``y[_F_O_IS + 1]``, ``u[i]`` inside a
+  ``for i in range(4)`` with a constant bound). Each slot resolves through the layout to a struct
+  member: a real quantity ``p->R_r``, the parts of a complex one ``y->i_s_ref.re`` and ``.im``;
+  a table by ``table_at(p, SLOT, t)`` at the first table's start slot;
+* **scalars**: float, int and bool locals (declared at the top of the C function with the type
+  every assignment agrees on: an int that is also given a float is a real), Python complex
+  numbers (``complex(a, b)``, ``.real``, ``.imag``, ``np.conj``, ``np.abs``);
+* **statements**: assignment (also to several targets at once, evaluated before any is
+  written), augmented assignment, ``if``/``elif``/``else``, ``for`` over a constant
+  ``range`` (unrolled), ``return``; a docstring and ``pass``;
+* **expressions**: arithmetic, comparisons (chained), ``and``/``or``/``not``, ``x if c else
+  y``, ``abs``, ``min``/``max`` of two reals, ``float``/``int``, numpy's and math's elementary
+  functions, and calls of other jit functions of the kernel language (each becomes a static C
+  function; one returning a tuple returns its first element and writes the others through
+  pointers).
+
+Rounding follows the compiled tiers operation for operation: the same operations in the same
+order; Python's ``%`` by ``acd_pymod``; ``np.sin``, ``np.cos``, ``np.sqrt`` and ``np.abs`` of a
+complex number by acdrive's own functions (``sim._lane_math``, the C's ``ACD_SIN``, ``ACD_COS``,
+``ACD_SQRT``, ``acd_cabs``), which the loops rebind numpy's to; complex products and quotients
+as ``acd_cmul``/``acd_cdiv`` (numba's formulas). A real mixed with a complex number acts on
+each part (``r z = (r z.re, r z.im)``, ``z + r = (z.re + r, z.im)``): numba promotes the real to
+``r + 0j`` and, with its default fast-math flags (no NaN, no infinity, no signed zero), folds
+the products and sums with that zero to exactly these; with ``ACDRIVE_STRICT_MATH=1`` the two
+differ at most in the sign of a zero.
+
+A construct outside the language is an ``UnsupportedKernel`` naming the kernel, the line and
+the construct.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import math
+import textwrap
+import types
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from acdrive.sim._ccode._helpers import names_in
+
+REAL, INT, BOOL, COMPLEX = "real", "int", "bool", "complex"
+_C_TYPE = {REAL: "ACDRIVE_REAL", INT: "int", BOOL: "int", COMPLEX: "acd_complex"}
+
+#: numpy's and math's functions of one or two reals -> the prelude's macros
+_REAL_FUNCTIONS = {
+    "sqrt": "ACD_SQRT", "exp": "ACD_EXP", "log": "ACD_LOG", "floor": "ACD_FLOOR",
+    "sin": "ACD_SIN", "cos": "ACD_COS", "arccos": "ACD_ACOS", "acos": "ACD_ACOS",
+    "arctan2": "ACD_ATAN2", "atan2": "ACD_ATAN2", "hypot": "ACD_HYPOT", "fabs": "ACD_FABS",
+    "nextafter": "ACD_NEXTAFTER",
+}  # fmt: skip
+_TWO_ARGUMENTS = {"arctan2", "atan2", "hypot", "nextafter"}
+
+
+class UnsupportedKernel(Exception):  # noqa: N818 (a reason, raised to the caller's fallback)
+    """A kernel construct the translator does not take: ``str`` names the kernel, its line and
+    the construct."""
+
+
+@dataclass
+class Role:
+    """An array argument of a kernel: its layout and its C name (``u``, ``p``, ``s``, ``y``)."""
+
+    layout: object
+    name: str
+
+
+@dataclass
+class Translated:
+    """A kernel's C: ``body`` (statements of the step function) and ``helpers`` ((C name, text)
+    of the static functions it calls, in definition order: each after those it calls)."""
+
+    body: str
+    helpers: list[str] = field(default_factory=list)
+
+
+def _python_function(kernel):
+    return getattr(kernel, "py_func", kernel)
+
+
+def _is_kernel_function(value) -> bool:
+    return callable(getattr(value, "py_func", None)) or isinstance(value, types.FunctionType)
+
+
+class _Module:
+    """What the translation of one kernel and its helpers shares: the helper functions already
+    written (by Python function), in order."""
+
+    def __init__(self):
+        self.helpers: dict = {}
+        self.order: list[str] = []
+
+
+def _bare(text: str) -> str:
+    """``text`` without one pair of parentheses around all of it (a condition inside ``if
+    (...)``: clang warns of ``if ((a == b))``)."""
+    if not (text.startswith("(") and text.endswith(")")):
+        return text
+    depth = 0
+    for k, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if depth == 0 and k < len(text) - 1:
+            return text  # the first parenthesis closes before the end
+    return text[1:-1]
+
+
+def c_literal(value: float) -> str:
+    if not math.isfinite(value):
+        return "ACD_INF" if value > 0 else "(-ACD_INF)" if value < 0 else "(ACD_INF - ACD_INF)"
+    return f"ACD_R({float(value)!r})"
+
+
+class _Function:
+    """One kernel or helper: the type pass, then the C text."""
+
+    def __init__(self, func, roles: dict[str, Role], module: _Module, c_name: str,
+                 arg_types: dict[str, str] | None = None, is_step: bool = False):  # fmt: skip
+        self.func = _python_function(func)
+        self.roles = roles
+        self.module = module
+        self.c_name = c_name
+        self.is_step = is_step
+        source = textwrap.dedent(inspect.getsource(self.func))
+        tree = ast.parse(source)
+        self.node = next(n for n in tree.body if isinstance(n, ast.FunctionDef))
+        self.first_line = self.func.__code__.co_firstlineno - 1
+        self.where = f"{self.func.__module__}.{self.func.__name__}"
+        self.globals = self.func.__globals__
+        self.arg_types = dict(arg_types or {})
+        self.types: dict[str, str] = dict(self.arg_types)
+        self.constants: dict[str, int] = {}  # loop variables of unrolled loops
+        self.return_type = None
+        self.temp = 0
+
+    # --- errors and constants -----------------------------------------------------------
+
+    def fail(self, node, what: str):
+        line = self.first_line + getattr(node, "lineno", 1)
+        raise UnsupportedKernel(f"{self.where} (line {line}): {what}")
+
+    def constant(self, node):
+        """The value of ``node`` if it is a constant of the module (or of an unrolled loop),
+        else None."""
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float, bool)):
+            return node.value
+        if isinstance(node, ast.Name):
+            if node.id in self.constants:
+                return self.constants[node.id]
+            if node.id in self.types:
+                return None
+            value = self.globals.get(node.id)
+            if isinstance(value, (bool, int, float, np.integer, np.floating)):
+                return value.item() if isinstance(value, np.generic) else value
+            return None
+        if isinstance(node, ast.Attribute):
+            value = self._attribute_value(node)
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                return value
+            return None
+        if isinstance(node, ast.BinOp):
+            a, b = self.constant(node.left), self.constant(node.right)
+            if isinstance(a, int) and isinstance(b, int):
+                op = type(node.op)
+                if op is ast.Add:
+                    return a + b
+                if op is ast.Sub:
+                    return a - b
+                if op is ast.Mult:
+                    return a * b
+        return None
+
+    def _attribute_value(self, node):
+        if isinstance(node.value, ast.Name) and node.value.id not in self.types:
+            owner = self.globals.get(node.value.id)
+            if isinstance(owner, types.ModuleType):
+                return getattr(owner, node.attr, None)
+        return None
+
+    # --- slots ------------------------------------------------------------------------------
+
+    def member(self, node: ast.Subscript) -> tuple[str, str]:
+        """(C lvalue, type) of ``array[slot]`` for a role array."""
+        role = self.roles[node.value.id]
+        k = self.constant(node.slice)
+        if not isinstance(k, int):
+            self.fail(node, f"the slot of {node.value.id}[...] is not a constant of the module")
+        for v in role.layout:
+            if v.kind == "table":
+                continue
+            first = role.layout.slot(v.name)
+            if first <= k < first + v.width:
+                if v.kind == "complex":
+                    return f"{role.name}->{v.name}.{'re' if k == first else 'im'}", REAL
+                return f"{role.name}->{v.name}", REAL
+        self.fail(node, f"slot {k} of {node.value.id} is no real or complex quantity")
+
+    # --- types ------------------------------------------------------------------------------
+
+    def unify(self, node, a: str | None, b: str) -> str:
+        if a is None or a == b:
+            return b
+        if {a, b} <= {INT, BOOL}:
+            return INT
+        if {a, b} <= {INT, BOOL, REAL}:
+            return REAL
+        self.fail(node, f"a variable given both a {a} and a {b} value")
+
+    def infer(self, body: list) -> None:
+        """Types of every local (two passes: a loop may read a later assignment)."""
+        for _ in range(2):
+            self._infer_block(body)
+
+    def _infer_block(self, body):
+        for stmt in body:
+            if isinstance(stmt, ast.Assign):
+                value = self.type_of(stmt.value)
+                for target in stmt.targets:
+                    self._assign_type(target, value, stmt)
+            elif isinstance(stmt, ast.AugAssign):
+                if isinstance(stmt.target, ast.Name):
+                    value = self.type_of(ast.BinOp(stmt.target, stmt.op, stmt.value))
+                    self.types[stmt.target.id] = self.unify(
+                        stmt, self.types.get(stmt.target.id), value
+                    )
+            elif isinstance(stmt, ast.If):
+                self._infer_block(stmt.body)
+                self._infer_block(stmt.orelse)
+            elif isinstance(stmt, ast.For):
+                n = self._range_of(stmt)
+                name = stmt.target.id
+                for i in range(n):
+                    self.constants[name] = i
+                    self._infer_block(stmt.body)
+                self.constants.pop(name, None)
+            elif isinstance(stmt, ast.Return) and stmt.value is not None:
+                t = self.type_of(stmt.value)
+                self.return_type = t if self.return_type is None else self._unify_return(
+                    stmt, self.return_type, t)  # fmt: skip
+
+    def _unify_return(self, node, a, b):
+        if isinstance(a, tuple) and isinstance(b, tuple) and len(a) == len(b):
+            return tuple(self.unify(node, x, y) for x, y in zip(a, b, strict=True))
+        return self.unify(node, a, b)
+
+    def _assign_type(self, target, value, stmt):
+        if isinstance(target, ast.Name):
+            if isinstance(value, tuple):
+                self.fail(stmt, "a tuple kept in one variable")
+            self.types[target.id] = self.unify(stmt, self.types.get(target.id), value)
+        elif isinstance(target, ast.Tuple):
+            if not (isinstance(value, tuple) and len(value) == len(target.elts)):
+                self.fail(stmt, "an unpacking whose value is not a tuple of that length")
+            for t, v in zip(target.elts, value, strict=True):
+                self._assign_type(t, v, stmt)
+        elif isinstance(target, ast.Subscript):
+            if not (isinstance(target.value, ast.Name) and target.value.id in self.roles):
+                self.fail(stmt, "a subscript of something other than the kernel's arrays")
+            if value == COMPLEX:
+                self.fail(stmt, "a complex value written to one slot")
+        else:
+            self.fail(stmt, f"assignment to {type(target).__name__}")
+
+    def _range_of(self, stmt: ast.For) -> int:
+        it = stmt.iter
+        if not (isinstance(it, ast.Call) and isinstance(it.func, ast.Name)
+                and it.func.id == "range" and len(it.args) == 1
+                and isinstance(stmt.target, ast.Name) and not stmt.orelse):  # fmt: skip
+            self.fail(stmt, "a loop other than 'for i in range(N)'")
+        n = self.constant(it.args[0])
+        if not isinstance(n, int) or n > 64:
+            self.fail(stmt, "a loop whose bound is not a constant of at most 64")
+        return n
+
+    def type_of(self, node) -> str | tuple:
+        return self.expr(node)[1]
+
+    # --- expressions: (C text, type) ---------------------------------------------------------
+
+    def expr(self, node) -> tuple[str, object]:
+        k = self.constant(node)
+        if k is not None:
+            if isinstance(k, bool):
+                return ("1" if k else "0"), BOOL
+            if isinstance(k, int):
+                return (str(k) if k >= 0 else f"({k})"), INT
+            return c_literal(k), REAL
+        method = getattr(self, f"_{type(node).__name__}", None)
+        if method is None:
+            self.fail(node, f"the expression {type(node).__name__}")
+        return method(node)
+
+    def _Name(self, node):
+        if node.id in self.types:
+            return node.id, self.types[node.id]
+        if node.id in self.arg_types:
+            return node.id, self.arg_types[node.id]
+        if node.id in ("t", "T_s") and self.is_step:
+            return node.id, REAL
+        self.fail(node, f"the name {node.id!r} (not a local, an argument or a constant)")
+
+    def _Attribute(self, node):
+        value = self._attribute_value(node)
+        if value is not None:
+            self.fail(node, f"the module attribute {ast.unparse(node)!r}")
+        text, t = self.expr(node.value)
+        if t == COMPLEX and node.attr in ("real", "imag"):
+            return f"({text}).{'re' if node.attr == 'real' else 'im'}", REAL
+        self.fail(node, f"the attribute .{node.attr} of a {t}")
+
+    def _Subscript(self, node):
+        if isinstance(node.value, ast.Name) and node.value.id in self.roles:
+            return self.member(node)
+        self.fail(node, "a subscript of something other than the kernel's arrays")
+
+    def _UnaryOp(self, node):
+        text, t = self.expr(node.operand)
+        if isinstance(node.op, ast.USub):
+            if t == COMPLEX:
+                return f"acd_cneg({text})", COMPLEX
+            return f"(-{text})", REAL if t == REAL else INT
+        if isinstance(node.op, ast.UAdd):
+            return text, t
+        if isinstance(node.op, ast.Not):
+            return f"(!{self.truth(text, t)})", BOOL
+        self.fail(node, f"the operator {type(node.op).__name__}")
+
+    def truth(self, text, t):
+        return f"({text} != 0)" if t == REAL else text
+
+    def _BinOp(self, node):
+        a, ta = self.expr(node.left)
+        b, tb = self.expr(node.right)
+        op = type(node.op)
+        if COMPLEX in (ta, tb):
+            return self._complex_op(node, op, a, ta, b, tb)
+        if op is ast.Div:
+            if ta != REAL and tb != REAL:
+                return f"((ACDRIVE_REAL){a} / (ACDRIVE_REAL){b})", REAL
+            return f"({a} / {b})", REAL
+        if op is ast.Mod:
+            if REAL in (ta, tb):
+                return f"acd_pymod({a}, {b})", REAL
+            self.fail(node, "% of two integers")
+        symbol = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.BitOr: "|",
+                  ast.BitAnd: "&"}.get(op)  # fmt: skip
+        if symbol is None:
+            self.fail(node, f"the operator {op.__name__}")
+        if symbol in "|&" and REAL in (ta, tb):
+            self.fail(node, f"the bit operator {symbol} on a real")
+        result = REAL if REAL in (ta, tb) else INT
+        return f"({a} {symbol} {b})", result
+
+    def _complex_op(self, node, op, a, ta, b, tb):
+        if ta == COMPLEX and tb == COMPLEX:
+            name = {ast.Add: "acd_cadd", ast.Sub: "acd_csub", ast.Mult: "acd_cmul",
+                    ast.Div: "acd_cdiv"}.get(op)  # fmt: skip
+            if name is None:
+                self.fail(node, f"the operator {op.__name__} on complex numbers")
+            return f"{name}({a}, {b})", COMPLEX
+        if ta == COMPLEX:  # complex op real
+            name = {ast.Add: "acd_caddr", ast.Sub: "acd_csubr", ast.Mult: "acd_cmulr",
+                    ast.Div: "acd_cdivr"}.get(op)  # fmt: skip
+            if name is None:
+                self.fail(node, f"the operator {op.__name__} on complex numbers")
+            return f"{name}({a}, {b})", COMPLEX
+        if op is ast.Mult:
+            return f"acd_cscale({a}, {b})", COMPLEX
+        if op is ast.Add:
+            return f"acd_caddr({b}, {a})", COMPLEX
+        if op is ast.Sub:
+            return f"acd_rsubc({a}, {b})", COMPLEX
+        if op is ast.Div:
+            return f"acd_cdiv(acd_c({a}, ACD_R(0.0)), {b})", COMPLEX
+        self.fail(node, f"the operator {op.__name__} on complex numbers")
+
+    def _Compare(self, node):
+        symbols = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==",
+                   ast.NotEq: "!="}  # fmt: skip
+        parts = []
+        left = node.left
+        for op, right in zip(node.ops, node.comparators, strict=True):
+            if type(op) not in symbols:
+                self.fail(node, f"the comparison {type(op).__name__}")
+            a, ta = self.expr(left)
+            b, tb = self.expr(right)
+            if COMPLEX in (ta, tb):
+                self.fail(node, "a comparison of complex numbers")
+            parts.append(f"({a} {symbols[type(op)]} {b})")
+            left = right
+        return ("(" + " && ".join(parts) + ")") if len(parts) > 1 else parts[0], BOOL
+
+    def _BoolOp(self, node):
+        symbol = " && " if isinstance(node.op, ast.And) else " || "
+        values = []
+        for v in node.values:
+            text, t = self.expr(v)
+            if t not in (BOOL, INT, REAL):
+                self.fail(node, f"'and'/'or' of a {t}")
+            values.append(self.truth(text, t))
+        return "(" + symbol.join(values) + ")", BOOL
+
+    def _IfExp(self, node):
+        c, tc = self.expr(node.test)
+        a, ta = self.expr(node.body)
+        b, tb = self.expr(node.orelse)
+        t = self.unify(node, ta, tb)
+        if t == REAL:
+            a, b = self.as_real(a, ta), self.as_real(b, tb)
+        return f"({self.truth(c, tc)} ? {a} : {b})", t
+
+    def as_real(self, text, t):
+        return text if t == REAL else f"(ACDRIVE_REAL)({text})"
+
+    def _Tuple(self, node):
+        items = [self.expr(e) for e in node.elts]
+        return [x for x, _ in items], tuple(t for _, t in items)
+
+    def _Call(self, node):
+        func = node.func
+        if node.keywords:
+            self.fail(node, "a call with keyword arguments")
+        name = None
+        if isinstance(func, ast.Name):
+            name = func.id
+            target = self.globals.get(name, getattr(__builtins__, name, None)
+                                      if not isinstance(__builtins__, dict)
+                                      else __builtins__.get(name))  # fmt: skip
+        elif isinstance(func, ast.Attribute):
+            owner = func.value.id if isinstance(func.value, ast.Name) else None
+            module = self.globals.get(owner) if owner else None
+            if module is None or not isinstance(module, types.ModuleType):
+                self.fail(node, f"the call {ast.unparse(func)}")
+            name = func.attr
+            target = getattr(module, name, None)
+            if module.__name__ in ("numpy", "math") or getattr(module, "__name__", "").startswith(
+                "acdrive.sim._lane_math"
+            ):
+                return self._library_call(node, name)
+        else:
+            self.fail(node, "a call of an expression")
+        from acdrive.core import _tables
+
+        if target is _tables.table_at:
+            return self._table_at(node)
+        args = [self.expr(a) for a in node.args]
+        if name in ("abs", "min", "max", "complex", "float", "int") and target in (
+            abs, min, max, complex, float, int
+        ):
+            return self._builtin(node, name, args)
+        if target is not None and _is_kernel_function(target):
+            return self._helper_call(node, target, args)
+        self.fail(node, f"the call {name}(...)")
+
+    def _library_call(self, node, name):
+        args = [self.expr(a) for a in node.args]
+        if name == "abs" and len(args) == 1:
+            text, t = args[0]
+            if t == COMPLEX:
+                return f"acd_cabs({text})", REAL
+            return f"ACD_FABS({self.as_real(text, t)})", REAL
+        if name == "conj" and len(args) == 1 and args[0][1] == COMPLEX:
+            return f"acd_conj({args[0][0]})", COMPLEX
+        if name in _REAL_FUNCTIONS:
+            want = 2 if name in _TWO_ARGUMENTS else 1
+            if len(args) != want or any(t not in (REAL, INT) for _, t in args):
+                self.fail(node, f"{name} of other than {want} real argument(s)")
+            inner = ", ".join(self.as_real(x, t) for x, t in args)
+            return f"{_REAL_FUNCTIONS[name]}({inner})", REAL
+        self.fail(node, f"the library function {name}")
+
+    def _builtin(self, node, name, args):
+        if name == "abs" and len(args) == 1:
+            text, t = args[0]
+            if t == COMPLEX:
+                return f"ACD_HYPOT(({text}).re, ({text}).im)", REAL
+            if t == REAL:
+                return f"ACD_FABS({text})", REAL
+            return f"abs({text})", INT
+        if name in ("min", "max") and len(args) == 2:
+            (a, ta), (b, tb) = args
+            if REAL in (ta, tb):
+                return f"acd_{name}({self.as_real(a, ta)}, {self.as_real(b, tb)})", REAL
+            symbol = ">" if name == "max" else "<"
+            return f"(({b}) {symbol} ({a}) ? ({b}) : ({a}))", INT
+        if name == "complex" and len(args) == 2:
+            (a, ta), (b, tb) = args
+            return f"acd_c({self.as_real(a, ta)}, {self.as_real(b, tb)})", COMPLEX
+        if name == "float" and len(args) == 1:
+            return self.as_real(*args[0]), REAL
+        if name == "int" and len(args) == 1:
+            return f"((int)({args[0][0]}))", INT
+        self.fail(node, f"{name} with {len(args)} argument(s)")
+
+    def _table_at(self, node):
+        if len(node.args) != 3 or not isinstance(node.args[0], ast.Name):
+            self.fail(node, "table_at other than table_at(p, SLOT, t)")
+        role = self.roles.get(node.args[0].id)
+        start = self.constant(node.args[1])
+        tables = [v for v in role.layout if v.kind == "table"] if role else []
+        if not tables or start != role.layout.table_start:
+            self.fail(node, "table_at of other than the first table of a role's layout")
+        t, tt = self.expr(node.args[2])
+        v = f"{role.name}->{tables[0].name}"
+        return f"acd_table_at({v}.n, {v}.t, {v}.v, {self.as_real(t, tt)})", REAL
+
+    def _helper_call(self, node, target, args):
+        for text, t in args:
+            if isinstance(t, tuple):
+                self.fail(node, "a tuple passed to a function")
+        arg_types = tuple(t for _, t in args)
+        helper = _helper(self.module, target, arg_types, node, self)
+        call = f"{helper.c_name}({', '.join(x for x, _ in args)})"
+        return call, helper.return_type
+
+    # --- statements -------------------------------------------------------------------------
+
+    def new_temp(self) -> str:
+        self.temp += 1
+        return f"acd_t{self.temp}"
+
+    def block(self, body, depth: int) -> list[str]:
+        pad = "    " * depth
+        lines = []
+        for stmt in body:
+            if (isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Constant)
+                    and isinstance(stmt.value.value, str)):  # fmt: skip
+                continue  # a docstring
+            if isinstance(stmt, ast.Pass):
+                continue
+            if isinstance(stmt, ast.Assign):
+                lines += self.assign(stmt, pad)
+            elif isinstance(stmt, ast.AugAssign):
+                target = ast.Name(stmt.target.id, ast.Load()) if isinstance(
+                    stmt.target, ast.Name) else stmt.target  # fmt: skip
+                lvalue, lt = self.expr(target)
+                value, vt = self.expr(ast.BinOp(target, stmt.op, stmt.value))
+                lines.append(f"{pad}{lvalue} = {self.cast_to(value, vt, lt)};")
+            elif isinstance(stmt, ast.If):
+                test, tt = self.expr(stmt.test)
+                lines.append(f"{pad}if ({_bare(self.truth(test, tt))}) {{")
+                lines += self.block(stmt.body, depth + 1)
+                orelse = stmt.orelse
+                while len(orelse) == 1 and isinstance(orelse[0], ast.If):
+                    test, tt = self.expr(orelse[0].test)
+                    lines.append(f"{pad}}} else if ({_bare(self.truth(test, tt))}) {{")
+                    lines += self.block(orelse[0].body, depth + 1)
+                    orelse = orelse[0].orelse
+                if orelse:
+                    lines.append(f"{pad}}} else {{")
+                    lines += self.block(orelse, depth + 1)
+                lines.append(f"{pad}}}")
+            elif isinstance(stmt, ast.For):
+                n = self._range_of(stmt)
+                name = stmt.target.id
+                for i in range(n):
+                    self.constants[name] = i
+                    lines += self.block(stmt.body, depth)
+                self.constants.pop(name, None)
+            elif isinstance(stmt, ast.Return):
+                lines += self.return_lines(stmt, pad)
+            else:
+                self.fail(stmt, f"the statement {type(stmt).__name__}")
+        return lines
+
+    def cast_to(self, text, t, want):
+        if want == REAL and t in (INT, BOOL):
+            return f"(ACDRIVE_REAL)({text})"
+        return text
+
+    def lvalue(self, target):
+        if isinstance(target, ast.Name):
+            return target.id, self.types[target.id]
+        return self.member(target)
+
+    def assign(self, stmt, pad) -> list[str]:
+        if len(stmt.targets) != 1:
+            self.fail(stmt, "a chained assignment a = b = c")
+        target = stmt.targets[0]
+        if not isinstance(target, ast.Tuple):
+            lvalue, lt = self.lvalue(target)
+            value, vt = self.expr(stmt.value)
+            return [f"{pad}{lvalue} = {self.cast_to(value, vt, lt)};"]
+        targets = [self.lvalue(t) for t in target.elts]
+        if isinstance(stmt.value, ast.Tuple):
+            values = [self.expr(v) for v in stmt.value.elts]
+            if len(values) != len(targets):
+                self.fail(stmt, "an unpacking of a tuple of another length")
+            reads = " ".join(v for v, _ in values)
+            names = names_in(reads)
+            if not any(lv in names if isinstance(t, ast.Name) else lv in reads
+                       for (lv, _), t in zip(targets, target.elts, strict=True)):  # fmt: skip
+                # no value reads a target: written in order
+                return [f"{pad}{lv} = {self.cast_to(v, vt, lt)};"
+                        for (lv, lt), (v, vt) in zip(targets, values, strict=True)]  # fmt: skip
+            temps = [self.new_temp() for _ in values]
+            lines = [f"{pad}{{"]
+            for temp, (v, vt), (_, lt) in zip(temps, values, targets, strict=True):
+                lines.append(f"{pad}    {_C_TYPE[lt]} {temp} = {self.cast_to(v, vt, lt)};")
+            for temp, (lv, _) in zip(temps, targets, strict=True):
+                lines.append(f"{pad}    {lv} = {temp};")
+            return [*lines, f"{pad}}}"]
+        if not isinstance(stmt.value, ast.Call):
+            self.fail(stmt, "an unpacking of other than a tuple or a function's tuple")
+        value, vt = self.expr(stmt.value)
+        if not (isinstance(vt, tuple) and len(vt) == len(targets)):
+            self.fail(stmt, "an unpacking whose value is not a tuple of that length")
+        temps = [self.new_temp() for _ in vt]
+        lines = [f"{pad}{{"]
+        for temp, t in zip(temps[1:], vt[1:], strict=True):
+            lines.append(f"{pad}    {_C_TYPE[t]} {temp};")
+        outs = "".join(f", &{temp}" for temp in temps[1:])
+        lines.append(f"{pad}    {_C_TYPE[vt[0]]} {temps[0]} = {value[:-1]}{outs});")
+        for temp, t, (lv, lt) in zip(temps, vt, targets, strict=True):
+            lines.append(f"{pad}    {lv} = {self.cast_to(temp, t, lt)};")
+        return [*lines, f"{pad}}}"]
+
+    def return_lines(self, stmt, pad) -> list[str]:
+        if stmt.value is None:
+            self.fail(stmt, "a return without a value")
+        if self.is_step:
+            value, vt = self.expr(stmt.value)
+            if vt not in (INT, BOOL):
+                self.fail(stmt, "a step returning other than its integer event bits")
+            return [f"{pad}return (uint32_t)({value});"]
+        value, vt = self.expr(stmt.value)
+        if isinstance(self.return_type, tuple):  # the first element returned, the others out
+            if not isinstance(stmt.value, ast.Tuple):
+                self.fail(stmt, "a tuple returned from other than a tuple expression")
+            lines = [f"{pad}*acd_r{k} = {self.cast_to(v, t, want)};" for k, (v, t, want)
+                     in enumerate(zip(value, vt, self.return_type, strict=True)) if k > 0]  # fmt: skip
+            return [*lines, f"{pad}return {self.cast_to(value[0], vt[0], self.return_type[0])};"]
+        return [f"{pad}return {self.cast_to(value, vt, self.return_type)};"]
+
+    def declarations(self) -> list[str]:
+        by_type: dict[str, list[str]] = {}
+        for name, t in self.types.items():
+            if name in self.arg_types:
+                continue
+            by_type.setdefault(_C_TYPE[t], []).append(name)
+        return [f"    {c} {', '.join(names)};" for c, names in by_type.items()]
+
+
+def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
+    func = _python_function(target)
+    key = (func, arg_types)
+    found = module.helpers.get(key)
+    if found is not None:
+        return found
+    # the name follows from the function and its argument types alone, so the kinds of one
+    # file that call the same helper share one definition
+    c_name = f"acd_{func.__module__.rsplit('.', 1)[-1].lstrip('_')}_{func.__name__.lstrip('_')}"
+    if any(t != REAL for t in arg_types):
+        c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
+                                for t in arg_types)  # fmt: skip
+    params = list(inspect.signature(func).parameters)
+    if len(params) != len(arg_types):
+        caller.fail(node, f"{func.__name__} called with {len(arg_types)} of {len(params)} "
+                    "arguments")  # fmt: skip
+    f = _Function(func, {}, module, c_name, dict(zip(params, arg_types, strict=True)))
+    f.infer(f.node.body)
+    if f.return_type is None:
+        f.fail(f.node, "a function without a return value")
+    body = f.block(f.node.body, 1)
+    ret = f.return_type
+    c_ret = _C_TYPE[ret[0]] if isinstance(ret, tuple) else _C_TYPE[ret]
+    args = ", ".join(f"{_C_TYPE[t]} {p}" for p, t in zip(params, arg_types, strict=True))
+    if isinstance(ret, tuple):  # the other elements through pointers
+        args += "".join(f", {_C_TYPE[t]} *acd_r{k}" for k, t in enumerate(ret) if k > 0)
+    doc = (inspect.getdoc(func) or func.__name__).split("\n")[0].replace("*/", "* /")
+    text = "\n".join([f"/* {f.where}: {doc} */", f"static {c_ret} {c_name}({args})", "{",
+                      *f.declarations(), *body, "}"])  # fmt: skip
+    entry = types.SimpleNamespace(c_name=c_name, text=text, return_type=ret)
+    module.helpers[key] = entry
+    module.order.append(key)
+    return entry
+
+
+def translate_step(kernel, roles: dict[str, Role]) -> Translated:
+    """The C body of a sampled part's step kernel (``step(t, T_s, u, p, s, y)``): ``roles``
+    maps the kernel's array arguments by position name (``u``, ``p``, ``s``, ``y``) to their
+    layouts. Raises ``UnsupportedKernel`` naming the construct."""
+    module = _Module()
+    func = _python_function(kernel)
+    params = list(inspect.signature(func).parameters)
+    if len(params) != 6:
+        raise UnsupportedKernel(f"{func.__module__}.{func.__name__}: a step takes "
+                                "(t, T_s, u, p, s, y)")  # fmt: skip
+    by_name = {params[i]: roles[r] for i, r in ((2, "u"), (3, "p"), (4, "s"), (5, "y"))
+               if r in roles}  # fmt: skip
+    f = _Function(func, by_name, module, "step", is_step=True)
+    for k, standard in ((0, "t"), (1, "T_s")):
+        if params[k] != standard:
+            f.fail(f.node, f"argument {k + 1} named {params[k]!r} (the step's is {standard!r})")
+    f.infer(f.node.body)
+    body = f.block(f.node.body, 1)
+    helpers = [(module.helpers[k].c_name, module.helpers[k].text) for k in module.order]
+    return Translated("\n".join([*f.declarations(), *body]) + "\n", helpers)
+
+
+#: the mixed real and complex operations of the translated kernels (module docstring)
+KERNEL_ARITHMETIC = r"""
+/* -z */
+static inline acd_complex acd_cneg(acd_complex z)
+{
+    return acd_c(-z.re, -z.im);
+}
+
+/* z + r */
+static inline acd_complex acd_caddr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re + r, z.im);
+}
+
+/* z - r */
+static inline acd_complex acd_csubr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re - r, z.im);
+}
+
+/* r - z */
+static inline acd_complex acd_rsubc(ACDRIVE_REAL r, acd_complex z)
+{
+    return acd_c(r - z.re, -z.im);
+}
+
+/* z r */
+static inline acd_complex acd_cmulr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re * r, z.im * r);
+}
+
+/* z / r */
+static inline acd_complex acd_cdivr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re / r, z.im / r);
+}
+"""
+
+
+def _kernel_layouts(cls) -> dict[str, Role]:
+    return {"u": Role(cls.INPUTS, "u"), "p": Role(cls.PARAMS, "p"),
+            "s": Role(cls.STATES, "s"), "y": Role(cls.OUTPUTS, "y")}  # fmt: skip
+
+
+def c_step(cls, source: str):
+    """The ``CStep`` of sampled part class ``cls`` generated from its ``step`` kernel
+    (``translate_step``), ``source`` naming the paper and equations it implements."""
+    from acdrive.sim._ccode._kinds import CStep, CSupport
+    from acdrive.sim._ccode._kinds.common import TABLE_AT
+
+    translated = translate_step(cls.step, _kernel_layouts(cls))
+    helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
+    support = (TABLE_AT, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
+    return CStep(body=translated.body, source=source, support=support, from_kernel=True)

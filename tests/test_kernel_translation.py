@@ -1,0 +1,210 @@
+"""C generated from the part kernels (``sim._ccode._translate``): for every sampled part kind
+whose C is generated from its kernel, the C step and the compiled kernel (as every numba tier
+compiles it: strict arithmetic, acdrive's sin, cos, |z| and sqrt) give the same bits.
+
+Each kind's structs, its generated step and the helpers it calls are compiled as the native tier
+compiles them (``sim._native.NATIVE_CFLAGS``) with a wrapper that reads and writes the kernel's
+flat arrays; both sides then run on the same random draws: parameters, inputs, states and held
+outputs among ordinary values, signed zeros, the "no limit" stand-in 1e300 and values of either
+sign spanning 1e-3 to 1e3, and sample instants that include every table breakpoint exactly.
+
+The translator's refusals are checked too: a construct outside the kernel language is one line
+naming the kernel, its line and the construct.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from acdrive.core._parts import SampledPart
+from acdrive.sim._ccode import _kinds
+from acdrive.sim._ccode._c_source import KindTypes, Member, _step_signature, helpers_of, kind_name
+from acdrive.sim._ccode._c_source import kind_declarations
+from acdrive.sim._ccode._prelude import PRELUDE
+from acdrive.sim._ccode._translate import UnsupportedKernel, translate_step
+from acdrive.sim._kernels import kind_module
+from acdrive.sim._native import NATIVE_CFLAGS
+
+pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
+
+#: points of every table of the test's structs and flat arrays
+POINTS = 4
+DRAWS = 400
+
+
+def generated_kinds() -> list[type]:
+    import acdrive.drives.pm._c_kinds  # noqa: F401 (registers the PM drive's kinds)
+
+    _kinds._load()
+    return sorted((cls for cls, step in _kinds._REGISTRY.items() if step.from_kernel),
+                  key=lambda c: c.__name__)  # fmt: skip
+
+
+def test_the_translated_kinds_are_registered():
+    names = {c.__name__ for c in generated_kinds()}
+    assert {"Encoder", "CurrentSensors", "VoltageSensor", "SpeedReference", "ForcedRelay",
+            "RelayCommand", "SpeedEstimator", "IndirectFOC", "SpeedPI", "SaturatedSpeedP",
+            "PositionP", "CarrierLatch"} <= names  # fmt: skip
+
+
+_ROLES = (("in", "INPUTS", "u"), ("params", "PARAMS", "p"), ("state", "STATES", "s"),
+          ("out", "OUTPUTS", "y"))  # fmt: skip
+
+
+def _members(layout) -> list[Member]:
+    return [Member(v.name, ("table", POINTS) if v.kind == "table" else v.kind) for v in layout]
+
+
+def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]:
+    """C lines copying between a flat array (the kernel's) and a struct (the C step's)."""
+    lines = []
+    for v in layout:
+        if v.kind == "table":
+            continue
+        k = layout.slot(v.name)
+        parts = [(f"{struct}.{v.name}.re", k), (f"{struct}.{v.name}.im", k + 1)] if (
+            v.kind == "complex") else [(f"{struct}.{v.name}", k)]  # fmt: skip
+        for member, slot in parts:
+            lines.append(f"    {member} = {array}[{slot}];" if into_struct
+                         else f"    {array}[{slot}] = {member};")  # fmt: skip
+    offset = layout.table_start
+    for v in layout.tables:
+        if into_struct:
+            lines += [f"    {struct}.{v.name}.n = (int){array}[{offset}];",
+                      f"    for (i = 0; i < {POINTS}; ++i) {{",
+                      f"        {struct}.{v.name}.t[i] = {array}[{offset} + 1 + i];",
+                      f"        {struct}.{v.name}.v[i] = {array}[{offset} + 1 + {POINTS} + i];",
+                      "    }"]  # fmt: skip
+        offset += 1 + 2 * POINTS
+    return lines
+
+
+def c_library(cls, folder):
+    """The kind's generated C step with a flat-array wrapper ``run``, compiled."""
+    step = _kinds._REGISTRY[cls]
+    entry = KindTypes(cls, kind_name(cls), step, step.body)
+    for role, attr, _ in _ROLES:
+        entry.members[role] = _members(getattr(cls, attr))
+    kinds = {cls: entry}
+    code = [_step_signature(entry), "{", "    (void)t;", "    (void)T_s;", step.body, "}"]
+    wrapper = ["uint32_t run(double t, double T_s, const double *u, const double *p, double *s, "
+               "double *y)", "{", "    int i = 0;", "    uint32_t events;"]  # fmt: skip
+    args = ["t", "T_s"]
+    for role, attr, arg in _ROLES:
+        layout = getattr(cls, attr)
+        if not entry.members[role]:
+            continue
+        wrapper.append(f"    acd_{entry.cname}_{role} {arg.upper()};")
+        args.append(f"&{arg.upper()}")
+    for role, attr, arg in _ROLES:
+        if entry.members[role]:
+            wrapper += _copy_lines(getattr(cls, attr), arg.upper(), arg, True)
+    wrapper.append(f"    events = acd_{entry.cname}_step({', '.join(args)});")
+    for role, attr, arg in _ROLES[2:]:
+        if entry.members[role]:
+            wrapper += _copy_lines(getattr(cls, attr), arg.upper(), arg, False)
+    wrapper += ["    (void)i;", "    return events;", "}"]
+    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
+                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
+    path = folder / f"{entry.cname}.c"
+    path.write_text(source)
+    library = folder / f"lib{entry.cname}.so"
+    done = subprocess.run(["gcc", *NATIVE_CFLAGS, "-o", str(library), str(path), "-lm"],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lib = ctypes.CDLL(str(library))
+    pointer = ctypes.POINTER(ctypes.c_double)
+    lib.run.argtypes = [ctypes.c_double, ctypes.c_double, pointer, pointer, pointer, pointer]
+    lib.run.restype = ctypes.c_uint32
+    return lib.run
+
+
+SPECIAL = np.array([0.0, -0.0, 1e300, -1e300, 1.0, -1.0, 0.5, 2.0])
+
+
+def _values(rng, n: int) -> np.ndarray:
+    out = np.exp(rng.uniform(np.log(1e-3), np.log(1e3), n)) * rng.choice([-1.0, 1.0], n)
+    special = rng.random(n) < 0.15
+    out[special] = rng.choice(SPECIAL, int(special.sum()))
+    return out
+
+
+def _flat(rng, layout) -> tuple[np.ndarray, list[float]]:
+    """A flat array of ``layout`` (tables of POINTS sorted times) and the table times."""
+    fixed = _values(rng, layout.fixed_size)
+    times, tables = [], []
+    for _ in layout.tables:
+        t = np.sort(rng.uniform(0.0, 1.0, POINTS))
+        t[2] = t[1]  # a vertical step
+        tables += [np.array([float(POINTS)]), t, _values(rng, POINTS)]
+        times += list(t)
+    return np.concatenate([fixed, *tables]) if tables else fixed, times
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    both_nan = np.isnan(a) & np.isnan(b)
+    return bool(np.all(both_nan | (a.view(np.int64) == b.view(np.int64))))
+
+
+@pytest.mark.parametrize("cls", generated_kinds(), ids=lambda c: c.__name__)
+def test_generated_c_equals_the_compiled_kernel_bit_for_bit(cls, tmp_path):
+    run_c = c_library(cls, tmp_path)
+    kernel = kind_module(cls).step
+    rng = np.random.default_rng(sum(map(ord, cls.__name__)))
+    T_s = 1e-4
+    for draw in range(DRAWS):
+        p, times = _flat(rng, cls.PARAMS)
+        u, _ = _flat(rng, cls.INPUTS)
+        s, _ = _flat(rng, cls.STATES)
+        y, _ = _flat(rng, cls.OUTPUTS)
+        t = times[draw % len(times)] if times and draw % 2 else float(rng.uniform(0.0, 1.2))
+        s_c, y_c = s.copy(), y.copy()
+        events = kernel(t, T_s, u, p, s, y)
+        as_pointer = (lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        events_c = run_c(t, T_s, as_pointer(u), as_pointer(p), as_pointer(s_c), as_pointer(y_c))
+        assert events_c == events, (draw, events, events_c)
+        assert _same(s, s_c), (draw, s, s_c)
+        assert _same(y, y_c), (draw, y, y_c)
+
+
+def _kernel(source: str):
+    namespace: dict = {"np": np}
+    exec(compile(source, "<kernel>", "exec"), namespace)  # noqa: S102 (a test's own kernel)
+    return namespace["step"]
+
+
+@pytest.mark.parametrize(("body", "construct"), [
+    ("    while t > 0.0:\n        t -= 1.0\n    return 0\n", "statement While"),
+    ("    y[0] = u[0] ** 2\n    return 0\n", "operator Pow"),
+    ("    y[0] = np.tanh(u[0])\n    return 0\n", "library function tanh"),
+    ("    k = int(u[0])\n    y[0] = u[k]\n    return 0\n", "not a constant of the module"),
+])  # fmt: skip
+def test_a_construct_outside_the_language_names_kernel_line_and_construct(body, construct):
+    from acdrive.core._signals import Layout, real
+
+    import linecache
+
+    source = "def step(t, T_s, u, p, s, y):\n" + body
+    linecache.cache["<kernel>"] = (len(source), None, source.splitlines(True), "<kernel>")
+    roles = {"u": _Role(Layout(real("a", "", "input a"), real("b", "", "input b"))),
+             "y": _Role(Layout(real("c", "", "output c")))}  # fmt: skip
+    with pytest.raises(UnsupportedKernel) as exc:
+        translate_step(_kernel(source), roles)
+    message = str(exc.value)
+    assert message.startswith("__main__.step (line ") or ".step (line " in message
+    assert construct in message and "\n" not in message
+
+
+def _Role(layout):  # noqa: N802 (a stand-in constructor)
+    from acdrive.sim._ccode._translate import Role
+
+    return Role(layout, "x")
+
+
+def test_only_sampled_parts_are_translated():
+    assert all(issubclass(c, SampledPart) for c in generated_kinds())
