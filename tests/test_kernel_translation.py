@@ -180,7 +180,7 @@ def _kernel(source: str):
 
 @pytest.mark.parametrize(("body", "construct"), [
     ("    while t > 0.0:\n        t -= 1.0\n    return 0\n", "statement While"),
-    ("    y[0] = u[0] ** 2\n    return 0\n", "operator Pow"),
+    ("    y[0] = u[0] ** 3\n    return 0\n", "operator Pow"),
     ("    y[0] = np.tanh(u[0])\n    return 0\n", "library function tanh"),
     ("    k = int(u[0])\n    y[0] = u[k]\n    return 0\n", "not a constant of the module"),
 ])  # fmt: skip

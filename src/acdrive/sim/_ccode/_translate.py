@@ -24,11 +24,10 @@ Rounding follows the compiled tiers operation for operation: the same operations
 order; Python's ``%`` by ``acd_pymod``; ``np.sin``, ``np.cos``, ``np.sqrt`` and ``np.abs`` of a
 complex number by acdrive's own functions (``sim._lane_math``, the C's ``ACD_SIN``, ``ACD_COS``,
 ``ACD_SQRT``, ``acd_cabs``), which the loops rebind numpy's to; complex products and quotients
-as ``acd_cmul``/``acd_cdiv`` (numba's formulas). A real mixed with a complex number acts on
-each part (``r z = (r z.re, r z.im)``, ``z + r = (z.re + r, z.im)``): numba promotes the real to
-``r + 0j`` and, with its default fast-math flags (no NaN, no infinity, no signed zero), folds
-the products and sums with that zero to exactly these; with ``ACDRIVE_STRICT_MATH=1`` the two
-differ at most in the sign of a zero.
+as ``acd_cmul``/``acd_cdiv`` (numba's formulas). A real mixed with a complex number is promoted
+to ``r + 0j`` first, as numba does, and the complex operation follows: a sampled step is
+compiled without fast-math in every tier, so the products and sums with that zero are kept
+(they decide the sign of a zero result).
 
 A construct outside the language is an ``UnsupportedKernel`` naming the kernel, the line and
 the construct.
@@ -137,6 +136,7 @@ class _Function:
         self.arg_types = dict(arg_types or {})
         self.types: dict[str, str] = dict(self.arg_types)
         self.constants: dict[str, int] = {}  # loop variables of unrolled loops
+        self.tables: dict[str, str] = {}  # locals holding a table (table_offset): its name
         self.return_type = None
         self.temp = 0
 
@@ -251,6 +251,9 @@ class _Function:
         return self.unify(node, a, b)
 
     def _assign_type(self, target, value, stmt):
+        if isinstance(target, ast.Name) and isinstance(value, tuple) and value[:1] == ("table",):
+            self.tables[target.id] = value[1]
+            return
         if isinstance(target, ast.Name):
             if isinstance(value, tuple):
                 self.fail(stmt, "a tuple kept in one variable")
@@ -349,6 +352,10 @@ class _Function:
             if REAL in (ta, tb):
                 return f"acd_pymod({a}, {b})", REAL
             self.fail(node, "% of two integers")
+        if op is ast.Pow:
+            if self.constant(node.right) != 2 or ta != REAL:
+                self.fail(node, "the operator Pow other than a real squared (x ** 2)")
+            return f"({a} * {a})", REAL  # numba: a constant integer power by multiplication
         symbol = {ast.Add: "+", ast.Sub: "-", ast.Mult: "*", ast.BitOr: "|",
                   ast.BitAnd: "&"}.get(op)  # fmt: skip
         if symbol is None:
@@ -365,21 +372,12 @@ class _Function:
             if name is None:
                 self.fail(node, f"the operator {op.__name__} on complex numbers")
             return f"{name}({a}, {b})", COMPLEX
-        if ta == COMPLEX:  # complex op real
-            name = {ast.Add: "acd_caddr", ast.Sub: "acd_csubr", ast.Mult: "acd_cmulr",
-                    ast.Div: "acd_cdivr"}.get(op)  # fmt: skip
-            if name is None:
-                self.fail(node, f"the operator {op.__name__} on complex numbers")
-            return f"{name}({a}, {b})", COMPLEX
-        if op is ast.Mult:
-            return f"acd_cscale({a}, {b})", COMPLEX
-        if op is ast.Add:
-            return f"acd_caddr({b}, {a})", COMPLEX
-        if op is ast.Sub:
-            return f"acd_rsubc({a}, {b})", COMPLEX
-        if op is ast.Div:
-            return f"acd_cdiv(acd_c({a}, ACD_R(0.0)), {b})", COMPLEX
-        self.fail(node, f"the operator {op.__name__} on complex numbers")
+        # a real operand promoted to r + 0j (module docstring), then the complex operation
+        if ta != COMPLEX:
+            a = f"acd_c({self.as_real(a, ta)}, ACD_R(0.0))"
+        if tb != COMPLEX:
+            b = f"acd_c({self.as_real(b, tb)}, ACD_R(0.0))"
+        return self._complex_op(node, op, a, COMPLEX, b, COMPLEX)
 
     def _Compare(self, node):
         symbols = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==",
@@ -433,6 +431,11 @@ class _Function:
             target = self.globals.get(name, getattr(__builtins__, name, None)
                                       if not isinstance(__builtins__, dict)
                                       else __builtins__.get(name))  # fmt: skip
+        elif isinstance(func, ast.Attribute) and func.attr == "conjugate" and not node.args:
+            text, t = self.expr(func.value)
+            if t != COMPLEX:
+                self.fail(node, f".conjugate() of a {t}")
+            return f"acd_conj({text})", COMPLEX
         elif isinstance(func, ast.Attribute):
             owner = func.value.id if isinstance(func.value, ast.Name) else None
             module = self.globals.get(owner) if owner else None
@@ -450,6 +453,8 @@ class _Function:
 
         if target is _tables.table_at:
             return self._table_at(node)
+        if target is _tables.table_offset:
+            return self._table_offset(node)
         args = [self.expr(a) for a in node.args]
         if name in ("abs", "min", "max", "complex", "float", "int") and target in (
             abs, min, max, complex, float, int
@@ -468,6 +473,8 @@ class _Function:
             return f"ACD_FABS({self.as_real(text, t)})", REAL
         if name == "conj" and len(args) == 1 and args[0][1] == COMPLEX:
             return f"acd_conj({args[0][0]})", COMPLEX
+        if name == "angle" and len(args) == 1 and args[0][1] == COMPLEX:
+            return f"acd_carg({args[0][0]})", REAL
         if name in _REAL_FUNCTIONS:
             want = 2 if name in _TWO_ARGUMENTS else 1
             if len(args) != want or any(t not in (REAL, INT) for _, t in args):
@@ -499,17 +506,42 @@ class _Function:
             return f"((int)({args[0][0]}))", INT
         self.fail(node, f"{name} with {len(args)} argument(s)")
 
-    def _table_at(self, node):
-        if len(node.args) != 3 or not isinstance(node.args[0], ast.Name):
-            self.fail(node, "table_at other than table_at(p, SLOT, t)")
-        role = self.roles.get(node.args[0].id)
-        start = self.constant(node.args[1])
-        tables = [v for v in role.layout if v.kind == "table"] if role else []
+    def _table(self, node, array, where) -> tuple[Role, str]:
+        """(role, table name) of a table argument: the first table's start slot, a local
+        holding a ``table_offset``, or a ``table_offset`` call."""
+        role = self.roles.get(array.id) if isinstance(array, ast.Name) else None
+        if role is None:
+            self.fail(node, f"{where} of other than one of the kernel's arrays")
+        if isinstance(where_node := node.args[1], ast.Name) and where_node.id in self.tables:
+            return role, self.tables[where_node.id]
+        if isinstance(where_node, ast.Call):
+            text, t = self.expr(where_node)
+            if isinstance(t, tuple) and t[0] == "table":
+                return role, t[1]
+        start = self.constant(where_node)
+        tables = role.layout.tables
         if not tables or start != role.layout.table_start:
-            self.fail(node, "table_at of other than the first table of a role's layout")
+            self.fail(node, f"{where} of other than a table of the kernel's layouts")
+        return role, tables[0].name
+
+    def _table_at(self, node):
+        if len(node.args) != 3:
+            self.fail(node, "table_at other than table_at(p, TABLE, t)")
+        role, name = self._table(node, node.args[0], "table_at")
         t, tt = self.expr(node.args[2])
-        v = f"{role.name}->{tables[0].name}"
+        v = f"{role.name}->{name}"
         return f"acd_table_at({v}.n, {v}.t, {v}.v, {self.as_real(t, tt)})", REAL
+
+    def _table_offset(self, node):
+        """``table_offset(p, START, k)``: table k of the layout (a name, no C)."""
+        if len(node.args) != 3 or not isinstance(node.args[0], ast.Name):
+            self.fail(node, "table_offset other than table_offset(p, START, k)")
+        role = self.roles.get(node.args[0].id)
+        k = self.constant(node.args[2])
+        if (role is None or self.constant(node.args[1]) != role.layout.table_start
+                or not isinstance(k, int) or not 0 <= k < len(role.layout.tables)):  # fmt: skip
+            self.fail(node, "table_offset of other than a table of the kernel's layouts")
+        return "", ("table", role.layout.tables[k].name)
 
     def _helper_call(self, node, target, args):
         for text, t in args:
@@ -584,6 +616,8 @@ class _Function:
         if len(stmt.targets) != 1:
             self.fail(stmt, "a chained assignment a = b = c")
         target = stmt.targets[0]
+        if isinstance(target, ast.Name) and target.id in self.tables:
+            return []  # a table's name: nothing to compute
         if not isinstance(target, ast.Tuple):
             lvalue, lt = self.lvalue(target)
             value, vt = self.expr(stmt.value)
@@ -711,36 +745,6 @@ KERNEL_ARITHMETIC = r"""
 static inline acd_complex acd_cneg(acd_complex z)
 {
     return acd_c(-z.re, -z.im);
-}
-
-/* z + r */
-static inline acd_complex acd_caddr(acd_complex z, ACDRIVE_REAL r)
-{
-    return acd_c(z.re + r, z.im);
-}
-
-/* z - r */
-static inline acd_complex acd_csubr(acd_complex z, ACDRIVE_REAL r)
-{
-    return acd_c(z.re - r, z.im);
-}
-
-/* r - z */
-static inline acd_complex acd_rsubc(ACDRIVE_REAL r, acd_complex z)
-{
-    return acd_c(r - z.re, -z.im);
-}
-
-/* z r */
-static inline acd_complex acd_cmulr(acd_complex z, ACDRIVE_REAL r)
-{
-    return acd_c(z.re * r, z.im * r);
-}
-
-/* z / r */
-static inline acd_complex acd_cdivr(acd_complex z, ACDRIVE_REAL r)
-{
-    return acd_c(z.re / r, z.im / r);
 }
 """
 

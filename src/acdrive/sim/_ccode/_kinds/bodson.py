@@ -184,22 +184,9 @@ register(
 
 register(
     SupplyFrequencyEstimator,
-    CStep(
+    c_step(
+        SupplyFrequencyEstimator,
         source="supply frequency from the grid voltage's phase advance per sample, filtered",
-        body=r"""
-    acd_complex v_g = u->v_g;
-    if (s->started == ACD_R(0.0)) {
-        s->started = ACD_R(1.0);
-        s->w_e = p->w_nominal;
-    } else if (acd_cabs(v_g) > p->v_min) {
-        /* phase advance over one sample: angle of v_g(k) v_g(k-1)* */
-        ACDRIVE_REAL w_raw = acd_carg(acd_cmul(v_g, acd_conj(s->v_prev))) / T_s;
-        s->w_e += T_s / (p->tau + T_s) * (w_raw - s->w_e);
-    }
-    s->v_prev = v_g;
-    y->w_e = s->w_e;
-    return 0u;
-""",
     ),
 )
 

@@ -6,7 +6,6 @@ kernel line for line."""
 
 from __future__ import annotations
 
-from acdrive._frames import K_PEAK
 from acdrive.control._current import CurrentProgram
 from acdrive.control._delay import ComputationDelay
 from acdrive.control._open_loop import ComplexProgram, VoltageProgram
@@ -15,7 +14,6 @@ from acdrive.plant._network import ForcedRelay, RelayCommand
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
 from acdrive.sim._ccode._translate import c_step
 from acdrive.sim._ccode._kinds import CStep, register
-from acdrive.sim._ccode._kinds.common import TABLE_AT
 
 register(
     Encoder,
@@ -71,13 +69,9 @@ register(
 
 register(
     CurrentProgram,
-    CStep(
+    c_step(
+        CurrentProgram,
         source="a complex current from two piecewise-linear tables (control._current)",
-        body=r"""
-    y->i = acd_c(acd_table_at(p->re.n, p->re.t, p->re.v, t), acd_table_at(p->im.n, p->im.t, p->im.v, t));
-    return 0u;
-""",
-        support=(TABLE_AT,),
     ),
 )
 
@@ -91,34 +85,17 @@ register(
 
 register(
     VoltageProgram,
-    CStep(
+    c_step(
+        VoltageProgram,
         source="open-loop three-phase voltage program, Bodson (8) scaling "
         "(control._open_loop.program_step)",
-        body=rf"""
-    if (s->started != ACD_R(0.0)) {{
-        ACDRIVE_REAL f_mean = ACD_R(0.5) * (acd_table_at(p->f.n, p->f.t, p->f.v, s->t_prev)
-                                            + acd_table_at(p->f.n, p->f.t, p->f.v, t));
-        s->theta += ACD_R(2.0) * ACD_PI * f_mean * (t - s->t_prev);
-    }}
-    s->t_prev = t;
-    s->started = ACD_R(1.0);
-    y->v_ref = acd_cscale(ACD_R({K_PEAK!r}) * acd_table_at(p->V_pk.n, p->V_pk.t, p->V_pk.v, t),
-                          acd_c(ACD_COS(s->theta), ACD_SIN(s->theta)));
-    return 0u;
-""",
-        support=(TABLE_AT,),
     ),
 )
 
 register(
     ComplexProgram,
-    CStep(
+    c_step(
+        ComplexProgram,
         source="a complex command from two tables (control._open_loop.complex_program_step)",
-        body=r"""
-    y->v_ref.re = acd_table_at(p->re.n, p->re.t, p->re.v, t);
-    y->v_ref.im = acd_table_at(p->im.n, p->im.t, p->im.v, t);
-    return 0u;
-""",
-        support=(TABLE_AT,),
     ),
 )
