@@ -45,11 +45,36 @@ def generated_kinds() -> list[type]:
                   key=lambda c: c.__name__)  # fmt: skip
 
 
+def _instances() -> list:
+    """Parts of the kinds whose layouts are set per instance (``PER_INSTANCE``): each form
+    their structure takes."""
+    from acdrive.control._current import StationaryCurrentController
+    from acdrive.control._delay import ComputationDelay
+    from acdrive.control._lti import LTI
+
+    pi, lag = LTI.pi(2.0, 300.0), LTI.pi_lag(3.0, 100.0, [500.0], [2000.0])
+    return [ComputationDelay("delay"), ComputationDelay("delay", unit="A", kind="real"),
+            StationaryCurrentController("pi", pi, T_s=1e-4),
+            StationaryCurrentController("pi_dc", pi, T_s=1e-4, v_dc_input=True),
+            StationaryCurrentController("lag", lag, T_s=1e-4, aw_gain=0.0, v_max=50.0)]  # fmt: skip
+
+
+def cases() -> list:
+    """(kind, part or None): a class-level kind once, a per-instance kind per instance."""
+    out = [(cls, None) for cls in generated_kinds() if not getattr(cls, "PER_INSTANCE", None)]
+    return out + [(type(part), part) for part in _instances()]
+
+
 def test_the_translated_kinds_are_registered():
     names = {c.__name__ for c in generated_kinds()}
     assert {"Encoder", "CurrentSensors", "VoltageSensor", "SpeedReference", "ForcedRelay",
             "RelayCommand", "SpeedEstimator", "IndirectFOC", "SpeedPI", "SaturatedSpeedP",
-            "PositionP", "CarrierLatch"} <= names  # fmt: skip
+            "PositionP", "CarrierLatch", "SupplyFrequencyEstimator", "Synchroniser",
+            "SpeedController", "CurrentProgram", "VoltageProgram", "ComplexProgram",
+            "ComputationDelay", "StationaryCurrentController", "PMTorqueReference",
+            "PMSpeedPI", "RotorFrameCurrentController"} <= names  # fmt: skip
+    per_instance = {c for c in generated_kinds() if getattr(c, "PER_INSTANCE", None)}
+    assert per_instance <= {type(part) for part in _instances()}  # each one is exercised
 
 
 _ROLES = (("in", "INPUTS", "u"), ("params", "PARAMS", "p"), ("state", "STATES", "s"),
@@ -84,30 +109,33 @@ def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]
     return lines
 
 
-def c_library(cls, folder):
-    """The kind's generated C step with a flat-array wrapper ``run``, compiled."""
+def c_library(cls, part, folder):
+    """The kind's generated C step (for ``part``, a per-instance kind) with a flat-array
+    wrapper ``run``, compiled."""
     step = _kinds._REGISTRY[cls]
-    entry = KindTypes(cls, kind_name(cls), step, step.body)
+    of = part if part is not None else cls
+    body = step.body(part) if callable(step.body) else step.body
+    support = step.support(part) if callable(step.support) else step.support
+    entry = KindTypes(cls, kind_name(cls), step, body, support=support)
     for role, attr, _ in _ROLES:
-        entry.members[role] = _members(getattr(cls, attr))
+        entry.members[role] = _members(getattr(of, attr))
     kinds = {cls: entry}
-    code = [_step_signature(entry), "{", "    (void)t;", "    (void)T_s;", step.body, "}"]
+    code = [_step_signature(entry), "{", "    (void)t;", "    (void)T_s;", body, "}"]
     wrapper = ["uint32_t run(double t, double T_s, const double *u, const double *p, double *s, "
                "double *y)", "{", "    int i = 0;", "    uint32_t events;"]  # fmt: skip
     args = ["t", "T_s"]
     for role, attr, arg in _ROLES:
-        layout = getattr(cls, attr)
         if not entry.members[role]:
             continue
         wrapper.append(f"    acd_{entry.cname}_{role} {arg.upper()};")
         args.append(f"&{arg.upper()}")
     for role, attr, arg in _ROLES:
         if entry.members[role]:
-            wrapper += _copy_lines(getattr(cls, attr), arg.upper(), arg, True)
+            wrapper += _copy_lines(getattr(of, attr), arg.upper(), arg, True)
     wrapper.append(f"    events = acd_{entry.cname}_step({', '.join(args)});")
     for role, attr, arg in _ROLES[2:]:
         if entry.members[role]:
-            wrapper += _copy_lines(getattr(cls, attr), arg.upper(), arg, False)
+            wrapper += _copy_lines(getattr(of, attr), arg.upper(), arg, False)
     wrapper += ["    (void)i;", "    return events;", "}"]
     source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
                         *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
@@ -151,17 +179,22 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(both_nan | (a.view(np.int64) == b.view(np.int64))))
 
 
-@pytest.mark.parametrize("cls", generated_kinds(), ids=lambda c: c.__name__)
-def test_generated_c_equals_the_compiled_kernel_bit_for_bit(cls, tmp_path):
-    run_c = c_library(cls, tmp_path)
+@pytest.mark.parametrize(("cls", "part"), cases(),
+                         ids=lambda c: c.__name__ if isinstance(c, type) else getattr(c, "name", ""))  # fmt: skip
+def test_generated_c_equals_the_compiled_kernel_bit_for_bit(cls, part, tmp_path):
+    run_c = c_library(cls, part, tmp_path)
     kernel = kind_module(cls).step
-    rng = np.random.default_rng(sum(map(ord, cls.__name__)))
+    of = part if part is not None else cls
+    rng = np.random.default_rng(sum(map(ord, cls.__name__ + getattr(part, "name", ""))))
+    structural = {of.PARAMS.slot(n) for n in getattr(cls, "STRUCTURAL", ())}
     T_s = 1e-4
     for draw in range(DRAWS):
-        p, times = _flat(rng, cls.PARAMS)
-        u, _ = _flat(rng, cls.INPUTS)
-        s, _ = _flat(rng, cls.STATES)
-        y, _ = _flat(rng, cls.OUTPUTS)
+        p, times = _flat(rng, of.PARAMS)
+        for k in structural:  # the instance's structure, which its C is written for
+            p[k] = part.p[k]
+        u, _ = _flat(rng, of.INPUTS)
+        s, _ = _flat(rng, of.STATES)
+        y, _ = _flat(rng, of.OUTPUTS)
         t = times[draw % len(times)] if times and draw % 2 else float(rng.uniform(0.0, 1.2))
         s_c, y_c = s.copy(), y.copy()
         events = kernel(t, T_s, u, p, s, y)
@@ -208,3 +241,17 @@ def _Role(layout):  # noqa: N802 (a stand-in constructor)
 
 def test_only_sampled_parts_are_translated():
     assert all(issubclass(c, SampledPart) for c in generated_kinds())
+
+
+def test_the_current_controller_is_written_for_its_order():
+    """Per instance: a controller of order n names its states x_0 to x_{n-1} (the PI on both
+    axes is of order 2, the PI x lag of order 4); the v_dc input appears only in the instance
+    that has it."""
+    from acdrive.sim._ccode._translate import translate_part
+
+    pi, pi_dc, lag = _instances()[2:]
+    assert (pi.discrete.order, lag.discrete.order) == (2, 4)
+    for part in (pi, lag):
+        n, body = part.discrete.order, translate_part(part).body
+        assert f"s->x_{n - 1}" in body and f"s->x_{n}" not in body
+    assert "u->v_dc" in translate_part(pi_dc).body and "u->v_dc" not in translate_part(pi).body

@@ -63,6 +63,9 @@ class KindTypes:
     step: CStep
     body: str = ""
     members: dict = field(default_factory=dict)  # role -> [Member]
+    #: the support pieces the body calls (``CStep.support``, or its value for the first part
+    #: of a kind whose C is set per instance)
+    support: tuple = ()
 
 
 def literal(value: float, where: str) -> str:
@@ -98,7 +101,8 @@ def kind_types(parts, lookup=c_step_of) -> dict[type, KindTypes]:
         step = lookup(part)
         body = step.body(part) if callable(step.body) else step.body
         if cls not in kinds:
-            kinds[cls] = KindTypes(cls, kind_name(cls), step, body)
+            support = step.support(part) if callable(step.support) else step.support
+            kinds[cls] = KindTypes(cls, kind_name(cls), step, body, support=support)
         entry = kinds[cls]
         if body != entry.body:
             raise InputError(
@@ -173,7 +177,7 @@ def _support_order(kinds, extra: tuple[CSupport, ...] = ()) -> list[CSupport]:
         order.append(support)
 
     for entry in kinds.values():
-        for support in entry.step.support:
+        for support in entry.support:
             visit(support)
     for support in extra:
         visit(support)

@@ -66,10 +66,18 @@ class UnsupportedKernel(Exception):  # noqa: N818 (a reason, raised to the calle
 
 @dataclass
 class Role:
-    """An array argument of a kernel: its layout and its C name (``u``, ``p``, ``s``, ``y``)."""
+    """An array argument of a kernel: its layout and its C name (``u``, ``p``, ``s``, ``y``);
+    ``struct``, ``const`` and ``kind``: its C struct type, whether the step reads it only, and
+    the kind's C name (for a helper that takes the array); ``structural``: the instance's
+    values of the quantities its class names in ``STRUCTURAL`` (the C is written for them)."""
 
     layout: object
     name: str
+    struct: str = ""
+    const: bool = False
+    kind: str = ""
+    #: slot -> value of the quantities that set a per-instance kind's structure (``STRUCTURAL``)
+    structural: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -165,6 +173,31 @@ class _Function:
             if isinstance(value, (int, float)) and not isinstance(value, bool):
                 return value
             return None
+        if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name):
+            role = self.roles.get(node.value.id)
+            k = self.constant(node.slice)
+            if role is not None and isinstance(k, int) and k in role.structural:
+                return role.structural[k]
+            return None
+        if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Attribute)
+                and node.value.attr == "shape" and isinstance(node.value.value, ast.Name)
+                and node.value.value.id in self.roles and self.constant(node.slice) == 0):  # fmt: skip
+            layout = self.roles[node.value.value.id].layout
+            return None if layout.tables else layout.fixed_size
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                and node.func.id in ("int", "float") and len(node.args) == 1
+                and node.func.id not in self.globals):  # fmt: skip
+            value = self.constant(node.args[0])
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                return int(value) if node.func.id == "int" else float(value)
+            return None
+        if isinstance(node, ast.Compare) and len(node.ops) == 1:
+            a, b = self.constant(node.left), self.constant(node.comparators[0])
+            ops = {ast.Lt: float.__lt__, ast.LtE: float.__le__, ast.Gt: float.__gt__,
+                   ast.GtE: float.__ge__, ast.Eq: float.__eq__, ast.NotEq: float.__ne__}  # fmt: skip
+            if a is None or b is None or type(node.ops[0]) not in ops:
+                return None
+            return bool(ops[type(node.ops[0])](float(a), float(b)))
         if isinstance(node, ast.BinOp):
             a, b = self.constant(node.left), self.constant(node.right)
             if isinstance(a, int) and isinstance(b, int):
@@ -214,13 +247,26 @@ class _Function:
         self.fail(node, f"a variable given both a {a} and a {b} value")
 
     def infer(self, body: list) -> None:
-        """Types of every local (two passes: a loop may read a later assignment)."""
+        """Types of every local (two passes: a loop may read a later assignment). A local
+        assigned once, at the top level, to an integer constant (a slot computed from others,
+        an order) is that constant, not a variable."""
+        stores = [n.id for n in ast.walk(self.node) if isinstance(n, ast.Name)
+                  and isinstance(n.ctx, ast.Store)]  # fmt: skip
+        for stmt in body:
+            if (isinstance(stmt, ast.Assign) and len(stmt.targets) == 1
+                    and isinstance(stmt.targets[0], ast.Name)
+                    and stores.count(stmt.targets[0].id) == 1):  # fmt: skip
+                k = self.constant(stmt.value)
+                if isinstance(k, int) and not isinstance(k, bool):
+                    self.constants[stmt.targets[0].id] = k
         for _ in range(2):
             self._infer_block(body)
 
     def _infer_block(self, body):
         for stmt in body:
             if isinstance(stmt, ast.Assign):
+                if self._is_local_constant(stmt):
+                    continue
                 value = self.type_of(stmt.value)
                 for target in stmt.targets:
                     self._assign_type(target, value, stmt)
@@ -231,8 +277,11 @@ class _Function:
                         stmt, self.types.get(stmt.target.id), value
                     )
             elif isinstance(stmt, ast.If):
-                self._infer_block(stmt.body)
-                self._infer_block(stmt.orelse)
+                k = self.constant(stmt.test)
+                if k is None or k:
+                    self._infer_block(stmt.body)
+                if k is None or not k:
+                    self._infer_block(stmt.orelse)
             elif isinstance(stmt, ast.For):
                 n = self._range_of(stmt)
                 name = stmt.target.id
@@ -244,6 +293,10 @@ class _Function:
                 t = self.type_of(stmt.value)
                 self.return_type = t if self.return_type is None else self._unify_return(
                     stmt, self.return_type, t)  # fmt: skip
+
+    def _is_local_constant(self, stmt) -> bool:
+        target = stmt.targets[0]
+        return isinstance(target, ast.Name) and target.id in self.constants
 
     def _unify_return(self, node, a, b):
         if isinstance(a, tuple) and isinstance(b, tuple) and len(a) == len(b):
@@ -299,6 +352,11 @@ class _Function:
         if method is None:
             self.fail(node, f"the expression {type(node).__name__}")
         return method(node)
+
+    def _Constant(self, node):
+        if isinstance(node.value, complex):
+            return f"acd_c({c_literal(node.value.real)}, {c_literal(node.value.imag)})", COMPLEX
+        self.fail(node, f"the constant {node.value!r}")
 
     def _Name(self, node):
         if node.id in self.types:
@@ -455,13 +513,13 @@ class _Function:
             return self._table_at(node)
         if target is _tables.table_offset:
             return self._table_offset(node)
+        if target is not None and _is_kernel_function(target):
+            return self._helper_call(node, target)
         args = [self.expr(a) for a in node.args]
         if name in ("abs", "min", "max", "complex", "float", "int") and target in (
             abs, min, max, complex, float, int
         ):
             return self._builtin(node, name, args)
-        if target is not None and _is_kernel_function(target):
-            return self._helper_call(node, target, args)
         self.fail(node, f"the call {name}(...)")
 
     def _library_call(self, node, name):
@@ -543,14 +601,26 @@ class _Function:
             self.fail(node, "table_offset of other than a table of the kernel's layouts")
         return "", ("table", role.layout.tables[k].name)
 
-    def _helper_call(self, node, target, args):
-        for text, t in args:
-            if isinstance(t, tuple):
-                self.fail(node, "a tuple passed to a function")
-        arg_types = tuple(t for _, t in args)
-        helper = _helper(self.module, target, arg_types, node, self)
-        call = f"{helper.c_name}({', '.join(x for x, _ in args)})"
-        return call, helper.return_type
+    def _helper_call(self, node, target):
+        """A call of another kernel-language function. An array argument passes the struct
+        (the helper is written for this kind's struct); with one, an integer constant argument
+        (a slot) is bound inside the helper, which is written for that value."""
+        roles = [self.roles.get(a.id) if isinstance(a, ast.Name) else None for a in node.args]
+        args = []
+        for a, role in zip(node.args, roles, strict=True):
+            k = self.constant(a)
+            if role is not None:
+                args.append((role.name, ("role", role)))
+            elif any(roles) and isinstance(k, int) and not isinstance(k, bool):
+                args.append(("", ("const", k)))
+            else:
+                text, t = self.expr(a)
+                if isinstance(t, tuple):
+                    self.fail(node, "a tuple passed to a function")
+                args.append((text, t))
+        helper = _helper(self.module, target, tuple(t for _, t in args), node, self)
+        passed = [x for x, t in args if not (isinstance(t, tuple) and t[0] == "const")]
+        return f"{helper.c_name}({', '.join(passed)})", helper.return_type
 
     # --- statements -------------------------------------------------------------------------
 
@@ -567,6 +637,11 @@ class _Function:
                 continue  # a docstring
             if isinstance(stmt, ast.Pass):
                 continue
+            if isinstance(stmt, ast.Expr) and isinstance(stmt.value, ast.Call):
+                text, _ = self.expr(stmt.value)
+                lines.append(f"{pad}(void){text};" if self._returns_value(text) else
+                             f"{pad}{text};")  # fmt: skip
+                continue
             if isinstance(stmt, ast.Assign):
                 lines += self.assign(stmt, pad)
             elif isinstance(stmt, ast.AugAssign):
@@ -575,6 +650,9 @@ class _Function:
                 lvalue, lt = self.expr(target)
                 value, vt = self.expr(ast.BinOp(target, stmt.op, stmt.value))
                 lines.append(f"{pad}{lvalue} = {self.cast_to(value, vt, lt)};")
+            elif isinstance(stmt, ast.If) and self.constant(stmt.test) is not None:
+                # a test on constants (a structural parameter): only the branch taken
+                lines += self.block(stmt.body if self.constant(stmt.test) else stmt.orelse, depth)
             elif isinstance(stmt, ast.If):
                 test, tt = self.expr(stmt.test)
                 lines.append(f"{pad}if ({_bare(self.truth(test, tt))}) {{")
@@ -616,8 +694,9 @@ class _Function:
         if len(stmt.targets) != 1:
             self.fail(stmt, "a chained assignment a = b = c")
         target = stmt.targets[0]
-        if isinstance(target, ast.Name) and target.id in self.tables:
-            return []  # a table's name: nothing to compute
+        if isinstance(target, ast.Name) and (target.id in self.tables
+                                             or target.id in self.constants):  # fmt: skip
+            return []  # a table's name or a constant: nothing to compute
         if not isinstance(target, ast.Tuple):
             lvalue, lt = self.lvalue(target)
             value, vt = self.expr(stmt.value)
@@ -656,9 +735,16 @@ class _Function:
             lines.append(f"{pad}    {lv} = {self.cast_to(temp, t, lt)};")
         return [*lines, f"{pad}}}"]
 
+    def _returns_value(self, call: str) -> bool:
+        name = call.split("(", 1)[0]
+        helper = next((h for h in self.module.helpers.values() if h.c_name == name), None)
+        return helper is None or helper.return_type is not None
+
     def return_lines(self, stmt, pad) -> list[str]:
         if stmt.value is None:
-            self.fail(stmt, "a return without a value")
+            if self.is_step:
+                self.fail(stmt, "a return without a value")
+            return [f"{pad}return;"]
         if self.is_step:
             value, vt = self.expr(stmt.value)
             if vt not in (INT, BOOL):
@@ -684,32 +770,49 @@ class _Function:
 
 def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     func = _python_function(target)
-    key = (func, arg_types)
+    key = (func, tuple((t[0], t[1].struct, t[1].const) if isinstance(t, tuple) and t[0] == "role"
+                       else t for t in arg_types))  # fmt: skip
     found = module.helpers.get(key)
     if found is not None:
         return found
-    # the name follows from the function and its argument types alone, so the kinds of one
-    # file that call the same helper share one definition
-    c_name = f"acd_{func.__module__.rsplit('.', 1)[-1].lstrip('_')}_{func.__name__.lstrip('_')}"
-    if any(t != REAL for t in arg_types):
-        c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
-                                for t in arg_types)  # fmt: skip
     params = list(inspect.signature(func).parameters)
     if len(params) != len(arg_types):
         caller.fail(node, f"{func.__name__} called with {len(arg_types)} of {len(params)} "
                     "arguments")  # fmt: skip
-    f = _Function(func, {}, module, c_name, dict(zip(params, arg_types, strict=True)))
+    # the name follows from the function, its argument types and, for a helper of a kind's
+    # arrays, the kind and the bound slots, so the kinds of one file share one definition
+    c_name = f"acd_{func.__module__.rsplit('.', 1)[-1].lstrip('_')}_{func.__name__.lstrip('_')}"
+    roles = {p: t[1] for p, t in zip(params, arg_types, strict=True)
+             if isinstance(t, tuple) and t[0] == "role"}  # fmt: skip
+    constants = {p: t[1] for p, t in zip(params, arg_types, strict=True)
+                 if isinstance(t, tuple) and t[0] == "const"}  # fmt: skip
+    scalars = {p: t for p, t in zip(params, arg_types, strict=True) if not isinstance(t, tuple)}
+    if roles:
+        kind = next(iter(roles.values())).kind
+        c_name = f"acd_{kind}_{func.__name__.lstrip('_')}"
+        c_name += "".join(f"_{p}{'m' if k < 0 else ''}{abs(k)}" for p, k in constants.items())
+    if any(t != REAL for t in scalars.values()):
+        c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
+                                for t in scalars.values())  # fmt: skip
+    inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural)
+             for p, r in roles.items()}  # fmt: skip
+    f = _Function(func, inner, module, c_name, scalars)
+    f.constants.update(constants)
     f.infer(f.node.body)
-    if f.return_type is None:
-        f.fail(f.node, "a function without a return value")
     body = f.block(f.node.body, 1)
     ret = f.return_type
-    c_ret = _C_TYPE[ret[0]] if isinstance(ret, tuple) else _C_TYPE[ret]
-    args = ", ".join(f"{_C_TYPE[t]} {p}" for p, t in zip(params, arg_types, strict=True))
+    c_ret = "void" if ret is None else _C_TYPE[ret[0]] if isinstance(ret, tuple) else _C_TYPE[ret]
+    args = []
+    for p in params:
+        if p in inner:
+            args.append(f"{'const ' if inner[p].const else ''}{inner[p].struct} *{p}")
+        elif p in scalars:
+            args.append(f"{_C_TYPE[scalars[p]]} {p}")
     if isinstance(ret, tuple):  # the other elements through pointers
-        args += "".join(f", {_C_TYPE[t]} *acd_r{k}" for k, t in enumerate(ret) if k > 0)
+        args += [f"{_C_TYPE[t]} *acd_r{k}" for k, t in enumerate(ret) if k > 0]
     doc = (inspect.getdoc(func) or func.__name__).split("\n")[0].replace("*/", "* /")
-    text = "\n".join([f"/* {f.where}: {doc} */", f"static {c_ret} {c_name}({args})", "{",
+    text = "\n".join([f"/* {f.where}: {doc} */",
+                      f"static {c_ret} {c_name}({', '.join(args) or 'void'})", "{",
                       *f.declarations(), *body, "}"])  # fmt: skip
     entry = types.SimpleNamespace(c_name=c_name, text=text, return_type=ret)
     module.helpers[key] = entry
@@ -749,18 +852,45 @@ static inline acd_complex acd_cneg(acd_complex z)
 """
 
 
-def _kernel_layouts(cls) -> dict[str, Role]:
-    return {"u": Role(cls.INPUTS, "u"), "p": Role(cls.PARAMS, "p"),
-            "s": Role(cls.STATES, "s"), "y": Role(cls.OUTPUTS, "y")}  # fmt: skip
+def _kernel_layouts(cls, part=None) -> dict[str, Role]:
+    """The step's roles from the class's layouts (or the instance's, for a per-instance kind)."""
+    from acdrive.sim._ccode._c_source import kind_name
+
+    kind, of = kind_name(cls), part if part is not None else cls
+    return {"u": Role(of.INPUTS, "u", f"acd_{kind}_in", True, kind),
+            "p": Role(of.PARAMS, "p", f"acd_{kind}_params", True, kind),
+            "s": Role(of.STATES, "s", f"acd_{kind}_state", False, kind),
+            "y": Role(of.OUTPUTS, "y", f"acd_{kind}_out", False, kind)}  # fmt: skip
+
+
+def _support(translated: Translated) -> tuple:
+    from acdrive.sim._ccode._kinds import CSupport
+    from acdrive.sim._ccode._kinds.common import TABLE_AT
+
+    helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
+    return (TABLE_AT, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
+
+
+def translate_part(part) -> Translated:
+    """The C of a per-instance kind's step for ``part``: its own layouts, and the values of
+    the parameters its class names in ``STRUCTURAL`` (the controller's order) bound."""
+    roles = _kernel_layouts(type(part), part)
+    for name in getattr(type(part), "STRUCTURAL", ()):
+        slot = part.PARAMS.slot(name)
+        roles["p"].structural[slot] = float(part.p[slot])
+    return translate_step(type(part).step, roles)
 
 
 def c_step(cls, source: str):
     """The ``CStep`` of sampled part class ``cls`` generated from its ``step`` kernel
-    (``translate_step``), ``source`` naming the paper and equations it implements."""
-    from acdrive.sim._ccode._kinds import CStep, CSupport
-    from acdrive.sim._ccode._kinds.common import TABLE_AT
+    (``translate_step``), ``source`` naming the paper and equations it implements. A kind
+    whose layouts are set per instance (``PER_INSTANCE``) gets its C per instance
+    (``translate_part``)."""
+    from acdrive.sim._ccode._kinds import CStep
 
+    if getattr(cls, "PER_INSTANCE", None):
+        return CStep(body=lambda part: translate_part(part).body, source=source,
+                     support=lambda part: _support(translate_part(part)), from_kernel=True)  # fmt: skip
     translated = translate_step(cls.step, _kernel_layouts(cls))
-    helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
-    support = (TABLE_AT, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
-    return CStep(body=translated.body, source=source, support=support, from_kernel=True)
+    return CStep(body=translated.body, source=source, support=_support(translated),
+                 from_kernel=True)  # fmt: skip

@@ -1,5 +1,5 @@
-"""C support shared by several kinds: limits of a space vector and of a real, the wrapped angle,
-the speed PI (25), the piecewise-linear table; each mirrors its numba function."""
+"""C support shared by the plant kinds and the generated steps: the limit of a space vector and
+the piecewise-linear table (its value and its next point); each mirrors its numba function."""
 
 from __future__ import annotations
 
@@ -28,42 +28,6 @@ static acd_complex acd_clip_magnitude(acd_complex x, ACDRIVE_REAL limit, int *li
 }
 """,
     needs=(LIMIT_RTOL_C,),
-)
-
-SPEED_PI = CSupport(
-    "speed_pi",
-    r"""
-/* one sample of the speed PI (25) with conditional integration (control._speed.speed_pi):
-   returns the torque command, advances *e_int only while inside [tau_lo, tau_hi] */
-static ACDRIVE_REAL acd_speed_pi(ACDRIVE_REAL K_P, ACDRIVE_REAL K_I, ACDRIVE_REAL K_F,
-                                 ACDRIVE_REAL *e_int, ACDRIVE_REAL w_ref, ACDRIVE_REAL w,
-                                 ACDRIVE_REAL tau_lo, ACDRIVE_REAL tau_hi, ACDRIVE_REAL T_s,
-                                 int *clipped)
-{
-    ACDRIVE_REAL tau = K_F * K_P * w_ref - K_P * w + K_I * *e_int;
-    *clipped = 1;
-    if (tau > tau_hi) {
-        return tau_hi;
-    }
-    if (tau < tau_lo) {
-        return tau_lo;
-    }
-    *clipped = 0;
-    *e_int = *e_int + T_s * (w_ref - w);
-    return tau;
-}
-""",
-)
-
-WRAP = CSupport(
-    "wrap",
-    r"""
-/* an angle wrapped into [-pi, pi) */
-static ACDRIVE_REAL acd_wrap(ACDRIVE_REAL angle)
-{
-    return acd_pymod(angle + ACD_PI, ACD_R(2.0) * ACD_PI) - ACD_PI;
-}
-""",
 )
 
 #: core._tables.table_next_time: the first point time later than t (ACD_HUGE, the kernels'
@@ -122,26 +86,6 @@ static ACDRIVE_REAL acd_table_at(int n, const ACDRIVE_REAL *times, const ACDRIVE
         return values[hi];
     }
     return values[lo] + (values[hi] - values[lo]) * (t - times[lo]) / dt;
-}
-""",
-)
-
-#: control._foc._clip: x clipped to [-limit, limit]
-CLIP = CSupport(
-    "clip",
-    r"""
-/* x clipped to [-limit, limit] (*limited = 1 if it was outside) */
-static ACDRIVE_REAL acd_clip(ACDRIVE_REAL x, ACDRIVE_REAL limit, int *limited)
-{
-    *limited = 1;
-    if (x > limit) {
-        return limit;
-    }
-    if (x < -limit) {
-        return -limit;
-    }
-    *limited = 0;
-    return x;
 }
 """,
 )

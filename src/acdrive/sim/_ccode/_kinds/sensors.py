@@ -1,8 +1,8 @@
 """C steps of the sensors (``acdrive.plant._sensors``), the forced relay and the relay command
-(``plant._network``), the speed reference profile (``acdrive.control._speed``) and the open-loop
-voltage programs (``acdrive.control._open_loop``). The sensors, the speed reference and the relays
-are generated from their kernels (``sim._ccode._translate``); each remaining body mirrors its
-kernel line for line."""
+(``plant._network``), the speed reference profile (``acdrive.control._speed``), the computation
+delay (``control._delay``, per instance: real or complex) and the open-loop programs
+(``acdrive.control._open_loop``, ``control._current``), generated from their kernels by
+``sim._ccode._translate``."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from acdrive.control._speed import SpeedReference
 from acdrive.plant._network import ForcedRelay, RelayCommand
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
 from acdrive.sim._ccode._translate import c_step
-from acdrive.sim._ccode._kinds import CStep, register
+from acdrive.sim._ccode._kinds import register
 
 register(
     Encoder,
@@ -57,13 +57,9 @@ register(
 
 register(
     ComputationDelay,
-    CStep(
+    c_step(
+        ComputationDelay,
         source="one sample of computation delay (control._delay)",
-        body=r"""
-    y->x = s->stored; /* the input of the previous sample */
-    s->stored = u->x;
-    return 0u;
-""",
     ),
 )
 
