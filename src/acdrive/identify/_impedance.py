@@ -106,6 +106,13 @@ from acdrive.identify._fit import (
     percentile_interval,
     t_quantile,
 )
+from acdrive.identify._judge import (
+    RESIDUAL_FACTOR,
+    DelayFit,
+    fit_delay,
+    jackknife_covariance,
+    off_tone_noise,
+)
 from acdrive.identify._polarity import feedback_gain, simulated_polarity
 from acdrive.identify._winding import sampled_response
 
@@ -135,20 +142,39 @@ class Spectrum:
     periods: int
     command: np.ndarray
     polarity: np.ndarray
+    noise: float = float("nan")
+    noise_bins: int = 0
+    mean_current: float = 0.0
+    mean_command: float = 0.0
 
     def compensated(self, voltage_error: float, current=None) -> Spectrum:
         """This spectrum with the voltage compensated by ``voltage_error`` (and ``current``
         replacing the measured one, for the bootstrap)."""
-        return Spectrum(self.frequency, self.command - voltage_error * self.polarity,
-                        self.current if current is None else current, self.hold, self.periods,
-                        self.command, self.polarity)  # fmt: skip
+        return replace(self, voltage=self.command - voltage_error * self.polarity,
+                       current=self.current if current is None else current)  # fmt: skip
+
+    def advanced(self, delay: float) -> Spectrum:
+        """This spectrum with its current read ``delay`` [s] earlier (a current logged late by
+        ``delay``, re-aligned: I_k e^{j w_k delay}; ``identify._judge``)."""
+        turn = np.exp(2j * np.pi * self.frequency * delay)
+        return replace(self, current=self.current * turn)
+
+    def subset(self, keep: np.ndarray) -> Spectrum:
+        """The tones selected by the boolean ``keep`` only (the jackknife's refits)."""
+        return replace(self, frequency=self.frequency[keep], voltage=self.voltage[keep],
+                       current=self.current[keep], command=self.command[keep],
+                       polarity=self.polarity[keep])  # fmt: skip
 
 
 @dataclass(frozen=True)
 class ImpedanceFit:
     """The fitted inverse-Gamma parameters (``estimates`` in ``_circuit.NAMES`` order) with their
     intervals, the spectrum fitted, the residual (rms [A] and relative to the currents), the
-    degrees of freedom, the voltage error compensated and the bootstrap draws."""
+    degrees of freedom, the voltage error compensated and the bootstrap draws; how the fit
+    judged itself (``identify._judge``): ``residual_ratio`` its residual's rms over the noise
+    floor of the off-tone bins (NaN: not judged), ``timing`` the joint delay fit (None: not
+    run), ``delay`` the current's delay [s] compensated (0: none), ``model_error`` whether the
+    jackknife's model-error term is in ``cov``, and ``warnings`` one line per finding."""
 
     estimates: tuple[Estimate, ...]
     spectrum: Spectrum
@@ -159,6 +185,18 @@ class ImpedanceFit:
     draws: np.ndarray
     cov: np.ndarray
     model: AdmittanceModel | None = None
+    residual_ratio: float = float("nan")
+    timing: DelayFit | None = None
+    delay: float = 0.0
+    model_error: bool = False
+    warnings: tuple[str, ...] = ()
+    source: str = "log"
+
+    @property
+    def noise_rms(self) -> float:
+        """The noise floor [A]: the deviation of a real or imaginary part of a tone's current
+        coefficient, from the off-tone bins (``identify._judge``)."""
+        return math.sqrt(self.spectrum.noise)
 
     @property
     def params(self):
@@ -225,8 +263,9 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
     # the tones are the command's; the voltage is what was applied
     U = 0.0 if voltage_error is None else voltage_error
     applied = V[excited] - U * polarity[excited]
-    spec = Spectrum(frequency, applied, I[excited], hold, periods, V[excited], polarity[excited])
-    return spec
+    noise, noise_bins = off_tone_noise(I, periods, excited)
+    return Spectrum(frequency, applied, I[excited], hold, periods, V[excited], polarity[excited],
+                    noise, noise_bins, float(np.mean(i)), float(np.mean(v)))  # fmt: skip
 
 
 def _tone_coefficients(x: np.ndarray, spec: Spectrum, base_frequency: float) -> np.ndarray:
@@ -370,8 +409,8 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
             return np.full(spec.frequency.size, np.nan + 0j)
         return _tone_coefficients(signs, spec, base_frequency)
 
-    if simulated:
-        for _ in range(POLARITY_ROUNDS):  # the inverter's own sign (module docstring)
+    def polarity_rounds(spec, fit):
+        for _ in range(POLARITY_ROUNDS if simulated else 0):  # the inverter's own sign
             if not (fit.success and np.all(np.isfinite(fit.x))):
                 break
             coefficients = polarity(fit.x)
@@ -379,11 +418,34 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                 break
             spec = replace(spec, polarity=coefficients).compensated(voltage_error)
             fit = _solve(spec, fit.x, model=model)
+        return spec, fit
+
+    spec, fit = polarity_rounds(spec, fit)
     m, n = 2 * spec.frequency.size, len(model.fields)
     if m - n < 1:
         raise InputError("excitation", f"{spec.frequency.size} tones cannot determine "
                          f"{n} parameters with a residual left to judge the fit")  # fmt: skip
     dof = m - n
+    warnings = []
+    timing, delay = None, 0.0
+    if m - n > 1 and fit.success and np.all(np.isfinite(fit.x)):  # the channels' timing
+        timing = fit_delay(spec, fit.x, fit.cost, model, _residual)
+        if timing.refused(spec.hold):
+            told = _delay_text(timing.delay, spec.hold)
+            if check:
+                raise InputError(f"{log.source}: column 'i_a'", f"is read {told} column 'v_a' "
+                                 "(the phase of the current against the voltage grows with "
+                                 "frequency as a delay's does): the channels are misaligned by "
+                                 "about a row; align them and identify again")  # fmt: skip
+            warnings.append(f"column 'i_a' is read {told} column 'v_a': not compensated")
+        elif timing.significant(spec.hold):
+            delay = timing.delay
+            spec = spec.advanced(delay)
+            spec, fit = polarity_rounds(spec, _solve(spec, timing.theta, model=model))
+            warnings.append(f"column 'i_a' is read {_delay_text(delay, spec.hold)} column "
+                            f"'v_a' (+-{1.96 * timing.std * 1e6:.2g} us, from a joint fit of "
+                            "the delay): compensated, its uncertainty is in the intervals; "
+                            "check the channels' timing")  # fmt: skip
     rms = float(np.sqrt(2.0 * fit.cost / m))
     if not fit.success or not np.all(np.isfinite(fit.x)) or fit.cost >= _FAR:
         reached = (
@@ -411,6 +473,27 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         down = np.exp(_solve(spec.compensated(U - spread), fit.x, model=model).x)
         g = (up - down) / (2.0 * spread)
         cov = cov + np.outer(g, g) * spread**2
+    if delay != 0.0 and math.isfinite(timing.std) and timing.std > 0.0:  # + g g^T var(delay)
+        up = np.exp(_solve(spec.advanced(timing.std), fit.x, model=model).x)
+        down = np.exp(_solve(spec.advanced(-timing.std), fit.x, model=model).x)
+        g = (up - down) / (2.0 * timing.std)
+        cov = cov + np.outer(g, g) * timing.std**2
+    ratio = math.sqrt(s2 / spec.noise) if spec.noise > 0.0 else float("nan")
+    model_error = ratio > RESIDUAL_FACTOR
+    if model_error:  # + the delete-one-tone jackknife (identify._judge)
+        jackknife = jackknife_covariance(spec, fit.x, model,
+                                         lambda sub, start: _solve(sub, start, model=model))  # fmt: skip
+        with np.errstate(invalid="ignore"):
+            cov = cov + np.diag(values) @ jackknife @ np.diag(values)
+        causes = ("an inverter voltage error left uncompensated (no DC-step log)"
+                  if voltage_error is None else
+                  "an inverter voltage error compensated imperfectly (dead time, device drops)")  # fmt: skip
+        warnings.append(f"the residual is {ratio:.3g} times the noise floor of the off-tone "
+                        f"bins ({math.sqrt(s2):.3g} A against {math.sqrt(spec.noise):.3g} A, "
+                        f"at most {RESIDUAL_FACTOR:g} accepted as noise): the model misses part "
+                        f"of the log; likely {causes}, a current-sensor offset or gain, or a "
+                        "timing error between the channels; the intervals include a "
+                        "model-error term (delete-one-tone jackknife)")  # fmt: skip
     q = t_quantile(dof)
     rng = np.random.default_rng(seed)
     residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]
@@ -430,10 +513,17 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     )  # fmt: skip
     current_scale = float(np.sqrt(np.mean(np.abs(spec.current) ** 2) / 2.0))
     result = ImpedanceFit(estimates, spec, rms, rms / current_scale, dof, voltage_error, draws,
-                          cov, model)  # fmt: skip
+                          cov, model, ratio, timing, delay, model_error, tuple(warnings),
+                          log.source)  # fmt: skip
     if check:
         check_identified(result)
     return result
+
+
+def _delay_text(delay: float, hold: float) -> str:
+    """'0.5 sample periods (100 us) after' (or 'before'), for messages."""
+    side = "after" if delay > 0.0 else "before"
+    return f"{abs(delay) / hold:.2g} sample periods ({abs(delay) * 1e6:.3g} us) {side}"
 
 
 def check_identified(fit: ImpedanceFit) -> None:
@@ -441,7 +531,20 @@ def check_identified(fit: ImpedanceFit) -> None:
     cage IM's circuit, the interval rule for every model)."""
     low, high = fit.spectrum.frequency[0], fit.spectrum.frequency[-1]
     if fit.model is None or fit.model.fields is INVERSE_GAMMA:
-        _check_rotor_corner(fit.params, low, high)
+        try:
+            _check_rotor_corner(fit.params, low, high)
+        except InputError:
+            if fit.voltage_error is not None or not fit.model_error:
+                raise
+            # the residual says the model misses the log: the corner it places is no evidence
+            # against the tones; the uncompensated inverter is (identify._judge)
+            corner = fit.params.rotor_corner / (2.0 * math.pi)
+            raise InputError("dc", f"no DC-step log: the injection is fitted without the "
+                             "inverter's voltage error U_err (and R_s) the DC steps measure, "
+                             f"and its residual is {fit.residual_ratio:.3g} times the noise "
+                             f"floor, so the rotor corner {corner:.3g} Hz it places outside "
+                             f"the tones ({low:g} to {high:g} Hz) is not to be trusted; give "
+                             "the DC-step log") from None  # fmt: skip
     _check_widths(fit.estimates, f"tones {low:g} to {high:g} Hz")
 
 
