@@ -130,7 +130,7 @@ def test_a_dc_level_that_has_not_settled_or_a_single_level_is_refused():
     t = np.arange(3 * 1000) * HOLD  # 0.2 s per level: the slow pole (about 0.15 s) still acts
     v = np.repeat((12.0, 24.0, 36.0), 1000)
     i = sampled_response(DELORENZO_IM, v)
-    with pytest.raises(InputError, match=r"column 'v_a': the current of the level 12 V has not "
+    with pytest.raises(InputError, match=r"column 'i_a': the current of the level 12 V has not "
                        r"settled"):  # fmt: skip
         fit_dc_steps(StandstillLog(t, v, i, "dc"))
     t = np.arange(10000) * HOLD

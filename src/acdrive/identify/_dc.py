@@ -72,12 +72,46 @@ class DCStepFit:
     plateaus: tuple[Plateau, ...]
     chi2: float
     dof: int
+    offset: Estimate | None = None
 
     @property
     def voltage_error_std(self) -> float:
         """The standard error of U [V] (its Jacobian interval's half-width over z_0.975)."""
         low, high = self.voltage_error.jacobian
         return 0.5 * (high - low) / Z_95
+
+
+def _settled_window(log: StandstillLog, start: int, stop: int):
+    """(window, mean, stderr, drift) of the last ``SETTLED_FRACTION`` of rows start:stop, drift
+    being the difference of its halves' means, or None when the current has not settled there
+    (module docstring)."""
+    rows = stop - start
+    window = log.i_a[stop - max(4, int(SETTLED_FRACTION * rows)) : stop]
+    mean = float(np.mean(window))
+    spread = float(np.std(window, ddof=1))
+    stderr = spread / np.sqrt(window.size)
+    first, second = np.array_split(window, 2)
+    drift = abs(float(np.mean(second) - np.mean(first)))
+    # the halves' means differ with standard error 2 se; a drift below SETTLED_FLOOR of the
+    # current is no error worth a refusal (a noise-free log has se = 0)
+    settled = drift <= max(SETTLED_SIGMAS * 2.0 * stderr, SETTLED_FLOOR * abs(mean))
+    return window, mean, stderr, drift, settled
+
+
+def rests(log: StandstillLog) -> list[Plateau]:
+    """The zero-current stretches of ``log``: runs of zero command of at least
+    ``MIN_PLATEAU_ROWS`` rows whose current has settled (to zero: what the sensor reads there is
+    its offset, module docstring); a rest that has not settled is left out."""
+    found = []
+    edges = np.flatnonzero(np.diff(log.v_a) != 0.0) + 1
+    for start, stop in zip(np.concatenate(([0], edges)), np.concatenate((edges, [log.v_a.size])),
+                           strict=True):  # fmt: skip
+        if log.v_a[start] != 0.0 or stop - start < MIN_PLATEAU_ROWS:
+            continue
+        window, mean, stderr, _, settled = _settled_window(log, start, stop)
+        if settled:
+            found.append(Plateau(0.0, mean, stderr, window - mean))
+    return found
 
 
 def plateaus(log: StandstillLog) -> list[Plateau]:
@@ -90,22 +124,15 @@ def plateaus(log: StandstillLog) -> list[Plateau]:
     for start, stop in zip(starts, stops, strict=True):
         voltage = float(log.v_a[start])
         if voltage == 0.0:
-            continue  # a rest between levels
+            continue  # a rest between levels (``rests``)
         rows = stop - start
         if rows < MIN_PLATEAU_ROWS:
             raise InputError(where, f"the level {voltage:g} V is held for {rows} rows, a DC step "
                              f"needs at least {MIN_PLATEAU_ROWS}")  # fmt: skip
-        window = log.i_a[stop - max(4, int(SETTLED_FRACTION * rows)) : stop]
-        mean = float(np.mean(window))
-        spread = float(np.std(window, ddof=1))
-        stderr = spread / np.sqrt(window.size)
-        first, second = np.array_split(window, 2)
-        drift = abs(float(np.mean(second) - np.mean(first)))
-        # the halves' means differ with standard error 2 se; a drift below SETTLED_FLOOR of the
-        # current is no error worth a refusal (a noise-free log has se = 0)
-        if drift > max(SETTLED_SIGMAS * 2.0 * stderr, SETTLED_FLOOR * abs(mean)):
+        window, mean, stderr, drift, settled = _settled_window(log, start, stop)
+        if not settled:  # the current drifts: its column is the one named
             raise InputError(
-                where,
+                f"{log.source}: column 'i_a'",
                 f"the current of the level {voltage:g} V has not settled in its last "
                 f"{SETTLED_FRACTION:.0%} (drift {drift:.3g} A); hold each level longer",
             )
@@ -135,9 +162,16 @@ def _solve(V, I, se, start):
 def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_COUNT) -> DCStepFit:
     """R_s and the inverter voltage error U from a DC-step log (module docstring)."""
     found = plateaus(log)
+    zero = rests(log)
     V = np.array([p.voltage for p in found])
-    I = np.array([p.current for p in found])
     se = np.array([p.stderr for p in found])
+    offset, offset_se, offset_deviations = 0.0, 0.0, np.zeros(1)
+    if zero:  # the current sensor's offset, read where the current is zero (module docstring)
+        offset_deviations = np.concatenate([p.deviations + p.current for p in zero])
+        offset = float(np.mean(offset_deviations))
+        offset_deviations = offset_deviations - offset
+        offset_se = float(np.std(offset_deviations, ddof=1) / np.sqrt(offset_deviations.size))
+    I = np.array([p.current for p in found]) - offset
     slope, intercept = np.polyfit(I, V, 1)  # the straight line as the start
     fit = _solve(V, I, se, np.array([slope, intercept]))
     dof = V.size - 2
@@ -146,12 +180,15 @@ def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_C
         raise FitNotConverged("DC steps", fit.message, np.sqrt(chi2 / V.size) * se.mean(), "A")
     scale = max(1.0, chi2 / dof) if dof > 0 else 1.0
     cov = covariance(fit.jac, scale)
+    cov[1, 1] += (fit.x[0] * offset_se) ** 2  # U = V - R_s (I - offset): dU / d offset = R_s
     rng = np.random.default_rng(seed)
     model = (V - fit.x[1]) / fit.x[0]
     draws = np.empty((bootstrap, 2))
     for b in range(bootstrap):
         redrawn = model + np.array([rng.choice(p.deviations, p.deviations.size).mean()
                                     for p in found])  # fmt: skip
+        if zero:
+            redrawn -= rng.choice(offset_deviations, offset_deviations.size).mean()
         draws[b] = _solve(V, redrawn, se, fit.x).x
     top = int(np.argmax(np.abs(V)))
     single = V[top] / I[top]
@@ -171,4 +208,10 @@ def fit_dc_steps(log: StandstillLog, seed: int = 0, bootstrap: int = BOOTSTRAP_C
         float(single), jacobian_interval(single, single_se**2, Z_95),
         percentile_interval(single_draws),
     )  # fmt: skip
-    return DCStepFit(R_s, U, single_level, tuple(found), chi2, dof)
+    measured = None
+    if zero:
+        measured = Estimate("i_a_offset", "A", "current-sensor offset, the mean reading of the "
+                            "DC log's zero-current stretches (subtracted)", offset,
+                            jacobian_interval(offset, offset_se**2, Z_95),
+                            jacobian_interval(offset, offset_se**2, Z_95))  # fmt: skip
+    return DCStepFit(R_s, U, single_level, tuple(found), chi2, dof, measured)

@@ -144,8 +144,6 @@ class Spectrum:
     polarity: np.ndarray
     noise: float = float("nan")
     noise_bins: int = 0
-    mean_current: float = 0.0
-    mean_command: float = 0.0
 
     def compensated(self, voltage_error: float, current=None) -> Spectrum:
         """This spectrum with the voltage compensated by ``voltage_error`` (and ``current``
@@ -265,7 +263,7 @@ def spectrum(log: StandstillLog, base_frequency: float, settle: float,
     applied = V[excited] - U * polarity[excited]
     noise, noise_bins = off_tone_noise(I, periods, excited)
     return Spectrum(frequency, applied, I[excited], hold, periods, V[excited], polarity[excited],
-                    noise, noise_bins, float(np.mean(i)), float(np.mean(v)))  # fmt: skip
+                    noise, noise_bins)  # fmt: skip
 
 
 def _tone_coefficients(x: np.ndarray, spec: Spectrum, base_frequency: float) -> np.ndarray:

@@ -30,6 +30,12 @@ from acdrive.identify._fit import (
     t_quantile,
 )
 from acdrive.identify._impedance import ImpedanceFit, fit_impedance
+from acdrive.identify._offset import (
+    OFFSET_ROUNDS,
+    OFFSET_TOLERANCE,
+    joint_offset,
+    offset_estimate,
+)
 
 #: the T-circuit fields written, with unit and meaning (those of ``machines.IMParams``)
 T_FIELDS = (
@@ -50,6 +56,13 @@ class StandstillIdentification:
     split: str
     n_p: int
     t_estimates: tuple[Estimate, ...]
+    current_offset: Estimate | None = None
+    voltage_error: float | None = None
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What the fit found in its own residual and timing (``identify._judge``)."""
+        return self.impedance.warnings
 
     @property
     def params(self) -> InverseGamma:
@@ -62,6 +75,11 @@ class StandstillIdentification:
         if L_M is not None:
             params = InverseGamma(params.R_s, params.L_sigma, params.R_R, float(L_M))
         return t_circuit(params, self.n_p, self.split)
+
+
+def _less(log: StandstillLog, offset: float) -> StandstillLog:
+    """``log`` with ``offset`` [A] subtracted from its current."""
+    return StandstillLog(log.time, log.v_a, log.i_a - offset, log.source)
 
 
 def _t_values(values, n_p: int, split: str) -> np.ndarray:
@@ -85,7 +103,27 @@ def identify_standstill(injection: StandstillLog, base_frequency: float, settle:
     dc_fit = fit_dc_steps(dc, seed=seed, bootstrap=bootstrap) if dc is not None else None
     error = dc_fit.voltage_error.value if dc_fit is not None else None
     error_std = dc_fit.voltage_error_std if dc_fit is not None else 0.0
-    fit = fit_impedance(injection, base_frequency, settle, voltage_error=error, seed=seed + 1,
+    offset = dc_fit.offset if dc_fit is not None else None
+    reading = injection
+    if dc_fit is not None and offset is None:  # the offset from the injection's mean
+        intercept, intercept_std, slope = error, error_std, dc_fit.R_s.value
+        value = 0.0
+        for _ in range(OFFSET_ROUNDS):  # until the offset moves less than OFFSET_TOLERANCE
+            trial = fit_impedance(_less(injection, value), base_frequency, settle,
+                                  voltage_error=error, bootstrap=0, check=False,
+                                  dead_time=dead_time)  # fmt: skip
+            joint = joint_offset(injection, trial, base_frequency, intercept, intercept_std,
+                                 slope)  # fmt: skip
+            moved = abs(joint.value - value)
+            error, error_std, value = joint.voltage_error, joint.voltage_error_std, joint.value
+            if moved <= OFFSET_TOLERANCE * joint.std:
+                break
+        offset = offset_estimate(joint.value, joint.std, "current-sensor offset, from the "
+                                 "injection's mean current jointly with the parameters and the "
+                                 "DC steps (subtracted; U_err corrected by R_s times it)")  # fmt: skip
+    if offset is not None:  # the reading's sign starts the polarity's rounds: without the offset
+        reading = _less(injection, offset.value)
+    fit = fit_impedance(reading, base_frequency, settle, voltage_error=error, seed=seed + 1,
                         bootstrap=bootstrap, voltage_error_std=error_std,
                         dead_time=dead_time)  # fmt: skip
     values = fit.params.as_array()
@@ -99,7 +137,8 @@ def identify_standstill(injection: StandstillLog, base_frequency: float, settle:
                  jacobian_interval(t_values[j], cov[j, j], q), percentile_interval(draws[:, j]))
         for j, (name, unit, meaning) in enumerate(T_FIELDS)
     )  # fmt: skip
-    return StandstillIdentification(dc_fit, fit, split, n_p, t_estimates)
+    return StandstillIdentification(dc_fit, fit, split, n_p, t_estimates, offset,
+                                    error if dc_fit is not None else None)  # fmt: skip
 
 
 @checked(result=Instance(StandstillIdentification))
