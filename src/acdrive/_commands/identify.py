@@ -192,6 +192,8 @@ def _rows(result, no_load=None):
     if result.dc is not None:
         dc = result.dc
         rows += [(f"dc_steps.{e.name}", e) for e in (dc.R_s, dc.voltage_error, dc.single_level)]
+    if result.current_offset is not None:
+        rows.append((f"offsets.{result.current_offset.name}", result.current_offset))
     return rows
 
 
@@ -210,6 +212,10 @@ def _json(result, path, no_load=None) -> dict:
         "n_p": result.n_p,
         "residual_rms_a": fit.residual_rms,
         "residual_relative": fit.residual_relative,
+        "residual_over_noise_floor": fit.residual_ratio,
+        "noise_floor_a": fit.noise_rms,
+        "current_delay_s": fit.delay,
+        "warnings": list(fit.warnings),
         "tones_hz": list(fit.spectrum.frequency),
         "statement": identifiability(result),
         "written": str(path),
@@ -217,6 +223,8 @@ def _json(result, path, no_load=None) -> dict:
     if result.dc is not None:
         dc = result.dc
         out["dc_steps"] = {e.name: entry(e) for e in (dc.R_s, dc.voltage_error, dc.single_level)}
+    if result.current_offset is not None:
+        out["offsets"] = {result.current_offset.name: entry(result.current_offset)}
     if no_load is not None:
         out["no_load"] = {"L_M": entry(no_load.L_M), "frequency_hz": no_load.frequency,
                           "slip": no_load.slip, "residual_a": no_load.residual,
@@ -252,7 +260,7 @@ def run(args) -> int:
     no_load_log, frequency, no_load_settle = _no_load(args, machine)
     v_dc = _link_voltage(args, no_load_log, machine)
     try:
-        with typed_names(WINDOW_OPTIONS):
+        with typed_names({**WINDOW_OPTIONS, "dc": "--dc-log"}):
             result = identify_standstill(injection, base, settle, dc=dc, n_p=n_p,
                                          split=args.leakage_split, seed=args.seed,
                                          dead_time=args.dead_time_s)  # fmt: skip

@@ -227,4 +227,6 @@ def dfim_identifiability(result: DFIMIdentification) -> list[str]:
         lines.append("not identifiable from the rotor side: M, L_s, R_s separately (the ratio "
                      "M/L_s is free); a stator resistance measured apart fixes them")  # fmt: skip
     lines.append("not identified at standstill: the pole pairs, the inertia and friction")
+    for stator, fit in (("open", result.open), ("shorted", result.shorted)):  # identify._judge
+        lines += [f"warning (stator {stator}): {line}" for line in fit.warnings]
     return lines

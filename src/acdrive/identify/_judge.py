@@ -13,8 +13,9 @@ residual is not judged.
 
 **The residual against the floor.** A model that explains the log leaves at each tone only that
 noise: the residual variance s^2 = |r|^2 / (2K - n) is sigma^2 within the spread of two
-variance estimates. ``RESIDUAL_FACTOR`` on the rms (a variance ratio of 4, beyond the 0.9999
-quantile of F(16, 40), the default test's degrees of freedom) marks a model error: something in
+variance estimates. ``RESIDUAL_FACTOR`` on the rms (a variance ratio of 4, beyond the 0.999
+quantile of F(16, 40), the default test's degrees of freedom: noise alone exceeds it in 2 fits
+of 10,000) marks a model error: something in
 the log the winding's model does not have (an inverter voltage error not compensated or not
 compensated well, a current-sensor offset or gain, a timing error, saturation). The residual's
 scaling of the Jacobian covariance treats that error as white noise, which it is not: it is

@@ -96,6 +96,8 @@ def params_text(result, source: str, no_load=None) -> str:
     if result.dc is not None:
         for estimate in (result.dc.R_s, result.dc.voltage_error, result.dc.single_level):
             lines += _estimate_table("identification.dc_steps", estimate)
+    if result.current_offset is not None:
+        lines += _estimate_table("identification.offsets", result.current_offset)
     if no_load is not None:
         lines += [
             "[identification.no_load]",

@@ -224,4 +224,6 @@ def pm_identifiability(result: PMStandstillIdentification) -> list[str]:
     if result.dc is not None:
         lines.append(f"inverter voltage error U_err = {result.dc.voltage_error.value:.4g} V "
                      "(DC-step intercept), compensated in both axis tests")  # fmt: skip
+    for axis, fit in (("d", result.d), ("q", result.q)):  # identify._judge
+        lines += [f"warning ({axis}-axis test): {line}" for line in fit.warnings]
     return lines

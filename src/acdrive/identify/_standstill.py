@@ -30,6 +30,7 @@ from acdrive.identify._fit import (
     t_quantile,
 )
 from acdrive.identify._impedance import ImpedanceFit, fit_impedance
+from acdrive.identify._judge import RESIDUAL_FACTOR
 from acdrive.identify._offset import (
     OFFSET_ROUNDS,
     OFFSET_TOLERANCE,
@@ -164,8 +165,23 @@ def identifiability(result: StandstillIdentification) -> list[str]:
     ]
     if result.dc is None:
         lines.append("no DC-step log: the inverter's voltage error was neither measured nor "
-                     "compensated")  # fmt: skip
+                     "compensated; a current-sensor offset was not estimated (it does not "
+                     "enter the injection's tones)")  # fmt: skip
     else:
-        lines.append(f"inverter voltage error U_err = {result.dc.voltage_error.value:.4g} V "
-                     "(DC-step intercept), compensated in the injection")  # fmt: skip
+        error = result.dc.voltage_error.value if result.voltage_error is None else result.voltage_error
+        offset = result.current_offset
+        low, high = offset.jacobian
+        lines.append(f"inverter voltage error U_err = {error:.4g} V (DC-step intercept "
+                     f"{result.dc.voltage_error.value:.4g} V plus R_s times the current "
+                     f"offset), compensated in the injection; current-sensor offset "
+                     f"{offset.value:.3g} A (95 %: {low:.3g} to {high:.3g} A), subtracted")  # fmt: skip
+    fit = result.impedance
+    if fit.residual_ratio == fit.residual_ratio:  # judged (identify._judge)
+        lines.append(f"residual {fit.residual_ratio:.3g} times the noise floor of the off-tone "
+                     f"bins ({fit.noise_rms:.3g} A; above {RESIDUAL_FACTOR:g} the model misses "
+                     "part of the log)")  # fmt: skip
+    else:
+        lines.append("residual not judged against the noise: one period of the base frequency "
+                     "has no off-tone bins (log two or more)")  # fmt: skip
+    lines += [f"warning: {line}" for line in fit.warnings]
     return lines
