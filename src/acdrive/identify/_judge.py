@@ -58,7 +58,8 @@ DELAY_LEVEL = 0.999
 DELAY_STARTS = (-1.0, -0.5, 0.0, 0.5, 1.0, 1.5, 2.0)
 
 
-def off_tone_noise(coefficients: np.ndarray, periods: int, excited: np.ndarray) -> tuple[float, int]:
+def off_tone_noise(coefficients: np.ndarray, periods: int,
+                   excited: np.ndarray) -> tuple[float, int]:  # fmt: skip
     """(sigma^2, count): the noise variance of a real or imaginary part of a tone coefficient
     from the off-frequency bins around the ``excited`` bins of ``coefficients`` (the window's
     DFT scaled by 2 / n), and how many bins gave it; (NaN, 0) with one period (module
@@ -122,7 +123,8 @@ def fit_delay(spec, theta: np.ndarray, cost: float, model, residual) -> DelayFit
                 continue
             fit = least_squares(joint, np.append(first, start), method="lm", xtol=1e-12,
                                 ftol=1e-12, gtol=1e-12, max_nfev=2000)  # fmt: skip
-            if fit.success and np.all(np.isfinite(fit.x)) and (best is None or fit.cost < best.cost):
+            better = best is None or fit.cost < best.cost
+            if fit.success and np.all(np.isfinite(fit.x)) and better:
                 best = fit
     if best is None:
         return DelayFit(0.0, float("inf"), theta, float("inf"))

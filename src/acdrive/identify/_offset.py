@@ -70,8 +70,9 @@ class JointOffset:
 def joint_offset(log, fit, base_frequency: float, intercept: float, intercept_std: float,
                  R_s: float) -> JointOffset:  # fmt: skip
     """The offset of ``log``'s current from the window of the injection ``fit`` (an
-    ``ImpedanceFit`` of ``log`` or of ``log`` less a trial offset, compensated by some U) and the DC steps' ``intercept`` U' [V] (standard
-    error ``intercept_std``) and slope ``R_s`` [ohm] (module docstring)."""
+    ``ImpedanceFit`` of ``log`` or of ``log`` less a trial offset, compensated by some U) and
+    the DC steps' ``intercept`` U' [V] (standard error ``intercept_std``) and slope ``R_s``
+    [ohm] (module docstring)."""
     spec, model = fit.spectrum, fit.model
     n = spec.periods * round(1.0 / (base_frequency * spec.hold))
     values = np.array([e.value for e in fit.estimates])

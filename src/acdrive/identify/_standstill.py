@@ -168,7 +168,9 @@ def identifiability(result: StandstillIdentification) -> list[str]:
                      "compensated; a current-sensor offset was not estimated (it does not "
                      "enter the injection's tones)")  # fmt: skip
     else:
-        error = result.dc.voltage_error.value if result.voltage_error is None else result.voltage_error
+        error = result.voltage_error
+        if error is None:
+            error = result.dc.voltage_error.value
         offset = result.current_offset
         low, high = offset.jacobian
         lines.append(f"inverter voltage error U_err = {error:.4g} V (DC-step intercept "
