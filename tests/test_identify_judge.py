@@ -154,3 +154,43 @@ def test_a_dc_log_with_a_rest_measures_the_current_offset_and_removes_its_bias()
     assert fit.voltage_error.covers(U) and fit.voltage_error.covers(U, "bootstrap")
     assert fit.R_s.covers(R_s)
     assert fit.offset.covers(c)
+
+
+def test_the_command_reports_the_offset_and_the_judgment_and_refuses_a_shifted_log(tmp_path,
+                                                                                   capsys):  # fmt: skip
+    """``acdrive identify`` on measured logs read by a sensor with a 0.05 A offset: the JSON
+    holds the offset with an interval around it, the residual against the noise floor and no
+    warning, and the estimates' intervals hold the circuit; the same injection one row late is
+    one line naming the current column and the timing (exit 2)."""
+    import json
+
+    from test_identify_estimators import sampled_response as response
+
+    from acdrive.cli import main
+    from acdrive.identify import write_log
+
+    c = 0.05
+    log = injection_log(MACHINE, seed=21)
+    injection = write_log(StandstillLog(log.time, log.v_a, log.i_a + c), tmp_path / "inj.csv")
+    t = np.arange(3 * 10000) * HOLD
+    v = np.repeat((12.0, 24.0, 36.0), 10000)
+    i = response(MACHINE, v) + c + NOISE * np.random.default_rng(22).standard_normal(t.size)
+    dc = write_log(StandstillLog(t, v, i), tmp_path / "dc.csv")
+    out = tmp_path / "machine.toml"
+    assert main(["identify", str(injection), "--dc-log", str(dc), "--pole-pairs", "1",
+                 "--out", str(out), "--json"]) == 0  # fmt: skip
+    printed = json.loads(capsys.readouterr().out)
+    low, high = printed["offsets"]["i_a_offset"]["ci95_jacobian"]
+    assert low <= c <= high
+    truth = inverse_gamma(MACHINE).as_array()
+    for name, true in zip(("R_s", "L_sigma", "R_R", "L_M"), truth, strict=True):
+        low, high = printed["inverse_gamma"][name]["ci95_jacobian"]
+        assert low <= true <= high, name
+    assert 0.5 < printed["residual_over_noise_floor"] < 2.0 and printed["warnings"] == []
+
+    late = StandstillLog(log.time, log.v_a, np.concatenate(([0.0], log.i_a[:-1])))
+    shifted = write_log(late, tmp_path / "late.csv")
+    assert main(["identify", str(shifted), "--dc-log", str(dc), "--pole-pairs", "1",
+                 "--out", str(tmp_path / "late.toml")]) == 2  # fmt: skip
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and "column 'i_a': is read 1 sample periods" in error[0], error
