@@ -180,12 +180,12 @@ def test_the_command_reports_the_offset_and_the_judgment_and_refuses_a_shifted_l
     assert main(["identify", str(injection), "--dc-log", str(dc), "--pole-pairs", "1",
                  "--out", str(out), "--json"]) == 0  # fmt: skip
     printed = json.loads(capsys.readouterr().out)
-    low, high = printed["offsets"]["i_a_offset"]["ci95_jacobian"]
-    assert low <= c <= high
     truth = inverse_gamma(MACHINE).as_array()
     for name, true in zip(("R_s", "L_sigma", "R_R", "L_M"), truth, strict=True):
         low, high = printed["inverse_gamma"][name]["ci95_jacobian"]
         assert low <= true <= high, name
+    low, high = printed["offsets"]["i_a_offset"]["ci95_jacobian"]
+    assert low <= c <= high
     assert 0.5 < printed["residual_over_noise_floor"] < 2.0 and printed["warnings"] == []
 
     late = StandstillLog(log.time, log.v_a, np.concatenate(([0.0], log.i_a[:-1])))
