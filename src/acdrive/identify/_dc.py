@@ -12,6 +12,12 @@ a straight line whose slope is R_s and whose intercept is the voltage error U; t
 separate them. One level alone gives V_k / I_k = R_s + U / I_k: R_s biased by U / I_k
 (``single_level``).
 
+**The current sensor's offset.** A reading I_k + c moves the intercept to U - R_s c
+(``identify._offset``). Runs of zero command (rests) whose current has settled carry no current:
+their mean reading is c (``rests``), subtracted from every plateau before the fit, and its
+standard error adds R_s^2 se_c^2 to U's variance (the bootstrap redraws it too). A log without a
+rest leaves c in the intercept; ``identify._standstill`` then separates it with the injection.
+
 **Estimator.** Plateaus are the runs of equal command in the log; each must hold at least
 ``MIN_PLATEAU_ROWS`` rows, and only its last ``SETTLED_FRACTION`` is used, where the two halves
 must agree within ``SETTLED_SIGMAS`` standard errors of their difference or ``SETTLED_FLOOR`` of

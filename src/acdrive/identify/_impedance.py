@@ -56,6 +56,11 @@ weight is one for white current noise. 95 % intervals: Jacobian covariance scale
 variance with Student's t over 2K - 4 degrees of freedom, and a bootstrap redrawing the K complex
 residuals (inflated by sqrt(2K / (2K - 4)) for the fitted degrees of freedom) (``identify._fit``).
 
+**Judged by its own data** (``identify._judge``): the residual against the noise floor of the
+off-tone bins (a model-error term and a warning above it), and the current's timing against the
+voltage by a joint delay fit (a row's shift refused naming ``i_a``, a smaller delay compensated
+and named).
+
 **Plausibility**, checked before the fit: every tone carries current, and the winding absorbs
 power at every tone (Re(V conj(I)) > 0: a reversed current sign or another phase's current is
 refused, naming ``i_a``).
