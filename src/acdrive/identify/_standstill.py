@@ -131,7 +131,7 @@ def identify_standstill(injection: StandstillLog, base_frequency: float, settle:
     t_values = _t_values(values, n_p, split)
     cov = propagate(lambda v: _t_values(v, n_p, split), values, fit.cov)
     draws = np.array([_t_values(d, n_p, split) if np.all(np.isfinite(d)) else np.full(5, np.nan)
-                      for d in fit.draws])  # fmt: skip
+                      for d in fit.draws]).reshape(-1, len(T_FIELDS))  # none with bootstrap=0
     q = t_quantile(fit.dof)
     t_estimates = tuple(
         Estimate(name, unit, meaning, float(t_values[j]),
