@@ -194,3 +194,23 @@ def test_the_command_reports_the_offset_and_the_judgment_and_refuses_a_shifted_l
                  "--out", str(tmp_path / "late.toml")]) == 2  # fmt: skip
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and "column 'i_a': is read 1 sample periods" in error[0], error
+
+
+def test_an_offset_that_cannot_be_separated_is_refused_in_one_line():
+    """Without a rest in the DC-step log the offset comes from the injection's mean current; an
+    injection on a DC level whose current never changes sign carries U_err P_0 and the offset
+    alike in that mean (P_0 = 1), so the identification is refused naming the current."""
+    from acdrive.identify import identify_standstill
+
+    t = np.arange(round(4.0 / HOLD)) * HOLD
+    v = 30.0 + multisine(t, TONES) * (2.0 / 15.0)  # about 1.9 A +- 0.3 A: always positive
+    i = sampled_response(MACHINE, v)
+    assert np.all(i[t >= 2.0] > 0.0)
+    injection = noisy(t, v, i, seed=9, source="biased")
+    rows = 10000
+    dc_v = np.repeat((12.0, 24.0, 36.0), rows)
+    dc_t = np.arange(dc_v.size) * HOLD
+    dc = noisy(dc_t, dc_v, sampled_response(MACHINE, dc_v), seed=10, source="dc")
+    with pytest.raises(InputError, match=r"^biased: column 'i_a': a current-sensor offset cannot "
+                       r"be separated from the inverter's voltage error"):  # fmt: skip
+        identify_standstill(injection, 1.0, 2.0, dc=dc, bootstrap=2)
