@@ -183,7 +183,7 @@ def identifiability(result: StandstillIdentification) -> list[str]:
                      f"bins ({fit.noise_rms:.3g} A; above {RESIDUAL_FACTOR:g} the model misses "
                      "part of the log)")  # fmt: skip
     else:
-        lines.append("residual not judged against the noise: one period of the base frequency "
-                     "has no off-tone bins (log two or more)")  # fmt: skip
+        lines.append("residual not judged against the noise: the window has no off-tone bins "
+                     "(one period of the base frequency: log two or more) or no noise in them")  # fmt: skip
     lines += [f"warning: {line}" for line in fit.warnings]
     return lines
