@@ -49,3 +49,18 @@ def test_a_current_offset_is_estimated_and_the_intervals_hold_the_machine(runs, 
                                                           abs=0.02)  # fmt: skip
     assert result.voltage_error == pytest.approx(predicted, abs=0.02)
     assert result.current_offset.covers(offset), result.current_offset
+
+
+def test_tones_within_the_voltage_error_leave_a_residual_that_is_judged_and_named():
+    """Tones of 4 V against U_err = 5.47 V (0.73 of it): the compensated fit's residual is
+    several times the noise floor; the warning names the tones and U_err, and the intervals
+    carry the model-error term."""
+    plan = dataclasses.replace(DEAD, tone_amplitude=4.0)
+    result = identify_standstill(injection_test(DELORENZO_IM, plan, seed=1), plan.base_frequency,
+                                 plan.settle, dc=dc_test(DELORENZO_IM, plan, seed=0),
+                                 n_p=DELORENZO_IM.n_p, bootstrap=10, dead_time=plan.t_d)  # fmt: skip
+    fit = result.impedance
+    assert fit.model_error and fit.residual_ratio > 2.0
+    (line,) = [w for w in fit.warnings if "noise floor" in w]
+    assert "tones too small for the inverter's voltage error (the smallest 4 V" in line, line
+    assert "U_err = 5.4" in line

@@ -125,6 +125,8 @@ EXCITED_FRACTION = 1e-2
 MIN_TONES = 3
 SAMPLES_PER_TONE = 10
 MAX_HALF_WIDTH = 0.5
+#: tones below this many times the compensated voltage error are named as a model error's cause
+TONE_MARGIN = 2.0
 #: refits with the sign of the current simulated from the previous fit (module docstring)
 POLARITY_ROUNDS = 2
 #: the polarity's feedback is measured by secants of this many noise deviations of each parameter
@@ -488,9 +490,16 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                                          lambda sub, start: _solve(sub, start, model=model))  # fmt: skip
         with np.errstate(invalid="ignore"):
             cov = cov + np.diag(values) @ jackknife @ np.diag(values)
-        causes = ("an inverter voltage error left uncompensated (no DC-step log)"
-                  if voltage_error is None else
-                  "an inverter voltage error compensated imperfectly (dead time, device drops)")  # fmt: skip
+        smallest = float(np.min(np.abs(spec.command)))
+        if voltage_error is None:
+            causes = "an inverter voltage error left uncompensated (no DC-step log)"
+        elif smallest < TONE_MARGIN * abs(voltage_error):
+            causes = (f"tones too small for the inverter's voltage error (the smallest "
+                      f"{smallest:.3g} V against U_err = {voltage_error:.3g} V, less than "
+                      f"{TONE_MARGIN:g} times it: the compensation's polarity model is least "
+                      "accurate there; raise the tones)")  # fmt: skip
+        else:
+            causes = "an inverter voltage error compensated imperfectly (dead time, device drops)"
         warnings.append(f"the residual is {ratio:.3g} times the noise floor of the off-tone "
                         f"bins ({math.sqrt(s2):.3g} A against {math.sqrt(spec.noise):.3g} A, "
                         f"at most {RESIDUAL_FACTOR:g} accepted as noise): the model misses part "
