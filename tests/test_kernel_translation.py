@@ -122,7 +122,8 @@ def c_library(cls, part, folder):
     kinds = {cls: entry}
     code = [_step_signature(entry), "{", "    (void)t;", "    (void)T_s;", body, "}"]
     wrapper = ["uint32_t run(double t, double T_s, const double *u, const double *p, double *s, "
-               "double *y)", "{", "    int i = 0;", "    uint32_t events;"]  # fmt: skip
+               "double *y)", "{", "    int i = 0;", "    uint32_t events;",
+               "    (void)u;", "    (void)p;", "    (void)s;", "    (void)y;"]  # fmt: skip
     args = ["t", "T_s"]
     for role, attr, arg in _ROLES:
         if not entry.members[role]:
@@ -142,7 +143,8 @@ def c_library(cls, part, folder):
     path = folder / f"{entry.cname}.c"
     path.write_text(source)
     library = folder / f"lib{entry.cname}.so"
-    done = subprocess.run(["gcc", *NATIVE_CFLAGS, "-o", str(library), str(path), "-lm"],
+    strict = ("-Wall", "-Wextra", "-Werror")  # a mistyped pointer is an error, not a warning
+    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
                           capture_output=True, text=True, check=False)  # fmt: skip
     assert done.returncode == 0, done.stderr
     lib = ctypes.CDLL(str(library))

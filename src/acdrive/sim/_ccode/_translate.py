@@ -787,9 +787,10 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     constants = {p: t[1] for p, t in zip(params, arg_types, strict=True)
                  if isinstance(t, tuple) and t[0] == "const"}  # fmt: skip
     scalars = {p: t for p, t in zip(params, arg_types, strict=True) if not isinstance(t, tuple)}
-    if roles:
+    if roles:  # written for the kind's structs (each array's role named) and the bound slots
         kind = next(iter(roles.values())).kind
         c_name = f"acd_{kind}_{func.__name__.lstrip('_')}"
+        c_name += "".join(f"_{r.struct.rsplit('_', 1)[-1]}" for r in roles.values())
         c_name += "".join(f"_{p}{'m' if k < 0 else ''}{abs(k)}" for p, k in constants.items())
     if any(t != REAL for t in scalars.values()):
         c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
@@ -811,9 +812,10 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     if isinstance(ret, tuple):  # the other elements through pointers
         args += [f"{_C_TYPE[t]} *acd_r{k}" for k, t in enumerate(ret) if k > 0]
     doc = (inspect.getdoc(func) or func.__name__).split("\n")[0].replace("*/", "* /")
+    unused = [f"    (void){p};" for p in params if p in inner or p in scalars]  # -Wextra
     text = "\n".join([f"/* {f.where}: {doc} */",
                       f"static {c_ret} {c_name}({', '.join(args) or 'void'})", "{",
-                      *f.declarations(), *body, "}"])  # fmt: skip
+                      *f.declarations(), *unused, *body, "}"])  # fmt: skip
     entry = types.SimpleNamespace(c_name=c_name, text=text, return_type=ret)
     module.helpers[key] = entry
     module.order.append(key)
