@@ -54,7 +54,7 @@ _REAL_FUNCTIONS = {
     "sqrt": "ACD_SQRT", "exp": "ACD_EXP", "log": "ACD_LOG", "floor": "ACD_FLOOR",
     "sin": "ACD_SIN", "cos": "ACD_COS", "arccos": "ACD_ACOS", "acos": "ACD_ACOS",
     "arctan2": "ACD_ATAN2", "atan2": "ACD_ATAN2", "hypot": "ACD_HYPOT", "fabs": "ACD_FABS",
-    "nextafter": "ACD_NEXTAFTER",
+    "nextafter": "ACD_NEXTAFTER", "tanh": "ACD_TANH",
 }  # fmt: skip
 _TWO_ARGUMENTS = {"arctan2", "atan2", "hypot", "nextafter"}
 
@@ -129,12 +129,17 @@ class _Function:
     """One kernel or helper: the type pass, then the C text."""
 
     def __init__(self, func, roles: dict[str, Role], module: _Module, c_name: str,
-                 arg_types: dict[str, str] | None = None, is_step: bool = False):  # fmt: skip
+                 arg_types: dict[str, str] | None = None, is_step: bool = False,
+                 fast: bool = False, top: bool = False):  # fmt: skip
         self.func = _python_function(func)
         self.roles = roles
         self.module = module
         self.c_name = c_name
         self.is_step = is_step
+        #: the kernel runs with fast-math flags (module docstring: mixed real-complex forms)
+        self.fast = fast
+        #: a plant kernel's own body (returns nothing)
+        self.top = top
         source = textwrap.dedent(inspect.getsource(self.func))
         tree = ast.parse(source)
         self.node = next(n for n in tree.body if isinstance(n, ast.FunctionDef))
@@ -363,7 +368,7 @@ class _Function:
             return node.id, self.types[node.id]
         if node.id in self.arg_types:
             return node.id, self.arg_types[node.id]
-        if node.id in ("t", "T_s") and self.is_step:
+        if node.id in ("t", "T_s") and (self.is_step or self.top):
             return node.id, REAL
         self.fail(node, f"the name {node.id!r} (not a local, an argument or a constant)")
 
@@ -430,6 +435,17 @@ class _Function:
             if name is None:
                 self.fail(node, f"the operator {op.__name__} on complex numbers")
             return f"{name}({a}, {b})", COMPLEX
+        if self.fast:  # the forms fast-math folds the promoted operation to (module docstring)
+            if ta == COMPLEX:
+                name = {ast.Add: "acd_caddr", ast.Sub: "acd_csubr", ast.Mult: "acd_cmulr",
+                        ast.Div: "acd_cdivr"}.get(op)  # fmt: skip
+                if name is None:
+                    self.fail(node, f"the operator {op.__name__} on complex numbers")
+                return f"{name}({a}, {self.as_real(b, tb)})", COMPLEX
+            name = {ast.Add: "acd_raddc", ast.Sub: "acd_rsubc", ast.Mult: "acd_cscale"}.get(op)
+            if name is None:
+                self.fail(node, f"the operator {op.__name__} of a real by a complex number")
+            return f"{name}({self.as_real(a, ta)}, {b})", COMPLEX
         # a real operand promoted to r + 0j (module docstring), then the complex operation
         if ta != COMPLEX:
             a = f"acd_c({self.as_real(a, ta)}, ACD_R(0.0))"
@@ -745,6 +761,10 @@ class _Function:
             if self.is_step:
                 self.fail(stmt, "a return without a value")
             return [f"{pad}return;"]
+        if self.top:
+            self.fail(stmt, "a plant kernel returning a value")
+        if self.top:
+            self.fail(stmt, "a plant kernel returning a value")
         if self.is_step:
             value, vt = self.expr(stmt.value)
             if vt not in (INT, BOOL):
@@ -752,6 +772,9 @@ class _Function:
             return [f"{pad}return (uint32_t)({value});"]
         value, vt = self.expr(stmt.value)
         if isinstance(self.return_type, tuple):  # the first element returned, the others out
+            if isinstance(stmt.value, ast.Call) and vt == self.return_type:
+                outs = "".join(f", acd_r{k}" for k in range(1, len(vt)))
+                return [f"{pad}return {value[:-1]}{outs});"]  # the same tuple passed through
             if not isinstance(stmt.value, ast.Tuple):
                 self.fail(stmt, "a tuple returned from other than a tuple expression")
             lines = [f"{pad}*acd_r{k} = {self.cast_to(v, t, want)};" for k, (v, t, want)
@@ -770,8 +793,9 @@ class _Function:
 
 def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     func = _python_function(target)
-    key = (func, tuple((t[0], t[1].struct, t[1].const) if isinstance(t, tuple) and t[0] == "role"
-                       else t for t in arg_types))  # fmt: skip
+    key = (func, caller.fast, tuple((t[0], t[1].struct, t[1].const)
+                                    if isinstance(t, tuple) and t[0] == "role" else t
+                                    for t in arg_types))  # fmt: skip
     found = module.helpers.get(key)
     if found is not None:
         return found
@@ -795,9 +819,11 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     if any(t != REAL for t in scalars.values()):
         c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
                                 for t in scalars.values())  # fmt: skip
+    if caller.fast:
+        c_name += "_fast"
     inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural)
              for p, r in roles.items()}  # fmt: skip
-    f = _Function(func, inner, module, c_name, scalars)
+    f = _Function(func, inner, module, c_name, scalars, fast=caller.fast)
     f.constants.update(constants)
     f.infer(f.node.body)
     body = f.block(f.node.body, 1)
@@ -851,6 +877,37 @@ static inline acd_complex acd_cneg(acd_complex z)
 {
     return acd_c(-z.re, -z.im);
 }
+
+/* fast-math forms of a real mixed with a complex number (module docstring) */
+static inline acd_complex acd_caddr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re + r, z.im);
+}
+
+static inline acd_complex acd_raddc(ACDRIVE_REAL r, acd_complex z)
+{
+    return acd_c(r + z.re, z.im);
+}
+
+static inline acd_complex acd_csubr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re - r, z.im);
+}
+
+static inline acd_complex acd_rsubc(ACDRIVE_REAL r, acd_complex z)
+{
+    return acd_c(r - z.re, -z.im);
+}
+
+static inline acd_complex acd_cmulr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re * r, z.im * r);
+}
+
+static inline acd_complex acd_cdivr(acd_complex z, ACDRIVE_REAL r)
+{
+    return acd_c(z.re / r, z.im / r);
+}
 """
 
 
@@ -867,10 +924,10 @@ def _kernel_layouts(cls, part=None) -> dict[str, Role]:
 
 def _support(translated: Translated) -> tuple:
     from acdrive.sim._ccode._kinds import CSupport
-    from acdrive.sim._ccode._kinds.common import TABLE_AT
+    from acdrive.sim._ccode._kinds.common import TABLE_AT, TANH
 
     helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
-    return (TABLE_AT, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
+    return (TABLE_AT, TANH, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
 
 
 def translate_part(part) -> Translated:
@@ -896,3 +953,77 @@ def c_step(cls, source: str):
     translated = translate_step(cls.step, _kernel_layouts(cls))
     return CStep(body=translated.body, source=source, support=_support(translated),
                  from_kernel=True)  # fmt: skip
+
+
+#: the arguments of each plant kernel role (``sim._kernels.ROLES``) -> the layout each array is
+#: and whether the kernel writes it; the fast-math roles (run inside the integrator's stages)
+PLANT_SIGNATURES = {
+    "state_outputs": ("t", "x", "p", "y"),
+    "direct_outputs": ("t", "x", "u", "p", "y"),
+    "rhs": ("t", "x", "u", "p", "y", "dx"),
+    "project": ("x", "p"),
+}
+_PLANT_ARRAYS = {"x": ("STATES", "state"), "u": ("INPUTS", "in"), "p": ("PARAMS", "params"),
+                 "y": ("OUTPUTS", "out"), "dx": ("STATES", "state")}  # fmt: skip
+_PLANT_WRITES = {"state_outputs": {"y"}, "direct_outputs": {"y"}, "rhs": {"dx"},
+                 "project": {"x"}}  # fmt: skip
+FAST_ROLES = ("rhs",)
+
+
+def translate_plant(kernel, role: str, of) -> Translated:
+    """The C body of a continuous part's kernel ``role`` (``PLANT_SIGNATURES``) for the class
+    (or, per instance, the part) ``of``. ``rhs`` runs with fast-math in the numba tiers, so a
+    real mixed with a complex number takes the form that folds to (module docstring); the
+    others run at the sample instant without it."""
+    from acdrive.sim._ccode._c_source import kind_name
+
+    cls = of if isinstance(of, type) else type(of)
+    kind = kind_name(cls)
+    func = _python_function(kernel)
+    params = list(inspect.signature(func).parameters)
+    standard = PLANT_SIGNATURES[role]
+    if len(params) != len(standard):
+        raise UnsupportedKernel(f"{func.__module__}.{func.__name__}: a {role} kernel takes "
+                                f"({', '.join(standard)})")  # fmt: skip
+    roles = {}
+    for name, std in zip(params, standard, strict=True):
+        if std == "t":
+            continue
+        attr, suffix = _PLANT_ARRAYS[std]
+        roles[name] = Role(getattr(of, attr), std, f"acd_{kind}_{suffix}",
+                           std not in _PLANT_WRITES[role], kind)  # fmt: skip
+    f = _Function(func, roles, _Module(), role, fast=role in FAST_ROLES, top=True)
+    if "t" in standard and params[0] != "t":
+        f.fail(f.node, f"argument 1 named {params[0]!r} (the kernel's is 't')")
+    f.infer(f.node.body)
+    body = f.block(f.node.body, 1)
+    module = f.module
+    helpers = [(module.helpers[k].c_name, module.helpers[k].text) for k in module.order]
+    return Translated("\n".join([*f.declarations(), *body]) + "\n", helpers)
+
+
+def c_plant(cls, source: str):
+    """The ``PlantC`` of continuous part class ``cls`` generated from its kernels
+    (``translate_plant``; per instance for a kind whose layouts are set per instance)."""
+    from acdrive.sim._ccode._kinds import PlantC
+
+    kernels = cls.kernels(cls.__new__(cls))
+    per_instance = bool(getattr(cls, "PER_INSTANCE", None))
+    bodies, supports = {}, []
+    for role, kernel in kernels.items():
+        if per_instance:
+            bodies[role] = (lambda part, kernel=kernel, role=role:
+                            translate_plant(kernel, role, part).body)  # fmt: skip
+        else:
+            translated = translate_plant(kernel, role, cls)
+            # a kernel that does nothing (a part without states has an empty rhs) has no C
+            bodies[role] = translated.body if translated.body.strip() else None
+            supports += list(_support(translated))
+    if per_instance:
+        def support(part):
+            out = []
+            for role, kernel in kernels.items():
+                out += list(_support(translate_plant(kernel, role, part)))
+            return tuple(out)
+        return PlantC(source=source, support=support, from_kernel=True, **bodies)
+    return PlantC(source=source, support=tuple(supports), from_kernel=True, **bodies)

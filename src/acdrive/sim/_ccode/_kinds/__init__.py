@@ -80,6 +80,8 @@ class PlantC:
     project: object = None
     direct_outputs: object = None
     support: tuple[CSupport, ...] = ()
+    #: True when the bodies are generated from the kind's kernels (``sim._ccode._translate``)
+    from_kernel: bool = False
 
     def role(self, name: str, part) -> str | None:
         """The body of kernel role ``name`` for ``part`` (None: the kind has no such body)."""

@@ -89,3 +89,15 @@ static ACDRIVE_REAL acd_table_at(int n, const ACDRIVE_REAL *times, const ACDRIVE
 }
 """,
 )
+
+#: tanh by precision (newlib's libm has both), for the shaft's Coulomb friction (np.tanh of a kernel)
+TANH = CSupport(
+    "tanh",
+    """
+#ifdef ACDRIVE_FLOAT
+#define ACD_TANH tanhf
+#else
+#define ACD_TANH tanh
+#endif
+""",
+)

@@ -13,83 +13,40 @@ import math
 
 from acdrive._frames import K_3C, K_PEAK
 from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.machines._dfim_part import LOSS_CURRENT_SCALE, DoublyFedMachine
+from acdrive.machines._dfim_part import DoublyFedMachine
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
-from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._translate import c_plant, c_step
 from acdrive.sim._ccode._kinds import CSupport, PlantC, register, register_plant
-from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE, TABLE_AT
+from acdrive.sim._ccode._kinds.common import CLIP_MAGNITUDE
 
-#: tanh by precision (newlib's libm has both), for the shaft's Coulomb friction
-TANH = CSupport(
-    "tanh",
-    """
-#ifdef ACDRIVE_FLOAT
-#define ACD_TANH tanhf
-#else
-#define ACD_TANH tanh
-#endif
-""",
-)
 
 register_plant(
     DCSource,
-    PlantC(
+    c_plant(
+        DCSource,
         source="DC source: the voltage profile (plant._sources.dc_state_outputs)",
-        state_outputs="    y->v_dc = acd_table_at(p->V.n, p->V.t, p->V.v, t);",
-        support=(TABLE_AT,),
     ),
 )
 
 register_plant(
     CageInductionMachine,
-    PlantC(
+    c_plant(
+        CageInductionMachine,
         source="Amezquita-Brooks et al. (1)-(2), complex form (machines._cage_part)",
-        state_outputs=r"""
-    y->i_s = x->i_s;
-    y->psi_r = x->psi_r;
-    /* (2): tau_e = n_p (L_m / L_r) Im(conj(psi_r) i_s) */
-    y->tau_e = p->n_p * p->L_m / p->L_r * acd_cmul(acd_conj(x->psi_r), x->i_s).im;
-""",
-        rhs=r"""
-    /* (1): sigma L_s di_s/dt = v_s - (R_s + L_m^2 R_r / L_r^2) i_s + (L_m / L_r) k psi_r,
-       dpsi_r/dt = (L_m R_r / L_r) i_s - k psi_r, with k = R_r / L_r - j n_p w */
-    ACDRIVE_REAL over_L_r = ACD_R(1.0) / p->L_r; /* each division once, as the kernel does */
-    ACDRIVE_REAL sigma_L_s = p->L_s - p->L_m * p->L_m * over_L_r;
-    acd_complex rotor_pole = acd_c(p->R_r * over_L_r, -(p->n_p * u->w));
-    ACDRIVE_REAL r_eq = p->R_s + p->L_m * p->L_m * p->R_r * (over_L_r * over_L_r);
-    acd_complex sum = acd_cadd(acd_csub(u->v_s, acd_cscale(r_eq, x->i_s)),
-                               acd_cmul(acd_cscale(p->L_m * over_L_r, rotor_pole), x->psi_r));
-    dx->i_s = acd_cscale(ACD_R(1.0) / sigma_L_s, sum);
-    dx->psi_r = acd_csub(acd_cscale(p->L_m * p->R_r * over_L_r, x->i_s),
-                         acd_cmul(rotor_pole, x->psi_r));
-""",
     ),
 )
 
 register_plant(
     ThreePhaseSource,
-    PlantC(
+    c_plant(
+        ThreePhaseSource,
         source="balanced three-phase source: v = sqrt(3/2) V_pk(t) u_g, du_g/dt = j 2 pi f(t) "
         "u_g (plant._sources)",
-        state_outputs=rf"""
-    y->v = acd_cscale(ACD_R({K_PEAK!r}) * acd_table_at(p->V_pk.n, p->V_pk.t, p->V_pk.v, t), x->u_g);
-""",
-        rhs=rf"""
-    ACDRIVE_REAL w_g = ACD_R({2.0 * math.pi!r}) * acd_table_at(p->f.n, p->f.t, p->f.v, t);
-    dx->theta_g = w_g;
-    dx->u_g.re = -w_g * x->u_g.im; /* j w_g u_g */
-    dx->u_g.im = w_g * x->u_g.re;
-""",
-        project=r"""
-    x->u_g.re = ACD_COS(x->theta_g); /* u_g = e^(j theta_g) */
-    x->u_g.im = ACD_SIN(x->theta_g);
-""",
-        support=(TABLE_AT,),
     ),
 )
 
@@ -122,79 +79,19 @@ register_plant(
 
 register_plant(
     StatorRelay,
-    PlantC(
+    c_plant(
+        StatorRelay,
         source="stator relay: the bus voltage while closed, the open stator's voltage while open "
         "(plant._network)",
-        direct_outputs=r"""
-    int closed = u->closed != ACD_R(0.0);
-    y->v = closed ? u->v_bus : u->v_open;
-    y->closed = closed ? ACD_R(1.0) : ACD_R(0.0);
-""",
     ),
 )
 
 register_plant(
     DoublyFedMachine,
-    PlantC(
+    c_plant(
+        DoublyFedMachine,
         source="Bodson (9) in the stationary frame, flux linkages as states, the stator relay "
         "and the rotor converter's loss (machines._dfim_part)",
-        direct_outputs=rf"""
-    /* (9): psi_s = L_s i_s + M i_r, psi_r = M i_s + L_r i_r, solved with a real determinant;
-       an open stator carries no current: psi_r = L_r i_r */
-    int connected = u->connected != ACD_R(0.0);
-    ACDRIVE_REAL inv_det = ACD_R(1.0) / (p->L_s * p->L_r - p->M * p->M);
-    acd_complex i_s, i_r, v_r, dpsi_r;
-    if (connected) {{
-        i_s = acd_cscale(inv_det, acd_csub(acd_cscale(p->L_r, x->psi_s), acd_cscale(p->M, x->psi_r)));
-        i_r = acd_cscale(inv_det, acd_csub(acd_cscale(p->L_s, x->psi_r), acd_cscale(p->M, x->psi_s)));
-    }} else {{
-        i_s = acd_c(ACD_R(0.0), ACD_R(0.0));
-        i_r = acd_cscale(ACD_R(1.0) / p->L_r, x->psi_r);
-    }}
-    /* dpsi_r/dt = v_r e_r - V_loss i_r / sqrt(|i_r|^2 + i_0^2) - R_r i_r + j n_p w psi_r */
-    v_r = acd_cmul(u->v_r, x->e_r);
-    if (p->V_loss > ACD_R(0.0)) {{
-        ACDRIVE_REAL squared = i_r.re * i_r.re + i_r.im * i_r.im + ACD_R({LOSS_CURRENT_SCALE**2!r});
-        v_r = acd_csub(v_r, acd_cscale(p->V_loss / ACD_SQRT(squared), i_r));
-    }}
-    dpsi_r = acd_cadd(acd_csub(v_r, acd_cscale(p->R_r, i_r)),
-                      acd_cmul(acd_c(ACD_R(0.0), p->n_p * u->w), x->psi_r));
-    y->i_s = i_s;
-    y->i_r = i_r;
-    y->i_r_rotor = acd_cmul(i_r, acd_c(x->e_r.re, -x->e_r.im));
-    /* tau_e = n_p M Im(i_s conj(i_r)) */
-    y->tau_e = p->n_p * p->M * acd_cmul(i_s, acd_conj(i_r)).im;
-    y->dpsi_r = dpsi_r;
-    if (connected) {{ /* di_s/dt = a v_s + b, the terms the supply bus sums */
-        y->bus_gain = p->L_r * inv_det;
-        y->bus_drive = acd_cscale(inv_det, acd_csub(acd_cscale(-p->L_r * p->R_s, i_s),
-                                                    acd_cscale(p->M, dpsi_r)));
-        y->v_open = acd_c(ACD_R(0.0), ACD_R(0.0));
-    }} else {{ /* the open stator's terminal voltage (M / L_r) dpsi_r/dt */
-        y->bus_gain = ACD_R(0.0);
-        y->bus_drive = acd_c(ACD_R(0.0), ACD_R(0.0));
-        y->v_open = acd_cscale(p->M / p->L_r, dpsi_r);
-    }}
-""",
-        rhs=r"""
-    /* (9): dpsi_s/dt = v_s - R_s i_s while connected, else the open stator's voltage;
-       dpsi_r/dt from the outputs; dtheta/dt = w, de_r/dt = j n_p w e_r */
-    ACDRIVE_REAL w_el = p->n_p * u->w;
-    if (u->connected != ACD_R(0.0)) {
-        dx->psi_s = acd_csub(u->v_s, acd_cscale(p->R_s, y->i_s));
-    } else {
-        dx->psi_s = y->v_open;
-    }
-    dx->psi_r = y->dpsi_r;
-    dx->theta = u->w;
-    dx->e_r.re = -w_el * x->e_r.im;
-    dx->e_r.im = w_el * x->e_r.re;
-""",
-        project=r"""
-    ACDRIVE_REAL angle = p->n_p * x->theta; /* e_r = e^(j n_p theta) */
-    x->e_r.re = ACD_COS(angle);
-    x->e_r.im = ACD_SIN(angle);
-""",
     ),
 )
 
@@ -203,68 +100,27 @@ _PSI_PM = f"ACD_R({K_PEAK!r}) * p->psi_m"
 
 register_plant(
     PermanentMagnetMachine,
-    PlantC(
+    c_plant(
+        PermanentMagnetMachine,
         source="Ugalde-Loo et al. (7)-(8) in rotor coordinates, fed from the stationary frame "
         "(machines._pmsm_part)",
-        state_outputs=rf"""
-    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
-    y->i_s = acd_cmul(acd_c(i_d, i_q), x->e_r);
-    y->i_dq = acd_c(i_d, i_q);
-    y->psi_s = acd_cmul(acd_c(p->L_d * i_d + {_PSI_PM}, p->L_q * i_q), x->e_r);
-    /* (8): tau_e = n_p (psi_pm i_q + (L_d - L_q) i_d i_q) */
-    y->tau_e = p->n_p * ({_PSI_PM} * i_q + (p->L_d - p->L_q) * i_d * i_q);
-    y->theta = x->theta;
-""",
-        rhs=rf"""
-    /* (7): v_dq = v_s conj(e_r); L_d di_d/dt = v_d - R_s i_d + w_r L_q i_q,
-       L_q di_q/dt = v_q - R_s i_q - w_r (L_d i_d + psi_pm); de_r/dt = j w_r e_r */
-    acd_complex v_dq = acd_cmul(u->v_s, acd_c(x->e_r.re, -x->e_r.im));
-    ACDRIVE_REAL i_d = x->i_dq.re, i_q = x->i_dq.im;
-    ACDRIVE_REAL w_r = p->n_p * u->w;
-    dx->i_dq.re = (v_dq.re - p->R_s * i_d + w_r * p->L_q * i_q) / p->L_d;
-    dx->i_dq.im = (v_dq.im - p->R_s * i_q - w_r * (p->L_d * i_d + {_PSI_PM})) / p->L_q;
-    dx->theta = u->w;
-    dx->e_r.re = -w_r * x->e_r.im;
-    dx->e_r.im = w_r * x->e_r.re;
-""",
-        project=r"""
-    ACDRIVE_REAL angle = p->n_p * x->theta; /* e_r = e^(j n_p theta) */
-    x->e_r.re = ACD_COS(angle);
-    x->e_r.im = ACD_SIN(angle);
-""",
     ),
 )
 
 register_plant(
     Shaft,
-    PlantC(
+    c_plant(
+        Shaft,
         source="Bodson (26): J dw/dt = tau_e - tau_L(t) - (B + k_b(t)) w - tau_c tanh(w / "
         "W_COULOMB) (plant._mechanics)",
-        state_outputs="    y->w = x->w;\n    y->theta = x->theta;",
-        rhs=rf"""
-    ACDRIVE_REAL load = acd_table_at(p->load.n, p->load.t, p->load.v, t) + p->B * x->w;
-    ACDRIVE_REAL k_b;
-    if (p->tau_c != ACD_R(0.0)) {{
-        load += p->tau_c * ACD_TANH(x->w / ACD_R({W_COULOMB!r})); /* W_COULOMB */
-    }}
-    dx->w = (u->tau_e - load) / p->J;
-    k_b = acd_table_at(p->brake.n, p->brake.t, p->brake.v, t);
-    if (k_b != ACD_R(0.0)) {{ /* a separate term, as the kernel */
-        dx->w -= k_b * x->w / p->J;
-    }}
-    dx->theta = x->w;
-""",
-        support=(TABLE_AT, TANH),
     ),
 )
 
 register_plant(
     PrescribedSpeed,
-    PlantC(
+    c_plant(
+        PrescribedSpeed,
         source="a shaft held at a speed profile (plant._mechanics.speed_state_outputs, speed_rhs)",
-        state_outputs="    y->w = acd_table_at(p->w.n, p->w.t, p->w.v, t);\n    y->theta = x->theta;",
-        rhs="    dx->theta = acd_table_at(p->w.n, p->w.t, p->w.v, t);",
-        support=(TABLE_AT,),
     ),
 )
 
