@@ -216,7 +216,7 @@ def _kernel(source: str):
 @pytest.mark.parametrize(("body", "construct"), [
     ("    while t > 0.0:\n        t -= 1.0\n    return 0\n", "statement While"),
     ("    y[0] = u[0] ** 3\n    return 0\n", "operator Pow"),
-    ("    y[0] = np.tanh(u[0])\n    return 0\n", "library function tanh"),
+    ("    y[0] = np.arcsinh(u[0])\n    return 0\n", "library function arcsinh"),
     ("    k = int(u[0])\n    y[0] = u[k]\n    return 0\n", "not a constant of the module"),
 ])  # fmt: skip
 def test_a_construct_outside_the_language_names_kernel_line_and_construct(body, construct):
@@ -257,3 +257,146 @@ def test_the_current_controller_is_written_for_its_order():
         n, body = part.discrete.order, translate_part(part).body
         assert f"s->x_{n - 1}" in body and f"s->x_{n}" not in body
     assert "u->v_dc" in translate_part(pi_dc).body and "u->v_dc" not in translate_part(pi).body
+
+
+# --- plant kinds: the continuous parts' kernels -------------------------------------------------
+
+#: C argument order of each plant role (``sim._ccode._plant_source._signature``): (array, struct
+#: role) present when the kind declares that struct; "y" and "x"/"dx" always where listed
+_PLANT_ARGS = {
+    "state_outputs": ("t", "p", "x?", "y"),
+    "direct_outputs": ("t", "p", "x?", "u", "y"),
+    "rhs": ("t", "p", "x", "u", "y", "dx"),
+    "project": ("p", "x"),
+}
+_PLANT_STRUCT = {"p": ("PARAMS", "params"), "x": ("STATES", "state"), "u": ("INPUTS", "in"),
+                 "y": ("OUTPUTS", "out"), "dx": ("STATES", "state")}  # fmt: skip
+
+
+def generated_plant_kinds() -> list[type]:
+    _kinds._load()
+    return sorted((cls for cls, c in _kinds._PLANT_REGISTRY.items() if c.from_kernel),
+                  key=lambda c: c.__name__)  # fmt: skip
+
+
+def test_the_translated_plant_kinds_are_registered():
+    names = {c.__name__ for c in generated_plant_kinds()}
+    assert {"DCSource", "CageInductionMachine", "ThreePhaseSource", "StatorRelay",
+            "DoublyFedMachine", "PermanentMagnetMachine", "Shaft", "PrescribedSpeed"} <= names  # fmt: skip
+
+
+def plant_library(cls, role: str, folder):
+    """The kind's generated C of ``role`` with a flat-array wrapper ``run(t, x, u, p, y, dx)``."""
+    from acdrive.sim._ccode._plant_source import _signature, _unused
+
+    c = _kinds._PLANT_REGISTRY[cls]
+    entry = KindTypes(cls, kind_name(cls), c, c.body(None) if False else "", support=c.support)
+    for r, attr, _ in _ROLES:
+        entry.members[r] = _members(getattr(cls, attr))
+    signature = _signature(entry, role)
+    code = [signature, "{", *_unused(signature), c.role(role, None).strip("\n"), "}"]
+    kinds = {cls: entry}
+    wrapper = ["void run(double t, double *x, const double *u, const double *p, double *y, "
+               "double *dx)", "{", "    int i = 0;",
+               "    (void)t; (void)x; (void)u; (void)p; (void)y; (void)dx;"]  # fmt: skip
+    args = []
+    for name in _PLANT_ARGS[role]:
+        if name == "t":
+            args.append("t")
+            continue
+        optional = name.endswith("?")
+        name = name.rstrip("?")
+        attr, struct = _PLANT_STRUCT[name]
+        layout = getattr(cls, attr)
+        if not entry.members[struct] and (name == "p" or optional or name == "u"):
+            continue
+        var = name.upper() + "_"
+        wrapper.append(f"    acd_{entry.cname}_{struct} {var};")
+        wrapper += _copy_lines(layout, var, name, True)
+        args.append(f"&{var}")
+    wrapper.append(f"    acd_{entry.cname}_{role}({', '.join(args)});")
+    written = {"state_outputs": "y", "direct_outputs": "y", "rhs": "dx", "project": "x"}[role]
+    attr = _PLANT_STRUCT[written][0]
+    wrapper += _copy_lines(getattr(cls, attr), written.upper() + "_", written, False)
+    wrapper += ["    (void)i;", "}"]
+    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
+                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
+    path = folder / f"{entry.cname}_{role}.c"
+    path.write_text(source)
+    library = folder / f"lib{entry.cname}_{role}.so"
+    strict = ("-Wall", "-Wextra", "-Werror")
+    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lib = ctypes.CDLL(str(library))
+    pointer = ctypes.POINTER(ctypes.c_double)
+    lib.run.argtypes = [ctypes.c_double, *([pointer] * 5)]
+    lib.run.restype = None
+    return lib.run
+
+
+def _same_up_to_zero_sign(a: np.ndarray, b: np.ndarray) -> bool:
+    """Equal bits, or both zeros of either sign, or both NaN: what a kernel compiled with
+    numba's no-signed-zeros flag promises."""
+    both_nan = np.isnan(a) & np.isnan(b)
+    zeros = (a == 0.0) & (b == 0.0)
+    return bool(np.all(both_nan | zeros | (a.view(np.int64) == b.view(np.int64))))
+
+
+def _finite_values(rng, n: int) -> np.ndarray:
+    """Values of either sign from 1e-3 to 1e3 and signed zeros (no 1e300: a fast-math kernel
+    assumes no overflow to infinity)."""
+    out = np.exp(rng.uniform(np.log(1e-3), np.log(1e3), n)) * rng.choice([-1.0, 1.0], n)
+    zero = rng.random(n) < 0.1
+    out[zero] = rng.choice([0.0, -0.0], int(zero.sum()))
+    return out
+
+
+def _plant_cases() -> list:
+    return [(cls, role) for cls in generated_plant_kinds()
+            for role in PLANT_ROLES_TRANSLATED if _kinds._PLANT_REGISTRY[cls].role(role, None)]  # fmt: skip
+
+
+PLANT_ROLES_TRANSLATED = ("state_outputs", "direct_outputs", "rhs", "project")
+
+
+@pytest.mark.parametrize(("cls", "role"), _plant_cases(),
+                         ids=lambda v: v.__name__ if isinstance(v, type) else v)  # fmt: skip
+def test_generated_plant_c_equals_the_compiled_kernel(cls, role, tmp_path):
+    """Against the kernel as every tier compiles it, at the sample instant and inside the
+    integrator's stages: bit for bit for a kernel without fast-math, up to the sign of a zero
+    for one with acdrive's fast-math flags (``jit_fast``), which leave that sign unspecified."""
+    from acdrive.sim._ccode._translate import _fast_math
+
+    run_c = plant_library(cls, role, tmp_path)
+    module = kind_module(cls)
+    exact = _same_up_to_zero_sign if _fast_math(getattr(cls, role), False) else _same
+    strict = getattr(module, role, None) if role != "rhs" else None
+    fast = getattr(module, f"{role}_fast", None) if role != "rhs" else module.rhs
+    rng = np.random.default_rng(sum(map(ord, cls.__name__ + role)))
+    as_pointer = (lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    for draw in range(DRAWS):
+        p, times = _flat(rng, cls.PARAMS)
+        p[: cls.PARAMS.fixed_size] = np.abs(_finite_values(rng, cls.PARAMS.fixed_size)) + 1e-3
+        x = _finite_values(rng, max(cls.STATES.fixed_size, 1))
+        u = _finite_values(rng, max(cls.INPUTS.fixed_size, 1))
+        y = _finite_values(rng, max(cls.OUTPUTS.fixed_size, 1))
+        dx = np.zeros(max(cls.STATES.fixed_size, 1))
+        t = times[draw % len(times)] if times and draw % 2 else float(rng.uniform(0.0, 1.2))
+        c_arrays = [a.copy() for a in (x, u, p, y, dx)]
+        run_c(t, *(as_pointer(a) for a in c_arrays))
+        for kernel, same in ((strict, exact), (fast, _same_up_to_zero_sign)):
+            if kernel is None:
+                continue
+            k_arrays = [a.copy() for a in (x, u, p, y, dx)]
+            kx, ku, kp, ky, kdx = k_arrays
+            if role == "state_outputs":
+                kernel(t, kx, kp, ky)
+            elif role == "direct_outputs":
+                kernel(t, kx, ku, kp, ky)
+            elif role == "rhs":
+                kernel(t, kx, ku, kp, ky, kdx)
+            else:
+                kernel(kx, kp)
+            for name, ka, ca in zip("x u p y dx".split(), k_arrays, c_arrays, strict=True):
+                assert same(ka, ca), (draw, name, ka, ca)

@@ -25,9 +25,14 @@ order; Python's ``%`` by ``acd_pymod``; ``np.sin``, ``np.cos``, ``np.sqrt`` and 
 complex number by acdrive's own functions (``sim._lane_math``, the C's ``ACD_SIN``, ``ACD_COS``,
 ``ACD_SQRT``, ``acd_cabs``), which the loops rebind numpy's to; complex products and quotients
 as ``acd_cmul``/``acd_cdiv`` (numba's formulas). A real mixed with a complex number is promoted
-to ``r + 0j`` first, as numba does, and the complex operation follows: a sampled step is
-compiled without fast-math in every tier, so the products and sums with that zero are kept
-(they decide the sign of a zero result).
+to ``r + 0j`` first, as numba does, and the complex operation follows: in a kernel compiled
+without fast-math (the sampled steps, ``jit``) the products and sums with that zero are kept
+(they decide the sign of a zero result); in one compiled with acdrive's fast-math flags (the
+plant's kernels, ``jit_fast``: no NaN, no infinity, no signed zero) numba folds them away, and
+the C writes what remains: ``r z = (r z.re, r z.im)``, ``z + r = (z.re + r, z.im)``,
+``r - z = (r - z.re, -z.im)``, ``z / r = (z.re / r, z.im / r)``. The flag is read from the
+kernel's own options, so with ``ACDRIVE_STRICT_MATH=1`` (no fast-math anywhere) every kernel
+takes the promoted form.
 
 A construct outside the language is an ``UnsupportedKernel`` naming the kernel, the line and
 the construct.
@@ -91,6 +96,18 @@ class Translated:
 
 def _python_function(kernel):
     return getattr(kernel, "py_func", kernel)
+
+
+def _fast_math(kernel, default: bool) -> bool:
+    """Whether ``kernel`` is compiled with fast-math flags (its own ``fastmath`` option: a
+    numba dispatcher's target options, or acdrive's lazy kernel's options); ``default`` for a
+    plain Python function."""
+    options = getattr(kernel, "targetoptions", None)
+    if options is None:
+        options = getattr(kernel, "_options", None)
+    if options is None:
+        return default
+    return bool(options.get("fastmath"))
 
 
 def _is_kernel_function(value) -> bool:
@@ -793,7 +810,7 @@ class _Function:
 
 def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     func = _python_function(target)
-    key = (func, caller.fast, tuple((t[0], t[1].struct, t[1].const)
+    key = (func, _fast_math(target, caller.fast), tuple((t[0], t[1].struct, t[1].const)
                                     if isinstance(t, tuple) and t[0] == "role" else t
                                     for t in arg_types))  # fmt: skip
     found = module.helpers.get(key)
@@ -819,11 +836,12 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     if any(t != REAL for t in scalars.values()):
         c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
                                 for t in scalars.values())  # fmt: skip
-    if caller.fast:
+    fast = _fast_math(target, caller.fast)
+    if fast:
         c_name += "_fast"
     inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural)
              for p, r in roles.items()}  # fmt: skip
-    f = _Function(func, inner, module, c_name, scalars, fast=caller.fast)
+    f = _Function(func, inner, module, c_name, scalars, fast=fast)
     f.constants.update(constants)
     f.infer(f.node.body)
     body = f.block(f.node.body, 1)
@@ -860,7 +878,7 @@ def translate_step(kernel, roles: dict[str, Role]) -> Translated:
                                 "(t, T_s, u, p, s, y)")  # fmt: skip
     by_name = {params[i]: roles[r] for i, r in ((2, "u"), (3, "p"), (4, "s"), (5, "y"))
                if r in roles}  # fmt: skip
-    f = _Function(func, by_name, module, "step", is_step=True)
+    f = _Function(func, by_name, module, "step", is_step=True, fast=_fast_math(kernel, False))
     for k, standard in ((0, "t"), (1, "T_s")):
         if params[k] != standard:
             f.fail(f.node, f"argument {k + 1} named {params[k]!r} (the step's is {standard!r})")
@@ -956,7 +974,7 @@ def c_step(cls, source: str):
 
 
 #: the arguments of each plant kernel role (``sim._kernels.ROLES``) -> the layout each array is
-#: and whether the kernel writes it; the fast-math roles (run inside the integrator's stages)
+#: and whether the kernel writes it
 PLANT_SIGNATURES = {
     "state_outputs": ("t", "x", "p", "y"),
     "direct_outputs": ("t", "x", "u", "p", "y"),
@@ -967,14 +985,13 @@ _PLANT_ARRAYS = {"x": ("STATES", "state"), "u": ("INPUTS", "in"), "p": ("PARAMS"
                  "y": ("OUTPUTS", "out"), "dx": ("STATES", "state")}  # fmt: skip
 _PLANT_WRITES = {"state_outputs": {"y"}, "direct_outputs": {"y"}, "rhs": {"dx"},
                  "project": {"x"}}  # fmt: skip
-FAST_ROLES = ("rhs",)
 
 
 def translate_plant(kernel, role: str, of) -> Translated:
     """The C body of a continuous part's kernel ``role`` (``PLANT_SIGNATURES``) for the class
-    (or, per instance, the part) ``of``. ``rhs`` runs with fast-math in the numba tiers, so a
-    real mixed with a complex number takes the form that folds to (module docstring); the
-    others run at the sample instant without it."""
+    (or, per instance, the part) ``of``. A kernel compiled with fast-math flags (``jit_fast``:
+    every tier inlines it with its own flags) has a real mixed with a complex number in the
+    form those flags fold the promoted operation to (module docstring)."""
     from acdrive.sim._ccode._c_source import kind_name
 
     cls = of if isinstance(of, type) else type(of)
@@ -992,7 +1009,7 @@ def translate_plant(kernel, role: str, of) -> Translated:
         attr, suffix = _PLANT_ARRAYS[std]
         roles[name] = Role(getattr(of, attr), std, f"acd_{kind}_{suffix}",
                            std not in _PLANT_WRITES[role], kind)  # fmt: skip
-    f = _Function(func, roles, _Module(), role, fast=role in FAST_ROLES, top=True)
+    f = _Function(func, roles, _Module(), role, fast=_fast_math(kernel, False), top=True)
     if "t" in standard and params[0] != "t":
         f.fail(f.node, f"argument 1 named {params[0]!r} (the kernel's is 't')")
     f.infer(f.node.body)
