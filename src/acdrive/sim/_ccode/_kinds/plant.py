@@ -1,23 +1,23 @@
-"""C of the plant kinds the plant C is built from (``sim._ccode._plant_source``): the DC
-and three-phase sources, the cage induction motor, the PM machine, the DFIM with its supply bus
-and stator relay (Bodson (9)), the free shaft and the averaged converters,
-the switching SVPWM inverter (its segments inside one control period), and the C step of
-the PWM unit's latch (a sampled part in front of an averaged converter). Each body repeats its
-numba kernel operation for operation (complex products as (ac - bd) + j(ad + bc), quotients by
-Smith's algorithm, the kernels' order of sums), so a strict-math build agrees to rounding; the
-FMU tests (``tests/test_export_fmu.py``) keep the two equal."""
-
+"""C of the plant kinds the plant C is built from (``sim._ccode._plant_source``). The
+continuous parts (the DC and three-phase sources, the cage induction motor, the PM machine, the
+DFIM and its stator relay (Bodson (9)), the free shaft, the prescribed speed) have it generated
+from their kernels (``sim._ccode._translate.c_plant``), as the PWM unit's latch (a sampled part
+in front of an averaged converter) has its step. Written here beside their kernels: the supply
+bus, whose inputs are set per instance (one per machine it feeds), and the modulators (the
+averaged converters and the switching SVPWM inverter, its segments inside one control period),
+whose kernels write a table of segments; each repeats its numba kernel operation for operation,
+and the native-tier and FMU tests keep the two equal."""
 from __future__ import annotations
 
 import math
 
-from acdrive._frames import K_3C, K_PEAK
+from acdrive._frames import K_3C
 from acdrive.machines._cage_part import CageInductionMachine
 from acdrive.machines._dfim_part import DoublyFedMachine
 from acdrive.machines._pmsm_part import PermanentMagnetMachine
 from acdrive.plant._converter import AveragedConverter, DCFedConverter
 from acdrive.plant._inverter import CarrierLatch, Inverter
-from acdrive.plant._mechanics import W_COULOMB, PrescribedSpeed, Shaft
+from acdrive.plant._mechanics import PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
 from acdrive.sim._ccode._translate import c_plant, c_step
@@ -95,8 +95,6 @@ register_plant(
     ),
 )
 
-#: psi_pm = K_PEAK psi_m (machines._pmsm_part.magnet_flux)
-_PSI_PM = f"ACD_R({K_PEAK!r}) * p->psi_m"
 
 register_plant(
     PermanentMagnetMachine,
