@@ -105,7 +105,8 @@ def test_names_units_in_comments(exported):
 
 
 class _NoC(SampledPart):
-    """A sampled part kind that has no C."""
+    """A sampled part kind whose kernel is outside the kernel language (a while loop), so it
+    has no C."""
 
     PARAMS = Layout(real("k", "", "a gain"))
     OUTPUTS = Layout(real("y", "", "an output"))
@@ -114,15 +115,20 @@ class _NoC(SampledPart):
     @staticmethod
     def step(t, T_s, u, p, s, y):  # pragma: no cover (never simulated)
         y[0] = p[0]
+        while y[0] > 1.0:
+            y[0] -= 1.0
         return 0
 
 
 def test_part_without_c_is_named():
+    """One line naming the part, its kind, and the kernel's line and construct the C could not
+    be generated from."""
     system = System([_NoC("toy")], [])
     with pytest.raises(InputError) as caught:
         to_c(system, 1e-4)
     message = str(caught.value)
     assert "toy" in message and "_NoC" in message and "\n" not in message
+    assert "the statement While" in message and "_NoC.step (line " in message
 
 
 #: run in a fresh interpreter: the engine's C registry loaded, then the PM drive's controller
@@ -144,15 +150,19 @@ try:
     refused = ""
 except Exception as error:
     refused = str(error)
+generated = _kinds._REGISTRY[MySpeedPI]
 print(json.dumps({"engine": engine_kinds, "before": imported_before, "found": found,
-                  "after": "acdrive.drives.pm._c_kinds" in sys.modules, "refused": refused}))
+                  "after": "acdrive.drives.pm._c_kinds" in sys.modules, "refused": refused,
+                  "generated": generated.from_kernel,
+                  "same": generated.body == _kinds._REGISTRY[PMSpeedPI].body}))
 """
 
 
 def test_a_drive_kinds_c_is_found_through_its_class():
     """The registry below the drives names no drive: the PM controller kinds' C
     (``drives.pm._c_kinds``) is imported on the first look-up of one of them, from the module
-    their class names as ``C_MODULE``; a subclass (another kind) is still refused by name."""
+    their class names as ``C_MODULE``; a subclass (another kind, without an entry) gets its C
+    generated from its kernel, the same as its parent's."""
     import json
     import sys
 
@@ -164,18 +174,18 @@ def test_a_drive_kinds_c_is_found_through_its_class():
     assert seen["found"] == dict.fromkeys(
         ["PMSpeedPI", "PMTorqueReference", "RotorFrameCurrentController"], True
     )
-    assert seen["refused"].startswith("mine: part kind MySpeedPI has no C implementation")
-    assert "C_MODULE" in seen["refused"] and "\n" not in seen["refused"]
+    assert seen["refused"] == "" and seen["generated"] and seen["same"]
 
 
 def test_cli_part_without_c_exit_2(tmp_path, capsys, monkeypatch):
-    """A kind without C (here the speed reference's entry taken out of the registry): one line
-    naming the part, exit 2, nothing written."""
+    """A kind without C (here the speed reference's entry taken out of the registry and its
+    kernel marked outside the language): one line naming the part, exit 2, nothing written."""
     from acdrive.control._speed import SpeedReference
     from acdrive.sim._ccode import _kinds as kinds
 
     kinds.exportable_kinds()  # loads the registry
     monkeypatch.delitem(kinds._REGISTRY, SpeedReference)
+    monkeypatch.setitem(kinds._UNTRANSLATABLE, SpeedReference, "a construct (marked by the test)")
     assert _cli("export", "c", "bodson-ramp", "--out", str(tmp_path / "out")) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1

@@ -15,6 +15,7 @@ import textwrap
 import numpy as np
 import pytest
 
+from acdrive._jit import jit
 from acdrive.errors import InputError, SimulationDiverged
 from acdrive.sim import _native
 from acdrive.sim._system import System
@@ -173,25 +174,68 @@ def test_a_failed_compile_leaves_nothing_and_the_numba_tiers_run(monkeypatch, tm
     assert system.compile().tier in ("specialised", "generic")
 
 
-def test_a_part_without_c_is_named_and_numba_runs_it(monkeypatch):
-    """A user's part kind has no C: the native tier names it and the auto tier runs numba."""
-    from acdrive.core._parts import SampledPart
-    from acdrive.core._signals import Layout, cplx
+@jit
+def looping_step(t, T_s, u, p, s, y):
+    """A user's kernel outside the kernel language: a while loop (numba compiles it)."""
+    k = 0
+    while k < 2:
+        y[k] = 0.0
+        k += 1
+    return 0
 
-    system, im, shaft = _open_loop_im()
-    assert _native.native_obstacle(system) in (None, "no C compiler found (cc, gcc or $CC)")
+
+def _with_user_program(system, kind):
+    """``system`` with its V/f program replaced by an instance of the user's ``kind``."""
+    im, shaft, inverter = (system.part(n) for n in ("im", "shaft", "inverter"))
+    mine = kind("mine", **system.part("program").values)
+    return System([im, shaft, mine, inverter],
+                  [(mine.out.v_ref, inverter.inp.v_ref), (inverter.out.v, im.inp.v_s),
+                   (shaft.out.w, im.inp.w), (im.out.tau_e, shaft.inp.tau_e)])  # fmt: skip
+
+
+@needs_cc
+def test_a_users_part_runs_natively_from_its_kernel(monkeypatch):
+    """A user's part kind, declared with the public API and registered nowhere, gets its C
+    generated from its kernel: the system runs on the native tier, equal bit for bit to the
+    specialised numba loop."""
+    from acdrive.control._open_loop import VoltageProgram
+    from acdrive.core._parts import SampledPart
 
     class MyProgram(SampledPart):
-        OUTPUTS = Layout(cplx("v_ref", "V", "commanded voltage"))
-        step = type(system.part("program")).step
+        """A V/f program written by a user (VoltageProgram's declarations and kernel)."""
 
-    mine = MyProgram("mine")
-    user = System([im, shaft, mine, system.part("inverter")],
-                  [(mine.out.v_ref, system.part("inverter").inp.v_ref),
-                   (system.part("inverter").out.v, im.inp.v_s), (shaft.out.w, im.inp.w),
-                   (im.out.tau_e, shaft.inp.tau_e)])  # fmt: skip
+        PARAMS, STATES, OUTPUTS = VoltageProgram.PARAMS, VoltageProgram.STATES, VoltageProgram.OUTPUTS
+        step = VoltageProgram.step
+
+    system, _, _ = _open_loop_im()
+    user = _with_user_program(system, MyProgram)
+    assert _native.native_obstacle(user) is None
+    run = {"duration": 0.05, "sample_time": 1e-4, "substeps": 2, "log": [user.part("shaft").out.w]}
+    native = _compiled(user, "native", monkeypatch).run(**run)
+    reference = _compiled(user, "specialised", monkeypatch).run(**run)
+    assert native.data[-1, 0] > 1.0  # the program drove the shaft
+    assert np.array_equal(native.data, reference.data)
+
+
+def test_a_part_outside_the_kernel_language_is_named_and_numba_runs_it(monkeypatch):
+    """A user's kind whose kernel is outside the kernel language (a while loop) has no C: the
+    native tier names the kind, the kernel's line and the construct, and the auto tier runs
+    numba."""
+    from acdrive.control._open_loop import VoltageProgram
+    from acdrive.core._parts import SampledPart
+
+    class MyLoop(SampledPart):
+        """A program whose kernel loops while a condition holds."""
+
+        PARAMS, STATES, OUTPUTS = VoltageProgram.PARAMS, VoltageProgram.STATES, VoltageProgram.OUTPUTS
+        step = looping_step
+
+    system, _, _ = _open_loop_im()
+    user = _with_user_program(system, MyLoop)
     reason = _native.native_obstacle(user)
-    assert reason is not None and ("MyProgram" in reason or "compiler" in reason)
+    assert reason is not None and ("MyLoop" in reason or "compiler" in reason)
+    if "compiler" not in reason:
+        assert "looping_step (line " in reason and "the statement While" in reason
     monkeypatch.setenv("ACDRIVE_LOOP_TIER", "native")
     with pytest.raises(InputError, match="native cannot run this system"):
         user.compile()

@@ -85,15 +85,18 @@ def native_obstacle(system) -> str | None:
         return f"the integrator {system.method} has no C"
     if not system.continuous:
         return "the system has no continuous part"
-    missing = []
+    from acdrive.sim._ccode._kinds import untranslatable
+
+    missing = {}
     for part in system.parts:
         lookup = c_step_of if isinstance(part, SampledPart) else plant_c_of
         try:
             lookup(part)
         except InputError:
-            missing.append(type(part).__name__)
+            missing[type(part).__name__] = untranslatable(type(part))
     if missing:
-        return f"no C for the part kind(s) {', '.join(sorted(set(missing)))}"
+        names = ", ".join(f"{n} ({why})" if why else n for n, why in sorted(missing.items()))
+        return f"no C for the part kind(s) {names}"
     return None
 
 

@@ -102,9 +102,11 @@ def _fast_math(kernel, default: bool) -> bool:
     """Whether ``kernel`` is compiled with fast-math flags (its own ``fastmath`` option: a
     numba dispatcher's target options, or acdrive's lazy kernel's options); ``default`` for a
     plain Python function."""
-    options = getattr(kernel, "targetoptions", None)
-    if options is None:
-        options = getattr(kernel, "_options", None)
+    # acdrive's lazy kernel keeps its options itself: reading them creates no dispatcher (a
+    # native run imports no numba); a numba dispatcher has them as its target options
+    options = kernel.__dict__.get("_options") if hasattr(kernel, "__dict__") else None
+    if options is None and type(kernel).__module__.startswith("numba"):
+        options = getattr(kernel, "targetoptions", None)
     if options is None:
         return default
     return bool(options.get("fastmath"))
@@ -157,11 +159,15 @@ class _Function:
         self.fast = fast
         #: a plant kernel's own body (returns nothing)
         self.top = top
-        source = textwrap.dedent(inspect.getsource(self.func))
+        try:
+            source = textwrap.dedent(inspect.getsource(self.func))
+        except (OSError, TypeError):
+            raise UnsupportedKernel(f"{self.func.__module__}.{self.func.__qualname__}: its "
+                                    "source is not available to read") from None  # fmt: skip
         tree = ast.parse(source)
         self.node = next(n for n in tree.body if isinstance(n, ast.FunctionDef))
         self.first_line = self.func.__code__.co_firstlineno - 1
-        self.where = f"{self.func.__module__}.{self.func.__name__}"
+        self.where = f"{self.func.__module__}.{self.func.__qualname__}"
         self.globals = self.func.__globals__
         self.arg_types = dict(arg_types or {})
         self.types: dict[str, str] = dict(self.arg_types)

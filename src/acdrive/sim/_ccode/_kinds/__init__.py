@@ -12,7 +12,10 @@ parameters as ``p->name``, its discrete state as ``s->name`` and writes its outp
 ``p->name`` has ``.n`` points ``.t[i]``, ``.v[i]``); ``t`` is the sample instant and ``T_s`` the
 sample period; it returns the event bits (``ACD_<KIND>_<EVENT>`` masks, from ``EVENTS``).
 
-A kind is looked up by its exact class: a subclass with another kernel needs its own entry.
+A kind is looked up by its exact class. A class with no entry (a user's own part, a subclass)
+gets its C generated from its kernels on its first look-up (``sim._ccode._translate``) and
+registered; a kernel outside the kernel language leaves it without C, and the refusal names
+the kernel, its line and the construct.
 
 Plant kinds (continuous parts and modulators, for the plant C, ``sim._ccode._plant_source``)
 have a second registry of :class:`PlantC` entries, the same seam: bodies written against the
@@ -128,15 +131,61 @@ def _load() -> None:
         _loaded = True
 
 
+#: kind -> why its C cannot be generated from its kernels (``sim._ccode._translate``)
+_UNTRANSLATABLE: dict[type, str] = {}
+
+
 def _entry(registry: dict, kind: type):
     """``kind``'s entry in ``registry``, after importing the module the class names as
-    ``C_MODULE`` if it has none yet (None: no C)."""
+    ``C_MODULE`` if it has none yet; a kind with neither (a user's own part) gets its C
+    generated from its kernels and registered (None: no C, the reason in ``untranslatable``)."""
     entry = registry.get(kind)
     module = getattr(kind, "C_MODULE", None)
     if entry is None and module:
         importlib.import_module(module)
         entry = registry.get(kind)
+    if entry is None and kind not in _UNTRANSLATABLE:
+        entry = _generated(registry, kind)
     return entry
+
+
+def _generated(registry: dict, kind: type):
+    """The C of ``kind`` generated from its kernels and registered, or None (the reason kept)."""
+    from acdrive.core._parts import ContinuousPart, SampledPart
+    from acdrive.sim._ccode._translate import UnsupportedKernel, c_plant, c_step
+
+    source = f"{kind.__module__}.{kind.__qualname__}, generated from its kernels"
+    try:
+        if registry is _REGISTRY and issubclass(kind, SampledPart):
+            entry = c_step(kind, source)
+        elif registry is _PLANT_REGISTRY and issubclass(kind, ContinuousPart):
+            entry = c_plant(kind, source)
+        else:
+            _UNTRANSLATABLE[kind] = "a modulator's segments have no generated C"
+            return None
+    except UnsupportedKernel as exc:
+        _UNTRANSLATABLE[kind] = str(exc)
+        return None
+    except Exception as exc:  # noqa: BLE001 (a kernel the translator stumbles on runs in numba)
+        _UNTRANSLATABLE[kind] = f"the translator could not read it ({type(exc).__name__}: {exc})"
+        return None
+    registry[kind] = entry
+    return entry
+
+
+def untranslatable(kind: type) -> str | None:
+    """Why ``kind``'s kernels gave no C (None: they did, or were not tried)."""
+    return _UNTRANSLATABLE.get(kind)
+
+
+def _no_c(part, what: str) -> InputError:
+    why = untranslatable(type(part))
+    return InputError(
+        part.name,
+        f"part kind {type(part).__name__} has no C implementation, so {what} cannot be "
+        f"exported: " + (f"its kernel is outside the kernel language ({why})" if why else
+                         "no C is registered for it"),
+    )  # fmt: skip
 
 
 def c_step_of(part) -> CStep:
@@ -144,12 +193,7 @@ def c_step_of(part) -> CStep:
     _load()
     step = _entry(_REGISTRY, type(part))
     if step is None:
-        raise InputError(
-            part.name,
-            f"part kind {type(part).__name__} has no C implementation, so the chain cannot be "
-            "exported (a kind's C is registered in acdrive.sim._ccode._kinds or in the module "
-            "its class names as C_MODULE)",
-        )
+        raise _no_c(part, "the chain")
     return step
 
 
@@ -158,12 +202,7 @@ def plant_c_of(part) -> PlantC:
     _load()
     c = _entry(_PLANT_REGISTRY, type(part))
     if c is None:
-        raise InputError(
-            part.name,
-            f"part kind {type(part).__name__} has no C implementation, so the plant cannot be "
-            "exported (a plant kind's C is registered in acdrive.sim._ccode._kinds.plant or in "
-            "the module its class names as C_MODULE)",
-        )
+        raise _no_c(part, "the plant")
     return c
 
 
