@@ -282,7 +282,83 @@ def generated_plant_kinds() -> list[type]:
 def test_the_translated_plant_kinds_are_registered():
     names = {c.__name__ for c in generated_plant_kinds()}
     assert {"DCSource", "CageInductionMachine", "ThreePhaseSource", "StatorRelay",
-            "DoublyFedMachine", "PermanentMagnetMachine", "Shaft", "PrescribedSpeed"} <= names  # fmt: skip
+            "DoublyFedMachine", "PermanentMagnetMachine", "Shaft", "PrescribedSpeed",
+            "AveragedConverter", "DCFedConverter"} <= names  # fmt: skip
+
+
+def segments_library(cls, folder):
+    """A modulator's generated ``segments`` with a flat-array wrapper
+    ``run(T_s, u, p, s, dt, v)`` returning n + 256 * events (v: MAX_SEGMENTS rows)."""
+    from acdrive.sim._ccode._plant_source import _signature, _unused
+
+    c = _kinds._PLANT_REGISTRY[cls]
+    entry = KindTypes(cls, kind_name(cls), c, "", support=c.support)
+    for r, attr, _ in _ROLES:
+        entry.members[r] = _members(getattr(cls, attr))
+    signature = _signature(entry, "segments")
+    code = [signature, "{", *_unused(signature), c.role("segments", None).strip("\n"), "}"]
+    kinds = {cls: entry}
+    width, rows = cls.OUTPUTS.fixed_size, cls.MAX_SEGMENTS
+    wrapper = ["uint32_t run(double T_s, const double *u, const double *p, double *s, "
+               "double *dt, double *v)", "{", "    int i = 0, n = 0, r;", "    uint32_t events;",
+               f"    acd_{entry.cname}_out V[{rows}];",
+               "    (void)u; (void)p; (void)s;"]  # fmt: skip
+    args = ["T_s"]
+    for r, attr, arg in (("in", "INPUTS", "u"), ("params", "PARAMS", "p"),
+                         ("state", "STATES", "s")):  # fmt: skip
+        if entry.members[r]:
+            wrapper.append(f"    acd_{entry.cname}_{r} {arg.upper()}_;")
+            wrapper += _copy_lines(getattr(cls, attr), arg.upper() + "_", arg, True)
+            args.append(f"&{arg.upper()}_")
+    wrapper.append(f"    for (r = 0; r < {rows}; ++r) {{")
+    wrapper += ["    " + line.replace("= v[", f"= v[r * {width} + ")
+                for line in _copy_lines(cls.OUTPUTS, "V[r]", "v", True)]  # fmt: skip
+    wrapper.append("    }")
+    wrapper.append(f"    events = acd_{entry.cname}_segments({', '.join([*args, '&n', 'dt', 'V'])});")
+    if entry.members["state"]:
+        wrapper += _copy_lines(cls.STATES, "S_", "s", False)
+    wrapper.append(f"    for (r = 0; r < {rows}; ++r) {{")
+    wrapper += ["    " + line.replace("    v[", f"    v[r * {width} + ")
+                for line in _copy_lines(cls.OUTPUTS, "V[r]", "v", False)]  # fmt: skip
+    wrapper += ["    }", "    (void)i;", "    return (uint32_t)n + 256u * events;", "}"]
+    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
+                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
+    path = folder / f"{entry.cname}_segments.c"
+    path.write_text(source)
+    library = folder / f"lib{entry.cname}_segments.so"
+    strict = ("-Wall", "-Wextra", "-Werror")
+    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lib = ctypes.CDLL(str(library))
+    pointer = ctypes.POINTER(ctypes.c_double)
+    lib.run.argtypes = [ctypes.c_double, *([pointer] * 5)]
+    lib.run.restype = ctypes.c_uint32
+    return lib.run
+
+
+@pytest.mark.parametrize("cls", [c for c in generated_plant_kinds()
+                                 if _kinds._PLANT_REGISTRY[c].segments is not None],
+                         ids=lambda c: c.__name__)  # fmt: skip
+def test_generated_segments_equal_the_compiled_kernel_bit_for_bit(cls, tmp_path):
+    """A modulator's segments (their count, lengths, outputs, events and its state) from the
+    generated C and from the compiled kernel, on random draws (strict: its kernel is ``jit``)."""
+    run_c = segments_library(cls, tmp_path)
+    kernel = kind_module(cls).segments
+    rng = np.random.default_rng(sum(map(ord, cls.__name__)))
+    width, rows = cls.OUTPUTS.fixed_size, cls.MAX_SEGMENTS
+    as_pointer = (lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+    for draw in range(DRAWS):
+        p, _ = _flat(rng, cls.PARAMS)
+        u, _ = _flat(rng, cls.INPUTS)
+        s = _values(rng, max(cls.STATES.fixed_size, 1))
+        dt, v = np.zeros(rows), np.zeros((rows, width))
+        s_c, dt_c, v_c = s.copy(), dt.copy(), v.copy()
+        n, events = kernel(1e-4, u, p, s, dt, v)
+        packed = run_c(1e-4, as_pointer(u), as_pointer(p), as_pointer(s_c), as_pointer(dt_c),
+                       as_pointer(v_c))  # fmt: skip
+        assert (packed % 256, packed // 256) == (n, events), draw
+        assert _same(s, s_c) and _same(dt, dt_c) and _same(v.ravel(), v_c.ravel()), draw
 
 
 def plant_library(cls, role: str, folder):
@@ -357,7 +433,7 @@ def _plant_cases() -> list:
             for role in PLANT_ROLES_TRANSLATED if _kinds._PLANT_REGISTRY[cls].role(role, None)]  # fmt: skip
 
 
-PLANT_ROLES_TRANSLATED = ("state_outputs", "direct_outputs", "rhs", "project")
+PLANT_ROLES_TRANSLATED = ("state_outputs", "direct_outputs", "rhs", "project")  # and segments
 
 
 @pytest.mark.parametrize(("cls", "role"), _plant_cases(),

@@ -52,6 +52,13 @@ import numpy as np
 from acdrive.sim._ccode._helpers import names_in
 
 REAL, INT, BOOL, COMPLEX = "real", "int", "bool", "complex"
+#: names a local may not take in C: the generated functions' arguments and C's keywords
+_RESERVED = frozenset({"n", "t", "T_s", "u", "p", "s", "x", "y", "dx", "dt", "v", "int", "double",
+                       "float", "char", "long", "short", "unsigned", "signed", "void", "static",
+                       "const", "return", "if", "else", "for", "while", "do", "switch", "case",
+                       "default", "break", "continue", "struct", "union", "enum", "typedef",
+                       "goto", "sizeof", "register", "extern", "auto", "volatile", "inline",
+                       "restrict"})
 _C_TYPE = {REAL: "ACDRIVE_REAL", INT: "int", BOOL: "int", COMPLEX: "acd_complex"}
 
 #: numpy's and math's functions of one or two reals -> the prelude's macros
@@ -83,6 +90,9 @@ class Role:
     kind: str = ""
     #: slot -> value of the quantities that set a per-instance kind's structure (``STRUCTURAL``)
     structural: dict = field(default_factory=dict)
+    #: "struct" (slots of a layout), "reals" (a modulator's segment lengths ``dt[i]``) or
+    #: "segments" (a modulator's outputs per segment ``v[i, slot]``)
+    shape: str = "struct"
 
 
 @dataclass
@@ -248,8 +258,23 @@ class _Function:
     # --- slots ------------------------------------------------------------------------------
 
     def member(self, node: ast.Subscript) -> tuple[str, str]:
-        """(C lvalue, type) of ``array[slot]`` for a role array."""
+        """(C lvalue, type) of ``array[slot]`` for a role array (``dt[i]`` and ``v[i, slot]``
+        of a modulator's segments)."""
         role = self.roles[node.value.id]
+        if role.shape == "reals":
+            index, t = self.expr(node.slice)
+            if t not in (INT, BOOL):
+                self.fail(node, f"an index of {node.value.id} that is not an integer")
+            return f"{role.name}[{index}]", REAL
+        prefix = f"{role.name}->"
+        if role.shape == "segments":
+            if not (isinstance(node.slice, ast.Tuple) and len(node.slice.elts) == 2):
+                self.fail(node, f"{node.value.id}[...] other than {node.value.id}[segment, slot]")
+            index, t = self.expr(node.slice.elts[0])
+            if t not in (INT, BOOL):
+                self.fail(node, f"a segment index of {node.value.id} that is not an integer")
+            prefix = f"{role.name}[{index}]."
+            node = ast.Subscript(node.value, node.slice.elts[1], node.ctx)
         k = self.constant(node.slice)
         if not isinstance(k, int):
             self.fail(node, f"the slot of {node.value.id}[...] is not a constant of the module")
@@ -259,8 +284,8 @@ class _Function:
             first = role.layout.slot(v.name)
             if first <= k < first + v.width:
                 if v.kind == "complex":
-                    return f"{role.name}->{v.name}.{'re' if k == first else 'im'}", REAL
-                return f"{role.name}->{v.name}", REAL
+                    return f"{prefix}{v.name}.{'re' if k == first else 'im'}", REAL
+                return f"{prefix}{v.name}", REAL
         self.fail(node, f"slot {k} of {node.value.id} is no real or complex quantity")
 
     # --- types ------------------------------------------------------------------------------
@@ -386,9 +411,14 @@ class _Function:
             return f"acd_c({c_literal(node.value.real)}, {c_literal(node.value.imag)})", COMPLEX
         self.fail(node, f"the constant {node.value!r}")
 
+    def local(self, name: str) -> str:
+        """The C name of a local: a name the C function's own arguments take (a modulator's
+        ``n``) or a C keyword gets a prefix."""
+        return f"k_{name}" if name in _RESERVED and name not in self.arg_types else name
+
     def _Name(self, node):
         if node.id in self.types:
-            return node.id, self.types[node.id]
+            return self.local(node.id), self.types[node.id]
         if node.id in self.arg_types:
             return node.id, self.arg_types[node.id]
         if node.id in ("t", "T_s") and (self.is_step or self.top):
@@ -726,7 +756,7 @@ class _Function:
 
     def lvalue(self, target):
         if isinstance(target, ast.Name):
-            return target.id, self.types[target.id]
+            return self.local(target.id), self.types[target.id]
         return self.member(target)
 
     def assign(self, stmt, pad) -> list[str]:
@@ -784,9 +814,14 @@ class _Function:
             if self.is_step:
                 self.fail(stmt, "a return without a value")
             return [f"{pad}return;"]
-        if self.top:
+        if self.top is True:
             self.fail(stmt, "a plant kernel returning a value")
-        if self.top:
+        if self.top == "segments":
+            value, vt = self.expr(stmt.value)
+            if not (isinstance(vt, tuple) and len(vt) == 2 and all(t in (INT, BOOL) for t in vt)):
+                self.fail(stmt, "a modulator returning other than (segments, event bits)")
+            return [f"{pad}*n = {value[0]};", f"{pad}return (uint32_t)({value[1]});"]
+        if self.top is True:
             self.fail(stmt, "a plant kernel returning a value")
         if self.is_step:
             value, vt = self.expr(stmt.value)
@@ -810,7 +845,7 @@ class _Function:
         for name, t in self.types.items():
             if name in self.arg_types:
                 continue
-            by_type.setdefault(_C_TYPE[t], []).append(name)
+            by_type.setdefault(_C_TYPE[t], []).append(self.local(name))
         return [f"    {c} {', '.join(names)};" for c, names in by_type.items()]
 
 
@@ -986,11 +1021,14 @@ PLANT_SIGNATURES = {
     "direct_outputs": ("t", "x", "u", "p", "y"),
     "rhs": ("t", "x", "u", "p", "y", "dx"),
     "project": ("x", "p"),
+    "segments": ("T_s", "u", "p", "s", "dt", "v"),
 }
 _PLANT_ARRAYS = {"x": ("STATES", "state"), "u": ("INPUTS", "in"), "p": ("PARAMS", "params"),
-                 "y": ("OUTPUTS", "out"), "dx": ("STATES", "state")}  # fmt: skip
+                 "y": ("OUTPUTS", "out"), "dx": ("STATES", "state"), "s": ("STATES", "state"),
+                 "dt": ("STATES", "reals"), "v": ("OUTPUTS", "out")}  # fmt: skip
 _PLANT_WRITES = {"state_outputs": {"y"}, "direct_outputs": {"y"}, "rhs": {"dx"},
-                 "project": {"x"}}  # fmt: skip
+                 "project": {"x"}, "segments": {"s", "dt", "v"}}  # fmt: skip
+_SHAPES = {"dt": "reals", "v": "segments"}
 
 
 def translate_plant(kernel, role: str, of) -> Translated:
@@ -1010,14 +1048,16 @@ def translate_plant(kernel, role: str, of) -> Translated:
                                 f"({', '.join(standard)})")  # fmt: skip
     roles = {}
     for name, std in zip(params, standard, strict=True):
-        if std == "t":
+        if std in ("t", "T_s"):
             continue
         attr, suffix = _PLANT_ARRAYS[std]
         roles[name] = Role(getattr(of, attr), std, f"acd_{kind}_{suffix}",
-                           std not in _PLANT_WRITES[role], kind)  # fmt: skip
-    f = _Function(func, roles, _Module(), role, fast=_fast_math(kernel, False), top=True)
-    if "t" in standard and params[0] != "t":
-        f.fail(f.node, f"argument 1 named {params[0]!r} (the kernel's is 't')")
+                           std not in _PLANT_WRITES[role], kind,
+                           shape=_SHAPES.get(std, "struct"))  # fmt: skip
+    top = "segments" if role == "segments" else True
+    f = _Function(func, roles, _Module(), role, fast=_fast_math(kernel, False), top=top)
+    if standard[0] in ("t", "T_s") and params[0] != standard[0]:
+        f.fail(f.node, f"argument 1 named {params[0]!r} (the kernel's is {standard[0]!r})")
     f.infer(f.node.body)
     body = f.block(f.node.body, 1)
     module = f.module
@@ -1030,7 +1070,8 @@ def c_plant(cls, source: str):
     (``translate_plant``; per instance for a kind whose layouts are set per instance)."""
     from acdrive.sim._ccode._kinds import PlantC
 
-    kernels = cls.kernels(cls.__new__(cls))
+    kernels = {role: kernel for role, kernel in cls.kernels(cls.__new__(cls)).items()
+               if role in PLANT_SIGNATURES}  # fmt: skip
     per_instance = bool(getattr(cls, "PER_INSTANCE", None))
     bodies, supports = {}, []
     for role, kernel in kernels.items():

@@ -151,17 +151,16 @@ def _entry(registry: dict, kind: type):
 
 def _generated(registry: dict, kind: type):
     """The C of ``kind`` generated from its kernels and registered, or None (the reason kept)."""
-    from acdrive.core._parts import ContinuousPart, SampledPart
+    from acdrive.core._parts import SampledPart
     from acdrive.sim._ccode._translate import UnsupportedKernel, c_plant, c_step
 
     source = f"{kind.__module__}.{kind.__qualname__}, generated from its kernels"
     try:
-        if registry is _REGISTRY and issubclass(kind, SampledPart):
-            entry = c_step(kind, source)
-        elif registry is _PLANT_REGISTRY and issubclass(kind, ContinuousPart):
-            entry = c_plant(kind, source)
+        if issubclass(kind, SampledPart):
+            entry = c_step(kind, source) if registry is _REGISTRY else None
         else:
-            _UNTRANSLATABLE[kind] = "a modulator's segments have no generated C"
+            entry = c_plant(kind, source) if registry is _PLANT_REGISTRY else None
+        if entry is None:
             return None
     except UnsupportedKernel as exc:
         _UNTRANSLATABLE[kind] = str(exc)

@@ -124,34 +124,19 @@ register_plant(
 
 register_plant(
     AveragedConverter,
-    PlantC(
+    c_plant(
+        AveragedConverter,
         source="averaged converter: the command held over the sample, |v| <= V_dc / sqrt(2) "
         "(plant._converter)",
-        segments=r"""
-    int saturated;
-    dt[0] = T_s;
-    v[0].v = acd_clip_magnitude(u->v_ref, p->V_dc / ACD_SQRT(ACD_R(2.0)), &saturated);
-    *n = 1;
-    return saturated ? ACD_AVERAGED_CONVERTER_SATURATED : 0u;
-""",
-        support=(CLIP_MAGNITUDE,),
     ),
 )
 
 register_plant(
     DCFedConverter,
-    PlantC(
+    c_plant(
+        DCFedConverter,
         source="averaged converter fed from a DC link: |v| <= max(v_dc, 0) / sqrt(2) "
         "(plant._converter)",
-        segments=r"""
-    int saturated;
-    dt[0] = T_s;
-    v[0].v = acd_clip_magnitude(u->v_ref, acd_max(u->v_dc, ACD_R(0.0)) / ACD_SQRT(ACD_R(2.0)),
-                                &saturated);
-    *n = 1;
-    return saturated ? ACD_DC_FED_CONVERTER_SATURATED : 0u;
-""",
-        support=(CLIP_MAGNITUDE,),
     ),
 )
 
