@@ -361,16 +361,19 @@ def test_generated_segments_equal_the_compiled_kernel_bit_for_bit(cls, tmp_path)
         assert _same(s, s_c) and _same(dt, dt_c) and _same(v.ravel(), v_c.ravel()), draw
 
 
-def plant_library(cls, role: str, folder):
-    """The kind's generated C of ``role`` with a flat-array wrapper ``run(t, x, u, p, y, dx)``."""
+def plant_library(cls, role: str, folder, part=None):
+    """The kind's generated C of ``role`` (for ``part``, a per-instance kind) with a flat-array
+    wrapper ``run(t, x, u, p, y, dx)``."""
     from acdrive.sim._ccode._plant_source import _signature, _unused
 
     c = _kinds._PLANT_REGISTRY[cls]
-    entry = KindTypes(cls, kind_name(cls), c, c.body(None) if False else "", support=c.support)
+    of = part if part is not None else cls
+    support = c.support(part) if callable(c.support) else c.support
+    entry = KindTypes(cls, kind_name(cls), c, "", support=support)
     for r, attr, _ in _ROLES:
-        entry.members[r] = _members(getattr(cls, attr))
+        entry.members[r] = _members(getattr(of, attr))
     signature = _signature(entry, role)
-    code = [signature, "{", *_unused(signature), c.role(role, None).strip("\n"), "}"]
+    code = [signature, "{", *_unused(signature), c.role(role, part).strip("\n"), "}"]
     kinds = {cls: entry}
     wrapper = ["void run(double t, double *x, const double *u, const double *p, double *y, "
                "double *dx)", "{", "    int i = 0;",
@@ -383,7 +386,7 @@ def plant_library(cls, role: str, folder):
         optional = name.endswith("?")
         name = name.rstrip("?")
         attr, struct = _PLANT_STRUCT[name]
-        layout = getattr(cls, attr)
+        layout = getattr(of, attr)
         if not entry.members[struct] and (name == "p" or optional or name == "u"):
             continue
         var = name.upper() + "_"
@@ -393,7 +396,7 @@ def plant_library(cls, role: str, folder):
     wrapper.append(f"    acd_{entry.cname}_{role}({', '.join(args)});")
     written = {"state_outputs": "y", "direct_outputs": "y", "rhs": "dx", "project": "x"}[role]
     attr = _PLANT_STRUCT[written][0]
-    wrapper += _copy_lines(getattr(cls, attr), written.upper() + "_", written, False)
+    wrapper += _copy_lines(getattr(of, attr), written.upper() + "_", written, False)
     wrapper += ["    (void)i;", "}"]
     source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
                         *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
@@ -429,22 +432,35 @@ def _finite_values(rng, n: int) -> np.ndarray:
 
 
 def _plant_cases() -> list:
-    return [(cls, role) for cls in generated_plant_kinds()
-            for role in PLANT_ROLES_TRANSLATED if _kinds._PLANT_REGISTRY[cls].role(role, None)]  # fmt: skip
+    """(kind, role, part or None): a per-instance kind (the supply bus, of one and of three
+    machines) per instance."""
+    from acdrive.plant._network import SupplyBus
+
+    out = []
+    for cls in generated_plant_kinds():
+        if getattr(cls, "PER_INSTANCE", None):
+            continue
+        out += [(cls, role, None) for role in PLANT_ROLES_TRANSLATED
+                if _kinds._PLANT_REGISTRY[cls].role(role, None)]  # fmt: skip
+    for bus in (SupplyBus("bus1", R=0.1, L=1e-3), SupplyBus("bus3", n_machines=3, R=0.1, L=1e-3)):
+        out.append((SupplyBus, "direct_outputs", bus))
+    return out
 
 
 PLANT_ROLES_TRANSLATED = ("state_outputs", "direct_outputs", "rhs", "project")  # and segments
 
 
-@pytest.mark.parametrize(("cls", "role"), _plant_cases(),
-                         ids=lambda v: v.__name__ if isinstance(v, type) else v)  # fmt: skip
-def test_generated_plant_c_equals_the_compiled_kernel(cls, role, tmp_path):
+@pytest.mark.parametrize(("cls", "role", "part"), _plant_cases(),
+                         ids=lambda v: v.__name__ if isinstance(v, type)
+                         else v if isinstance(v, str) else getattr(v, "name", ""))  # fmt: skip
+def test_generated_plant_c_equals_the_compiled_kernel(cls, role, part, tmp_path):
     """Against the kernel as every tier compiles it, at the sample instant and inside the
     integrator's stages: bit for bit for a kernel without fast-math, up to the sign of a zero
     for one with acdrive's fast-math flags (``jit_fast``), which leave that sign unspecified."""
     from acdrive.sim._ccode._translate import _fast_math
 
-    run_c = plant_library(cls, role, tmp_path)
+    run_c = plant_library(cls, role, tmp_path, part)
+    of = part if part is not None else cls
     module = kind_module(cls)
     exact = _same_up_to_zero_sign if _fast_math(getattr(cls, role), False) else _same
     strict = getattr(module, role, None) if role != "rhs" else None
@@ -452,12 +468,12 @@ def test_generated_plant_c_equals_the_compiled_kernel(cls, role, tmp_path):
     rng = np.random.default_rng(sum(map(ord, cls.__name__ + role)))
     as_pointer = (lambda a: a.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
     for draw in range(DRAWS):
-        p, times = _flat(rng, cls.PARAMS)
-        p[: cls.PARAMS.fixed_size] = np.abs(_finite_values(rng, cls.PARAMS.fixed_size)) + 1e-3
-        x = _finite_values(rng, max(cls.STATES.fixed_size, 1))
-        u = _finite_values(rng, max(cls.INPUTS.fixed_size, 1))
-        y = _finite_values(rng, max(cls.OUTPUTS.fixed_size, 1))
-        dx = np.zeros(max(cls.STATES.fixed_size, 1))
+        p, times = _flat(rng, of.PARAMS)
+        p[: of.PARAMS.fixed_size] = np.abs(_finite_values(rng, of.PARAMS.fixed_size)) + 1e-3
+        x = _finite_values(rng, max(of.STATES.fixed_size, 1))
+        u = _finite_values(rng, of.INPUTS.fixed_size) if of.INPUTS.fixed_size else np.zeros(1)
+        y = _finite_values(rng, max(of.OUTPUTS.fixed_size, 1))
+        dx = np.zeros(max(of.STATES.fixed_size, 1))
         t = times[draw % len(times)] if times and draw % 2 else float(rng.uniform(0.0, 1.2))
         c_arrays = [a.copy() for a in (x, u, p, y, dx)]
         run_c(t, *(as_pointer(a) for a in c_arrays))

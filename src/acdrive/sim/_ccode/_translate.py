@@ -183,6 +183,8 @@ class _Function:
         self.types: dict[str, str] = dict(self.arg_types)
         self.constants: dict[str, int] = {}  # loop variables of unrolled loops
         self.tables: dict[str, str] = {}  # locals holding a table (table_offset): its name
+        self.unrolling = 0  # depth of unrolled loops being written
+        self.loop_bound: set[str] = set()  # names bound per pass of an unrolled loop
         self.return_type = None
         self.temp = 0
 
@@ -246,6 +248,8 @@ class _Function:
                     return a - b
                 if op is ast.Mult:
                     return a * b
+                if op is ast.FloorDiv and b != 0:
+                    return a // b
         return None
 
     def _attribute_value(self, node):
@@ -338,9 +342,11 @@ class _Function:
             elif isinstance(stmt, ast.For):
                 n = self._range_of(stmt)
                 name = stmt.target.id
+                self.unrolling += 1
                 for i in range(n):
                     self.constants[name] = i
                     self._infer_block(stmt.body)
+                self.unrolling -= 1
                 self.constants.pop(name, None)
             elif isinstance(stmt, ast.Return) and stmt.value is not None:
                 t = self.type_of(stmt.value)
@@ -348,8 +354,21 @@ class _Function:
                     stmt, self.return_type, t)  # fmt: skip
 
     def _is_local_constant(self, stmt) -> bool:
-        target = stmt.targets[0]
-        return isinstance(target, ast.Name) and target.id in self.constants
+        """A top-level integer constant (``infer``), or, inside an unrolled loop, a name given
+        an integer computed from constants and the loop's index (a slot ``o = FIRST + 5 k``):
+        bound for this pass of the loop."""
+        target = stmt.targets[0] if len(stmt.targets) == 1 else None
+        if not isinstance(target, ast.Name):
+            return False
+        if target.id in self.constants and target.id not in self.loop_bound:
+            return True
+        if self.unrolling and target.id not in self.types:
+            k = self.constant(stmt.value)
+            if isinstance(k, int) and not isinstance(k, bool):
+                self.constants[target.id] = k
+                self.loop_bound.add(target.id)
+                return True
+        return False
 
     def _unify_return(self, node, a, b):
         if isinstance(a, tuple) and isinstance(b, tuple) and len(a) == len(b):
@@ -712,6 +731,8 @@ class _Function:
                              f"{pad}{text};")  # fmt: skip
                 continue
             if isinstance(stmt, ast.Assign):
+                if self._is_local_constant(stmt):
+                    continue
                 lines += self.assign(stmt, pad)
             elif isinstance(stmt, ast.AugAssign):
                 target = ast.Name(stmt.target.id, ast.Load()) if isinstance(
@@ -739,9 +760,11 @@ class _Function:
             elif isinstance(stmt, ast.For):
                 n = self._range_of(stmt)
                 name = stmt.target.id
+                self.unrolling += 1
                 for i in range(n):
                     self.constants[name] = i
                     lines += self.block(stmt.body, depth)
+                self.unrolling -= 1
                 self.constants.pop(name, None)
             elif isinstance(stmt, ast.Return):
                 lines += self.return_lines(stmt, pad)

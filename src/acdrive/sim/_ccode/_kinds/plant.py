@@ -1,12 +1,13 @@
 """C of the plant kinds the plant C is built from (``sim._ccode._plant_source``). The
 continuous parts (the DC and three-phase sources, the cage induction motor, the PM machine, the
-DFIM and its stator relay (Bodson (9)), the free shaft, the prescribed speed) have it generated
-from their kernels (``sim._ccode._translate.c_plant``), as the PWM unit's latch (a sampled part
-in front of an averaged converter) has its step. Written here beside their kernels: the supply
-bus, whose inputs are set per instance (one per machine it feeds), and the modulators (the
-averaged converters and the switching SVPWM inverter, its segments inside one control period),
-whose kernels write a table of segments; each repeats its numba kernel operation for operation,
-and the native-tier and FMU tests keep the two equal."""
+DFIM, its supply bus (per instance: one input set per machine) and stator relay (Bodson (9)),
+the free shaft, the prescribed speed) and the averaged converters have it generated from their
+kernels (``sim._ccode._translate.c_plant``), as the PWM unit's latch (a sampled part in front of
+an averaged converter) has its step. Written here beside its kernel: the switching SVPWM
+inverter (its segments inside one control period), whose kernel sorts the switching instants
+with a loop of run-time length, outside the kernel language; it repeats its numba kernel
+operation for operation, and the native-tier and FMU tests keep the two equal."""
+
 from __future__ import annotations
 
 import math
@@ -51,31 +52,14 @@ register_plant(
 )
 
 
-def _bus_direct_outputs(part) -> str:
-    """The bus voltage of ``part``'s n machines, solved exactly (plant._network):
-    v_bus = (v_g - R sum(i_s,k) - L sum(b_k)) / (1 + L sum(a_k)), the sums in machine order."""
-    sums = []
-    for k in range(part.n_machines):
-        sums += [f"    sum_i_s = acd_cadd(sum_i_s, u->i_s{k});", f"    sum_a += u->a{k};",
-                 f"    sum_b = acd_cadd(sum_b, u->b{k});"]  # fmt: skip
-    return "\n".join([
-        "    acd_complex sum_i_s = acd_c(ACD_R(0.0), ACD_R(0.0));",
-        "    acd_complex sum_b = acd_c(ACD_R(0.0), ACD_R(0.0));",
-        "    ACDRIVE_REAL sum_a = ACD_R(0.0);",
-        *sums,
-        "    y->v = acd_cscale(ACD_R(1.0) / (ACD_R(1.0) + p->L * sum_a),",
-        "                      acd_csub(acd_csub(u->v_g, acd_cscale(p->R, sum_i_s)),",
-        "                               acd_cscale(p->L, sum_b)));",
-    ])  # fmt: skip
-
-
 register_plant(
     SupplyBus,
-    PlantC(
+    c_plant(
+        SupplyBus,
         source="supply bus behind a shared series R-L, solved exactly (plant._network)",
-        direct_outputs=_bus_direct_outputs,
     ),
 )
+
 
 register_plant(
     StatorRelay,
