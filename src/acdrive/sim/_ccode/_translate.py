@@ -1088,6 +1088,11 @@ def translate_plant(kernel, role: str, of) -> Translated:
     return Translated("\n".join([*f.declarations(), *body]) + "\n", helpers)
 
 
+def _body_or_none(body: str) -> str | None:
+    """A kernel that does nothing (a part without states has an empty ``rhs``) has no C."""
+    return body if body.strip() else None
+
+
 def c_plant(cls, source: str):
     """The ``PlantC`` of continuous part class ``cls`` generated from its kernels
     (``translate_plant``; per instance for a kind whose layouts are set per instance)."""
@@ -1100,11 +1105,10 @@ def c_plant(cls, source: str):
     for role, kernel in kernels.items():
         if per_instance:
             bodies[role] = (lambda part, kernel=kernel, role=role:
-                            translate_plant(kernel, role, part).body)  # fmt: skip
+                            _body_or_none(translate_plant(kernel, role, part).body))  # fmt: skip
         else:
             translated = translate_plant(kernel, role, cls)
-            # a kernel that does nothing (a part without states has an empty rhs) has no C
-            bodies[role] = translated.body if translated.body.strip() else None
+            bodies[role] = _body_or_none(translated.body)
             supports += list(_support(translated))
     if per_instance:
         def support(part):
