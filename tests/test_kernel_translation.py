@@ -283,7 +283,7 @@ def test_the_translated_plant_kinds_are_registered():
     names = {c.__name__ for c in generated_plant_kinds()}
     assert {"DCSource", "CageInductionMachine", "ThreePhaseSource", "StatorRelay",
             "DoublyFedMachine", "PermanentMagnetMachine", "Shaft", "PrescribedSpeed",
-            "AveragedConverter", "DCFedConverter"} <= names  # fmt: skip
+            "AveragedConverter", "DCFedConverter", "Inverter"} <= names  # fmt: skip
 
 
 def segments_library(cls, folder):

@@ -108,6 +108,16 @@ def _python_function(kernel):
     return getattr(kernel, "py_func", kernel)
 
 
+def _stored_names(function) -> set[str]:
+    """The names a function assigns (its parameters among them are not bound as constants)."""
+    func = _python_function(function)
+    try:
+        tree = ast.parse(textwrap.dedent(inspect.getsource(func)))
+    except (OSError, TypeError, SyntaxError):
+        return set()
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store)}
+
+
 def _fast_math(kernel, default: bool) -> bool:
     """Whether ``kernel`` is compiled with fast-math flags (its own ``fastmath`` option: a
     numba dispatcher's target options, or acdrive's lazy kernel's options); ``default`` for a
@@ -184,6 +194,7 @@ class _Function:
         self.constants: dict[str, int] = {}  # loop variables of unrolled loops
         self.tables: dict[str, str] = {}  # locals holding a table (table_offset): its name
         self.unrolling = 0  # depth of unrolled loops being written
+        self.loops = 0  # depth of C loops (run-time bounds, while) being written
         self.loop_bound: set[str] = set()  # names bound per pass of an unrolled loop
         self.return_type = None
         self.temp = 0
@@ -340,18 +351,35 @@ class _Function:
                 if k is None or not k:
                     self._infer_block(stmt.orelse)
             elif isinstance(stmt, ast.For):
-                n = self._range_of(stmt)
+                how = self._range_of(stmt)
                 name = stmt.target.id
+                if how[0] == "loop":
+                    self.types[name] = self.unify(stmt, self.types.get(name), INT)
+                    self.loops += 1
+                    self._infer_block(stmt.body)
+                    self.loops -= 1
+                    continue
                 self.unrolling += 1
-                for i in range(n):
+                for i in how[1]:
                     self.constants[name] = i
                     self._infer_block(stmt.body)
                 self.unrolling -= 1
                 self.constants.pop(name, None)
+            elif isinstance(stmt, ast.While):
+                self._while_allowed(stmt)
+                self.loops += 1
+                self._infer_block(stmt.body)
+                self.loops -= 1
             elif isinstance(stmt, ast.Return) and stmt.value is not None:
                 t = self.type_of(stmt.value)
                 self.return_type = t if self.return_type is None else self._unify_return(
                     stmt, self.return_type, t)  # fmt: skip
+
+    def _while_allowed(self, stmt) -> None:
+        """A ``while`` loop only in a plant kernel (an exported controller's loops keep literal
+        bounds: docs/guide/export.md, "Firmware rules")."""
+        if self.is_step or self.top is False:
+            self.fail(stmt, "the statement While")
 
     def _is_local_constant(self, stmt) -> bool:
         """A top-level integer constant (``infer``), or, inside an unrolled loop, a name given
@@ -396,16 +424,23 @@ class _Function:
         else:
             self.fail(stmt, f"assignment to {type(target).__name__}")
 
-    def _range_of(self, stmt: ast.For) -> int:
+    def _range_of(self, stmt: ast.For):
+        """("unroll", range) of a loop over a constant range of at most 64, or ("loop", start
+        node, stop node) of one whose bounds are known at run time (a plant kernel's only: an
+        exported controller's loops keep literal bounds)."""
         it = stmt.iter
         if not (isinstance(it, ast.Call) and isinstance(it.func, ast.Name)
-                and it.func.id == "range" and len(it.args) == 1
+                and it.func.id == "range" and len(it.args) in (1, 2)
                 and isinstance(stmt.target, ast.Name) and not stmt.orelse):  # fmt: skip
-            self.fail(stmt, "a loop other than 'for i in range(N)'")
-        n = self.constant(it.args[0])
-        if not isinstance(n, int) or n > 64:
+            self.fail(stmt, "a loop other than 'for i in range(N)' or 'range(M, N)'")
+        start = it.args[0] if len(it.args) == 2 else ast.Constant(0)
+        stop = it.args[-1]
+        a, b = self.constant(start), self.constant(stop)
+        if isinstance(a, int) and isinstance(b, int) and b - a <= 64:
+            return "unroll", range(a, b)
+        if self.is_step or self.top is False:
             self.fail(stmt, "a loop whose bound is not a constant of at most 64")
-        return n
+        return "loop", start, stop
 
     def type_of(self, node) -> str | tuple:
         return self.expr(node)[1]
@@ -637,6 +672,11 @@ class _Function:
             if t == REAL:
                 return f"ACD_FABS({text})", REAL
             return f"abs({text})", INT
+        if name in ("min", "max") and len(args) > 2 and all(t in (REAL, INT) for _, t in args):
+            text = self.as_real(*args[0])  # Python's: the first extreme, left to right
+            for b, tb in args[1:]:
+                text = f"acd_{name}({text}, {self.as_real(b, tb)})"
+            return text, REAL
         if name in ("min", "max") and len(args) == 2:
             (a, ta), (b, tb) = args
             if REAL in (ta, tb):
@@ -694,12 +734,16 @@ class _Function:
         (the helper is written for this kind's struct); with one, an integer constant argument
         (a slot) is bound inside the helper, which is written for that value."""
         roles = [self.roles.get(a.id) if isinstance(a, ast.Name) else None for a in node.args]
+        stored = _stored_names(target)
+        params = list(inspect.signature(_python_function(target)).parameters)
         args = []
-        for a, role in zip(node.args, roles, strict=True):
+        for a, role, param in zip(node.args, roles, params + [None] * len(node.args),
+                                  strict=False):  # fmt: skip
             k = self.constant(a)
             if role is not None:
                 args.append((role.name, ("role", role)))
-            elif any(roles) and isinstance(k, int) and not isinstance(k, bool):
+            elif (any(roles) and isinstance(k, int) and not isinstance(k, bool)
+                  and param not in stored):  # fmt: skip
                 args.append(("", ("const", k)))
             else:
                 text, t = self.expr(a)
@@ -758,14 +802,39 @@ class _Function:
                     lines += self.block(orelse, depth + 1)
                 lines.append(f"{pad}}}")
             elif isinstance(stmt, ast.For):
-                n = self._range_of(stmt)
+                how = self._range_of(stmt)
                 name = stmt.target.id
+                if how[0] == "loop":  # the stop evaluated once, as Python's range does
+                    start, st = self.expr(how[1])
+                    stop, tt = self.expr(how[2])
+                    if st not in (INT, BOOL) or tt not in (INT, BOOL):
+                        self.fail(stmt, "a range of other than integers")
+                    end, i = self.new_temp(), self.local(name)
+                    lines += [f"{pad}{{", f"{pad}    int {end} = {stop};",
+                              f"{pad}    for ({i} = {start}; {i} < {end}; ++{i}) {{"]  # fmt: skip
+                    self.loops += 1
+                    lines += self.block(stmt.body, depth + 2)
+                    self.loops -= 1
+                    lines += [f"{pad}    }}", f"{pad}}}"]
+                    continue
                 self.unrolling += 1
-                for i in range(n):
+                for i in how[1]:
                     self.constants[name] = i
                     lines += self.block(stmt.body, depth)
                 self.unrolling -= 1
                 self.constants.pop(name, None)
+            elif isinstance(stmt, ast.While):
+                self._while_allowed(stmt)
+                test, tt = self.expr(stmt.test)
+                lines.append(f"{pad}while ({_bare(self.truth(test, tt))}) {{")
+                self.loops += 1
+                lines += self.block(stmt.body, depth + 1)
+                self.loops -= 1
+                lines.append(f"{pad}}}")
+            elif isinstance(stmt, (ast.Continue, ast.Break)):
+                if not self.loops or self.unrolling:
+                    self.fail(stmt, f"{type(stmt).__name__.lower()} outside a run-time loop")
+                lines.append(f"{pad}{type(stmt).__name__.lower()};")
             elif isinstance(stmt, ast.Return):
                 lines += self.return_lines(stmt, pad)
             else:
@@ -903,7 +972,7 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     fast = _fast_math(target, caller.fast)
     if fast:
         c_name += "_fast"
-    inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural)
+    inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural, r.shape)
              for p, r in roles.items()}  # fmt: skip
     f = _Function(func, inner, module, c_name, scalars, fast=fast)
     f.constants.update(constants)
@@ -913,7 +982,9 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     c_ret = "void" if ret is None else _C_TYPE[ret[0]] if isinstance(ret, tuple) else _C_TYPE[ret]
     args = []
     for p in params:
-        if p in inner:
+        if p in inner and inner[p].shape == "reals":
+            args.append(f"{'const ' if inner[p].const else ''}ACDRIVE_REAL *{p}")
+        elif p in inner:
             args.append(f"{'const ' if inner[p].const else ''}{inner[p].struct} *{p}")
         elif p in scalars:
             args.append(f"{_C_TYPE[scalars[p]]} {p}")

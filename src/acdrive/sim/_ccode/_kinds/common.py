@@ -1,34 +1,9 @@
-"""C support shared by the plant kinds and the generated steps: the limit of a space vector and
-the piecewise-linear table (its value and its next point); each mirrors its numba function."""
+"""C support of the generated kernels and the plant's loop: the piecewise-linear table (its value
+and its next point, mirroring ``core._tables``) and tanh in either precision."""
 
 from __future__ import annotations
 
-from acdrive._frames import LIMIT_RTOL
 from acdrive.sim._ccode._kinds import CSupport
-
-#: _frames.beyond_limit's tolerance: a magnitude a few ulps above its limit is at it
-LIMIT_RTOL_C = CSupport(
-    "limit_rtol", f"#define ACD_LIMIT_RTOL ACD_R({LIMIT_RTOL!r}) /* _frames.LIMIT_RTOL */\n"
-)
-
-#: _frames.clip_magnitude
-CLIP_MAGNITUDE = CSupport(
-    "clip_magnitude",
-    """
-/* x scaled back to magnitude limit if |x| is beyond it (then *limited = 1) */
-static acd_complex acd_clip_magnitude(acd_complex x, ACDRIVE_REAL limit, int *limited)
-{
-    ACDRIVE_REAL magnitude = acd_cabs(x);
-    if (!(magnitude > limit + ACD_LIMIT_RTOL * limit)) {
-        *limited = 0;
-        return x;
-    }
-    *limited = 1;
-    return acd_cscale(limit / magnitude, x);
-}
-""",
-    needs=(LIMIT_RTOL_C,),
-)
 
 #: core._tables.table_next_time: the first point time later than t (ACD_HUGE, the kernels'
 #: NO_BREAK, if none; a one-point table is a constant and has none)
