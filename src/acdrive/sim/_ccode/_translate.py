@@ -7,15 +7,22 @@ The kernel language is the subset of Python the part kernels are written in (doc
   slots that are constants of the module (``y[_F_O_IS]``, ``y[_F_O_IS + 1]``, ``u[i]`` inside a
   ``for i in range(4)`` with a constant bound). Each slot resolves through the layout to a struct
   member: a real quantity ``p->R_r``, the parts of a complex one ``y->i_s_ref.re`` and ``.im``;
-  a table by ``table_at(p, SLOT, t)`` at the first table's start slot;
+  a table by ``table_at(p, TABLE, t)`` (its start slot, or ``table_offset(p, START, k)``); a
+  modulator's segment lengths ``dt[i]`` and outputs ``v[i, SLOT]`` at run-time indices; an
+  array passed on to a helper, which is then written for that kind's struct;
 * **scalars**: float, int and bool locals (declared at the top of the C function with the type
   every assignment agrees on: an int that is also given a float is a real), Python complex
   numbers (``complex(a, b)``, ``.real``, ``.imag``, ``np.conj``, ``np.abs``);
 * **statements**: assignment (also to several targets at once, evaluated before any is
-  written), augmented assignment, ``if``/``elif``/``else``, ``for`` over a constant
-  ``range`` (unrolled), ``return``; a docstring and ``pass``;
+  written), augmented assignment, ``if``/``elif``/``else`` (a test on constants keeps only its
+  branch), ``for`` over a constant ``range`` of at most 64 (unrolled; integers computed from
+  the index inside are constants), ``return``, a call whose value is unused; a docstring and
+  ``pass``. In a plant kernel (a continuous part or a modulator) also ``for`` over a run-time
+  range (its stop evaluated once), ``while``, ``continue`` and ``break``: a sampled step, whose C
+  is exported to a processor, keeps literal loop bounds;
 * **expressions**: arithmetic, comparisons (chained), ``and``/``or``/``not``, ``x if c else
-  y``, ``abs``, ``min``/``max`` of two reals, ``float``/``int``, numpy's and math's elementary
+  y``, ``abs``, ``min``/``max`` (Python's: the first extreme), ``float``/``int``, ``x ** 2``,
+  complex literals, ``.conjugate()``, numpy's and math's elementary
   functions, and calls of other jit functions of the kernel language (each becomes a static C
   function; one returning a tuple returns its first element and writes the others through
   pointers).
