@@ -29,15 +29,10 @@ from acdrive.errors import InputError
 from acdrive.sim._ccode._chain import Chain, chains_of
 from acdrive.sim._ccode._helpers import helper_text
 from acdrive.sim._ccode._kinds import CStep, CSupport, c_step_of
+from acdrive.sim._ccode._pieces import kind_name
 from acdrive.sim._ccode._prelude import HELPERS, PRELUDE
 
 ROLES = ("params", "state", "in", "out")
-
-
-def kind_name(cls: type) -> str:
-    """CamelCase class name -> snake_case C name: SpeedEstimator -> speed_estimator,
-    PMSpeedPI -> pm_speed_pi."""
-    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])|(?<=[A-Z])(?=[A-Z][a-z])", "_", cls.__name__).lower()
 
 
 def layout_of(part, role: str):

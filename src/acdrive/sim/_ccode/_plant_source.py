@@ -57,7 +57,7 @@ from acdrive.sim._ccode._c_source import (
 )
 from acdrive.sim._ccode._kinds import PLANT_ROLES, plant_c_of
 from acdrive.sim._ccode._prelude import PRELUDE
-from acdrive.sim._ccode._kinds.common import TABLE_NEXT_TIME
+from acdrive.sim._ccode._pieces import TABLE_NEXT_TIME
 from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
 from acdrive.sim._loop_source import profile_parts
 

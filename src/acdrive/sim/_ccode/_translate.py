@@ -57,6 +57,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive.sim._ccode._helpers import names_in
+from acdrive.sim._ccode._pieces import TABLE_AT, TANH, CStep, CSupport, PlantC, kind_name
 
 REAL, INT, BOOL, COMPLEX = "real", "int", "bool", "complex"
 #: names a local may not take in C: the generated functions' arguments and C's keywords
@@ -1073,8 +1074,6 @@ static inline acd_complex acd_cdivr(acd_complex z, ACDRIVE_REAL r)
 
 def _kernel_layouts(cls, part=None) -> dict[str, Role]:
     """The step's roles from the class's layouts (or the instance's, for a per-instance kind)."""
-    from acdrive.sim._ccode._c_source import kind_name
-
     kind, of = kind_name(cls), part if part is not None else cls
     return {"u": Role(of.INPUTS, "u", f"acd_{kind}_in", True, kind),
             "p": Role(of.PARAMS, "p", f"acd_{kind}_params", True, kind),
@@ -1083,9 +1082,6 @@ def _kernel_layouts(cls, part=None) -> dict[str, Role]:
 
 
 def _support(translated: Translated) -> tuple:
-    from acdrive.sim._ccode._kinds import CSupport
-    from acdrive.sim._ccode._kinds.common import TABLE_AT, TANH
-
     helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
     return (TABLE_AT, TANH, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
 
@@ -1105,8 +1101,6 @@ def c_step(cls, source: str):
     (``translate_step``), ``source`` naming the paper and equations it implements. A kind
     whose layouts are set per instance (``PER_INSTANCE``) gets its C per instance
     (``translate_part``)."""
-    from acdrive.sim._ccode._kinds import CStep
-
     if getattr(cls, "PER_INSTANCE", None):
         return CStep(body=lambda part: translate_part(part).body, source=source,
                      support=lambda part: _support(translate_part(part)), from_kernel=True)  # fmt: skip
@@ -1137,8 +1131,6 @@ def translate_plant(kernel, role: str, of) -> Translated:
     (or, per instance, the part) ``of``. A kernel compiled with fast-math flags (``jit_fast``:
     every tier inlines it with its own flags) has a real mixed with a complex number in the
     form those flags fold the promoted operation to (module docstring)."""
-    from acdrive.sim._ccode._c_source import kind_name
-
     cls = of if isinstance(of, type) else type(of)
     kind = kind_name(cls)
     func = _python_function(kernel)
@@ -1174,8 +1166,6 @@ def _body_or_none(body: str) -> str | None:
 def c_plant(cls, source: str):
     """The ``PlantC`` of continuous part class ``cls`` generated from its kernels
     (``translate_plant``; per instance for a kind whose layouts are set per instance)."""
-    from acdrive.sim._ccode._kinds import PlantC
-
     kernels = {role: kernel for role, kernel in cls.kernels(cls.__new__(cls)).items()
                if role in PLANT_SIGNATURES}  # fmt: skip
     per_instance = bool(getattr(cls, "PER_INSTANCE", None))

@@ -33,72 +33,12 @@ that module, whose import registers the kind. The registry names no such module 
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass
 
 from acdrive.errors import InputError
+from acdrive.sim._ccode._pieces import PLANT_ROLES, CStep, CSupport, PlantC
 
-
-@dataclass(frozen=True)
-class CSupport:
-    """A piece of C (static functions, macros) that step bodies may call; ``needs`` lists the
-    pieces it calls in turn. A kind's ``support`` and a piece's ``needs`` say where a file may
-    draw its helpers from; the file holds, once whatever the number of kinds that use it, each
-    definition of them its code calls, and no other (``sim._ccode._helpers``)."""
-
-    name: str
-    code: str
-    needs: tuple[CSupport, ...] = ()
-
-
-@dataclass(frozen=True)
-class CStep:
-    """The C of one part kind's step: ``body`` (statements, returning the event bits; or a
-    function of the part instance giving them, for a kind whose layout is set per instance,
-    such as a controller of any order), ``support`` (what it calls) and ``source`` (paper and
-    equations it implements)."""
-
-    body: object
-    source: str
-    support: tuple[CSupport, ...] = ()
-    #: True when ``body`` is generated from the kind's kernel (``sim._ccode._translate``)
-    from_kernel: bool = False
-
-
-@dataclass(frozen=True)
-class PlantC:
-    """The C of one plant kind. A continuous part: ``state_outputs`` (writes ``y`` from ``x``),
-    ``direct_outputs`` (for a kind with direct outputs: writes them from ``x`` and the inputs
-    ``u`` it declares in ``DIRECT_FROM``), ``rhs`` (writes ``dx``; may read ``u`` and its own
-    ``y`` of the same evaluation; None for a part without states), ``project`` (re-normalises
-    redundant states ``x`` at each sample, for a kind with a ``project`` kernel). A modulator:
-    ``segments`` (writes ``*n`` segments ``dt[i]``, ``v[i]``, returns the event bits). Each
-    body is a text, or a function of the part instance giving it (a kind whose inputs are set
-    per instance, such as a bus of n machines). ``source``: paper and equations; ``support``:
-    what they call."""
-
-    source: str
-    state_outputs: object = None
-    rhs: object = None
-    segments: object = None
-    project: object = None
-    direct_outputs: object = None
-    support: tuple[CSupport, ...] = ()
-    #: True when the bodies are generated from the kind's kernels (``sim._ccode._translate``)
-    from_kernel: bool = False
-
-    def role(self, name: str, part) -> str | None:
-        """The body of kernel role ``name`` for ``part`` (None: the kind has no such body)."""
-        body = getattr(self, name)
-        return body(part) if callable(body) else body
-
-    def body(self, part) -> str:
-        """All bodies of ``part`` as one text (``_c_source.kind_types`` compares the instances'
-        C)."""
-        return "\n".join(self.role(r, part) or "" for r in PLANT_ROLES)
-
-
-#: the kernel roles of a plant kind, in the order the generated file defines them
-PLANT_ROLES = ("state_outputs", "direct_outputs", "rhs", "segments", "project")
+__all__ = ["PLANT_ROLES", "CStep", "CSupport", "PlantC", "c_step_of", "exportable_kinds",
+           "plant_c_of", "register", "register_plant", "untranslatable"]
 
 
 #: the modules whose import registers the engine's own kinds (imported on the first look-up)
