@@ -27,7 +27,7 @@ from acdrive.sim._ccode._c_source import KindTypes, Member, _step_signature, hel
 from acdrive.sim._ccode._c_source import kind_declarations
 from acdrive.sim._ccode._prelude import PRELUDE
 from acdrive.sim._ccode._translate import UnsupportedKernel, translate_step
-from acdrive.sim._kernels import kind_module
+from acdrive.sim._kernels import kind_source
 from acdrive.sim._native import NATIVE_CFLAGS
 
 pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc is not installed")
@@ -43,6 +43,16 @@ def generated_kinds() -> list[type]:
     _kinds._load()
     return sorted((cls for cls, step in _kinds._REGISTRY.items() if step.from_kernel),
                   key=lambda c: c.__name__)  # fmt: skip
+
+
+def kind_module(cls):
+    """The kind's kernels as the generic tier compiles them (``sim._kernels.kind_source``), but
+    compiled here, in this process, not loaded from the on-disk cache: a cached entry may come
+    from a process with other fast-math flags (a child run under ACDRIVE_STRICT_MATH=1), since
+    the flags of the functions a kernel inlines are not part of the cache's key."""
+    from acdrive.sim import _codegen as codegen
+
+    return codegen.load_module(kind_source(cls).replace("cache=True", "cache=False"))
 
 
 def _instances() -> list:
