@@ -191,9 +191,38 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.all(both_nan | (a.view(np.int64) == b.view(np.int64))))
 
 
-@pytest.mark.parametrize(("cls", "part"), cases(),
-                         ids=lambda c: c.__name__ if isinstance(c, type) else getattr(c, "name", ""))  # fmt: skip
-def test_generated_c_equals_the_compiled_kernel_bit_for_bit(cls, part, tmp_path):
+def _in_a_fresh_interpreter(check: str, index: int, folder) -> None:
+    """Run ``check(index, folder)`` of this module in a child interpreter: the numba reference is
+    compiled there from scratch, away from what the suite's earlier tests left in this process
+    (the rebinding of kernels to acdrive's elementary functions keeps copies per process)."""
+    import os
+    import sys
+    from pathlib import Path
+
+    code = (f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
+            f"import test_kernel_translation as t; t.{check}({index}, {str(folder)!r})")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ), timeout=900, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+
+
+def _case_id(case) -> str:
+    return "-".join(c.__name__ if isinstance(c, type) else c if isinstance(c, str)
+                    else getattr(c, "name", "") for c in case if c is not None)  # fmt: skip
+
+
+@pytest.mark.parametrize("index", range(len(cases())),
+                         ids=[_case_id(c) for c in cases()])  # fmt: skip
+def test_generated_c_equals_the_compiled_kernel_bit_for_bit(index, tmp_path):
+    _in_a_fresh_interpreter("check_step", index, tmp_path)
+
+
+def check_step(index: int, folder) -> None:
+    """Case ``index`` of ``cases()``: the kind's generated step against its compiled kernel."""
+    from pathlib import Path
+
+    cls, part = cases()[index]
+    tmp_path = Path(folder)
     run_c = c_library(cls, part, tmp_path)
     kernel = kind_module(cls).step
     of = part if part is not None else cls
@@ -347,12 +376,22 @@ def segments_library(cls, folder):
     return lib.run
 
 
-@pytest.mark.parametrize("cls", [c for c in generated_plant_kinds()
-                                 if _kinds._PLANT_REGISTRY[c].segments is not None],
-                         ids=lambda c: c.__name__)  # fmt: skip
-def test_generated_segments_equal_the_compiled_kernel_bit_for_bit(cls, tmp_path):
+def _modulators() -> list:
+    return [c for c in generated_plant_kinds() if _kinds._PLANT_REGISTRY[c].segments is not None]
+
+
+@pytest.mark.parametrize("index", range(len(_modulators())),
+                         ids=[c.__name__ for c in _modulators()])  # fmt: skip
+def test_generated_segments_equal_the_compiled_kernel_bit_for_bit(index, tmp_path):
+    _in_a_fresh_interpreter("check_segments", index, tmp_path)
+
+
+def check_segments(index: int, folder) -> None:
     """A modulator's segments (their count, lengths, outputs, events and its state) from the
     generated C and from the compiled kernel, on random draws (strict: its kernel is ``jit``)."""
+    from pathlib import Path
+
+    cls, tmp_path = _modulators()[index], Path(folder)
     run_c = segments_library(cls, tmp_path)
     kernel = kind_module(cls).segments
     rng = np.random.default_rng(sum(map(ord, cls.__name__)))
@@ -460,15 +499,22 @@ def _plant_cases() -> list:
 PLANT_ROLES_TRANSLATED = ("state_outputs", "direct_outputs", "rhs", "project")  # and segments
 
 
-@pytest.mark.parametrize(("cls", "role", "part"), _plant_cases(),
-                         ids=lambda v: v.__name__ if isinstance(v, type)
-                         else v if isinstance(v, str) else getattr(v, "name", ""))  # fmt: skip
-def test_generated_plant_c_equals_the_compiled_kernel(cls, role, part, tmp_path):
+@pytest.mark.parametrize("index", range(len(_plant_cases())),
+                         ids=[_case_id(c) for c in _plant_cases()])  # fmt: skip
+def test_generated_plant_c_equals_the_compiled_kernel(index, tmp_path):
+    _in_a_fresh_interpreter("check_plant", index, tmp_path)
+
+
+def check_plant(index: int, folder) -> None:
     """Against the kernel as every tier compiles it, at the sample instant and inside the
     integrator's stages: bit for bit for a kernel without fast-math, up to the sign of a zero
     for one with acdrive's fast-math flags (``jit_fast``), which leave that sign unspecified."""
+    from pathlib import Path
+
     from acdrive.sim._ccode._translate import _fast_math
 
+    cls, role, part = _plant_cases()[index]
+    tmp_path = Path(folder)
     run_c = plant_library(cls, role, tmp_path, part)
     of = part if part is not None else cls
     module = kind_module(cls)
