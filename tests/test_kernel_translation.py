@@ -46,10 +46,9 @@ def generated_kinds() -> list[type]:
 
 
 def kind_module(cls):
-    """The kind's kernels as the generic tier compiles them (``sim._kernels.kind_source``), but
-    compiled here, in this process, not loaded from the on-disk cache: a cached entry may come
-    from a process with other fast-math flags (a child run under ACDRIVE_STRICT_MATH=1), since
-    the flags of the functions a kernel inlines are not part of the cache's key."""
+    """The kind's kernels as the generic tier compiles them (``sim._kernels.kind_source``),
+    compiled in this process rather than loaded from the on-disk cache, which other processes
+    of the suite (children under ACDRIVE_STRICT_MATH=1 among them) also write."""
     from acdrive.sim import _codegen as codegen
 
     return codegen.load_module(kind_source(cls).replace("cache=True", "cache=False"))
@@ -194,7 +193,8 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 def _in_a_fresh_interpreter(check: str, index: int, folder) -> None:
     """Run ``check(index, folder)`` of this module in a child interpreter: the numba reference is
     compiled there from scratch, away from what the suite's earlier tests left in this process
-    (the rebinding of kernels to acdrive's elementary functions keeps copies per process)."""
+    (a kernel module compiled after every built-in scenario was built was seen to give other
+    values at the edges, -inf where a fresh interpreter gives NaN, from the same source)."""
     import os
     import sys
     from pathlib import Path
