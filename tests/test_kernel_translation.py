@@ -118,6 +118,25 @@ def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]
     return lines
 
 
+def _compiled_run(kinds, code: list[str], wrapper: list[str], folder, name: str, argtypes,
+                  restype):
+    """The kinds' declarations, the helpers ``code`` calls, ``code`` and the test's ``wrapper``
+    compiled as the native tier compiles (plus -Wall -Wextra -Werror: a mistyped pointer is an
+    error, not a warning); the wrapper's ``run`` loaded."""
+    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
+                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
+    path, library = folder / f"{name}.c", folder / f"lib{name}.so"
+    path.write_text(source)
+    strict = ("-Wall", "-Wextra", "-Werror")
+    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
+                          capture_output=True, text=True, check=False)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    lib = ctypes.CDLL(str(library))
+    lib.run.argtypes = argtypes
+    lib.run.restype = restype
+    return lib.run
+
+
 def c_library(cls, part, folder):
     """The kind's generated C step (for ``part``, a per-instance kind) with a flat-array
     wrapper ``run``, compiled."""
@@ -147,20 +166,9 @@ def c_library(cls, part, folder):
         if entry.members[role]:
             wrapper += _copy_lines(getattr(of, attr), arg.upper(), arg, False)
     wrapper += ["    (void)i;", "    return events;", "}"]
-    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
-                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
-    path = folder / f"{entry.cname}.c"
-    path.write_text(source)
-    library = folder / f"lib{entry.cname}.so"
-    strict = ("-Wall", "-Wextra", "-Werror")  # a mistyped pointer is an error, not a warning
-    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    lib = ctypes.CDLL(str(library))
     pointer = ctypes.POINTER(ctypes.c_double)
-    lib.run.argtypes = [ctypes.c_double, ctypes.c_double, pointer, pointer, pointer, pointer]
-    lib.run.restype = ctypes.c_uint32
-    return lib.run
+    return _compiled_run(kinds, code, wrapper, folder, entry.cname,
+                         [ctypes.c_double, ctypes.c_double, *([pointer] * 4)], ctypes.c_uint32)
 
 
 SPECIAL = np.array([0.0, -0.0, 1e300, -1e300, 1.0, -1.0, 0.5, 2.0])
@@ -288,7 +296,7 @@ def test_the_current_controller_is_written_for_its_order():
     """Per instance: a controller of order n names its states x_0 to x_{n-1} (the PI on both
     axes is of order 2, the PI x lag of order 4); the v_dc input appears only in the instance
     that has it."""
-    from acdrive.sim._ccode._translate import translate_part
+    from acdrive.sim._ccode._kind_c import translate_part
 
     pi, pi_dc, lag = _instances()[2:]
     assert (pi.discrete.order, lag.discrete.order) == (2, 4)
@@ -360,20 +368,9 @@ def segments_library(cls, folder):
     wrapper += ["    " + line.replace("    v[", f"    v[r * {width} + ")
                 for line in _copy_lines(cls.OUTPUTS, "V[r]", "v", False)]  # fmt: skip
     wrapper += ["    }", "    (void)i;", "    return (uint32_t)n + 256u * events;", "}"]
-    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
-                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
-    path = folder / f"{entry.cname}_segments.c"
-    path.write_text(source)
-    library = folder / f"lib{entry.cname}_segments.so"
-    strict = ("-Wall", "-Wextra", "-Werror")
-    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    lib = ctypes.CDLL(str(library))
     pointer = ctypes.POINTER(ctypes.c_double)
-    lib.run.argtypes = [ctypes.c_double, *([pointer] * 5)]
-    lib.run.restype = ctypes.c_uint32
-    return lib.run
+    return _compiled_run(kinds, code, wrapper, folder, f"{entry.cname}_segments",
+                         [ctypes.c_double, *([pointer] * 5)], ctypes.c_uint32)
 
 
 def _modulators() -> list:
@@ -447,20 +444,9 @@ def plant_library(cls, role: str, folder, part=None):
     attr = _PLANT_STRUCT[written][0]
     wrapper += _copy_lines(getattr(of, attr), written.upper() + "_", written, False)
     wrapper += ["    (void)i;", "}"]
-    source = "\n".join(["#include <stdint.h>", "#include <math.h>", PRELUDE,
-                        *kind_declarations(kinds), helpers_of(kinds, code), *code, *wrapper])  # fmt: skip
-    path = folder / f"{entry.cname}_{role}.c"
-    path.write_text(source)
-    library = folder / f"lib{entry.cname}_{role}.so"
-    strict = ("-Wall", "-Wextra", "-Werror")
-    done = subprocess.run(["gcc", *NATIVE_CFLAGS, *strict, "-o", str(library), str(path), "-lm"],
-                          capture_output=True, text=True, check=False)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    lib = ctypes.CDLL(str(library))
     pointer = ctypes.POINTER(ctypes.c_double)
-    lib.run.argtypes = [ctypes.c_double, *([pointer] * 5)]
-    lib.run.restype = None
-    return lib.run
+    return _compiled_run(kinds, code, wrapper, folder, f"{entry.cname}_{role}",
+                         [ctypes.c_double, *([pointer] * 5)], None)
 
 
 def _same_up_to_zero_sign(a: np.ndarray, b: np.ndarray) -> bool:

@@ -271,7 +271,7 @@ class StationaryCurrentController(SampledPart):
     #: v_max 1e12 V: no limit unless one is given
     DEFAULTS: ClassVar[dict] = {"v_max": 1e12, "aw_gain": 1.0}
     #: the parameters that set an instance's structure: its C is written for their values
-    #: (``sim._ccode._translate.translate_part``)
+    #: (``sim._ccode._kind_c.translate_part``)
     STRUCTURAL: ClassVar[tuple] = ("order", "v_dc_input")
     step = current_controller_step
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from acdrive.drives.pm._control import PMSpeedPI, PMTorqueReference, RotorFrameCurrentController
 from acdrive.sim._ccode._kinds import register
-from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._kind_c import c_step
 
 register(
     PMTorqueReference,

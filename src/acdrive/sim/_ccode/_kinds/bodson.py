@@ -12,7 +12,7 @@ from acdrive.control._bodson import (
     Synchroniser,
 )
 from acdrive.sim._ccode._kinds import register
-from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._kind_c import c_step
 
 register(
     SpeedEstimator,

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from acdrive.control._current import StationaryCurrentController
 from acdrive.control._foc import IndirectFOC, PositionP, SaturatedSpeedP, SpeedPI
-from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._kind_c import c_step
 from acdrive.sim._ccode._kinds import register
 
 register(

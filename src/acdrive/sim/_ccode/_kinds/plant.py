@@ -1,5 +1,5 @@
 """C of the plant kinds the plant C is built from (``sim._ccode._plant_source``), every one
-generated from its kernels (``sim._ccode._translate.c_plant``): the continuous parts (the DC and
+generated from its kernels (``sim._ccode._kind_c.c_plant``): the continuous parts (the DC and
 three-phase sources, the cage induction motor, the PM machine, the DFIM, its supply bus (per
 instance: one input set per machine) and stator relay (Bodson (9)), the free shaft, the
 prescribed speed), the modulators (the averaged converters and the switching SVPWM inverter,
@@ -16,7 +16,7 @@ from acdrive.plant._inverter import CarrierLatch, Inverter
 from acdrive.plant._mechanics import PrescribedSpeed, Shaft
 from acdrive.plant._network import StatorRelay, SupplyBus
 from acdrive.plant._sources import DCSource, ThreePhaseSource
-from acdrive.sim._ccode._translate import c_plant, c_step
+from acdrive.sim._ccode._kind_c import c_plant, c_step
 from acdrive.sim._ccode._kinds import register, register_plant
 
 register_plant(

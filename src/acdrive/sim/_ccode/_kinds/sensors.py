@@ -12,7 +12,7 @@ from acdrive.control._open_loop import ComplexProgram, VoltageProgram
 from acdrive.control._speed import SpeedReference
 from acdrive.plant._network import ForcedRelay, RelayCommand
 from acdrive.plant._sensors import CurrentSensors, Encoder, VoltageSensor
-from acdrive.sim._ccode._translate import c_step
+from acdrive.sim._ccode._kind_c import c_step
 from acdrive.sim._ccode._kinds import register
 
 register(
