@@ -77,9 +77,35 @@ def _support(translated: Translated) -> tuple:
     return (TABLE_AT, TANH, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
 
 
+#: translations of per-instance kinds, by what they depend on (``_structure``): the body and the
+#: support of an instance are read separately, and instances of one structure share their C
+_PER_INSTANCE: dict[tuple, Translated] = {}
+
+
+def _structure(part, role: str) -> tuple:
+    """What a per-instance kind's C depends on: its class, the kernel role, the instance's
+    layouts (names and kinds of every quantity) and its ``STRUCTURAL`` values."""
+    layouts = tuple(tuple((v.name, v.kind) for v in getattr(part, attr))
+                    for attr in ("PARAMS", "STATES", "INPUTS", "OUTPUTS"))  # fmt: skip
+    structural = tuple(float(part.p[part.PARAMS.slot(name)])
+                       for name in getattr(type(part), "STRUCTURAL", ()))  # fmt: skip
+    return type(part), role, layouts, structural
+
+
+def _once(part, role: str, translate) -> Translated:
+    key = _structure(part, role)
+    if key not in _PER_INSTANCE:
+        _PER_INSTANCE[key] = translate()
+    return _PER_INSTANCE[key]
+
+
 def translate_part(part) -> Translated:
     """The C of a per-instance kind's step for ``part``: its own layouts, and the values of
     the parameters its class names in ``STRUCTURAL`` (the controller's order) bound."""
+    return _once(part, "step", lambda: _translate_part(part))
+
+
+def _translate_part(part) -> Translated:
     roles = _kernel_layouts(type(part), part)
     for name in getattr(type(part), "STRUCTURAL", ()):
         slot = part.PARAMS.slot(name)
@@ -149,6 +175,11 @@ def translate_plant(kernel, role: str, of) -> Translated:
     return Translated("\n".join([*f.declarations(), *body]) + "\n", helpers)
 
 
+def _plant_part(kernel, role: str, part) -> Translated:
+    """``translate_plant`` for an instance of a per-instance kind, once per structure."""
+    return _once(part, role, lambda: translate_plant(kernel, role, part))
+
+
 def _body_or_none(body: str) -> str | None:
     """A kernel that does nothing (a part without states has an empty ``rhs``) has no C."""
     return body if body.strip() else None
@@ -164,7 +195,7 @@ def c_plant(cls, source: str):
     for role, kernel in kernels.items():
         if per_instance:
             bodies[role] = (lambda part, kernel=kernel, role=role:
-                            _body_or_none(translate_plant(kernel, role, part).body))  # fmt: skip
+                            _body_or_none(_plant_part(kernel, role, part).body))  # fmt: skip
         else:
             translated = translate_plant(kernel, role, cls)
             bodies[role] = _body_or_none(translated.body)
@@ -173,7 +204,7 @@ def c_plant(cls, source: str):
         def support(part):
             out = []
             for role, kernel in kernels.items():
-                out += list(_support(translate_plant(kernel, role, part)))
+                out += list(_support(_plant_part(kernel, role, part)))
             return tuple(out)
         return PlantC(source=source, support=support, from_kernel=True, **bodies)
     return PlantC(source=source, support=tuple(supports), from_kernel=True, **bodies)
