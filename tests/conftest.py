@@ -13,13 +13,9 @@ settings.register_profile("ci", derandomize=True, deadline=None)
 # on what a test checks; tests that count stderr lines would see it only on a cold cache (CI).
 # It is switched off here and tested on its own (test_cli_habits, which switches it back on).
 os.environ.setdefault("ACDRIVE_COMPILE_NOTICE", "0")
-# Nor does the suite start background compiles (sim._tier): a test's processes end with the test;
-# the tests of the background compile switch it on for their own processes.
-os.environ.setdefault("ACDRIVE_BACKGROUND_COMPILE", "0")
-# Every test runs the specialised loop unless it asks for another tier (tests/test_tiers.py
-# compares the generic loop with it): which tier an "auto" run picks depends on what earlier
-# tests left compiled in the cache, and under fast-math the tiers agree to rounding, not bits,
-# so a comparison of two runs must not depend on the order the tests ran in.
+# Every test runs numba's specialised loop unless it asks for the native one
+# (tests/test_native_tier.py compares the two bit for bit), so that what a test exercises does
+# not depend on whether the machine has a C compiler.
 os.environ.setdefault("ACDRIVE_LOOP_TIER", "specialised")
 if not os.environ.get("ACDRIVE_FUZZ_RANDOM"):
     settings.load_profile("ci")

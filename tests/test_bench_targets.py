@@ -387,9 +387,8 @@ def test_run_child_reads_output_and_reports_a_failure(tmp_path):
 
 def test_child_env_drops_the_suites_caches():
     base = {"PATH": "/bin", "NUMBA_CACHE_DIR": "/x", "ACDRIVE_NUMBA_CACHE_DIR": "/x",
-            "XDG_CACHE_HOME": "/mine", "ACDRIVE_BACKGROUND_COMPILE": "1"}  # fmt: skip
-    # and no background compile outliving the measured child
-    quiet = {"PATH": "/bin", "ACDRIVE_BACKGROUND_COMPILE": "0"}
+            "XDG_CACHE_HOME": "/mine"}  # fmt: skip
+    quiet = {"PATH": "/bin"}
     assert children.child_env(base, "/fresh") == {**quiet, "XDG_CACHE_HOME": "/fresh"}
     assert children.child_env(base, None) == quiet
 

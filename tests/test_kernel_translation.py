@@ -49,7 +49,7 @@ def generated_kinds() -> list[type]:
 
 
 def kind_module(cls):
-    """The kind's kernels as the generic tier compiles them (``sim._kernels.kind_source``),
+    """The kind's kernels compiled alone, as the loops inline them (``sim._kernels.kind_source``),
     compiled in this process rather than loaded from the on-disk cache, which other processes
     of the suite (children under ACDRIVE_STRICT_MATH=1 among them) also write."""
     from acdrive.sim import _codegen as codegen

@@ -8,7 +8,7 @@ pairs, 2-core machine): 0.52 CPU-s with numpy's default threads, 0.42 with one. 
 workers would share the cores with those spinning threads.
 
 ``one_blas_thread`` loads numpy with ``OPENBLAS_NUM_THREADS=1`` and then removes the variable
-again, so processes the command starts (a peer in ``acdrive bench``, a background compile) see
+again, so processes the command starts (a peer in ``acdrive bench``, a compiler) see
 the user's environment unchanged. Nothing is changed when numpy is already loaded, or when the
 user set ``OPENBLAS_NUM_THREADS`` or ``OMP_NUM_THREADS`` (their choice stands).
 """

@@ -66,11 +66,8 @@ def run_child(cmd: list[str], env: dict, cwd: str | None = None) -> dict:
 
 def child_env(base: dict, cache_home: str | None) -> dict:
     """``base`` without the cache variables (``CACHE_VARIABLES``), with ``XDG_CACHE_HOME`` set to
-    ``cache_home`` if given: the child then keys every cache of its own by that folder. No
-    background compile (``acdrive.sim._tier``): it would outlive the measured process, load the
-    machine under the next one and write into a cache folder that is removed."""
+    ``cache_home`` if given: the child then keys every cache of its own by that folder."""
     env = {k: v for k, v in base.items() if k not in CACHE_VARIABLES}
-    env["ACDRIVE_BACKGROUND_COMPILE"] = "0"
     if cache_home is not None:
         env["XDG_CACHE_HOME"] = cache_home
     return env

@@ -28,9 +28,8 @@ import sys
 from pathlib import Path
 
 SCENARIOS = ("bodson-ramp", "bodson-two-motors", "im-foc-speed")
-#: the loop measured is the specialised one (``acdrive.sim._tier``: a new topology would
-#: otherwise run in the generic loop), without a background compile beside the timing
-SPECIALISED = {"ACDRIVE_LOOP_TIER": "specialised", "ACDRIVE_BACKGROUND_COMPILE": "0"}
+#: the loop measured is numba's specialised one (``acdrive.sim._tier``)
+SPECIALISED = {"ACDRIVE_LOOP_TIER": "specialised"}
 
 WORKER = r"""
 import json, sys, time

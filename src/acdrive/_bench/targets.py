@@ -188,16 +188,11 @@ def _load():
 
 # --- the compile-free first result -------------------------------------------------------------
 #: a topology of the matched case's part kinds, without the encoder; argv[1]: "1" with it
-#: (the matched case's child also compiles its kinds' kernels for the generic tier, as the
-#: background compile after a user's first run does: children start no background compile)
 TOPOLOGY_CHILD = """\
 import sys
 from acdrive._bench.motulator_im import SUBSTEPS, T_S, log_ports, matched_acdrive_system
 system, parts = matched_acdrive_system("averaged", encoder=sys.argv[1] == "1")
 result = system.compile().run(float(sys.argv[2]), T_S, substeps=SUBSTEPS, log=log_ports(parts))
-if sys.argv[1] == "1":
-    from acdrive.sim._tier import compile_generic_tier
-    compile_generic_tier(system)
 print(result.steps)
 """
 

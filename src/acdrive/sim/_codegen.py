@@ -178,7 +178,7 @@ def _records() -> dict:
 
 
 def record_time(loop: str, size: int, seconds: float) -> None:
-    """Keep the compile time of a ``loop`` (its kind: "specialised", "generic", "kernels") of
+    """Keep the compile time of a ``loop`` (its kind: "specialised", "batch", ...) of
     ``size`` parts, measured on this machine, for later notices."""
     records = _records()
     kept = [r for r in records.get(loop, []) if isinstance(r, list) and len(r) == 2]

@@ -1,9 +1,9 @@
 """A system with its compiled loop: one run or a batch of variants, the size bounds of a run, and
 the held-input right-hand side the slow path and the linearisation use.
 
-The loop is one of two tiers (``sim._tier``): the specialised loop of this topology or the
-generic loop that runs any topology from tables. ``System.compile()`` compiles or loads the
-chosen loop at once; the seconds that took are reported by the next run's result
+The loop is one of two tiers (``sim._tier``): the native loop (the system's generated C) or
+numba's specialised loop of this topology. ``System.compile()`` compiles or loads the chosen
+loop at once; the seconds that took are reported by the next run's result
 (``compile_time``, ``tier``, ``compiled_now``) apart from its simulation time (``wall_time``).
 """
 
@@ -29,8 +29,7 @@ MAX_WORK = 1e9
 class CompiledSystem:
     """A system with its compiled loop: run once or over a batch of variants.
 
-    ``tier`` is the loop that runs it (``"native"``, ``"specialised"`` or ``"generic"``,
-    ``sim._tier``);
+    ``tier`` is the loop that runs it (``"native"`` or ``"specialised"``, ``sim._tier``);
     ``compile_time`` the seconds spent compiling or loading it that no run has reported yet
     (``compiled_now``: whether that was a compile rather than a load from the cache).
     """
@@ -40,8 +39,6 @@ class CompiledSystem:
         self.system = system
         self.source = system.source()
         self._module = None
-        self._tables = None
-        self._background = None
         self.tier = ""
         self.compile_time = 0.0
         self.compiled_now = False
@@ -72,26 +69,9 @@ class CompiledSystem:
         if asked == "specialised":
             self._specialise("ACDRIVE_LOOP_TIER=specialised")
             return
-        if asked == "auto" and codegen.is_cached(self.module.run):
-            self._specialise(None)  # a load
-            return
-        missing = _tier.kinds_without_kernels(self.system) if asked == "auto" else []
-        if missing:
-            from acdrive.sim import _generic
-
-            names = ", ".join(sorted({kind.__name__ for kind, _ in missing}))
-            why = "; ".join(sorted({reason for _, reason in missing}))
-            native = (f"the native loop cannot run it ({self._native_obstacle}); "
-                      if self._native_obstacle else "")  # fmt: skip
-            self._specialise(
-                f"{native}the generic loop cannot run it: no compiled kernels for the part kind(s) "
-                f"{names} ({why}); they compile in the background for the next new topology"
-            )
-            self._background = _tier.start_background(
-                kinds=[kind for kind, _ in missing], generic=not codegen.is_cached(_generic.run)
-            )
-            return
-        self._generalise()
+        no_c = (f"the native loop cannot run it ({self._native_obstacle})"
+                if self._native_obstacle else "")  # fmt: skip
+        self._specialise(no_c or None)
 
     def _nativise(self, required: bool) -> bool:
         """Build or load the native loop (``sim._native``) if it can run this system; else
@@ -129,73 +109,17 @@ class CompiledSystem:
         if switch:
             self.tier = "specialised"
 
-    def _generalise(self) -> None:
-        """Load (or compile) the part kinds' kernels and the generic loop; build the tables."""
-        from acdrive.sim import _generic, _tables
-        from acdrive.sim import _kernels as kernels
-
-        start = time.perf_counter()
-        addresses, kernel_seconds = {}, 0.0
-        for kind in _tier.kinds_of(self.system):
-            found, seconds = kernels.addresses(kind)
-            addresses.update(found)
-            kernel_seconds += seconds
-        if not codegen.is_cached(_generic.run):
-            measured = codegen.expected_time("generic", 1)
-            about = f" (about {measured:.2g} s as measured on this machine)" if measured else ""
-            codegen.notice(
-                f"compiling the generic simulation loop once for this installation{about}: "
-                "afterwards a new topology of compiled part kinds runs without a compile"
-            )
-        seconds, compiled = codegen.compile_for(_generic.run, _tier.GENERIC_RUN_ARGS)
-        if compiled:
-            codegen.record_time("generic", 1, seconds)
-        self._tables = _tables.tables(self.system, addresses)
-        self._spent(time.perf_counter() - start, compiled or kernel_seconds > 0.0)
-        self.tier = "generic"
-
-    def _loop_for(self, n_steps: int, substeps: int):
-        """The run function and its extra arguments for a run of ``n_steps`` samples: the
-        generic loop gives way to the specialised one once that is cached (a background compile
-        finished) or when compiling it pays for this run."""
-        if self.tier == "generic" and _tier.chosen() == "auto":
-            if codegen.is_cached(self.module.run):
-                self._specialise(None)
-            elif _tier.pays_to_specialise(self.system, n_steps, substeps):
-                expected = _tier.expected_generic_run(self.system, n_steps, substeps)
-                self._specialise(
-                    f"this run would take about {expected:.2g} s in the generic loop, longer "
-                    "than the compile"
-                )
-        if self.tier == "generic":
-            from acdrive.sim import _generic
-
-            return _generic.run, self._tables
+    def _loop_for(self):
+        """The run function of this system's tier."""
         if self.tier == "native":
-            return self._native_run, ()
-        return self.module.run, ()
+            return self._native_run
+        return self.module.run
 
     def _native_run(self, X, P, PO, S, Y, U, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
                     ECOUNT):  # fmt: skip
         """The native loop with the numba loops' arguments (``U`` is the loop's own inside)."""
         return self._native.run(P, PO, X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG,
                                 ELOG, ECOUNT)  # fmt: skip
-
-    def _announce_generic(self, n_steps: int, substeps: int) -> None:
-        """The first generic run of this system: say so, with its expected time, and start the
-        specialised loop's compile in the background for the runs after (``sim._tier``)."""
-        expected = _tier.expected_generic_run(self.system, n_steps, substeps)
-        later = ("the specialised loop compiles in the background for the runs after"
-                 if _tier.background_enabled() else "ACDRIVE_BACKGROUND_COMPILE=0: the "
-                 "specialised loop is not compiled in the background")  # fmt: skip
-        codegen.notice(
-            f"a new topology: running the generic loop, no compile (its part kinds' kernels are "
-            f"compiled on this machine), about {expected:.2g} s for this run; {later}"
-        )
-        self._background = (
-            _tier.start_background(specialised_source=self.source, size=len(self.system.parts))
-            or False
-        )
 
     def _reported(self) -> tuple[float, bool]:
         """(compile or load seconds, compiled) not yet reported, now handed to a result."""
@@ -277,18 +201,13 @@ class CompiledSystem:
         if tier == "native" and not np.array_equal(PO, self._native_offsets):
             # tables of other lengths than the library's structs hold
             self._specialise("a run with tables of other lengths runs the specialised loop", False)
-            loop, tables, tier = self.module.run, (), "specialised"
+            loop, tier = self.module.run, "specialised"
         else:
-            loop, tables = self._loop_for(n_steps, substeps)
-            tier = self.tier
-        if tier == "generic" and self._background is None:
-            self._announce_generic(n_steps, substeps)
+            loop = self._loop_for()
         start = time.perf_counter()
         done, status = loop(X, P, PO, S, Y, U, float(t0), float(sample_time), substeps, n_steps,
-                            log_every, idx, LOG, ELOG, ECOUNT, *tables)  # fmt: skip
+                            log_every, idx, LOG, ELOG, ECOUNT)  # fmt: skip
         wall = time.perf_counter() - start
-        if tier == "generic":
-            _tier.record_generic_run(self.system, n_steps, substeps, wall)
         if status != STATUS_OK:
             bad = [
                 name
@@ -476,8 +395,6 @@ class CompiledSystem:
                 idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
         if self.tier == "native":  # single runs stay native; the batch loads its own loop
             self._specialise("batches run the specialised loop", switch=False)
-        elif self.tier != "specialised":
-            self._specialise("batches run the specialised loop")
         seconds, compiled = codegen.compile_for(
             self.module.run_batch, tuple(numba.typeof(a) for a in args)
         )

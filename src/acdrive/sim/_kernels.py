@@ -1,12 +1,10 @@
-"""Part-kind kernels compiled once per installation, for the generic loop (``sim._generic``).
-
-Each kernel role is compiled with one explicit signature, so that the generic loop can call it
-through its address whatever the topology. The flags match what the kernel gets when it is
-inlined into the specialised loop (``sim._loop_source``), so that both tiers round alike: the
-plant's outputs and right-hand side are fast-math inside the integrator's stages and strict at
-the sample instant; projections, sampled parts and modulators are strict. One generated module
-per part kind (its kernels named by import, a fingerprint for kernels outside acdrive), cached in
-the compiled-systems folder like the specialised loops (``sim._codegen``).
+"""A part kind's kernels compiled alone, one explicit signature per role, with the flags each gets
+when it is inlined into a loop (``sim._loop_source``): the plant's outputs and right-hand side
+fast-math inside the integrator's stages and strict at the sample instant; projections, sampled
+parts and modulators strict. It is the reference the C generated from a kind's kernels
+(``sim._ccode._translate``) is checked against, bit for bit (tests/test_kernel_translation.py).
+One generated module per part kind (its kernels named by import, a fingerprint for kernels
+outside acdrive), in the compiled-systems folder like the loops (``sim._codegen``).
 """
 
 from __future__ import annotations
@@ -36,7 +34,7 @@ ROLES = {
 
 
 def roles_of(kind) -> list[str]:
-    """The generic-loop roles a part kind (a ``Part`` subclass) provides."""
+    """The roles a part kind (a ``Part`` subclass) provides."""
     present = kind.kernels(kind.__new__(kind))  # class-level lookup: no instance needed
     return [role for role, (attr, *_) in ROLES.items() if present.get(attr) is not None]
 
@@ -73,24 +71,3 @@ def kind_source(kind) -> str:
 def kind_module(kind):
     """The imported generated module of ``kind``'s role kernels (nothing compiled yet)."""
     return codegen.load_module(kind_source(kind))
-
-
-def kind_ready(kind) -> bool:
-    """Whether every role kernel of ``kind`` is in numba's on-disk cache (loads, no compile)."""
-    module = kind_module(kind)
-    return all(codegen.is_cached(getattr(module, role)) for role in roles_of(kind))
-
-
-def addresses(kind) -> tuple[dict, float]:
-    """((kind, role) -> native address of the kind's role kernel in this process, seconds spent
-    compiling), each kernel loaded from numba's cache or compiled now."""
-    module = kind_module(kind)
-    out, compiled = {}, 0.0
-    for role in roles_of(kind):
-        dispatcher = getattr(module, role)
-        signature = ROLES[role][1]
-        seconds, was_compiled = codegen.compile_for(dispatcher, signature)
-        compiled += seconds if was_compiled else 0.0
-        result = dispatcher.overloads[signature.args]
-        out[(kind, role)] = result.library.get_pointer_to_function(result.fndesc.llvm_func_name)
-    return out, compiled

@@ -24,8 +24,8 @@ Here the same functions are written as arithmetic only:
 ``LANE_MATH`` is the rebinding table (``sim._rebind``) that makes a kernel call these instead of
 numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos``, ``abs`` and
 ``sqrt`` replaced. Every compiled tier uses it: the generated loops rebind each kernel they
-inline (``sim._loop_source``, the single and the lockstep loops, and ``sim._kernels``, the
-generic tier's part kinds), and the exported C and the native tier compute the same (the double
+inline (``sim._loop_source``, the single and the lockstep loops, and ``sim._kernels``, a
+kind's kernels compiled alone), and the exported C and the native tier compute the same (the double
 build's ``acd_sincos`` and ``acd_cabs``, ``sim._ccode._prelude``, with these constants from
 ``sim._sincos_constants``). So a single run, a lockstep lane and a native run agree bit for bit.
 Python code outside the compiled loops (designs, analyses, reports) keeps numpy's functions.

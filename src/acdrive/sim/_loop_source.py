@@ -13,7 +13,8 @@ from acdrive.sim._codegen import (
     kernel_fingerprint,
     kernel_import,
 )
-from acdrive.sim._integrators import INTEGRATORS, RK6_A, RK6_B, RK6_C
+from acdrive.sim._integrators import INTEGRATORS
+from acdrive.sim._rk_source import NUMBA, step_lines
 
 #: the status codes ``run`` returns (mirrored by the generated source)
 STATUS_OK, STATUS_NONFINITE = 0, 1
@@ -92,7 +93,7 @@ def step_body(method: str, lanes: bool = False) -> list[str]:
     held, every stage time capped at ``cap`` (``advance_lines``); ``W`` holds the stage
     derivatives and, in its last row, the stage state. ``lanes``: every array has a
     trailing axis over variants, run by an innermost loop over ``LANES`` (``sim._lockstep_source``)."""
-    lines = _step_lines(method)
+    lines = step_lines(method, NUMBA)
     if not lanes:
         return lines
     out = []
@@ -104,41 +105,6 @@ def step_body(method: str, lanes: bool = False) -> list[str]:
         else:
             out.append(line)
     return out
-
-
-def _step_lines(method: str) -> list[str]:
-    if method == "rk4":  # written out: the DFIM results' rounding is this sequence
-        return [
-            "    k1, k2, k3, k4, xt = W[0], W[1], W[2], W[3], W[4]",
-            "    derivatives(min(t, cap), X, P, PO, Y, U, k1)",
-            "    for i in range(N_X):",
-            "        xt[i] = X[i] + 0.5 * h * k1[i]",
-            "    derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k2)",
-            "    for i in range(N_X):",
-            "        xt[i] = X[i] + 0.5 * h * k2[i]",
-            "    derivatives(min(t + 0.5 * h, cap), xt, P, PO, Y, U, k3)",
-            "    for i in range(N_X):",
-            "        xt[i] = X[i] + h * k3[i]",
-            "    derivatives(min(t + h, cap), xt, P, PO, Y, U, k4)",
-            "    for i in range(N_X):",
-            "        X[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])",
-        ]
-    stages = len(RK6_B)
-    lines = [f"    xt = W[{stages}]"]
-
-    def combination(weights):
-        return " + ".join(f"{w!r} * W[{j}, i]" for j, w in enumerate(weights) if w != 0.0)
-
-    for i in range(stages):
-        if i == 0:
-            lines.append("    derivatives(min(t, cap), X, P, PO, Y, U, W[0])")
-            continue
-        lines.append("    for i in range(N_X):")
-        lines.append(f"        xt[i] = X[i] + h * ({combination(RK6_A[i])})")
-        lines.append(f"    derivatives(min(t + {RK6_C[i]!r} * h, cap), xt, P, PO, Y, U, W[{i}])")
-    lines.append("    for i in range(N_X):")
-    lines.append(f"        X[i] += h * ({combination(RK6_B)})")
-    return lines
 
 
 def kernel_header(

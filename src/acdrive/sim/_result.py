@@ -351,7 +351,7 @@ class SystemResult(Result):
     descriptions: dict[str, str] = field(default_factory=dict)
     #: seconds spent compiling or loading the loop before this run (not in ``wall_time``)
     compile_time: float = 0.0
-    #: the loop that ran (``sim._tier``): "native", "specialised" or "generic"
+    #: the loop that ran (``sim._tier``): "native" or "specialised"
     tier: str = ""
     #: whether ``compile_time`` was a compile (else a load from the cache)
     compiled_now: bool = False

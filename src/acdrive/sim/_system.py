@@ -192,7 +192,7 @@ class System:
 
     def compile(self) -> CompiledSystem:
         """The compiled system, its loop compiled or loaded now (``sim._tier`` chooses the
-        specialised or the generic loop; the seconds it took are reported by the first run)."""
+        native or numba's specialised loop; the seconds it took are reported by the first run)."""
         return CompiledSystem(self)
 
     # --- arrays -----------------------------------------------------------------------------

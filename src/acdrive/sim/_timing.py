@@ -7,7 +7,7 @@ from __future__ import annotations
 
 def loop_time_text(seconds: float, compiled: bool, tiers) -> str:
     """The compile or load time of a run's loop, for a headline beside its simulation time:
-    " (+ 12.15 s compiling the specialised loop)", " (+ 0.05 s loading the generic loop)", or
+    " (+ 12.15 s compiling the specialised loop)", " (+ 0.05 s loading the native loop)", or
     " (specialised loop)" when the loop was in memory already. ``tiers``: the tier names of the
     runs (``sim._tier``)."""
     names = " and ".join(sorted({t for t in tiers if t})) or "simulation"

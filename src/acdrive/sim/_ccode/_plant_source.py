@@ -58,7 +58,8 @@ from acdrive.sim._ccode._c_source import (
 from acdrive.sim._ccode._kinds import PLANT_ROLES, plant_c_of
 from acdrive.sim._ccode._prelude import PRELUDE
 from acdrive.sim._ccode._pieces import TABLE_NEXT_TIME
-from acdrive.sim._integrators import RK6_A, RK6_B, RK6_C
+from acdrive.sim._integrators import METHODS
+from acdrive.sim._rk_source import c_dialect, step_lines
 from acdrive.sim._loop_source import profile_parts
 
 #: the compiled loop's rule (sim._loop_source.integrate): a segment whose remaining length is
@@ -210,49 +211,11 @@ def _direct_lines(system, kinds) -> list[str]:
 
 def _rk_lines(method: str, n_x: int, name: str) -> list[str]:
     """Body of ``<name>_plant_step``: one Runge-Kutta step with the inputs held and the stage
-    times capped at ``cap``, the arithmetic of ``sim._loop_source._step_lines`` in the same
-    order."""
-    d = f"{name}_derivatives"
-    if method == "rk4":
-        return [
-            "    int i;",
-            f"    {name}_vector k1, k2, k3, k4, xt;",
-            f"    {d}(ACD_CAPPED(t, cap), p, &X->x, in, y, &k1.x);",
-            f"    for (i = 0; i < {n_x}; ++i) {{",
-            "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k1.v[i];",
-            "    }",
-            f"    {d}(ACD_CAPPED(t + ACD_R(0.5) * h, cap), p, &xt.x, in, y, &k2.x);",
-            f"    for (i = 0; i < {n_x}; ++i) {{",
-            "        xt.v[i] = X->v[i] + ACD_R(0.5) * h * k2.v[i];",
-            "    }",
-            f"    {d}(ACD_CAPPED(t + ACD_R(0.5) * h, cap), p, &xt.x, in, y, &k3.x);",
-            f"    for (i = 0; i < {n_x}; ++i) {{",
-            "        xt.v[i] = X->v[i] + h * k3.v[i];",
-            "    }",
-            f"    {d}(ACD_CAPPED(t + h, cap), p, &xt.x, in, y, &k4.x);",
-            f"    for (i = 0; i < {n_x}; ++i) {{",
-            (
-                "        X->v[i] += h / ACD_R(6.0) * (k1.v[i] + ACD_R(2.0) * k2.v[i] + "
-                "ACD_R(2.0) * k3.v[i] + k4.v[i]);"
-            ),
-            "    }",
-        ]
-    if method != "rk6":
-        raise InputError("integrator", f"{method} has no C in the plant export (rk4, rk6 have)")
-    stages = len(RK6_B)
-
-    def combination(weights):
-        return " + ".join(f"ACD_R({w!r}) * k[{j}].v[i]" for j, w in enumerate(weights) if w != 0.0)
-
-    lines = ["    int i;", f"    {name}_vector k[{stages}], xt;"]
-    lines.append(f"    {d}(ACD_CAPPED(t, cap), p, &X->x, in, y, &k[0].x);")
-    for s in range(1, stages):
-        lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
-                  f"        xt.v[i] = X->v[i] + h * ({combination(RK6_A[s])});", "    }",
-                  f"    {d}(ACD_CAPPED(t + ACD_R({RK6_C[s]!r}) * h, cap), p, &xt.x, in, y, &k[{s}].x);"]  # fmt: skip
-    lines += [f"    for (i = 0; i < {n_x}; ++i) {{",
-              f"        X->v[i] += h * ({combination(RK6_B)});", "    }"]  # fmt: skip
-    return lines
+    times capped at ``cap``, the method's tableau expanded as every loop expands it
+    (``sim._rk_source``)."""
+    if method not in METHODS:
+        raise InputError("integrator", f"{method} has no C in the plant export ({', '.join(METHODS)} have)")
+    return step_lines(method, c_dialect(name, n_x))
 
 
 def _advance_lines(system, name: str, in_arg: str) -> list[str]:
