@@ -41,10 +41,15 @@ DRAWS = 400
 
 
 def generated_kinds() -> list[type]:
+    """The registered kinds defined in their modules (not the classes a factory makes at run
+    time, nor a test's own kinds: ``_instances`` has those it checks)."""
+    import sys
+
     import acdrive.drives.pm._c_kinds  # noqa: F401 (registers the PM drive's kinds)
 
     _kinds._load()
-    return sorted((cls for cls, step in _kinds._REGISTRY.items() if step.from_kernel),
+    return sorted((cls for cls, step in _kinds._REGISTRY.items() if step.from_kernel
+                   and getattr(sys.modules[cls.__module__], cls.__name__, None) is cls),
                   key=lambda c: c.__name__)  # fmt: skip
 
 
@@ -65,10 +70,37 @@ def _instances() -> list:
     from acdrive.control._lti import LTI
 
     pi, lag = LTI.pi(2.0, 300.0), LTI.pi_lag(3.0, 100.0, [500.0], [2000.0])
-    return [ComputationDelay("delay"), ComputationDelay("delay", unit="A", kind="real"),
-            StationaryCurrentController("pi", pi, T_s=1e-4),
-            StationaryCurrentController("pi_dc", pi, T_s=1e-4, v_dc_input=True),
-            StationaryCurrentController("lag", lag, T_s=1e-4, aw_gain=0.0, v_max=50.0)]  # fmt: skip
+    parts = [ComputationDelay("delay"), ComputationDelay("delay", unit="A", kind="real"),
+             StationaryCurrentController("pi", pi, T_s=1e-4),
+             StationaryCurrentController("pi_dc", pi, T_s=1e-4, v_dc_input=True),
+             StationaryCurrentController("lag", lag, T_s=1e-4, aw_gain=0.0, v_max=50.0),
+             *_reducers()]  # fmt: skip
+    for part in parts:
+        _kinds.c_step_of(part)  # a kind made at run time is registered on its first look-up
+    return parts
+
+
+def _reducers() -> list:
+    """The batch reducers' parts (``acdrive._reducer_parts``), one of each form: the stats part
+    over a space vector with a reference and a real signal; the oscillation part with and
+    without a reference; the speed error with a relay gate and two excluded windows, and
+    without either."""
+    from acdrive._reducer_parts import _reducer_class, _speed_error_class, _stats_class
+
+    stats = _stats_class((("A", True, True), ("rad/s", False, False)))
+    window = {"start0": 0.1, "stop0": 0.9, "limit0": 1.0, "start1": 0.0, "stop1": 1.0,
+              "limit1": 0.5}  # fmt: skip
+    gated, free = _speed_error_class("rad/s", True, 2), _speed_error_class("rad/s", False, 0)
+    return [stats("stats", every=2.0, **window),
+            _reducer_class("oscillation", "rad/s", False, True)(
+                "osc_ref", start=0.1, stop=0.9, split=0.5, a_hp=0.9, b_lp=0.1, is_complex=0.0,
+                has_ref=1.0),
+            _reducer_class("oscillation", "rad/s", False, False)(
+                "osc", start=0.1, stop=0.9, split=0.5, a_hp=0.9, b_lp=0.1, is_complex=0.0,
+                has_ref=0.0),
+            gated("gated", every=1.0, slew=0.01, settle=0.02, has_gate=1.0, start0=0.2, end0=0.3,
+                  start1=0.6, end1=0.7),
+            free("free", every=1.0, slew=0.01, settle=0.02, has_gate=0.0)]  # fmt: skip
 
 
 def cases() -> list:
@@ -267,6 +299,8 @@ def check_step(index: int, folder) -> None:
         p, times = _flat(rng, of.PARAMS)
         for k in structural:  # the instance's structure, which its C is written for
             p[k] = part.p[k]
+        if part is not None and not of.PARAMS.tables and draw % 2:
+            p = np.array(part.p, dtype=float)  # the part as configured (a reducer's every)
         u, _ = _flat(rng, of.INPUTS)
         s, _ = _flat(rng, of.STATES)
         y, _ = _flat(rng, of.OUTPUTS)

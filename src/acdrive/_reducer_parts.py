@@ -314,6 +314,8 @@ def _reducer_class(kind: str, unit: str, is_complex: bool, has_ref: bool) -> typ
             {
                 "__doc__": f"On-line {kind} of a signal (acdrive.batch).",
                 "FACTORY_KEY": ("reducer", key),
+                # the class's own values (its key): its C is written for them
+                "STRUCTURAL": ("is_complex", "has_ref"),
                 "PARAMS": REDUCER_PARAMS,
                 "STATES": states,
                 "INPUTS": Layout(*inputs),
@@ -374,6 +376,7 @@ def _speed_error_class(unit: str, gated: bool, n_windows: int) -> type:
             {
                 "__doc__": "On-line whole-run and tracking speed error (acdrive.batch).",
                 "FACTORY_KEY": ("speed_error", key),
+                "STRUCTURAL": ("has_gate",),  # the class's own value (its key): its C is for it
                 "PARAMS": Layout(*params),
                 "STATES": Layout(*(real(n, u, d) for n, u, d in SPEED_ERROR_STATES)),
                 "INPUTS": Layout(*inputs),

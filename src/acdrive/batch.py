@@ -20,11 +20,16 @@ variants per core on, forked workers prepare shares of the variants while this p
 the first (``_forked_map``; the same rows in the same order as one process gives). Valid variants are
 grouped by compiled topology and table layout (same generated source, parameter offsets, sample
 time, duration and substeps) and each group runs in one call of the compiled batch loop
-(``CompiledSystem.run_packed``). A group of at least ``LANES`` (48) variants per core whose
-modulators make one segment per sample runs in lockstep, ``LANES`` variants at a time over SIMD
-lanes (``sim._lockstep_source``:
-bit-identical to the single runs, ``tests/test_lockstep.py``); otherwise numba's ``prange`` runs the single run's loop one variant per row,
-bit-identical to running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
+(``CompiledSystem.run_packed``). Where the native loop runs the group's system (every part's C
+generated from its kernels, the reducers' among them, and a C compiler), each variant runs in
+it as its single run would, the variants spread over the cores, with no numba compile
+(``tests/test_native_batch.py``), unless the batch is large enough that numba's lockstep loop
+pays for its compile (``sim._compiled.LOCKSTEP_PAYS_STEPS``) or ``lockstep=True`` asks for it.
+In numba, a group of at least ``LANES`` (48) variants per core whose modulators make one segment
+per sample runs in lockstep, ``LANES`` variants at a time over SIMD lanes
+(``sim._lockstep_source``: bit-identical to the single runs, ``tests/test_lockstep.py``);
+otherwise numba's ``prange`` runs the single run's loop one variant per row, bit-identical to
+running each variant alone (``tests/test_batch.py`` checks ``np.array_equal``).
 
 **On-line reducers.** A ``Reducer`` is a metric computed inside the loop by sampled parts
 (``acdrive._reducer_parts``) appended after every other part: one "stats" part (its step
@@ -470,7 +475,7 @@ class BatchResult:
     ``SystemResult`` of variant i when ``log`` was asked for. ``wall_time`` is the compiled
     loops' time; ``steps`` the control steps simulated (valid variants). ``units``: column ->
     unit ("" for flags, counts, ratios and text; ``Reducer.column_units``). ``loops``: the
-    batch loop each group ran in ("lockstep" or "per-variant"), in group order."""
+    batch loop each group ran in ("native", "lockstep" or "per-variant"), in group order."""
 
     rows: list[dict]
     traces: dict = field(default_factory=dict)
@@ -572,9 +577,10 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
     every ``log_every`` samples (default: the scenario's), in ``BatchResult.traces``.
     ``integrator`` / ``substeps``: override the scenario's (e.g. ``"rk6"``, 1), applied to every
     variant; running a variant alone with the same setup gives the same bits.
-    ``lockstep``: None lets the compiled system choose the SIMD lockstep loop where it applies
-    (module docstring), True requires it (``InputError`` naming the modulator where it cannot
-    apply), False runs one variant at a time.
+    ``lockstep``: None lets the compiled system choose the native loop or numba's SIMD lockstep
+    loop (module docstring), True requires lockstep (``InputError`` naming the modulator where
+    it cannot apply), False runs one variant at a time (in the native loop where it runs the
+    system).
     """
     if not isinstance(variants, (list, tuple)):
         raise InputError("variants", "must be a list of dicts of overrides")

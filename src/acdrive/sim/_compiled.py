@@ -24,6 +24,11 @@ from acdrive.sim._result import SystemResult
 MAX_SUBSTEPS = 1000
 LOG_BUDGET_BYTES = 2 * 1024**3
 MAX_WORK = 1e9
+#: integrator steps (variants x samples x substeps) from which a batch of a system the native
+#: loop runs goes to numba's lockstep loop instead of the native loop per variant: the lockstep
+#: loop's compile (about 40 s) is paid back at about 0.7 us saved per step (3.5x the per-variant
+#: speed per CPU-second; docs/design.md, "Batches and sweeps")
+LOCKSTEP_PAYS_STEPS = 5e7
 
 
 class CompiledSystem:
@@ -361,10 +366,6 @@ class CompiledSystem:
         logs, event counts, samples done and status of every variant, and the wall time. The
         variants run in lockstep where ``lockstep_plan`` chooses it (``sim._lockstep_source``);
         ``self.last_batch_loop`` names the loop that ran."""
-        import numba
-
-        from acdrive.sim._lockstep_source import lockstep_broken, lockstep_plan
-
         B = X.shape[0]
         U = np.zeros((B, self.system.sizes["u"]))
         n_ev = len(self.system.event_names())
@@ -374,6 +375,16 @@ class CompiledSystem:
         DONE = np.zeros(B, dtype=np.int64)
         STATUS = np.zeros(B, dtype=np.int64)
         idx = np.array([c[2] for c in columns], dtype=np.int64)
+        if self._native_batch_pays(PO, B * n_steps * substeps, lockstep):
+            start = time.perf_counter()
+            self._native_batch(P, PO, X, S, Y, float(t0), float(sample_time), substeps, n_steps,
+                               log_every, idx, LOG, ELOG, ECOUNT, DONE, STATUS)  # fmt: skip
+            self.last_batch_loop = "native"
+            return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
+        import numba
+
+        from acdrive.sim._lockstep_source import lockstep_broken, lockstep_plan
+
         lanes = lockstep_plan(self.system, PO, B, lockstep, P=P)
         if lanes is not None:
             lane_args = (X, P, S, Y, float(t0), float(sample_time), substeps, n_steps, log_every,
@@ -403,6 +414,39 @@ class CompiledSystem:
         call_interruptible(self.module.run_batch, *args)
         return LOG, ELOG, ECOUNT, DONE, STATUS, time.perf_counter() - start
 
+    def _native_batch_pays(self, PO, steps: float, lockstep) -> bool:
+        """Whether a batch runs in the native loop, variant by variant: the system's tier is
+        native, the variants' tables have the library's lengths, and lockstep is neither asked
+        for nor paid back (``LOCKSTEP_PAYS_STEPS``; ``lockstep=False`` refuses it)."""
+        if lockstep not in (None, True, False):
+            raise InputError("lockstep", f"must be None, True or False, got {lockstep!r}")
+        if self.tier != "native" or lockstep is True:
+            return False
+        if not np.array_equal(PO, self._native_offsets):
+            return False
+        return lockstep is False or steps < LOCKSTEP_PAYS_STEPS
+
+    def _native_batch(self, P, PO, X, S, Y, t0, T_s, n_sub, n_steps, log_every, idx, LOG, ELOG,
+                      ECOUNT, DONE, STATUS):  # fmt: skip
+        """Each row in the native loop as a single run of it (the same bits), the rows spread
+        over the cores this process may use: ctypes lets go of the interpreter during the call,
+        and the library keeps its run's context per thread."""
+
+        def one(b: int) -> None:
+            DONE[b], STATUS[b] = self._native.run(P[b], PO, X[b], S[b], Y[b], t0, T_s, n_sub,
+                                                  n_steps, log_every, idx, LOG[b], ELOG[b],
+                                                  ECOUNT[b])  # fmt: skip
+
+        workers = min(X.shape[0], _cores())
+        if workers <= 1:
+            for b in range(X.shape[0]):
+                one(b)
+            return
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(one, range(X.shape[0])))
+
     # --- pieces for the slow path and the linearisation -------------------------------------
     def derivatives(self, t: float, X: np.ndarray, held: np.ndarray, parts=None) -> np.ndarray:
         """dX/dt with every non-plant output held at ``held`` (a Y vector): the right-hand side a
@@ -423,3 +467,10 @@ class CompiledSystem:
         """The value of output ``port`` in an output vector ``Y``."""
         i = self.system.output_slot(port)
         return complex(Y[i], Y[i + 1]) if port.var.kind == "complex" else float(Y[i])
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    import os
+
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1

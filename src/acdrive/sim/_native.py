@@ -86,14 +86,19 @@ def native_obstacle(system) -> str | None:
     if not system.continuous:
         return "the system has no continuous part"
     from acdrive.sim._ccode._kinds import untranslatable
+    from acdrive.sim._ccode._translate import UnsupportedKernel
 
     missing = {}
     for part in system.parts:
         lookup = c_step_of if isinstance(part, SampledPart) else plant_c_of
         try:
-            lookup(part)
+            entry = lookup(part)
+            if callable(getattr(entry, "body", None)):  # written per instance: translated now
+                entry.body(part)
         except InputError:
             missing[type(part).__name__] = untranslatable(type(part))
+        except UnsupportedKernel as exc:
+            missing[type(part).__name__] = str(exc)
     if missing:
         names = ", ".join(f"{n} ({why})" if why else n for n, why in sorted(missing.items()))
         return f"no C for the part kind(s) {names}"

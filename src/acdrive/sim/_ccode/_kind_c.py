@@ -116,9 +116,10 @@ def _translate_part(part) -> Translated:
 def c_step(cls, source: str):
     """The ``CStep`` of sampled part class ``cls`` generated from its ``step`` kernel
     (``translate_step``), ``source`` naming the paper and equations it implements. A kind
-    whose layouts are set per instance (``PER_INSTANCE``) gets its C per instance
-    (``translate_part``)."""
-    if getattr(cls, "PER_INSTANCE", None):
+    whose layouts are set per instance (``PER_INSTANCE``), or whose C is written for the values
+    of some of its parameters (``STRUCTURAL``), gets its C per instance (``translate_part``),
+    once per structure."""
+    if getattr(cls, "PER_INSTANCE", None) or getattr(cls, "STRUCTURAL", None):
         return CStep(body=lambda part: translate_part(part).body, source=source,
                      support=lambda part: _support(translate_part(part)), from_kernel=True)  # fmt: skip
     translated = translate_step(cls.step, _kernel_layouts(cls))

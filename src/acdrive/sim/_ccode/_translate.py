@@ -52,7 +52,7 @@ import inspect
 import math
 import textwrap
 import types
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -100,6 +100,13 @@ class Role:
     #: "struct" (slots of a layout), "reals" (a modulator's segment lengths ``dt[i]``) or
     #: "segments" (a modulator's outputs per segment ``v[i, slot]``)
     shape: str = "struct"
+    #: the array is the layout's slots from this one on (a helper given ``p[K:]``): its slot k
+    #: is the layout's k + offset
+    offset: int = 0
+
+    def size(self) -> int | None:
+        """The number of slots the array has (None for a layout with tables)."""
+        return None if self.layout.tables else self.layout.fixed_size - self.offset
 
 
 @dataclass
@@ -226,6 +233,9 @@ class _Function:
             if isinstance(value, (bool, int, float, np.integer, np.floating)):
                 return value.item() if isinstance(value, np.generic) else value
             return None
+        if (isinstance(node, ast.Attribute) and node.attr == "size"
+                and isinstance(node.value, ast.Name) and node.value.id in self.roles):  # fmt: skip
+            return self.roles[node.value.id].size()
         if isinstance(node, ast.Attribute):
             value = self._attribute_value(node)
             if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -234,14 +244,21 @@ class _Function:
         if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name):
             role = self.roles.get(node.value.id)
             k = self.constant(node.slice)
-            if role is not None and isinstance(k, int) and k in role.structural:
-                return role.structural[k]
+            if role is not None and isinstance(k, int) and k + role.offset in role.structural:
+                return role.structural[k + role.offset]
             return None
         if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Attribute)
                 and node.value.attr == "shape" and isinstance(node.value.value, ast.Name)
                 and node.value.value.id in self.roles and self.constant(node.slice) == 0):  # fmt: skip
-            layout = self.roles[node.value.value.id].layout
-            return None if layout.tables else layout.fixed_size
+            return self.roles[node.value.value.id].size()
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd, ast.Not)):
+            a = self.constant(node.operand)
+            if a is None:
+                return None
+            return not a if isinstance(node.op, ast.Not) else -a if isinstance(node.op, ast.USub) else a
+        if isinstance(node, ast.IfExp):
+            test = self.constant(node.test)
+            return None if test is None else self.constant(node.body if test else node.orelse)
         if (isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
                 and node.func.id in ("int", "float") and len(node.args) == 1
                 and node.func.id not in self.globals):  # fmt: skip
@@ -300,6 +317,7 @@ class _Function:
         k = self.constant(node.slice)
         if not isinstance(k, int):
             self.fail(node, f"the slot of {node.value.id}[...] is not a constant of the module")
+        k += role.offset
         for v in role.layout:
             if v.kind == "table":
                 continue
@@ -332,7 +350,7 @@ class _Function:
                     and isinstance(stmt.targets[0], ast.Name)
                     and stores.count(stmt.targets[0].id) == 1):  # fmt: skip
                 k = self.constant(stmt.value)
-                if isinstance(k, int) and not isinstance(k, bool):
+                if isinstance(k, int):  # a slot, an order or a flag
                     self.constants[stmt.targets[0].id] = k
         for _ in range(2):
             self._infer_block(body)
@@ -594,6 +612,13 @@ class _Function:
         return "(" + symbol.join(values) + ")", BOOL
 
     def _IfExp(self, node):
+        test = self.constant(node.test)
+        if test is not None:  # a test on constants (a structural parameter): the branch taken
+            text, t = self.expr(node.body if test else node.orelse)
+            other = node.orelse if test else node.body
+            if t in (INT, BOOL) and isinstance(other, ast.Constant) and isinstance(other.value, float):
+                return self.as_real(text, t), REAL  # numba's type of the whole expression
+            return text, t
         c, tc = self.expr(node.test)
         a, ta = self.expr(node.body)
         b, tb = self.expr(node.orelse)
@@ -740,7 +765,7 @@ class _Function:
         """A call of another kernel-language function. An array argument passes the struct
         (the helper is written for this kind's struct); with one, an integer constant argument
         (a slot) is bound inside the helper, which is written for that value."""
-        roles = [self.roles.get(a.id) if isinstance(a, ast.Name) else None for a in node.args]
+        roles = [self._role_argument(a) for a in node.args]
         stored = _stored_names(target)
         params = list(inspect.signature(_python_function(target)).parameters)
         args = []
@@ -749,9 +774,8 @@ class _Function:
             k = self.constant(a)
             if role is not None:
                 args.append((role.name, ("role", role)))
-            elif (any(roles) and isinstance(k, int) and not isinstance(k, bool)
-                  and param not in stored):  # fmt: skip
-                args.append(("", ("const", k)))
+            elif any(roles) and isinstance(k, int) and param not in stored:
+                args.append(("", ("const", k)))  # a slot or a flag (a bool is bound as 0 or 1)
             else:
                 text, t = self.expr(a)
                 if isinstance(t, tuple):
@@ -760,6 +784,21 @@ class _Function:
         helper = _helper(self.module, target, tuple(t for _, t in args), node, self)
         passed = [x for x, t in args if not (isinstance(t, tuple) and t[0] == "const")]
         return f"{helper.c_name}({', '.join(passed)})", helper.return_type
+
+    def _role_argument(self, node) -> Role | None:
+        """The role a helper's argument passes: a role array, or a slice ``p[K:]`` of one with a
+        constant start (the helper sees its slot k as the layout's K + k); else None."""
+        if isinstance(node, ast.Name):
+            return self.roles.get(node.id)
+        if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name)
+                and node.value.id in self.roles and isinstance(node.slice, ast.Slice)
+                and node.slice.upper is None and node.slice.step is None):  # fmt: skip
+            role = self.roles[node.value.id]
+            start = self.constant(node.slice.lower) if node.slice.lower is not None else 0
+            if role.shape != "struct" or not isinstance(start, int) or isinstance(start, bool):
+                self.fail(node, f"a slice of {node.value.id} with a start that is not a constant")
+            return replace(role, offset=role.offset + start)
+        return None
 
     # --- statements -------------------------------------------------------------------------
 
@@ -793,7 +832,10 @@ class _Function:
                 lines.append(f"{pad}{lvalue} = {self.cast_to(value, vt, lt)};")
             elif isinstance(stmt, ast.If) and self.constant(stmt.test) is not None:
                 # a test on constants (a structural parameter): only the branch taken
-                lines += self.block(stmt.body if self.constant(stmt.test) else stmt.orelse, depth)
+                taken = stmt.body if self.constant(stmt.test) else stmt.orelse
+                lines += self.block(taken, depth)
+                if taken and isinstance(taken[-1], ast.Return):
+                    break  # the rest of the block never runs
             elif isinstance(stmt, ast.If):
                 test, tt = self.expr(stmt.test)
                 lines.append(f"{pad}if ({_bare(self.truth(test, tt))}) {{")
@@ -844,6 +886,7 @@ class _Function:
                 lines.append(f"{pad}{type(stmt).__name__.lower()};")
             elif isinstance(stmt, ast.Return):
                 lines += self.return_lines(stmt, pad)
+                break  # what follows a return in its block never runs
             else:
                 self.fail(stmt, f"the statement {type(stmt).__name__}")
         return lines
@@ -940,17 +983,23 @@ class _Function:
         return [f"{pad}return {self.cast_to(value, vt, self.return_type)};"]
 
     def declarations(self) -> list[str]:
+        """The locals' declarations; a step's ``t`` or ``T_s`` that the kernel assigns is a
+        local that starts as the argument (Python reads the argument until it is assigned)."""
         by_type: dict[str, list[str]] = {}
+        rebound = []
         for name, t in self.types.items():
             if name in self.arg_types:
                 continue
+            if name in ("t", "T_s") and (self.is_step or self.top):
+                rebound.append(f"    {_C_TYPE[t]} {self.local(name)} = {name};")
+                continue
             by_type.setdefault(_C_TYPE[t], []).append(self.local(name))
-        return [f"    {c} {', '.join(names)};" for c, names in by_type.items()]
+        return [*(f"    {c} {', '.join(names)};" for c, names in by_type.items()), *rebound]
 
 
 def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     func = _python_function(target)
-    key = (func, _fast_math(target, caller.fast), tuple((t[0], t[1].struct, t[1].const)
+    key = (func, _fast_math(target, caller.fast), tuple((t[0], t[1].struct, t[1].const, t[1].offset)
                                     if isinstance(t, tuple) and t[0] == "role" else t
                                     for t in arg_types))  # fmt: skip
     found = module.helpers.get(key)
@@ -971,7 +1020,7 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     if roles:  # written for the kind's structs (each array's role named) and the bound slots
         kind = next(iter(roles.values())).kind
         c_name = f"acd_{kind}_{func.__name__.lstrip('_')}"
-        c_name += "".join(f"_{r.struct.rsplit('_', 1)[-1]}" for r in roles.values())
+        c_name += "".join(f"_{r.struct.rsplit('_', 1)[-1]}{r.offset or ''}" for r in roles.values())
         c_name += "".join(f"_{p}{'m' if k < 0 else ''}{abs(k)}" for p, k in constants.items())
     if any(t != REAL for t in scalars.values()):
         c_name += "_" + "".join({REAL: "r", INT: "i", BOOL: "b", COMPLEX: "c"}[t]
@@ -979,8 +1028,7 @@ def _helper(module: _Module, target, arg_types: tuple, node, caller: _Function):
     fast = _fast_math(target, caller.fast)
     if fast:
         c_name += "_fast"
-    inner = {p: Role(r.layout, p, r.struct, r.const, r.kind, r.structural, r.shape)
-             for p, r in roles.items()}  # fmt: skip
+    inner = {p: replace(r, name=p) for p, r in roles.items()}
     f = _Function(func, inner, module, c_name, scalars, fast=fast)
     f.constants.update(constants)
     f.infer(f.node.body)
