@@ -1,6 +1,7 @@
 """The PMSM/PMSG part (``machines/_pmsm_part.py``, Ugalde-Loo et al. (7)-(8)).
 
-* its linearised current subsystem at a fixed speed is ``machines.pmsm.dq_current_ss`` (9)-(11);
+* its linearised current subsystem at a fixed speed is ``machines.pmsm.dq_current_ss`` (9)-(11):
+  ``test_kernel_jacobian.py``, with the other machines;
 * its currents agree with a Radau solution of (7) written here in the paper's own variables
   (amplitude-invariant Park transform of the phase voltages, the paper's psi_m), which also
   checks the power-invariant scaling psi_pm = sqrt(3/2) psi_m; RK4 converges with order 4;
@@ -18,7 +19,7 @@ from acdrive._frames import K_PEAK, complex_to_abc
 from acdrive.control import ComplexProgram
 from acdrive.errors import InputError
 from acdrive.machines import PermanentMagnetMachine
-from acdrive.machines._pmsm import PMSG_2MW, PMSGParams, dq_current_ss
+from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
 from acdrive.plant._mechanics import PrescribedSpeed, Shaft, brake_torque, load_torque
 from acdrive.sim import System
 
@@ -57,49 +58,7 @@ def test_parameters_follow_pmsg_params_and_are_validated():
     assert e_r == pytest.approx(np.exp(2j * 0.3), abs=1e-15)
 
 
-# --- (a) the linearised current subsystem is (9)-(11) -----------------------------------------
-@pytest.mark.parametrize("name", MACHINES)
-@pytest.mark.parametrize("w", [0.0, 0.37 * W_RATED, -W_RATED])
-def test_linearised_current_subsystem_is_dq_current_ss(name, w):
-    """Central differences of the compiled right-hand side in rotor coordinates, at a rotor
-    angle away from zero (the stationary input is v_dq e_r), against (11)."""
-    params = MACHINES[name]
-    pm, source, system = at_speed(params, w=w)
-    compiled = system.compile()
-    theta = 0.7
-    e_r = np.exp(1j * params.n_p * theta)
-    X0, _ = system.pack_initial({"pm": {"theta": theta}})
-    i_at, v_at = state_slot(system, pm, "i_dq"), system.output_slot(source.out.v_ref)
-
-    def current_derivative(i_dq, v_dq):
-        X = X0.copy()
-        X[i_at], X[i_at + 1] = i_dq.real, i_dq.imag
-        held = np.zeros(system.sizes["y"])
-        v_s = v_dq * e_r
-        held[v_at], held[v_at + 1] = v_s.real, v_s.imag
-        dX = compiled.derivatives(0.0, X, held)
-        return np.array([dX[i_at], dX[i_at + 1]])
-
-    i0, v0, h = 1200.0 - 800.0j, 300.0 + 150.0j, 1.0
-    A_num = np.column_stack(
-        [(current_derivative(i0 + d, v0) - current_derivative(i0 - d, v0)) / (2 * h)
-         for d in (h, 1j * h)]
-    )  # fmt: skip
-    B_num = np.column_stack(
-        [(current_derivative(i0, v0 + d) - current_derivative(i0, v0 - d)) / (2 * h)
-         for d in (h, 1j * h)]
-    )  # fmt: skip
-    A, B, _, _ = dq_current_ss(params, params.n_p * w)
-    np.testing.assert_allclose(A_num, A, rtol=0, atol=1e-9 * np.max(np.abs(A)))
-    np.testing.assert_allclose(B_num, B, rtol=0, atol=1e-9 * np.max(np.abs(B)))
-    # the affine rest: x' = A x + B u + (0, -psi_pm n_p w / L_q), the magnet's input disturbance
-    # of (7) in power-invariant scaling (psi_pm = sqrt(3/2) psi_m)
-    offset = current_derivative(i0, v0) - (A @ [i0.real, i0.imag] + B @ [v0.real, v0.imag])
-    magnet = -K_PEAK * params.psi_m * params.n_p * w / params.L_q
-    np.testing.assert_allclose(offset, [0.0, magnet], rtol=0, atol=1e-9 * np.max(np.abs(B)) * 300)
-
-
-# --- (b) Radau solution of (7) in the paper's variables ---------------------------------------
+# --- (a) Radau solution of (7) in the paper's variables ---------------------------------------
 def paper_phase_currents(params, w_gen, theta_e0, pieces, t_out):
     """Phase currents of (7) as printed, in the paper's variables, by Radau (rtol 1e-10).
 
@@ -179,7 +138,7 @@ def test_rk4_converges_with_order_4():
     assert np.all((orders > 3.7) & (orders < 4.3)), (errors, orders)
 
 
-# --- (c) power balance ---------------------------------------------------------------------------
+# --- (b) power balance ---------------------------------------------------------------------------
 @pytest.mark.parametrize("name", MACHINES)
 def test_power_balance_at_every_state(name):
     """Re(v_s conj(i_s)) = R_s |i_s|^2 + d/dt (L_d i_d^2 + L_q i_q^2)/2 + tau_e w, from the compiled
