@@ -1,8 +1,10 @@
 """The linear models the analysis uses are the Jacobians of the simulated machines' kernels.
 
 Every current-subsystem plant of ``analysis._plants.plant_from_params`` (the cage IM's
-``stator_current_ss``, the PM machine's ``dq_current_ss``, the DFIM's ``dfim_rotor_current_ss``)
-and the DFIM's impedances and Delta Z of Bodson (11), (13) (``machines._dfim``) are compared, entry
+``stator_current_ss``, the PM machine's ``dq_current_ss``, the DFIM's ``dfim_rotor_current_ss``),
+the DFIM's impedances and Delta Z of Bodson (11), (13) (``machines._dfim``), and the first-order
+current loops the drives are designed and checked on (the DFIM's rotor current after the
+decoupling of Bodson (45)-(46), the PM drive's axes after its feed-forward) are compared, entry
 by entry, with the Jacobian of the machine part's compiled kernels
 (``analysis._kernel_jacobian``), carried into the model's coordinates
 (``analysis._kernel_plants``), at several operating points: speeds of either sign and zero,
@@ -212,3 +214,74 @@ def test_dfim_impedances_and_delta_z_are_the_kernels(name, w_m, w_e):
     assert np.all(np.abs(model_coefficients - kernel_coefficients) <= 2.0 * coefficient_bounds), (
         model_coefficients, kernel_coefficients)  # fmt: skip
 
+
+
+@pytest.mark.parametrize("name", DFIM_MACHINES)
+@pytest.mark.parametrize("w_m", [0.0, 60.0, -150.0, 250.0])
+@pytest.mark.parametrize("point", DFIM_POINTS)
+def test_dfim_rotor_current_decoupling_is_the_kernels_rotor_row(name, w_m, point):
+    """Bodson (45): sigma L_R di_R/dt = v_R - u_R with u_R = Z_R i_R + Z_MR i_S + (M / L_S)
+    (v_S - Z_S i_S - Z_MS i_R), sigma L_R = L_R - M^2 / L_S: the plant the rotor current PI (47)
+    sees after the decoupling (46), and the first-order loop of the DFIM drive's period check
+    (``drives.dfim._period``). The controller's own u_R (``control._bodson.rotor_current_loop``
+    with zero PI gains and virtual resistance) against the kernel's di_R/dt in the frame at w_e."""
+    from acdrive.control._bodson import SpeedController, rotor_current_loop
+
+    params, w_e = DFIM_MACHINES[name], W_60HZ
+    i_S, i_R, v_R, theta, v_S = point
+    v_S = v_S or 90.0 + 25.0j  # the decoupling's stator-voltage term counts
+    kernel = dfim_rotor_current_subsystem(params, params.n_p * w_m, w_e, i_S, i_R, v_R, theta, v_S)
+    currents, voltage = np.array([i_S.real, i_S.imag, i_R.real, i_R.imag]), [v_R.real, v_R.imag]
+    di_R = (kernel.A @ currents + kernel.B @ voltage + kernel.rest)[2:]
+    windings = {n: getattr(params, n) for n in ("R_s", "R_r", "L_s", "L_r", "M", "n_p")}
+    controller = SpeedController("controller", **windings, K_P=1.0, K_I=1.0, i_s_max=1e6,
+                                 i_r_max=1e6, v_r_max=1e12)  # fmt: skip
+    s = controller.initial_state()
+    u_R, saturated = rotor_current_loop(controller.p, s, 1e-4, w_e, w_m, v_S, i_S, i_R, i_R)
+    assert not saturated
+    sigma_L_r = params.L_r - params.M**2 / params.L_s
+    expected = (v_R - u_R) / sigma_L_r
+    # rounding: the kernel's rotor row (its terms) and u_R's terms, over sigma L_R
+    kappa = leakage_condition(params.L_s, params.L_r, params.M)
+    Z_S, Z_MS, Z_R, Z_MR = impedances(machine_vector(params), w_e, w_m)
+    u_terms = abs(Z_R * i_R) + abs(Z_MR * i_S) + params.M / params.L_s * (
+        abs(v_S) + abs(Z_S * i_S) + abs(Z_MS * i_R))  # fmt: skip
+    bound = rest_bound(kernel, [i_S, i_R], [v_R], kappa, kernel.rest)[2:]
+    bound += 2.0 * gamma(OPERATIONS) * (kappa + 1.0) * (abs(v_R) + u_terms) / sigma_L_r
+    assert np.all(np.abs(di_R - [expected.real, expected.imag]) <= bound), (di_R, expected)
+
+
+@pytest.mark.parametrize("name", PM_MACHINES)
+@pytest.mark.parametrize("w_r", [0.0, 0.37 * 2.0 * math.pi * 50.0, -2.0 * math.pi * 50.0])
+def test_pm_drive_decoupled_axes_are_the_kernels(name, w_r):
+    """The PM drive's current loop model (``drives.pm._period``, ``_design.CurrentPIGains``): with
+    the cross terms and the back EMF fed forward by its controller
+    (``drives.pm._control.rotor_current_step``, v_dq = v' - w_r L_q i_q + j w_r (L_d i_d +
+    psi_pm)), each axis is L di/dt = v' - R_s i. The controller with zero gains and its integral
+    state at v' against the kernel's di_dq/dt."""
+    from acdrive.drives.pm._control import RotorFrameCurrentController
+
+    params = PM_MACHINES[name]
+    i_dq, v_axes, theta = -35.0 + 120.0j, 14.0 - 6.0j, 0.9
+    estimates = {n: getattr(params, n) for n in ("R_s", "L_d", "L_q", "psi_m", "n_p")}
+    controller = RotorFrameCurrentController("current", K_P_d=0.0, K_P_q=0.0, K_I_d=0.0,
+                                             K_I_q=0.0, **estimates, V_dc=1e9)  # fmt: skip
+    s = controller.initial_state(x=v_axes)
+    i_s = i_dq * np.exp(1j * params.n_p * theta)
+    u = controller.INPUTS.pack("u", {"i_dq_ref": i_dq, "i_s": i_s, "theta": theta,
+                                     "w": w_r / params.n_p})  # fmt: skip
+    y = np.zeros(controller.OUTPUTS.size())
+    assert type(controller).step(0.0, 1e-4, u, controller.p, s, y) == 0  # within the limit
+    at = controller.OUTPUTS.slot("v_dq_wanted")
+    v_dq = complex(y[at], y[at + 1])
+    kernel = pm_current_subsystem(params, w_r, i_dq, v_dq, theta)
+    di = kernel.A @ [i_dq.real, i_dq.imag] + kernel.B @ [v_dq.real, v_dq.imag] + kernel.rest
+    expected = [(v_axes.real - params.R_s * i_dq.real) / params.L_d,
+                (v_axes.imag - params.R_s * i_dq.imag) / params.L_q]  # fmt: skip
+    # rounding: the kernel's terms and the feed-forward's, over the inductance of each axis
+    feed_forward = np.abs([w_r * params.L_q * i_dq.imag,
+                           w_r * (params.L_d * i_dq.real + K_PEAK * params.psi_m)])  # fmt: skip
+    bound = rest_bound(kernel, [i_dq], [v_dq], 1.0, kernel.rest)
+    axes = feed_forward + np.abs([v_axes.real, v_axes.imag])
+    bound += 2.0 * gamma(OPERATIONS) * 2.0 * axes / [params.L_d, params.L_q]
+    assert np.all(np.abs(di - expected) <= bound), (di, expected)
