@@ -32,7 +32,12 @@ from acdrive.analysis._kernel_plants import (
 from acdrive.analysis._plants import MACHINES, plant_from_params
 from acdrive.machines import BODSON_DFIM, DELORENZO_IM, DFIMParams, IMParams, PMSGParams
 from acdrive.machines._cage_part import CageInductionMachine
-from acdrive.machines._dfim import delta_z_coefficients, impedances, machine_vector
+from acdrive.machines._dfim import (
+    delta_z_coefficients,
+    impedances,
+    machine_vector,
+    shifted_delta_z_coefficients,
+)
 
 #: the largest part of a matrix's largest entry the rounding bound may be (module docstring)
 SENSITIVITY = 1e-9
@@ -171,8 +176,9 @@ def complex_matrix(real_form: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("w_e", [W_60HZ, W_50HZ])
 def test_dfim_impedances_and_delta_z_are_the_kernels(name, w_m, w_e):
     """Bodson (9)-(11) in the frame at w_e: L di/dt = v - Z i, so Z = -L A of the kernel's
-    Jacobian, and Delta Z(s) = det(s L + Z) (13): ``impedances`` and ``delta_z_coefficients``
-    against the kernel, at shaft speed ``w_m`` (so w_r = n_p w_m)."""
+    Jacobian, and Delta Z(s) = det(s L + Z) (13): ``impedances``, ``delta_z_coefficients`` and,
+    in the stationary frame, ``shifted_delta_z_coefficients`` (15)-(16) against the kernel, at
+    shaft speed ``w_m`` (so w_r = n_p w_m)."""
     params = DFIM_MACHINES[name]
     i_S, i_R, v_R, theta, v_S = DFIM_POINTS[1]
     kernel = dfim_rotor_current_subsystem(params, params.n_p * w_m, w_e, i_S, i_R, v_R, theta, v_S)
@@ -190,30 +196,39 @@ def test_dfim_impedances_and_delta_z_are_the_kernels(name, w_m, w_e):
     Z_model = np.array([[Z_S, Z_MS], [Z_MR, Z_R]])
     assert np.all(Z_bound <= SENSITIVITY * np.abs(Z_model).max())
     assert np.all(np.abs(Z_model - Z_kernel) <= 2.0 * Z_bound), (Z_model, Z_kernel)
-    # Delta Z(s) = det(s L + Z) = det L s^2 + (L_s Z_R + L_r Z_S - M (Z_MR + Z_MS)) s + det Z
-    (z11, z12), (z21, z22) = Z_kernel
+    coefficients, bounds = delta_z_from(params, Z_kernel, Z_bound)
+    model = delta_z_coefficients(params, w_e, w_m)
+    assert np.all(np.abs(model - coefficients) <= 2.0 * bounds), (model, coefficients)
+    # the stationary frame (Bodson (15)-(16)): Delta Z(s - j w_e) = det(s L + Z - j w_e L)
+    Z_stationary = Z_kernel - 1j * w_e * L
+    Z_bound += gamma(OPERATIONS) * np.abs(Z_stationary)
+    coefficients, bounds = delta_z_from(params, Z_stationary, Z_bound)
+    model = shifted_delta_z_coefficients(params, w_m)
+    assert np.all(np.abs(model - coefficients) <= 2.0 * bounds), (model, coefficients)
+
+
+def delta_z_from(params, Z: np.ndarray, Z_bound: np.ndarray):
+    """(coefficients, bounds) of det(s L + Z) = det L s^2 + (L_s Z_22 + L_r Z_11 - M (Z_21 +
+    Z_12)) s + det Z (Bodson (13)), highest power first, from the impedance matrix Z with
+    entrywise bounds ``Z_bound``: the bounds carried through, plus their own rounding."""
+    (z11, z12), (z21, z22) = Z
     (b11, b12), (b21, b22) = Z_bound
-    kernel_coefficients = np.array([
-        params.L_s * params.L_r - params.M**2,
-        params.L_s * z22 + params.L_r * z11 - params.M * (z21 + z12),
-        z11 * z22 - z21 * z12,
-    ])  # fmt: skip
-    coefficient_bounds = np.array([
+    L_s, L_r, M = params.L_s, params.L_r, params.M
+    coefficients = np.array(
+        [L_s * L_r - M * M, L_s * z22 + L_r * z11 - M * (z21 + z12), z11 * z22 - z21 * z12]
+    )
+    carried = np.array([
         0.0,
-        params.L_s * b22 + params.L_r * b11 + params.M * (b21 + b12),
+        L_s * b22 + L_r * b11 + M * (b21 + b12),
         b11 * abs(z22) + abs(z11) * b22 + b21 * abs(z12) + abs(z21) * b12,
     ])  # fmt: skip
     terms = np.array([
-        params.L_s * params.L_r,
-        params.L_s * abs(z22) + params.L_r * abs(z11) + params.M * (abs(z21) + abs(z12)),
+        L_s * L_r + M * M,
+        L_s * abs(z22) + L_r * abs(z11) + M * (abs(z21) + abs(z12)),
         abs(z11 * z22) + abs(z21 * z12),
     ])  # fmt: skip
-    kappa = leakage_condition(params.L_s, params.L_r, params.M)
-    coefficient_bounds += gamma(OPERATIONS) * (kappa + 1.0) * terms
-    model_coefficients = delta_z_coefficients(params, w_e, w_m)
-    assert np.all(np.abs(model_coefficients - kernel_coefficients) <= 2.0 * coefficient_bounds), (
-        model_coefficients, kernel_coefficients)  # fmt: skip
-
+    kappa = leakage_condition(L_s, L_r, M)
+    return coefficients, carried + gamma(OPERATIONS) * (kappa + 1.0) * terms
 
 
 @pytest.mark.parametrize("name", DFIM_MACHINES)
