@@ -15,7 +15,8 @@ is carried into the model's coordinates:
   psi = L i, L = [[L_s, M], [M, L_r]], stationary frame; the model's are the currents in the frame
   turning at w_e, which coincides with the stationary one at the instant t = 0 taken here, so
   A = L^-1 J L - j w_e (the frame's rotation), B = L^-1 (d f / d v_r) conj(e_r) (the part's v_r is
-  in rotor coordinates, v_R conj(e_r)), C = (d i_r / d psi) L; v_S = 0 (a disturbance), connected.
+  in rotor coordinates, v_R conj(e_r)), C = (d i_r / d psi) L; the stator connected, its voltage
+  v_S (the model's disturbance) in ``rest``.
 
 Complex quantities are real pairs (real part first); a complex gain c is the real matrix
 [[Re c, -Im c], [Im c, Re c]]. Every matrix comes with an entrywise bound on its rounding error
