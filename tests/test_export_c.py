@@ -131,50 +131,41 @@ def test_part_without_c_is_named():
     assert "the statement While" in message and "_NoC.step (line " in message
 
 
-#: run in a fresh interpreter: the engine's C registry loaded, then the PM drive's controller
-#: parts built and their C looked up, then a subclass of one (whose C is not its parent's)
-_C_MODULE_LOOKUP = """
+#: run in a fresh interpreter: the PM drive's controller parts built and their C looked up, then
+#: a subclass of one (another kind, whose C is its own)
+_DRIVE_KIND_LOOKUP = """
 import json, sys
 from acdrive.sim._ccode import _kinds
-engine_kinds = _kinds.exportable_kinds()
 from acdrive.drives.pm import PMSpeedPI, controller_parts
 from acdrive.scenarios import load_scenario
 parts = controller_parts(load_scenario("pm-bly171d-speed"))
-imported_before = "acdrive.drives.pm._c_kinds" in sys.modules
-found = {type(p).__name__: _kinds.c_step_of(p) is _kinds._REGISTRY[type(p)] for p in parts.values()}
+before = sorted(k.__name__ for k in _kinds._REGISTRY)
+found = {type(p).__name__: _kinds.c_step_of(p).from_kernel for p in parts.values()}
 class MySpeedPI(PMSpeedPI):
     pass
 mine = MySpeedPI("mine", **parts["speed_pi"].values)
-try:
-    _kinds.c_step_of(mine)
-    refused = ""
-except Exception as error:
-    refused = str(error)
-generated = _kinds._REGISTRY[MySpeedPI]
-print(json.dumps({"engine": engine_kinds, "before": imported_before, "found": found,
-                  "after": "acdrive.drives.pm._c_kinds" in sys.modules, "refused": refused,
-                  "generated": generated.from_kernel,
-                  "same": generated.body == _kinds._REGISTRY[PMSpeedPI].body}))
+print(json.dumps({"before": before, "found": found, "mine": _kinds.c_step_of(mine).from_kernel,
+                  "same": _kinds._REGISTRY[MySpeedPI].body == _kinds._REGISTRY[PMSpeedPI].body,
+                  "source": _kinds._REGISTRY[PMSpeedPI].source}))
 """
 
 
-def test_a_drive_kinds_c_is_found_through_its_class():
-    """The registry below the drives names no drive: the PM controller kinds' C
-    (``drives.pm._c_kinds``) is imported on the first look-up of one of them, from the module
-    their class names as ``C_MODULE``; a subclass (another kind, without an entry) gets its C
-    generated from its kernel, the same as its parent's."""
+def test_a_drive_kinds_c_is_generated_on_its_first_look_up():
+    """The registry below the drives names no part: the PM controller kinds' C is generated
+    from their kernels when one of them is first looked up, named by the class's ``SOURCE``; a
+    subclass (another kind) gets its own, the same as its parent's."""
     import json
     import sys
 
-    done = subprocess.run([sys.executable, "-c", _C_MODULE_LOOKUP], capture_output=True,
+    done = subprocess.run([sys.executable, "-c", _DRIVE_KIND_LOOKUP], capture_output=True,
                           text=True, check=True)  # fmt: skip
     seen = json.loads(done.stdout)
-    assert "SpeedReference" in seen["engine"] and "PMSpeedPI" not in seen["engine"]
-    assert not seen["before"] and seen["after"]
+    assert seen["before"] == []
     assert seen["found"] == dict.fromkeys(
         ["PMSpeedPI", "PMTorqueReference", "RotorFrameCurrentController"], True
     )
-    assert seen["refused"] == "" and seen["generated"] and seen["same"]
+    assert seen["mine"] and seen["same"]
+    assert seen["source"].startswith("Bodson (25)") and "generated from its kernels" in seen["source"]
 
 
 def test_cli_part_without_c_exit_2(tmp_path, capsys, monkeypatch):
@@ -183,8 +174,7 @@ def test_cli_part_without_c_exit_2(tmp_path, capsys, monkeypatch):
     from acdrive.control._speed import SpeedReference
     from acdrive.sim._ccode import _kinds as kinds
 
-    kinds.exportable_kinds()  # loads the registry
-    monkeypatch.delitem(kinds._REGISTRY, SpeedReference)
+    monkeypatch.delitem(kinds._REGISTRY, SpeedReference, raising=False)
     monkeypatch.setitem(kinds._UNTRANSLATABLE, SpeedReference, "a construct (marked by the test)")
     assert _cli("export", "c", "bodson-ramp", "--out", str(tmp_path / "out")) == 2
     err = capsys.readouterr().err.strip().splitlines()

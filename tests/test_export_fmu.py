@@ -726,7 +726,6 @@ def test_direct_outputs_without_c_are_refused(monkeypatch):
         DIRECT_OUTPUTS: ClassVar = ("y",)
         state_outputs = rhs = direct_outputs = None
 
-    _kinds._load()
     monkeypatch.setitem(_kinds._PLANT_REGISTRY, Through, _kinds.PlantC(source="test", rhs=""))
     command, through = Command("command"), Through("through")
     system = System.__new__(System)  # the wiring only: the kernels are never compiled here

@@ -40,17 +40,25 @@ POINTS = 4
 DRAWS = 400
 
 
+def built_in_kinds() -> list[type]:
+    """Every built-in part kind: the catalog's (``acdrive.machines``, ``plant``, ``control``)
+    and the PM drive's own controller kinds."""
+    from acdrive._part_catalog import part_kinds
+    from acdrive.drives.pm import PMSpeedPI, PMTorqueReference, RotorFrameCurrentController
+
+    return [*part_kinds().values(), PMSpeedPI, PMTorqueReference, RotorFrameCurrentController]
+
+
 def generated_kinds() -> list[type]:
-    """The registered kinds defined in their modules (not the classes a factory makes at run
-    time, nor a test's own kinds: ``_instances`` has those it checks)."""
-    import sys
-
-    import acdrive.drives.pm._c_kinds  # noqa: F401 (registers the PM drive's kinds)
-
-    _kinds._load()
-    return sorted((cls for cls, step in _kinds._REGISTRY.items() if step.from_kernel
-                   and getattr(sys.modules[cls.__module__], cls.__name__, None) is cls),
-                  key=lambda c: c.__name__)  # fmt: skip
+    """The built-in sampled kinds whose C is written per class, each generated from its kernel
+    on its look-up (a kind whose C is written per instance is checked per instance:
+    ``_instances``)."""
+    out = []
+    for cls in built_in_kinds():
+        if issubclass(cls, SampledPart) and _kinds._entry(_kinds._REGISTRY, cls) is not None:
+            if not callable(_kinds._REGISTRY[cls].body):
+                out.append(cls)
+    return sorted(set(out), key=lambda c: c.__name__)
 
 
 def kind_module(cls):
@@ -105,19 +113,19 @@ def _reducers() -> list:
 
 def cases() -> list:
     """(kind, part or None): a class-level kind once, a per-instance kind per instance."""
-    out = [(cls, None) for cls in generated_kinds() if not getattr(cls, "PER_INSTANCE", None)]
-    return out + [(type(part), part) for part in _instances()]
+    return [(cls, None) for cls in generated_kinds()] + [(type(p), p) for p in _instances()]
 
 
 def test_the_translated_kinds_are_registered():
-    names = {c.__name__ for c in generated_kinds()}
+    sampled = [c for c in built_in_kinds() if issubclass(c, SampledPart)]
+    names = {c.__name__ for c in sampled if _kinds._entry(_kinds._REGISTRY, c) is not None}
     assert {"Encoder", "CurrentSensors", "VoltageSensor", "SpeedReference", "ForcedRelay",
             "RelayCommand", "SpeedEstimator", "IndirectFOC", "SpeedPI", "SaturatedSpeedP",
             "PositionP", "CarrierLatch", "SupplyFrequencyEstimator", "Synchroniser",
             "SpeedController", "CurrentProgram", "VoltageProgram", "ComplexProgram",
             "ComputationDelay", "StationaryCurrentController", "PMTorqueReference",
             "PMSpeedPI", "RotorFrameCurrentController"} <= names  # fmt: skip
-    per_instance = {c for c in generated_kinds() if getattr(c, "PER_INSTANCE", None)}
+    per_instance = {c for c in sampled if callable(_kinds._REGISTRY[c].body)}
     assert per_instance <= {type(part) for part in _instances()}  # each one is exercised
 
 
@@ -359,7 +367,7 @@ def test_the_current_controller_is_written_for_its_order():
     that has it."""
     from acdrive.sim._ccode._kind_c import translate_part
 
-    pi, pi_dc, lag = _instances()[2:]
+    pi, pi_dc, lag = _instances()[2:5]
     assert (pi.discrete.order, lag.discrete.order) == (2, 4)
     for part in (pi, lag):
         n, body = part.discrete.order, translate_part(part).body
@@ -382,9 +390,11 @@ _PLANT_STRUCT = {"p": ("PARAMS", "params"), "x": ("STATES", "state"), "u": ("INP
 
 
 def generated_plant_kinds() -> list[type]:
-    _kinds._load()
-    return sorted((cls for cls, c in _kinds._PLANT_REGISTRY.items() if c.from_kernel),
-                  key=lambda c: c.__name__)  # fmt: skip
+    """The built-in plant kinds (continuous parts and modulators), their C generated on their
+    look-up."""
+    found = [cls for cls in built_in_kinds() if not issubclass(cls, SampledPart)
+             and _kinds._entry(_kinds._PLANT_REGISTRY, cls) is not None]  # fmt: skip
+    return sorted(set(found), key=lambda c: c.__name__)
 
 
 def test_the_translated_plant_kinds_are_registered():

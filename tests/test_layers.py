@@ -5,10 +5,10 @@ another and acdrive's top-level helper modules (``_cache``, ``_jit``, ``errors``
 level: no drive, no export, nothing else above them. The C of the parts and the generators of a
 system's C (``sim._ccode``) are the engine's: its native tier (``sim._native``) runs them, and the
 plant's C integrates with its Runge-Kutta tableau (``sim._integrators``); the export
-(``acdrive.export``) builds on them from above, and a drive's own controller kinds keep their C in
-the drive's package (named by the class's ``C_MODULE``, imported by the C registry without naming
-the drive). The drives build on the engine; scenarios, batches, sweeps, the analysis and the commands reach a drive
-only through the registry (``acdrive.drives._registry``, whose ``BUILTIN`` table is the one place
+(``acdrive.export``) builds on them from above; every part kind's C, a drive's own controller
+kinds' among them, is generated from its kernels on its first look-up, so the C registry names
+no part kind. The drives build on the engine; scenarios, batches, sweeps, the analysis and the
+commands reach a drive only through the registry (``acdrive.drives._registry``, whose ``BUILTIN`` table is the one place
 that names a drive's package). Module-level imports must form no cycle, so every module can be
 imported on its own.
 
@@ -263,11 +263,22 @@ def test_the_graph_sees_the_drives_and_the_registry():
 
 def test_the_graph_sees_the_engines_c_from_both_sides():
     """The reader finds the engine's native tier importing the engine's C inside a function and
-    the export and the PM drive's C kinds importing it from above, so an empty list of upward
-    imports means something."""
+    the export importing it from above, so an empty list of upward imports means something."""
     assert "acdrive.sim._ccode._c_source" in GRAPH.function_level["acdrive.sim._native"]
     assert "acdrive.sim._ccode._c_source" in GRAPH.module_level["acdrive.export._fmu"]
-    assert "acdrive.sim._ccode._kinds" in GRAPH.module_level["acdrive.drives.pm._c_kinds"]
+
+
+def test_the_c_registry_names_no_part_kind():
+    """Every kind's C is generated from its kernels on its first look-up: the registry and the
+    translator import no module of the parts (``control``, ``plant``, ``machines``) nor of a
+    drive, at any level."""
+    registry = [m for m in GRAPH.files if _in(m, f"{PACKAGE}.sim._ccode")]
+    assert f"{PACKAGE}.sim._ccode._kinds" in registry
+    parts = [f"{PACKAGE}.{p}" for p in ("control", "plant", "machines", "drives")]
+    named = sorted(f"{m} -> {t}" for m in registry
+                   for t in [*GRAPH.module_level[m], *GRAPH.function_level[m]]
+                   if any(_in(t, p) for p in parts))  # fmt: skip
+    assert not named, named
 
 
 def test_no_module_level_import_cycle():

@@ -91,6 +91,8 @@ class SpeedEstimator(SampledPart):
     """Shaft speed from the encoder: backward difference, first-order low-pass of time constant
     ``tau``; zero on the first sample."""
 
+    SOURCE = "Bodson IV-A: speed from the encoder, backward difference, first-order filter"
+
     PARAMS, STATES, INPUTS, OUTPUTS = SPEED_PARAMS, SPEED_STATES, SPEED_INPUTS, SPEED_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"tau": 0.0}
     step = speed_estimator_step
@@ -131,6 +133,8 @@ def frequency_estimator_step(t, T_s, u, p, s, y):
 class SupplyFrequencyEstimator(SampledPart):
     """Supply frequency from the grid voltage's phase advance per sample, low-pass filtered,
     starting from ``w_nominal``; held while the grid voltage is below ``v_min``."""
+
+    SOURCE = "supply frequency from the grid voltage's phase advance per sample, filtered"
 
     PARAMS, STATES, INPUTS, OUTPUTS = FREQ_PARAMS, FREQ_STATES, FREQ_INPUTS, FREQ_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"tau": 0.01, "v_min": 0.0}
@@ -257,6 +261,8 @@ class Synchroniser(SampledPart):
     """Grid synchronisation before the stator relay closes, Bodson (28) (module docstring).
     With ``enabled`` 0 the relay is closed from the start and the adjustments stay at their
     initial values."""
+
+    SOURCE = "Bodson (28): grid synchronisation with the stator open"
 
     PARAMS, STATES, INPUTS, OUTPUTS = SYNC_PARAMS, SYNC_STATES, SYNC_INPUTS, SYNC_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"enabled": 0.0, "gain": 40.0, "tol_magnitude": 0.02,
@@ -494,6 +500,11 @@ class SpeedController(SampledPart):
     """Bodson's speed controller once the relay is closed (module docstring): speed PI within
     the on-line torque limits, torque and reactive-power law, voltage or current command, sensor
     fallback. While the relay is open it passes the synchroniser's voltage on."""
+
+    SOURCE = (
+        "Bodson section III: speed PI (25), torque limits (30)-(42), law (20)-(24), rotor current "
+        "loop (45)-(49), sensor fallback"
+    )
 
     PARAMS, STATES, INPUTS, OUTPUTS = CTRL_PARAMS, CTRL_STATES, CTRL_INPUTS, CTRL_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"K_F": 2.0 / 3.0, "Q_ref": 0.0, "Q_kp": 0.0, "Q_ki": 0.0,

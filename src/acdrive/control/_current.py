@@ -260,6 +260,11 @@ class StationaryCurrentController(SampledPart):
     objects given), ``part.discrete`` its discretisation.
     """
 
+    SOURCE = (
+        "stationary-frame current controller K(z) with magnitude limit and anti-windup by "
+        "conditioning (control._current; Amezquita-Brooks (20) or the PI)"
+    )
+
     OUTPUTS = CONTROLLER_OUTPUTS
     EVENTS = ("saturated", "period_mismatch")
     PER_INSTANCE: ClassVar[dict] = {
@@ -410,6 +415,8 @@ CURRENT_OUTPUTS = Layout(cplx("i", "A", "current space vector, stationary frame"
 class CurrentProgram(SampledPart):
     """A complex current from two piecewise-linear tables (a current reference, or a known
     measured signal for an open-loop test); the same kernel as ``open_loop.ComplexProgram``."""
+
+    SOURCE = "a complex current from two piecewise-linear tables (control._current)"
 
     PARAMS, OUTPUTS = CURRENT_TABLES, CURRENT_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"re": 0.0, "im": 0.0}

@@ -31,6 +31,8 @@ class ComputationDelay(SampledPart):
     """``ComputationDelay(name, unit="V", kind="complex")``: the output is the input of the
     previous sample (zero, or ``initial=`` the first held value, before that)."""
 
+    SOURCE = "one sample of computation delay (control._delay)"
+
     step = delay_step
     PER_INSTANCE: ClassVar[dict] = {
         "STATES": "stored, of the unit and kind given",

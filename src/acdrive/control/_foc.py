@@ -259,6 +259,8 @@ class IndirectFOC(SampledPart):
     of the Appendix, rated flux (``RATED_FLUX``), ``CURRENT_LIMIT``, ``MIN_FLUX``.
     """
 
+    SOURCE = "indirect field orientation: (slip), (flux), (torque) of control._foc's docstring"
+
     PARAMS, STATES, INPUTS, OUTPUTS = IFOC_PARAMS, IFOC_STATES, IFOC_INPUTS, IFOC_OUTPUTS
     DEFAULTS: ClassVar[dict] = {**{n: getattr(DELORENZO_IM, n) for n in IFOC_ESTIMATES},
                                 "i_max": CURRENT_LIMIT, "psi_min": MIN_FLUX,
@@ -318,6 +320,8 @@ class SaturatedSpeedP(SampledPart):
     within the drive's ratings; no overload rating is given).
     """
 
+    SOURCE = "Amezquita-Brooks (21): saturated proportional speed controller"
+
     PARAMS, INPUTS, OUTPUTS = SAT_P_PARAMS, SPEED_INPUTS, TORQUE_OUTPUTS
     DEFAULTS: ClassVar[dict] = {
         "k_p": speed_p_gain(J_ESTIMATE, SPEED_P_BANDWIDTH),
@@ -365,6 +369,8 @@ class SpeedPI(SampledPart):
     the integral holds what it had and the loop leaves the limit without a windup delay.
     """
 
+    SOURCE = "speed PI with clamping anti-windup and torque limit (control._speed.speed_pi)"
+
     PARAMS, STATES, INPUTS, OUTPUTS = SPEED_PI_PARAMS, SPEED_PI_STATES, SPEED_INPUTS, TORQUE_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"K_P": _PI_DEFAULT.K_P, "K_I": _PI_DEFAULT.K_I, "K_F": 1.0,
                                 "tau_max": RATED_TORQUE}  # fmt: skip
@@ -411,6 +417,8 @@ class PositionP(SampledPart):
     rated speed 361 rad/s. No speed feed-forward: a ramp reference is followed with the lag
     w / K_theta. The reference is in encoder angle (an encoder offset shifts the zero).
     """
+
+    SOURCE = "P position loop of the P-PI cascade (Fig. 12)"
 
     PARAMS, INPUTS, OUTPUTS = POSITION_PARAMS, POSITION_INPUTS, POSITION_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"K_theta": POSITION_GAIN, "w_max": RATED_SPEED}

@@ -49,6 +49,11 @@ def program_step(t, T_s, u, p, s, y):
 class VoltageProgram(SampledPart):
     """Three-phase voltage command of given amplitude and frequency profiles (open loop)."""
 
+    SOURCE = (
+        "open-loop three-phase voltage program, Bodson (8) scaling "
+        "(control._open_loop.program_step)"
+    )
+
     PARAMS, STATES, OUTPUTS = PROGRAM_PARAMS, PROGRAM_STATES, COMMAND
     DEFAULTS: ClassVar[dict] = {"f": 50.0}
     step = program_step
@@ -70,6 +75,8 @@ def complex_program_step(t, T_s, u, p, s, y):
 
 class ComplexProgram(SampledPart):
     """A complex voltage command from two tables (default zero: a shorted winding)."""
+
+    SOURCE = "a complex command from two tables (control._open_loop.complex_program_step)"
 
     PARAMS, OUTPUTS = TABLE_PARAMS, COMMAND
     DEFAULTS: ClassVar[dict] = {"re": 0.0, "im": 0.0}

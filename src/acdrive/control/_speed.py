@@ -109,5 +109,7 @@ def speed_reference_step(t, T_s, u, p, s, y):
 class SpeedReference(SampledPart):
     """A speed reference read from a piecewise-linear profile at each sample."""
 
+    SOURCE = "speed reference profile (control._speed, core._tables.table_at)"
+
     PARAMS, OUTPUTS = REFERENCE_PARAMS, REFERENCE_OUTPUTS
     step = speed_reference_step

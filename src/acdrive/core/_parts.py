@@ -120,11 +120,9 @@ class Part:
     #: layouts the constructor sets per instance (attribute -> what decides them, e.g.
     #: ``{"INPUTS": "one i_s, a, b per machine (n_machines)"}``), told as such by ``describe()``
     PER_INSTANCE: ClassVar[dict] = {}
-    #: for a kind defined above the engine (a drive's own controller part): the module whose
-    #: import registers the kind's C (its step written in C, for the native loop and the C
-    #: export), imported when the kind's C is first looked up; None: the engine's own C modules
-    #: register the kind, or it has no C
-    C_MODULE: ClassVar[str | None] = None
+    #: the paper and equations (or the model) the kind's kernels implement, named in the C
+    #: generated from them (``sim._ccode``)
+    SOURCE: ClassVar[str] = ""
 
     def __init_subclass__(cls, **kwargs):
         """Append the declarations table to the class docstring (``help()``, API reference)."""

@@ -9,8 +9,8 @@ acdrive's power-invariant scaling, Bodson (8)); w_r = n_p w is the electrical ro
 
 The first two lines are the rows of (1) (matrix A, B) written as complex numbers; the torque is
 (2) with the paper's amplitude-invariant 3/2 absorbed by the power-invariant scaling. The
-right-hand side divides by L_r and by sigma L_s through their reciprocals (the C mirror in
-``sim._ccode._kinds.plant`` the same way).
+right-hand side divides by L_r and by sigma L_s through their reciprocals (and so does the C
+generated from it).
 """
 
 from __future__ import annotations
@@ -88,6 +88,8 @@ def cage_rhs(t, x, u, p, y, dx):
 
 class CageInductionMachine(MachinePart):
     """Cage induction motor, Amezquita-Brooks et al. (1)-(2); parameters as ``IMParams``."""
+
+    SOURCE = "Amezquita-Brooks et al. (1)-(2), complex form (machines._cage_part)"
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"n_p": 1}

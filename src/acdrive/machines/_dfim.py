@@ -67,8 +67,8 @@ def impedances(p, w_e, w_m):
 @jit
 def _over_j(z, x):
     """z / (j x) for real x: the numbers of the complex division by Z_MS = j w_e M (Bodson (11)),
-    but the signs of zeros, without its branches and its raise path for a zero divisor (the C of
-    ``sim._ccode._kinds.bodson`` writes the same)."""
+    but the signs of zeros, without its branches and its raise path for a zero divisor (the C
+    generated from it is the same)."""
     return complex(z.imag / x, -z.real / x)
 
 
@@ -99,8 +99,8 @@ def steady_state_currents(p, w_e, w_m, v_s, v_r):
 @jit
 def _minus_j_over(x, Q, v_s):
     """x - j Q / v_s for real x, Q and v_s, written out: the numbers of the complex division
-    (0 + j Q) / v_s, without its branches and its raise path for a zero divisor (the C of
-    ``sim._ccode._kinds.bodson`` writes the same)."""
+    (0 + j Q) / v_s, without its branches and its raise path for a zero divisor (the C
+    generated from it is the same)."""
     return complex(x - 0.0 / v_s, 0.0 - Q / v_s)
 
 

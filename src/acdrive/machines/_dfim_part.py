@@ -178,6 +178,11 @@ def dfim_project(x, p):
 class DoublyFedMachine(MachinePart):
     """DFIM electrical model, Bodson (9); parameters as ``DFIMParams`` (mechanics separate)."""
 
+    SOURCE = (
+        "Bodson (9) in the stationary frame, flux linkages as states, the stator relay and the "
+        "rotor converter's loss (machines._dfim_part)"
+    )
+
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"V_loss": 0.0}
     INITIAL: ClassVar[dict] = {"e_r": 1.0}

@@ -144,6 +144,11 @@ class PermanentMagnetMachine(MachinePart):
     """PMSM/PMSG, Ugalde-Loo et al. (7)-(8), motor reference arrows (module docstring);
     parameters as ``machines.PMSGParams`` (its J goes to a ``Shaft``)."""
 
+    SOURCE = (
+        "Ugalde-Loo et al. (7)-(8) in rotor coordinates, fed from the stationary frame "
+        "(machines._pmsm_part)"
+    )
+
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     INITIAL: ClassVar[dict] = {"e_r": 1.0}
     state_outputs = pmsm_state_outputs

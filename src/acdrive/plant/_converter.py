@@ -61,6 +61,11 @@ class AveragedConverter(Modulator):
     """Averaged voltage-source converter: the sampled command held over the sample (ZOH) within
     the linear range of space-vector modulation, |v| <= V_dc / sqrt(2) (module docstring)."""
 
+    SOURCE = (
+        "averaged converter: the command held over the sample, |v| <= V_dc / sqrt(2) "
+        "(plant._converter)"
+    )
+
     PARAMS, INPUTS, OUTPUTS = AVERAGED_PARAMS, AVERAGED_INPUTS, AVERAGED_OUTPUTS
     EVENTS = ("saturated",)
     MAX_SEGMENTS = 1
@@ -92,6 +97,10 @@ class DCFedConverter(Modulator):
     """``AveragedConverter`` whose DC-link voltage is the input ``v_dc`` (from a
     ``plant.DCSource``) read at each sample instant: |v| <= v_dc / sqrt(2), a command
     beyond it scaled back along its direction and reported as ``saturated``."""
+
+    SOURCE = (
+        "averaged converter fed from a DC link: |v| <= max(v_dc, 0) / sqrt(2) (plant._converter)"
+    )
 
     INPUTS, OUTPUTS = FED_INPUTS, AVERAGED_OUTPUTS
     EVENTS = ("saturated",)

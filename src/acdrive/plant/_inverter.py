@@ -277,6 +277,11 @@ class Inverter(Modulator):
     (``check_run``); the kernel itself would round the number of samples per carrier period.
     """
 
+    SOURCE = (
+        "two-level inverter, centred SVPWM, dead time and device drops; Amezquita-Brooks et al. VI "
+        "(plant._inverter.inverter_segments)"
+    )
+
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"f_pwm": 5000.0, "t_d": 0.0, "v_drop": 0.0}
     EVENTS = ("overmodulation",)
@@ -355,6 +360,11 @@ class CarrierLatch(SampledPart):
     """The PWM unit's shadow register: the controller's command taken once per carrier period
     1 / f_pwm (N = T_pwm / T_s samples) and held, as ``plant.Inverter`` latches it; in
     front of an averaged converter it makes the carrier-period average of the inverter."""
+
+    SOURCE = (
+        "the PWM unit's shadow register, N = max(1, round(1 / (f_pwm T_s))) samples "
+        "(plant._inverter.latch_step)"
+    )
 
     PARAMS, STATES, INPUTS, OUTPUTS = LATCH_PARAMS, LATCH_STATES, LATCH_INPUTS, LATCH_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"f_pwm": 5000.0}

@@ -93,6 +93,11 @@ class Shaft(ContinuousPart):
     """Free shaft with inertia, viscous and Coulomb friction, a load-torque profile and an
     eddy-current brake whose coefficient follows a profile (module docstring)."""
 
+    SOURCE = (
+        "Bodson (26): J dw/dt = tau_e - tau_L(t) - (B + k_b(t)) w - tau_c tanh(w / W_COULOMB) "
+        "(plant._mechanics)"
+    )
+
     PARAMS, STATES, INPUTS, OUTPUTS = SHAFT_PARAMS, SHAFT_STATES, SHAFT_INPUTS, SHAFT_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"B": 0.0, "tau_c": 0.0, "load": 0.0, "brake": 0.0}
     state_outputs = shaft_state_outputs
@@ -125,6 +130,8 @@ def speed_rhs(t, x, u, p, y, dx):
 
 class PrescribedSpeed(ContinuousPart):
     """Shaft held at a speed profile (a dynamometer): outputs w(t) and its angle."""
+
+    SOURCE = "a shaft held at a speed profile (plant._mechanics.speed_state_outputs, speed_rhs)"
 
     PARAMS, STATES, OUTPUTS = SPEED_PARAMS, SPEED_STATES, SHAFT_OUTPUTS
     state_outputs = speed_state_outputs

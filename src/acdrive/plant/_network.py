@@ -88,6 +88,8 @@ class SupplyBus(ContinuousPart):
     exactly (module docstring). Wire ``machine.out.i_s, bus_gain, bus_drive`` to the bus inputs
     ``i_s<k>, a<k>, b<k>`` with :meth:`wires_from`."""
 
+    SOURCE = "supply bus behind a shared series R-L, solved exactly (plant._network)"
+
     PARAMS, OUTPUTS = BUS_PARAMS, BUS_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"R": 0.0, "L": 0.0}
     PER_INSTANCE: ClassVar[dict] = {
@@ -146,6 +148,11 @@ class StatorRelay(ContinuousPart):
     the machine's open-circuit voltage while open (the machine's ``connected`` input takes the
     same command)."""
 
+    SOURCE = (
+        "stator relay: the bus voltage while closed, the open stator's voltage while open "
+        "(plant._network)"
+    )
+
     INPUTS, OUTPUTS = RELAY_INPUTS, RELAY_OUTPUTS
     DIRECT_FROM = ("v_bus", "v_open", "closed")
     DIRECT_OUTPUTS = ("v", "closed")
@@ -167,6 +174,8 @@ def relay_command_step(t, T_s, u, p, s, y):
 class RelayCommand(SampledPart):
     """Close a relay at ``close_at`` (held from the sample at or after it; closed before the
     first sample if ``close_at`` is 0)."""
+
+    SOURCE = "relay command at a set time (plant._network.relay_command_step)"
 
     PARAMS, OUTPUTS = COMMAND_PARAMS, COMMAND_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"close_at": 0.0}
@@ -200,6 +209,8 @@ class ForcedRelay(SampledPart):
     """A relay closed at ``close_at`` whatever its ``command`` (module docstring): closed =
     command or t >= close_at, from the sample at or after ``close_at`` (from the start if it is
     0); event ``forced`` on every sample it holds the relay closed against an open command."""
+
+    SOURCE = "a relay closed from close_at whatever its command (plant._network)"
 
     PARAMS, INPUTS, OUTPUTS = FORCED_PARAMS, FORCED_INPUTS, FORCED_OUTPUTS
     EVENTS = ("forced",)

@@ -64,6 +64,8 @@ def encoder_step(t, T_s, u, p, s, y):
 class Encoder(SampledPart):
     """Incremental encoder read at each sample (``encoder_angle``)."""
 
+    SOURCE = "Bodson IV-A: incremental encoder (plant._sensors.encoder_angle)"
+
     PARAMS, INPUTS, OUTPUTS = ENCODER_PARAMS, ENCODER_INPUTS, ENCODER_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"offset": 0.0, "counts_per_rev": 0.0}
     step = encoder_step
@@ -102,6 +104,8 @@ class CurrentSensors(SampledPart):
     """Stator and rotor current sensors sampled together; from ``fault_time`` on (if ``fails``)
     the measurement is lost: ``valid`` drops to 0 and the currents keep their last values."""
 
+    SOURCE = "Bodson IV-A: current sensors, lost from fault_time (plant._sensors)"
+
     PARAMS, INPUTS, OUTPUTS = CURRENT_PARAMS, CURRENT_INPUTS, CURRENT_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"fails": 0.0, "fault_time": 0.0}
     EVENTS = ("lost",)
@@ -138,6 +142,8 @@ def voltage_sensor_step(t, T_s, u, p, s, y):
 class VoltageSensor(SampledPart):
     """A voltage space-vector measurement with a gain error; from ``fault_time`` on (if
     ``fails``) it is lost: ``valid`` drops to 0 and the voltage keeps its last value."""
+
+    SOURCE = "voltage sensor with a gain error, lost from fault_time (plant._sensors)"
 
     PARAMS, INPUTS, OUTPUTS = VOLTAGE_PARAMS, VOLTAGE_INPUTS, VOLTAGE_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"gain": 1.0, "fails": 0.0, "fault_time": 0.0}

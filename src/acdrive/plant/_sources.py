@@ -66,6 +66,11 @@ def source_rhs(t, x, u, p, y, dx):
 class ThreePhaseSource(ContinuousPart):
     """Balanced three-phase source with magnitude and frequency profiles."""
 
+    SOURCE = (
+        "balanced three-phase source: v = sqrt(3/2) V_pk(t) u_g, du_g/dt = j 2 pi f(t) u_g "
+        "(plant._sources)"
+    )
+
     PARAMS, STATES, OUTPUTS = PARAMS, STATES, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"f": 50.0}
     INITIAL: ClassVar[dict] = {"u_g": 1.0}
@@ -129,6 +134,8 @@ def dc_rhs(t, x, u, p, y, dx):
 
 class DCSource(ContinuousPart):
     """A DC voltage following a profile ``V`` (e.g. a converter's DC link, with a drop)."""
+
+    SOURCE = "DC source: the voltage profile (plant._sources.dc_state_outputs)"
 
     PARAMS, OUTPUTS = DC_PARAMS, DC_OUTPUTS
     state_outputs = dc_state_outputs

@@ -49,9 +49,6 @@ from acdrive.drives.pm._design import (
 from acdrive.errors import InputError
 from acdrive.plant._converter import max_voltage_magnitude
 
-#: the module that writes the three parts' steps in C (``Part.C_MODULE``: the C registry imports
-#: it when it first looks one of them up)
-C_KINDS = "acdrive.drives.pm._c_kinds"
 
 #: the controller's machine estimates, declared once for the three parts
 ESTIMATES = (
@@ -136,11 +133,12 @@ class PMTorqueReference(SampledPart):
     on the voltage limit (V) above it, |i| <= i_max (``drives.pm._design``). ``tau_lim`` is the
     torque the reference gives (smaller than asked when a limit acts)."""
 
+    SOURCE = "torque -> rotor-frame current reference: MTPA, field weakening on (V)"
+
     PARAMS, INPUTS, OUTPUTS = REF_PARAMS, REF_INPUTS, REF_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"margin": 0.9}
     EVENTS = REF_EVENTS
     step = torque_reference_step
-    C_MODULE = C_KINDS
 
     def check(self) -> None:
         _check_machine(self)
@@ -198,11 +196,12 @@ class PMSpeedPI(SampledPart):
     each sample is min(tau_max, the torque available at the measured speed within i_max and the
     voltage limit), with clamping anti-windup (event ``torque_limit``)."""
 
+    SOURCE = "Bodson (25) limited to min(tau_max, the torque available at the measured speed)"
+
     PARAMS, STATES, INPUTS, OUTPUTS = SPEED_PARAMS, SPEED_STATES, SPEED_INPUTS, SPEED_OUTPUTS
     DEFAULTS: ClassVar[dict] = {"K_F": 1.0, "margin": 0.9}
     EVENTS = ("torque_limit",)
     step = pm_speed_pi_step
-    C_MODULE = C_KINDS
 
     def check(self) -> None:
         require_feedforward_fraction(f"{self.name}.K_F", self.values["K_F"])
@@ -300,6 +299,11 @@ class RotorFrameCurrentController(SampledPart):
     back-calculation anti-windup at |v| <= V_dc / sqrt(2) (event ``saturated``); gains from
     ``drives.pm._design.CurrentPIGains.design`` (module docstring of ``_design``)."""
 
+    SOURCE = (
+        "rotor-frame PI per axis with decoupling, back-EMF feed-forward and back-calculation anti-"
+        "windup at V_dc / sqrt(2)"
+    )
+
     PARAMS, STATES, INPUTS, OUTPUTS = (
         CURRENT_PARAMS,
         CURRENT_STATES,
@@ -309,4 +313,3 @@ class RotorFrameCurrentController(SampledPart):
     DEFAULTS: ClassVar[dict] = {"advance": 0.5, "decouple": 1.0}
     EVENTS = ("saturated",)
     step = rotor_current_step
-    C_MODULE = C_KINDS

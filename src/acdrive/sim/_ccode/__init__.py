@@ -1,10 +1,11 @@
-"""The engine's C: the C text of each part kind and the generators of a system's controller-chain
-C and plant C, the second implementation of the parts' numba kernels.
+"""The engine's C: the C of each part kind, generated from its kernels, and the generators of a
+system's controller-chain C and plant C.
 
+* ``_translate``, ``_kind_c``: the kernel language translated to C (a kind's step, its plant
+  roles, the helpers they call);
 * ``_kinds``: the C of each part kind, in registries keyed by the part's class (``CStep`` for a
-  sampled part, ``PlantC`` for a continuous part or a modulator); the engine's own kinds in its
-  modules, a kind defined above the engine (a drive's controller) in the module its class names
-  as ``C_MODULE``;
+  sampled part, ``PlantC`` for a continuous part or a modulator), generated on a kind's first
+  look-up, built-in or a user's alike;
 * ``_prelude``: the C text every generated file starts with (the real type, the math functions
   by precision, complex arithmetic);
 * ``_helpers``: the helpers a generated file holds, those its code calls (no ``static``

@@ -26,8 +26,8 @@ plant FMU does the same: the outputs after a step to t_{k+1} are computed with t
 that step integrated, and setting an input changes no output until the next step. There is no
 same-instant feedthrough across the boundary, so nothing is refused for it.
 
-Each kind's C is written once in ``sim._ccode._kinds.plant`` (the seam of the controller
-kinds). A part with direct outputs or a ``project`` kernel its C lacks is refused, naming the
+Each kind's C is generated from its kernels (``sim._ccode._kinds``, as the controller kinds'
+is). A part with direct outputs or a ``project`` kernel its C lacks is refused, naming the
 part.
 
 The plant FMU (``acdrive.export``) is built from this text; the native tier of the loop
@@ -84,7 +84,7 @@ def _check_exportable(system) -> None:
             raise InputError(
                 part.name,
                 f"part kind {type(part).__name__} has direct outputs, which its C does not "
-                "write (a direct_outputs body in acdrive.sim._ccode._kinds.plant)",
+                "write (its direct_outputs kernel gave no C)",
             )
         if type(part).project is not None and plant_c_of(part).project is None:
             raise InputError(
