@@ -683,9 +683,15 @@ def test_cli_writes_both_and_keeps_users_folder(scenario, tmp_path, capsys):
     assert sorted(p.name for p in mine.iterdir()) == ["notes.txt"]
 
 
-def test_cli_plant_without_c_is_one_line_and_writes_nothing(tmp_path, capsys):
-    """fault-phase-loss's grid (an UnbalancedSource) has no C: one line naming the part and the
-    rule, exit 2."""
+def test_cli_plant_without_c_is_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    """A plant kind without C (here fault-phase-loss's grid, an UnbalancedSource, its entry
+    taken out of the registry and its kernel marked outside the language): one line naming the
+    part and the rule, exit 2."""
+    from acdrive.plant._sources import UnbalancedSource
+    from acdrive.sim._ccode import _kinds
+
+    monkeypatch.delitem(_kinds._PLANT_REGISTRY, UnbalancedSource, raising=False)
+    monkeypatch.setitem(_kinds._UNTRANSLATABLE, UnbalancedSource, "a construct (marked by the test)")
     assert _cli("export", "fmu", "fault-phase-loss", "--part", "plant", "--out", str(tmp_path)) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "grid:" in err[0] and "has no C implementation" in err[0]

@@ -320,9 +320,7 @@ def test_kept_objects_serve_a_new_controller_and_a_damaged_one_is_rebuilt(tmp_pa
 def test_every_built_in_scenario_has_c_for_every_part():
     """Every run of every built-in scenario has C for each of its part kinds, so the native tier
     runs it. A kind that lost its C would fall back to numba with the same numbers, which a
-    comparison of results cannot see; this names the kind and the reason. One is known:
-    fault-phase-loss's unbalanced grid, whose kernel takes the exponential of a complex number,
-    outside the kernel language (numba runs it)."""
+    comparison of results cannot see; this names the kind and the reason."""
     from acdrive.export._cost import one_run
     from acdrive.export._scenario import built
     from acdrive.scenarios import builtin_names, load_scenario
@@ -343,6 +341,4 @@ def test_every_built_in_scenario_has_c_for_every_part():
             reason = _native.native_obstacle(drive.system)
             if reason is not None:
                 obstacles[f"{name}/{run.name}"] = reason
-    known = {"fault-phase-loss/fault-phase-loss"}
-    assert set(obstacles) == known, obstacles
-    assert "UnbalancedSource" in obstacles["fault-phase-loss/fault-phase-loss"]
+    assert obstacles == {}

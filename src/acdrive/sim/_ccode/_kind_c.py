@@ -60,6 +60,49 @@ static inline acd_complex acd_cdivr(acd_complex z, ACDRIVE_REAL r)
 {
     return acd_c(z.re / r, z.im / r);
 }
+
+/* the C library's sine and cosine (numba's complex exp calls them, not acdrive's) */
+#ifdef ACDRIVE_FLOAT
+#define ACD_LIB_SIN sinf
+#define ACD_LIB_COS cosf
+#else
+#define ACD_LIB_SIN sin
+#define ACD_LIB_COS cos
+#endif
+
+/* exp(z) as numba computes it (cmath.exp): exp(re) (cos im + j sin im), and its values at
+   infinities and NaN */
+static acd_complex acd_cexp(acd_complex z)
+{
+    ACDRIVE_REAL x = z.re, y = z.im, r, c, s;
+    if (isfinite(x)) {
+        if (!isfinite(y)) {
+            return acd_c(NAN, NAN);
+        }
+        c = ACD_LIB_COS(y);
+        s = ACD_LIB_SIN(y);
+        r = ACD_EXP(x);
+        return acd_c(r * c, r * s);
+    }
+    if (isnan(x)) {
+        return y != ACD_R(0.0) ? acd_c(x, x) : acd_c(x, y);
+    }
+    if (x > ACD_R(0.0)) { /* +inf: a zero cosine or sine stays zero */
+        if (!isfinite(y)) {
+            return acd_c(x, NAN);
+        }
+        c = ACD_LIB_COS(y);
+        s = ACD_LIB_SIN(y);
+        return acd_c(c != ACD_R(0.0) ? c * x : c, s != ACD_R(0.0) ? s * x : s);
+    }
+    if (!isfinite(y)) { /* -inf */
+        return acd_c(ACD_R(0.0), ACD_R(0.0));
+    }
+    r = ACD_EXP(x);
+    c = ACD_LIB_COS(y);
+    s = ACD_LIB_SIN(y);
+    return acd_c(r * c, r * s);
+}
 """
 
 

@@ -688,6 +688,8 @@ class _Function:
             return f"acd_conj({args[0][0]})", COMPLEX
         if name == "angle" and len(args) == 1 and args[0][1] == COMPLEX:
             return f"acd_carg({args[0][0]})", REAL
+        if name == "exp" and len(args) == 1 and args[0][1] == COMPLEX:
+            return f"acd_cexp({args[0][0]})", COMPLEX
         if name in _REAL_FUNCTIONS:
             want = 2 if name in _TWO_ARGUMENTS else 1
             if len(args) != want or any(t not in (REAL, INT) for _, t in args):
@@ -751,15 +753,23 @@ class _Function:
         return f"acd_table_at({v}.n, {v}.t, {v}.v, {self.as_real(t, tt)})", REAL
 
     def _table_offset(self, node):
-        """``table_offset(p, START, k)``: table k of the layout (a name, no C)."""
+        """``table_offset(p, START, k)``: table k of the layout; ``table_offset(p, q, k)`` with
+        ``q`` itself a table of the layout: the k-th table after it (a name, no C)."""
         if len(node.args) != 3 or not isinstance(node.args[0], ast.Name):
             self.fail(node, "table_offset other than table_offset(p, START, k)")
         role = self.roles.get(node.args[0].id)
         k = self.constant(node.args[2])
-        if (role is None or self.constant(node.args[1]) != role.layout.table_start
-                or not isinstance(k, int) or not 0 <= k < len(role.layout.tables)):  # fmt: skip
+        start, first = node.args[1], None
+        if role is not None and self.constant(start) == role.layout.table_start:
+            first = 0
+        elif role is not None and isinstance(start, ast.Name) and start.id in self.tables:
+            names = [v.name for v in role.layout.tables]
+            if self.tables[start.id] in names:
+                first = names.index(self.tables[start.id])
+        if (first is None or not isinstance(k, int)
+                or not 0 <= first + k < len(role.layout.tables)):  # fmt: skip
             self.fail(node, "table_offset of other than a table of the kernel's layouts")
-        return "", ("table", role.layout.tables[k].name)
+        return "", ("table", role.layout.tables[first + k].name)
 
     def _helper_call(self, node, target):
         """A call of another kernel-language function. An array argument passes the struct
