@@ -6,9 +6,10 @@ it ``float`` and switches every math function to its ``f`` form (sinf, sqrtf, ..
 Cortex-M4F's single-precision FPU does all the work. Of C99 <math.h> the files of the built-in
 scenarios call, all of it in newlib's libm: the controller chains call ``acos, atan2, exp,
 fabs, floor, fmod, log, sqrt``, and in the float build also ``cos, hypot, sin``; the plant calls
-``floor, nextafter, sqrt, tanh``, in the double build also ``fabs``, and in the float build also
-``cos, hypot, sin`` (the double build's sine, cosine and magnitude are acdrive's own, below,
-whose reduction calls ``fabs`` and ``floor``). These are the calls
+``cos, exp, floor, nextafter, sin, sqrt, tanh``, in the double build also ``fabs``, and in the
+float build also ``hypot`` (the double build's sine, cosine and magnitude are acdrive's own,
+below, whose reduction calls ``fabs`` and ``floor``; the library's sine and cosine are those of
+numba's complex exponential, which the unbalanced grid's EMFs take). These are the calls
 compiled into the objects, not a list kept by hand: ``tests/test_export_compilers.py`` compiles
 every built-in scenario's files and compares.
 
