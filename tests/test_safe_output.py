@@ -14,6 +14,7 @@ SHORT = """
 name = "{name}"
 [simulation]
 duration = {duration}
+log_every = {log_every}
 [[motor]]
 speed_reference_rpm = [[0, 0], [{duration}, 100]]
 [motor.controller]
@@ -40,9 +41,9 @@ def _tree(folder):
     )
 
 
-def _scenario(tmp_path, name, duration=0.2):
+def _scenario(tmp_path, name, duration=0.2, log_every=1):
     path = tmp_path / "scenario.toml"
-    path.write_text(SHORT.format(name=name, duration=duration))
+    path.write_text(SHORT.format(name=name, duration=duration, log_every=log_every))
     return path
 
 
@@ -116,7 +117,9 @@ def test_interrupted_run_keeps_the_old_output_and_leaves_nothing_hidden(tmp_path
     quick = _scenario(tmp_path, "short", duration=0.2)
     assert _cli("run", str(quick), "--out", str(out), "--no-figures").returncode == 0
     old = _tree(out)
-    slow = _scenario(tmp_path, "short", duration=60.0)  # long enough to be interrupted
+    # long enough to be interrupted while it simulates (60 s of it take under a second on the
+    # native loop: the signal would come while the process exits), logged every 1000 samples
+    slow = _scenario(tmp_path, "short", duration=3000.0, log_every=1000)
     proc = subprocess.Popen(
         [sys.executable, "-m", "acdrive.cli", "run", str(slow), "--out", str(out)],
         stderr=subprocess.PIPE,

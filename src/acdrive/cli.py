@@ -179,6 +179,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         if debug:
             raise
+        # taken: a second interrupt, or one a library (pyarrow's stop handler) passed on again
+        # while it was raised, must not end the process by the signal past its exit code
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         sys.stderr.write("acdrive: interrupted (SIGINT)\n")
         return 130
     except Terminated:

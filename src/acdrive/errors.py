@@ -2,6 +2,8 @@
 
 import contextlib
 import re
+import signal
+import threading
 
 __all__ = ["InputError", "Notice", "SimulationDiverged", "UnknownField"]
 
@@ -148,3 +150,34 @@ def call_interruptible(function, *args):
         if cause is not None:
             raise cause from None
         raise
+
+
+@contextlib.contextmanager
+def interrupt_held():
+    """Hold SIGINT and SIGTERM for the block and take them when it ends.
+
+    numba compiles and loads its cached code through llvmlite, which calls Python back from
+    inside LLVM (the object cache's notifications): an interrupt raised in such a callback is
+    printed as "Exception ignored" and lost, and the command runs on to its end (seen: a SIGINT
+    2.05 s into ``acdrive run`` while numba loaded the loop). Held, a signal that came is passed
+    to its Python handler once the compile or load is over (``KeyboardInterrupt``, the command's
+    ``Terminated``). Only in the main thread, and only for a signal whose handler is a Python
+    function (a default or ignored disposition is left alone)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(signum)
+        if callable(handler):
+            held[signum] = handler
+    came = []
+    for signum in held:
+        signal.signal(signum, lambda number, frame: came.append((number, frame)))
+    try:
+        yield
+    finally:
+        for signum, handler in held.items():
+            signal.signal(signum, handler)
+    for number, frame in came[:1]:  # the first signal decides, as it would have unheld
+        held[number](number, frame)

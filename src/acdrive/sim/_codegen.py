@@ -29,7 +29,7 @@ import warnings
 from pathlib import Path
 
 from acdrive._cache import _cache_dir, cache_folder
-from acdrive.errors import Notice
+from acdrive.errors import Notice, interrupt_held
 
 _LOADED: dict[str, object] = {}
 #: compile seconds measured in this process since the last ``record_compile_times``
@@ -151,17 +151,18 @@ def compile_for(dispatcher, signature) -> tuple[float, bool]:
         return 0.0, False
     hits = dispatcher.stats.cache_hits.total()
     start = time.perf_counter()
-    try:
-        dispatcher.compile(signature)
-    except _DAMAGE as error:
-        if not _drop_damaged(dispatcher):
-            raise  # no cache file to blame: the code itself does not compile
-        notice(
-            f"a compiled-code cache file of {dispatcher.py_func.__module__}."
-            f"{dispatcher.py_func.__name__} could not be read ({type(error).__name__}); "
-            "removed, compiling again"
-        )
-        dispatcher.compile(signature)
+    with interrupt_held():  # llvmlite calls Python back from inside LLVM (errors.interrupt_held)
+        try:
+            dispatcher.compile(signature)
+        except _DAMAGE as error:
+            if not _drop_damaged(dispatcher):
+                raise  # no cache file to blame: the code itself does not compile
+            notice(
+                f"a compiled-code cache file of {dispatcher.py_func.__module__}."
+                f"{dispatcher.py_func.__name__} could not be read ({type(error).__name__}); "
+                "removed, compiling again"
+            )
+            dispatcher.compile(signature)
     seconds = time.perf_counter() - start
     compiled = dispatcher.stats.cache_hits.total() == hits
     if compiled:
