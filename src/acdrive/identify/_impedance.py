@@ -33,15 +33,25 @@ approaches zero the dead time clamps it there: the inverter's polarity flips fro
 the next, and no smoothing of the reading recovers that pattern. The estimator therefore takes
 the sign the inverter itself saw: that of the current the fitted circuit draws from the logged
 command with the voltage error fed back sample by sample (``identify._polarity``). It fits
-first without compensation (a passive circuit whose resistances carry the error), then refits
-with the sign of the current simulated from the previous fit until that sign repeats (at most
-``POLARITY_ROUNDS`` times). Starting from the reading's sign instead fails where the inverter
-clamps the current near zero within a few noise deviations: on motulator's 2.2 kW IM behind its
-carrier-comparison inverter (2 us, 1 V, 540 V, tones of 15 V against an 8.5 V error), 7 % of the
-window's samples lie within 0.05 A of zero, their reading's sign flickers, and the first fit
-went to L_M = 4.5e11 H, from where no simulated sign recovers; from the uncompensated fit the
-rounds reach R_s, L_sigma, R_R, L_M within 9e-3 on the noise-free log
-(``benchmarks/coverage_motulator.py``). The estimate's own noise then moves the sign it is compensated
+first with the reading's sign, then ``POLARITY_ROUNDS`` times with the sign of the current
+simulated from the previous fit. Where the inverter clamps the current at zero, the reading
+there is noise around zero and its sign flickers; on motulator's 2.2 kW IM behind its
+carrier-comparison inverter (2 us, 1 V, 540 V, tones of 15 V against an 8.5 V error; 7 % of the
+window's samples within 0.05 A of zero) that first fit went to L_M = 4.5e11 H, from where no
+simulated sign recovers. A compensated fit that ends with a larger residual than the
+uncompensated one has started from a wrong sign: the rounds are then run from the
+uncompensated fit (a passive circuit whose resistances carry the error) until the simulated
+sign repeats (at most ``FAR_ROUNDS``); on that noise-free log they end within 9e-3 of
+R_s, L_sigma, R_R, L_M (``benchmarks/coverage_motulator.py``).
+
+**Held or clamped at a zero crossing.** The simulated sign is held over each period (acdrive's
+inverter part does the same); a real inverter takes each leg's direction at each switching edge
+and holds a current that its error drives towards zero at zero (``identify._polarity``). The two
+bracket a bench: on the noise-free motulator log above, the held sign leaves R_s, L_sigma, R_R,
+L_M off by -6.8e-4, +8.8e-3, +1.5e-3, +6.7e-4 and the clamping one by +9.7e-4, -4.2e-3,
+-1.6e-3, -2.5e-3. When the residual is above the noise floor (below), the fit is repeated with
+the clamping polarity and the difference d of the two estimates adds d d^T to the covariance.
+The estimate's own noise then moves the sign it is compensated
 with; its intervals include that feedback (``_polarity.feedback_gain``). This applies to every
 model that declares its winding's state space (``AdmittanceModel.state_space``: the cage IM's
 circuit, a PM axis, the DFIM's rotor open or shorted). A failure mode, measured on the BLY171D
@@ -134,9 +144,11 @@ SAMPLES_PER_TONE = 10
 MAX_HALF_WIDTH = 0.5
 #: tones below this many times the compensated voltage error are named as a model error's cause
 TONE_MARGIN = 2.0
-#: at most this many refits with the sign of the current simulated from the previous fit, fewer
-#: when the simulated sign repeats (module docstring)
-POLARITY_ROUNDS = 10
+#: refits with the sign of the current simulated from the previous fit (module docstring)
+POLARITY_ROUNDS = 2
+#: at most this many such refits from the uncompensated fit or towards the clamping inverter's
+#: fit, fewer when the simulated sign repeats (module docstring)
+FAR_ROUNDS = 10
 #: the polarity's feedback is measured by secants of this many noise deviations of each parameter
 FEEDBACK_STEP_SIGMAS = 2.0
 #: a period is a whole number of samples to this relative tolerance
@@ -411,27 +423,23 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     model = with_dead_time(model, dead_time)
     spec = spectrum(log, base_frequency, settle, voltage_error)
     theta0 = np.log(model.start(spec))
+    fit = _solve(spec, theta0, model=model)
     simulated = voltage_error is not None and model.state_space is not None
-    if simulated:  # the polarity's rounds start from the uncompensated fit (module docstring)
-        plain = spectrum(log, base_frequency, settle)
-        fit = _solve(plain, np.log(model.start(plain)), model=model)
-    else:
-        fit = _solve(spec, theta0, model=model)
 
-    def polarity(theta):
+    def polarity(theta, clamping=False):
         try:
             signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
-                                       model.dead_time, model.state_space)  # fmt: skip
+                                       model.dead_time, model.state_space, clamping)  # fmt: skip
         except np.linalg.LinAlgError:  # a parameter off any physical range: no sign to tell
             return np.full(spec.frequency.size, np.nan + 0j)
         return _tone_coefficients(signs, spec, base_frequency)
 
-    def polarity_rounds(spec, fit):
+    def polarity_rounds(spec, fit, clamping=False, rounds=POLARITY_ROUNDS):
         previous = None
-        for _ in range(POLARITY_ROUNDS if simulated else 0):  # the inverter's own sign
+        for _ in range(rounds if simulated else 0):  # the inverter's own sign
             if not (fit.success and np.all(np.isfinite(fit.x))):
                 break
-            coefficients = polarity(fit.x)
+            coefficients = polarity(fit.x, clamping)
             if not np.all(np.isfinite(coefficients)):
                 break
             if previous is not None and np.array_equal(coefficients, previous):
@@ -441,7 +449,16 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
             fit = _solve(spec, fit.x, model=model)
         return spec, fit
 
-    spec, fit = polarity_rounds(spec, fit)
+    def converged(fit):
+        return fit.success and np.all(np.isfinite(fit.x)) and fit.cost < _FAR
+
+    if simulated:  # from the reading's sign; from the uncompensated fit if that ends worse
+        plain = spectrum(log, base_frequency, settle)
+        uncompensated = _solve(plain, np.log(model.start(plain)), model=model)
+        rounds = polarity_rounds(spec, fit)
+        if not converged(rounds[1]) or rounds[1].cost > uncompensated.cost:
+            rounds = polarity_rounds(spec, uncompensated, rounds=FAR_ROUNDS)
+        spec, fit = rounds
     m, n = 2 * spec.frequency.size, len(model.fields)
     if m - n < 1:
         raise InputError("excitation", f"{spec.frequency.size} tones cannot determine "
@@ -501,11 +518,18 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         cov = cov + np.outer(g, g) * timing.std**2
     ratio = math.sqrt(s2 / spec.noise) if spec.noise > 0.0 else float("nan")
     model_error = ratio > RESIDUAL_FACTOR
+    clamping_term = False
     if model_error:  # + the delete-one-tone jackknife (identify._judge)
         jackknife = jackknife_covariance(spec, fit.x, model,
                                          lambda sub, start: _solve(sub, start, model=model))  # fmt: skip
         with np.errstate(invalid="ignore"):
             cov = cov + np.diag(values) @ jackknife @ np.diag(values)
+        if simulated:  # + d d^T, d the clamping inverter's estimate less this one (_polarity)
+            _, clamped = polarity_rounds(spec, fit, clamping=True, rounds=FAR_ROUNDS)
+            if converged(clamped):
+                d = np.exp(clamped.x) - values
+                cov = cov + np.outer(d, d)
+                clamping_term = True
         smallest = float(np.min(np.abs(spec.command)))
         if voltage_error is None:
             causes = "an inverter voltage error left uncompensated (no DC-step log)"
@@ -521,7 +545,9 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                         f"at most {RESIDUAL_FACTOR:g} accepted as noise): the model misses part "
                         f"of the log; likely {causes}, a current-sensor offset or gain, or a "
                         "timing error between the channels; the intervals include a "
-                        "model-error term (delete-one-tone jackknife)")  # fmt: skip
+                        "model-error term (delete-one-tone jackknife"
+                        + (", and the difference to a fit whose inverter clamps the current at "
+                           "its zero crossings" if clamping_term else "") + ")")  # fmt: skip
     q = t_quantile(dof)
     rng = np.random.default_rng(seed)
     residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]

@@ -14,6 +14,19 @@ run over the logged command v_k from rest (the settling time lets the log's own 
 forgotten), with C the sampling row of ``_winding.discrete_winding`` (dead time included).
 Its s_k is the inverter's polarity as far as the fitted parameters are right; it carries no
 sensor noise.
+
+**Two inverters at a zero crossing.** The recursion above holds each period's sign at the
+sample instant (as acdrive's ``plant.Inverter`` does): a current driven towards zero chatters
+around it from sample to sample. A real inverter takes each leg's direction at each switching
+edge, so within the period the error adapts and holds the current at zero (zero-current
+clamping; motulator's carrier-comparison converter does this). ``clamping=True`` models that
+limit: s_k = +1 (-1) while the current stays positive (negative) under the full error, else the
+fraction in [-1, 1] that brings the next sample to zero,
+
+    s_k = clip((C Phi x_k + C Gamma v_k) / (C Gamma U), -1, 1).
+
+A bench inverter lies between the two; ``identify._impedance`` fits with the held sign and, when
+the residual exceeds the noise floor, adds the clamping fit's difference to the intervals.
 """
 
 from __future__ import annotations
@@ -26,30 +39,43 @@ from acdrive.identify._winding import discrete_winding
 
 
 def simulated_polarity(values, v: np.ndarray, hold: float, voltage_error: float,
-                       dead_time: float = 0.0,
-                       state_space=standstill_state_space) -> np.ndarray:  # fmt: skip
+                       dead_time: float = 0.0, state_space=standstill_state_space,
+                       clamping: bool = False) -> np.ndarray:  # fmt: skip
     """s_k = sign(i_k) of the winding ``state_space(values)`` (default the inverse-Gamma circuit,
     values R_s, L_sigma, R_R, L_M; an RL branch for ``identify._pm``) fed the command ``v`` [V]
     held over periods ``hold`` [s] less ``voltage_error`` [V] times the sign (module docstring),
     from rest; the inverter's dead time ``dead_time`` [s] moves the sample t_d / 2 early
-    (``identify._winding``)."""
+    (``identify._winding``); ``clamping`` holds a current that the error would drive through
+    zero at zero instead (module docstring)."""
     A, B = state_space(values)
     Phi, Gamma, C = discrete_winding(A, B, hold, dead_time)
     if A.shape == (1, 1):  # one state: a second one that stays at rest
         Phi = np.array([[Phi[0, 0], 0.0], [0.0, 0.0]])
         Gamma, C = np.array([Gamma[0], 0.0]), np.array([C[0], 0.0])
-    return _signs(np.ascontiguousarray(v, dtype=float), Phi, Gamma, C, float(voltage_error))
+    return _signs(np.ascontiguousarray(v, dtype=float), Phi, Gamma, C, float(voltage_error),
+                  bool(clamping))
 
 
 @jit
-def _signs(v, Phi, Gamma, C, U):
+def _signs(v, Phi, Gamma, C, U, clamping):
     """The recursion of ``simulated_polarity`` (compiled: a log has tens of thousands of rows)."""
     signs = np.empty(v.size)
     x0 = 0.0
     x1 = 0.0
+    reach = C[0] * Gamma[0] + C[1] * Gamma[1]  # the next sample's current per volt held
     for k in range(v.size):
         current = C[0] * x0 + C[1] * x1
-        s = 1.0 if current > 0.0 else (-1.0 if current < 0.0 else 0.0)
+        if clamping and U * reach > 0.0:
+            free = (C[0] * (Phi[0, 0] * x0 + Phi[0, 1] * x1)
+                    + C[1] * (Phi[1, 0] * x0 + Phi[1, 1] * x1) + reach * v[k])  # fmt: skip
+            if current > 0.0 and free > reach * U:
+                s = 1.0
+            elif current < 0.0 and free < -reach * U:
+                s = -1.0
+            else:  # the error holds the current at zero (or drives it through within the period)
+                s = min(1.0, max(-1.0, free / (reach * U)))
+        else:
+            s = 1.0 if current > 0.0 else (-1.0 if current < 0.0 else 0.0)
         signs[k] = s
         applied = v[k] - U * s
         x0, x1 = (Phi[0, 0] * x0 + Phi[0, 1] * x1 + Gamma[0] * applied,
