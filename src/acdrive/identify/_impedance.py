@@ -427,10 +427,13 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     simulated = voltage_error is not None and model.state_space is not None
 
     def polarity(theta, clamping=False):
-        try:
-            signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
-                                       model.dead_time, model.state_space, clamping)  # fmt: skip
-        except np.linalg.LinAlgError:  # a parameter off any physical range: no sign to tell
+        try:  # a parameter off any physical range (a wild round): no sign to tell
+            with np.errstate(all="ignore"):
+                signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
+                                           model.dead_time, model.state_space, clamping)  # fmt: skip
+        except np.linalg.LinAlgError:
+            return np.full(spec.frequency.size, np.nan + 0j)
+        if not np.all(np.isfinite(signs)):
             return np.full(spec.frequency.size, np.nan + 0j)
         return _tone_coefficients(signs, spec, base_frequency)
 

@@ -148,8 +148,8 @@ def run(args) -> dict:
         path = out_dir / f"{args.test}_offset{c:g}.csv"
         with open(path, "w", encoding="utf-8") as handle:
             handle.write("time [s],v_a [V],i_a [A]\n")
-            handle.writelines(f"{float(t)!r},{v!r},{i!r}\n"
-                              for t, v, i in zip(time, ctrl.v_a[:n], reading[:n], strict=True))  # fmt: skip
+            rows_out = zip(time, ctrl.v_a[:n], reading[:n], strict=True)
+            handle.writelines(f"{float(t)!r},{v!r},{i!r}\n" for t, v, i in rows_out)
         written.append({"offset_a": c, "path": str(path)})
     u_err = 4.0 / 3.0 * (args.dead_time_s * args.f_pwm * args.u_dc + args.threshold_v)
     return {
