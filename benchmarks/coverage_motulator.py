@@ -41,6 +41,7 @@ import argparse
 import hashlib
 import json
 import os
+import re
 import subprocess
 import sys
 from collections import Counter
@@ -100,7 +101,9 @@ def without_rest(log):
 
 
 def cause(message: str) -> str:
-    """A refusal's or warning's message, cut to 160 characters (the cause comes first)."""
+    """A refusal's or warning's message with its numbers as '#' (so that one cause counts once),
+    cut to 160 characters (the cause comes first)."""
+    message = re.sub(r"[-+]?\d+(\.\d+)?(e[-+]?\d+)?", "#", message)
     return message if len(message) <= 160 else message[:157] + "..."
 
 

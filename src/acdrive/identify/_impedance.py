@@ -311,7 +311,7 @@ def _residual(theta, spec: Spectrum, model: AdmittanceModel):
         params = np.exp(theta)
         try:
             Y = model.admittance(params, 2.0 * np.pi * spec.frequency, spec.hold)
-        except np.linalg.LinAlgError:
+        except (np.linalg.LinAlgError, ZeroDivisionError):  # a parameter underflowed to zero
             Y = np.full(spec.frequency.size, np.nan)
     error = spec.current - Y * spec.voltage
     if not np.all(np.isfinite(error)):
@@ -431,7 +431,7 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
             with np.errstate(all="ignore"):
                 signs = simulated_polarity(np.exp(theta), log.v_a, spec.hold, voltage_error,
                                            model.dead_time, model.state_space, clamping)  # fmt: skip
-        except np.linalg.LinAlgError:
+        except (np.linalg.LinAlgError, ZeroDivisionError):
             return np.full(spec.frequency.size, np.nan + 0j)
         if not np.all(np.isfinite(signs)):
             return np.full(spec.frequency.size, np.nan + 0j)

@@ -45,7 +45,7 @@ import numpy as np
 
 from acdrive.errors import InputError
 from acdrive.identify._dc import Z_95
-from acdrive.identify._fit import Estimate, jacobian_interval
+from acdrive.identify._fit import Estimate, FitNotConverged, jacobian_interval
 from acdrive.identify._polarity import simulated_polarity
 
 #: at most this many rounds of (offset, U, refit) when the offset comes from the injection's
@@ -92,6 +92,10 @@ def joint_offset(log, fit, base_frequency: float, intercept: float, intercept_st
                          "in the DC-step test")  # fmt: skip
     mean_current, mean_command = float(np.mean(log.i_a[-n:])), float(np.mean(log.v_a[-n:]))
     value = (mean_current - Y_0 * mean_command + Y_0 * P_0 * intercept) / denominator
+    if not math.isfinite(value):  # a trial fit off any physical range: no DC gain or polarity
+        raise FitNotConverged("current-sensor offset from the injection's mean", "the trial "
+                              "fit's circuit has no finite DC admittance or polarity",
+                              fit.residual_rms, "A (rms of the tones' current error)")  # fmt: skip
     noise = spec.noise if math.isfinite(spec.noise) else (fit.residual_rms**2)
     variance = (0.5 * noise + (Y_0 * P_0 * intercept_std) ** 2) / denominator**2
     std = math.sqrt(variance)
