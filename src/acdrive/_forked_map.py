@@ -22,6 +22,8 @@ import pickle
 import sys
 import traceback
 
+from acdrive._threads import usable_cores
+
 #: the environment variable capping the processes (the parent counts as one)
 WORKERS_VARIABLE = "ACDRIVE_PREPARE_WORKERS"
 
@@ -33,8 +35,7 @@ def worker_count(n_items: int, min_per_worker: int) -> int:
     (which may not start children)."""
     if not sys.platform.startswith("linux") or multiprocessing.current_process().daemon:
         return 1
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    n = min(cores or 1, n_items // max(min_per_worker, 1))
+    n = min(usable_cores(), n_items // max(min_per_worker, 1))
     cap = os.environ.get(WORKERS_VARIABLE, "").strip()
     if cap:
         try:

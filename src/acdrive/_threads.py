@@ -32,3 +32,9 @@ def one_blas_thread() -> bool:
     finally:
         del os.environ["OPENBLAS_NUM_THREADS"]
     return True
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return cores or 1

@@ -437,7 +437,9 @@ class CompiledSystem:
                                                   n_steps, log_every, idx, LOG[b], ELOG[b],
                                                   ECOUNT[b])  # fmt: skip
 
-        workers = min(X.shape[0], _cores())
+        from acdrive._threads import usable_cores
+
+        workers = min(X.shape[0], usable_cores())
         if workers <= 1:
             for b in range(X.shape[0]):
                 one(b)
@@ -467,10 +469,3 @@ class CompiledSystem:
         """The value of output ``port`` in an output vector ``Y``."""
         i = self.system.output_slot(port)
         return complex(Y[i], Y[i + 1]) if port.var.kind == "complex" else float(Y[i])
-
-
-def _cores() -> int:
-    """The cores this process may run on."""
-    import os
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1

@@ -28,6 +28,7 @@ class Dialect:
     x: str
     xt: str
     call: Callable[[str, bool, int], str]
+    capped: Callable[[str], str]
     loop: str
     end: tuple[str, ...]
     begin: Callable[[int], list[str]]
@@ -48,6 +49,7 @@ NUMBA = Dialect(
     call=lambda time, start, j: (
         f"    derivatives({time}, {'X' if start else 'xt'}, P, PO, Y, U, W[{j}])"
     ),
+    capped=lambda time: f"min({time}, cap)",
     loop="    for i in range(N_X):",
     end=(),
     begin=_numba_begin,
@@ -68,6 +70,7 @@ def c_dialect(name: str, n_x: int) -> Dialect:
         call=lambda time, start, j: (
             f"    {derivatives}({time}, p, {'&X->x' if start else '&xt.x'}, in, y, &k[{j}].x);"
         ),
+        capped=lambda time: f"ACD_CAPPED({time}, cap)",
         loop=f"    for (i = 0; i < {n_x}; ++i) {{",
         end=("    }",),
         begin=lambda stages: ["    int i;", f"    {name}_vector k[{stages}], xt;"],
@@ -77,7 +80,7 @@ def c_dialect(name: str, n_x: int) -> Dialect:
 
 def _capped(dialect: Dialect, node: float) -> str:
     time = "t" if node == 0.0 else "t + h" if node == 1.0 else f"t + {dialect.literal(node)} * h"
-    return f"min({time}, cap)" if dialect is NUMBA else f"ACD_CAPPED({time}, cap)"
+    return dialect.capped(time)
 
 
 def _terms(dialect: Dialect, weights) -> list[str]:
