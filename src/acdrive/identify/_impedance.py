@@ -75,6 +75,9 @@ imaginary parts) over log-parameters (positive by construction); their maximum-l
 weight is one for white current noise. 95 % intervals: Jacobian covariance scaled by the residual
 variance with Student's t over 2K - 4 degrees of freedom, and a bootstrap redrawing the K complex
 residuals (inflated by sqrt(2K / (2K - 4)) for the fitted degrees of freedom) (``identify._fit``).
+The terms the resampled noise cannot carry (the compensated delay's uncertainty, the model-error
+terms below) are added to the Jacobian covariance and, as a Gaussian draw of the same covariance,
+to each bootstrap refit, so both intervals carry them.
 
 **Judged by its own data** (``identify._judge``): the residual against the noise floor of the
 off-tone bins (a model-error term and a warning above it), and the current's timing against the
@@ -517,11 +520,12 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         down = np.exp(_solve(spec.compensated(U - spread), fit.x, model=model).x)
         g = (up - down) / (2.0 * spread)
         cov = cov + np.outer(g, g) * spread**2
+    beyond_noise = np.zeros((n, n))  # the terms the noise resampling cannot draw (below)
     if delay != 0.0 and math.isfinite(timing.std) and timing.std > 0.0:  # + g g^T var(delay)
         up = np.exp(_solve(spec.advanced(timing.std), fit.x, model=model).x)
         down = np.exp(_solve(spec.advanced(-timing.std), fit.x, model=model).x)
         g = (up - down) / (2.0 * timing.std)
-        cov = cov + np.outer(g, g) * timing.std**2
+        beyond_noise = beyond_noise + np.outer(g, g) * timing.std**2
     ratio = math.sqrt(s2 / spec.noise) if spec.noise > 0.0 else float("nan")
     model_error = ratio > RESIDUAL_FACTOR
     clamping_term = False
@@ -529,13 +533,13 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         jackknife = jackknife_covariance(spec, fit.x, model,
                                          lambda sub, start: _solve(sub, start, model=model))  # fmt: skip
         with np.errstate(invalid="ignore"):
-            cov = cov + np.diag(values) @ jackknife @ np.diag(values)
+            beyond_noise = beyond_noise + np.diag(values) @ jackknife @ np.diag(values)
         if simulated:  # + d d^T, d the clamping inverter's estimate less this one (_polarity),
             # when the clamping inverter explains the log at least as well as the held sign
             _, clamped = polarity_rounds(spec, fit, clamping=True, rounds=FAR_ROUNDS)
             if converged(clamped) and clamped.cost <= fit.cost:
                 d = np.exp(clamped.x) - values
-                cov = cov + np.outer(d, d)
+                beyond_noise = beyond_noise + np.outer(d, d)
                 clamping_term = True
         smallest = float(np.min(np.abs(spec.command)))
         if voltage_error is None:
@@ -555,6 +559,8 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
                         "model-error term (delete-one-tone jackknife"
                         + (", and the difference to a fit whose inverter clamps the current at "
                            "its zero crossings" if clamping_term else "") + ")")  # fmt: skip
+    with np.errstate(invalid="ignore"):
+        cov = cov + beyond_noise
     q = t_quantile(dof)
     rng = np.random.default_rng(seed)
     residual = fit.fun[: m // 2] + 1j * fit.fun[m // 2 :]
@@ -567,6 +573,7 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
         refit = _solve(resampled, fit.x, BOOTSTRAP_TOLERANCE, model)
         moved = fit.x + gain @ (refit.x - fit.x)  # the feedback, to first order
         draws[b] = np.exp(moved) if refit.success and refit.cost < _FAR else np.nan
+    draws = draws + gaussian_draws(beyond_noise, bootstrap, seed)
     estimates = tuple(
         Estimate(name, unit, meaning, float(values[j]),
                  jacobian_interval(values[j], cov[j, j], q), percentile_interval(draws[:, j]))
@@ -579,6 +586,28 @@ def fit_impedance(log: StandstillLog, base_frequency: float, settle: float,
     if check:
         check_identified(result)
     return result
+
+
+def gaussian_draws(cov: np.ndarray, count: int, seed: int) -> np.ndarray:
+    """``count`` draws of N(0, ``cov``) (rows), for the bootstrap: the delay's and the model
+    error's terms of the Jacobian covariance are not in the resampled noise, so each refit is
+    moved by a draw of them and the percentile interval carries what the Jacobian interval
+    carries. Its own generator (``seed`` and a second word), so a fit without these terms draws
+    exactly the bootstrap it drew without them; a parameter whose term is unbounded (inf or NaN)
+    draws NaN, i.e. an unknown interval. ``cov`` is symmetric positive semidefinite up to
+    rounding: the square root keeps its eigenvalues above the rounding of the largest."""
+    n = cov.shape[0]
+    if not np.any(cov):
+        return np.zeros((count, n))
+    bounded = np.all(np.isfinite(cov), axis=0) & np.all(np.isfinite(cov), axis=1)
+    draws = np.full((count, n), np.nan)
+    inner = cov[np.ix_(bounded, bounded)]
+    eigenvalues, vectors = np.linalg.eigh(0.5 * (inner + inner.T))
+    rounding = inner.shape[0] * np.finfo(float).eps * max(float(np.max(eigenvalues)), 0.0)
+    root = vectors * np.sqrt(np.where(eigenvalues > rounding, eigenvalues, 0.0))
+    normal = np.random.default_rng([seed, 1]).standard_normal((count, inner.shape[0]))
+    draws[:, bounded] = normal @ root.T
+    return draws
 
 
 def _delay_text(delay: float, hold: float) -> str:
