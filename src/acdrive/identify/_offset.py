@@ -29,7 +29,11 @@ Two ways to measure c:
 
 Its standard error: the mean of n white-noise samples of deviation s has s^2 / n, which is half
 the off-tone noise variance of a tone coefficient (2 s^2 / n, ``identify._judge``); U's then
-adds R_s^2 var(c) to the DC intercept's variance, which the injection's intervals carry.
+adds R_s^2 var(c) to the DC intercept's variance, which the injection's intervals carry. Where
+the injection's residual is above its noise floor (``ImpedanceFit.model_error``), P_0 is as
+uncertain as the inverter's sign near zero current: the variance adds d^2, d the offset that a
+clamping inverter's mean sign gives less this one (the model-error term of
+``identify._impedance``, "Held or clamped at a zero crossing").
 
 The voltage column is the latched command, so it has no offset; a log of a measured voltage
 whose channel has one moves the DC intercept as U does and is not separable from it with
@@ -83,6 +87,11 @@ def joint_offset(log, fit, base_frequency: float, intercept: float, intercept_st
         signs = np.sign(log.i_a[-n:])
     P_0 = float(np.mean(signs))
     Y_0 = float(model.admittance(values, np.zeros(1), spec.hold)[0].real)
+    mean_current, mean_command = float(np.mean(log.i_a[-n:])), float(np.mean(log.v_a[-n:]))
+
+    def offset(P_0):
+        return (mean_current - Y_0 * mean_command + Y_0 * P_0 * intercept) / (1.0 - Y_0 * R_s * P_0)
+
     denominator = 1.0 - Y_0 * R_s * P_0
     if abs(denominator) < SEPARABLE:
         raise InputError(f"{log.source}: column 'i_a'", f"a current-sensor offset cannot be "
@@ -90,14 +99,21 @@ def joint_offset(log, fit, base_frequency: float, intercept: float, intercept_st
                          "zero-current stretch and the injection's current keeps one sign "
                          f"({P_0:+.2f} of the samples' mean sign); log a rest at zero command "
                          "in the DC-step test")  # fmt: skip
-    mean_current, mean_command = float(np.mean(log.i_a[-n:])), float(np.mean(log.v_a[-n:]))
-    value = (mean_current - Y_0 * mean_command + Y_0 * P_0 * intercept) / denominator
+    value = offset(P_0)
     if not math.isfinite(value):  # a trial fit off any physical range: no DC gain or polarity
         raise FitNotConverged("current-sensor offset from the injection's mean", "the trial "
                               "fit's circuit has no finite DC admittance or polarity",
                               fit.residual_rms, "A (rms of the tones' current error)")  # fmt: skip
     noise = spec.noise if math.isfinite(spec.noise) else (fit.residual_rms**2)
     variance = (0.5 * noise + (Y_0 * P_0 * intercept_std) ** 2) / denominator**2
+    if fit.model_error and model.state_space is not None and fit.voltage_error is not None:
+        # + d^2, d the offset a clamping inverter's mean sign gives less this one (the model
+        # error's term of identify._impedance, on P_0)
+        clamped = simulated_polarity(values, log.v_a, spec.hold, fit.voltage_error,
+                                     model.dead_time, model.state_space, True)[-n:]  # fmt: skip
+        difference = offset(float(np.mean(clamped))) - value
+        if math.isfinite(difference):
+            variance += difference**2
     std = math.sqrt(variance)
     U = intercept + R_s * value
     U_std = math.sqrt(intercept_std**2 + (R_s * std) ** 2)
