@@ -101,7 +101,13 @@ def run_sil(args) -> int:
         print(f"  {column:<{width}}  max |diff| {row['max_difference']:.3e}  peak "
               f"{row['peak']:.3e}  ratio {row['ratio']:.3e}")  # fmt: skip
     print(f"worst: {report['worst_signal']} at {report['worst_ratio']:.3e} of its peak; "
-          f"events {'equal' if report['events_equal'] else 'DIFFER'}")  # fmt: skip
+          f"events {'equal' if report['events_equal'] else 'differ:'}")  # fmt: skip
+    for row in report["events_differing"]:
+        first = row["first_difference_s"]
+        when = (f"first at t = {first:.6g} s" if first is not None
+                else "the logged samples agree (a difference between them)")  # fmt: skip
+        print(f"  {row['event']}: raised on {row['acdrive']} samples by acdrive, "
+              f"{row['c']} by the C; {when}")  # fmt: skip
     if args.real == "double":
         ok = report["worst_ratio"] <= DOUBLE_TOLERANCE and report["events_equal"]
         print(f"double build within {DOUBLE_TOLERANCE:g} of each signal's peak: "

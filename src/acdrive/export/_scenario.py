@@ -73,6 +73,25 @@ def _worst(reference, other, no_limit: float | None = None) -> tuple[dict, str]:
     return signals, max(signals, key=lambda c: signals[c]["ratio"])
 
 
+def event_differences(reference, other, event_names) -> list[dict]:
+    """Each event whose per-sample record differs between two runs of one system: its name
+    (``part.event``), the samples on which each run raised it and the first logged time [s] at
+    which the records differ (``event_names``: ``System.event_names()``, the order of the
+    runs' ``event_log`` columns and bits), in the order of that time."""
+    out = []
+    for i, (part, names) in enumerate(event_names):
+        for bit, name in enumerate(names):
+            mine = (reference.event_log[:, i] >> bit) & 1
+            theirs = (other.event_log[:, i] >> bit) & 1
+            differ = np.flatnonzero(mine != theirs)
+            if differ.size or reference.events[part][name] != other.events[part][name]:
+                first = float(reference.t[differ[0]]) if differ.size else None
+                out.append({"event": f"{part}.{name}", "acdrive": reference.events[part][name],
+                            "c": other.events[part][name], "first_difference_s": first})  # fmt: skip
+    return sorted(out, key=lambda d: math.inf if d["first_difference_s"] is None
+                  else d["first_difference_s"])  # fmt: skip
+
+
 def float_bound(input_rounding_ratio: float) -> float:
     """The bound of the float build's worst ratio (docs/guide/export.md, "The float bound").
 
@@ -118,10 +137,11 @@ def compare_in_loop(setup, real: str = "double") -> dict:
         "signals": signals,
         "worst_signal": worst,
         "worst_ratio": signals[worst]["ratio"],
-        "events_equal": reference.events == in_loop.events,
         "events_acdrive": reference.events,
         "events_c": in_loop.events,
+        "events_differing": event_differences(reference, in_loop, drive.system.event_names()),
     }
+    report["events_equal"] = not report["events_differing"]
     if real == "float":
         # the modulators' outputs switch: a carrier comparison that flips one sample earlier
         # moves a switched voltage by its full swing (an event, counted apart), so the bound is
