@@ -5,7 +5,8 @@
 ``DIR/<sweep name>/`` (default ``DIR`` ``./acdrive-sweeps``, as ``acdrive run`` writes
 ``DIR/<scenario name>/``) with a progress bar on stderr, and prints that folder. SWEEP is a sweep
 file (TOML) or the name of a built-in sweep (``acdrive.sweep.builtin``); ``acdrive sweep --list``
-names the built-in sweeps with their size and description. Interrupted (SIGINT, SIGTERM), the
+names the built-in sweeps with their size and description, and ``acdrive sweep --show NAME``
+prints one of them, a sweep file to copy and edit. Interrupted (SIGINT, SIGTERM), the
 command prints one line with the exact command that resumes the sweep (absolute paths, so it
 works from any folder) before the CLI's own ``interrupted`` line.
 """
@@ -15,12 +16,15 @@ from __future__ import annotations
 HELP = """Run a scenario over a grid or a seeded random set of parameter values, in chunks, into a
 Parquet dataset (one file per chunk, written atomically; run the same command again to resume
 after an interruption: an interrupted sweep prints that command), then write report.md with
-figures. --scheduler sends the chunks to a Dask cluster. --list names the built-in sweeps."""
+figures. --scheduler sends the chunks to a Dask cluster. --list names the built-in sweeps,
+--show NAME prints one (a sweep file to start from)."""
 
 DEFAULT_OUT = "acdrive-sweeps"
 DEFAULT_TIMEOUT = 10.0  # seconds to reach a Dask scheduler
-#: the options of running a sweep, unused by --list
+#: the options of running a sweep, unused by --list and --show
 RUN_OPTIONS = ("out", "scheduler", "timeout", "chunk")
+#: the switches of running a sweep, unused by --list and --show
+RUN_SWITCHES = ("no_report", "quiet")
 
 
 def register(subparsers) -> None:
@@ -30,6 +34,10 @@ def register(subparsers) -> None:
     p.add_argument("sweep", nargs="?", help="sweep file (TOML) or built-in sweep name (see --list)")
     p.add_argument(
         "--list", action="store_true", help="name the built-in sweeps with a line on each"
+    )
+    p.add_argument(
+        "--show", metavar="NAME", default=None,
+        help="print the TOML file of one built-in sweep (a sweep file to start from)",
     )
     p.add_argument(
         "--out",
@@ -65,6 +73,28 @@ def list_builtin() -> list[str]:
     return lines
 
 
+def show_builtin(args) -> None:
+    """Print the TOML file of the built-in sweep ``--show NAME`` as it is stored; a name that is
+    no built-in sweep, or an option that runs a sweep beside it, is refused."""
+    from acdrive._commands._options import flag, refuse_unused
+    from acdrive.errors import InputError
+    from acdrive.sweep._spec import builtin_sweeps, read_sweep_text
+
+    names = builtin_sweeps()
+    if args.show not in names:
+        raise InputError("--show", f"must be one of {', '.join(names)}, got '{args.show}'")
+    why = "it prints a built-in sweep, running none"
+    if args.sweep is not None:
+        raise InputError("--show", "prints a built-in sweep and takes no SWEEP")
+    if args.list:
+        raise InputError("--list", f"does not apply with --show: {why}")
+    refuse_unused(args, RUN_OPTIONS, "--show", why)
+    for switch in RUN_SWITCHES:
+        if getattr(args, switch):
+            raise InputError(flag(switch), f"does not apply with --show: {why}")
+    print(read_sweep_text(args.show)[0], end="")
+
+
 def resume_command(args) -> str:
     """The shell command that runs this sweep again into the same folder (so resumes it): the
     options given, with the sweep file and ``--out`` as absolute paths."""
@@ -92,11 +122,14 @@ def run(args) -> int:
     from acdrive.sweep._engine import run_sweep, sweep_progress
     from acdrive.sweep._spec import MAX_CHUNK, load_sweep
 
+    if args.show is not None:
+        show_builtin(args)
+        return 0
     if args.list:
         if args.sweep is not None:
             raise InputError("--list", "names the built-in sweeps and takes no SWEEP")
         refuse_unused(args, RUN_OPTIONS, "--list", "it names the built-in sweeps, running none")
-        for switch in ("no_report", "quiet"):
+        for switch in RUN_SWITCHES:
             if getattr(args, switch):
                 raise InputError(flag(switch), "does not apply with --list: it names the "
                                  "built-in sweeps, running none")  # fmt: skip
