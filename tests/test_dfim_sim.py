@@ -218,8 +218,9 @@ def test_speed_oscillation_metric_recovers_a_known_sinusoid():
 
 @pytest.mark.slow
 def test_paper_gains_limit_cycle_in_voltage_mode_only():
-    """The finding stated in the README: at a_D,VEL = 314 rad/s voltage command oscillates near the
-    supply frequency, current command does not, and voltage command at 100 rad/s does not."""
+    """The finding stated in docs/stability.md: at a_D,VEL = 314 rad/s voltage command oscillates
+    near the supply frequency, current command does not, and voltage command at 100 rad/s does
+    not."""
 
     def oscillation(mode, bandwidth, **converter):
         data = {

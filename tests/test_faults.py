@@ -107,7 +107,7 @@ def window(t, start, stop=np.inf):
 def assert_same_run(a, b) -> None:
     """Two runs of the same equations by two topologies: identical with strict IEEE arithmetic
     (ACDRIVE_STRICT_MATH=1); with the default fast-math build each topology's compiled loop may
-    round differently in the last bit, which a long run amplifies a little (docs/design.md
+    round differently in the last bit, which a long run amplifies a little (docs/speed.md
     measures up to 4e-10 of a signal's peak between two engines): 1e-9 of each signal's peak."""
     if STRICT_MATH:
         np.testing.assert_array_equal(a.signals, b.signals)

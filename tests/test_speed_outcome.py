@@ -74,8 +74,8 @@ def test_a_sag_that_is_ridden_through_reports_its_recovery_consistent_with_the_d
 
 
 def test_a_genuine_limit_cycle_still_gets_the_finding():
-    """bodson-ramp-ideal (README: the paper's gains with an ideal converter settle into a limit
-    cycle near 47 Hz)."""
+    """bodson-ramp-ideal (docs/stability.md: the paper's gains with an ideal converter settle into a
+    limit cycle near 47 Hz)."""
     out = run_scenario(load_scenario("bodson-ramp-ideal"))
     finding = out.summary["finding"]
     assert "the speed oscillates in a limit cycle" in finding

@@ -324,7 +324,7 @@ def test_report_lists_invalid_and_unstable_variants_and_the_table_keeps_the_reas
     invalid = table[~table["valid"]]
     assert len(invalid) == 2 and invalid["reason"].str.startswith("motor[0].params.M:").all()
     ok = table[table["valid"]].set_index("vary.motor[0].controller.speed_bandwidth")
-    # the README's finding: the ideal converter's limit cycle at the paper's 314 rad/s
+    # the finding of docs/stability.md: the ideal converter's limit cycle at the paper's 314 rad/s
     assert not ok.loc[314.0, "stable"] and ok.loc[100.0, "stable"]
     report = (folder / "report.md").read_text()
     assert "## Invalid variants" in report and "sigma" in report

@@ -38,3 +38,15 @@ def test_show_runs_nothing_and_refuses_the_options_of_a_run(extra, named, tmp_pa
     (line,) = capsys.readouterr().err.splitlines()
     assert line.startswith(f"acdrive: error: {named}:")
     assert not any(tmp_path.iterdir())  # nothing written
+
+
+def test_the_sweeps_guide_shows_the_builtin_sweep_file_as_it_is(capsys):
+    """The guide's sweep file is ``acdrive sweep --show dfim-bandwidth``, character by character."""
+    import re
+    from pathlib import Path
+
+    guide = Path(__file__).resolve().parents[1] / "docs" / "guide" / "sweeps.md"
+    section = guide.read_text().split("## A sweep file", 1)[1]
+    shown = re.search(r"```toml\n(.*?)```", section, re.DOTALL).group(1)
+    assert main(["sweep", "--show", "dfim-bandwidth"]) == 0
+    assert shown == capsys.readouterr().out

@@ -37,9 +37,9 @@ STRICT_MATH = os.environ.get("ACDRIVE_STRICT_MATH") == "1"
 #: depends on what surrounds an operation after inlining, so the same kernel would round one way
 #: in the single loop and another in the lockstep lanes. With these flags every finite result
 #: (up to the sign of a zero) depends only on the written order of operations: the tiers, the
-#: exported C and the lockstep batch agree bit for bit. Measured (docs/design.md, "Session 17"):
-#: ``contract`` bought no speed; ``arcp`` was worth 6 % on im-foc-speed, which the cage IM's
-#: kernel now gets from reciprocals it writes itself.
+#: exported C and the lockstep batch agree bit for bit. Measured (docs/design.md, "Fast-math
+#: flags and bit identity"): ``contract`` bought no speed; ``arcp`` was worth 6 % on
+#: im-foc-speed, which the cage IM's kernel now gets from reciprocals it writes itself.
 FAST_MATH_FLAGS = frozenset() if STRICT_MATH else frozenset({"nnan", "ninf", "nsz"})
 
 #: ``FAST_MATH_FLAGS`` as the ``fastmath`` option of a generated module's source (sorted, so

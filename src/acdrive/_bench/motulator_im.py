@@ -22,7 +22,7 @@ reference's own resolution.
 
 Integration on acdrive's side: one step of the sixth-order method (``System(method="rk6")``) per
 held segment (``INTEGRATOR``, ``SUBSTEPS``; the measurements behind the choice are in
-docs/design.md, "Benchmark suite").
+docs/speed.md, "The benchmark suite").
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ from acdrive._bench.windows import Clock, spread
 SCENARIO = "bodson-ramp"
 
 #: name -> (what, target, unit, comparison): the issue's numbers, and where it gives none (the
-#: compile-free ratio, the 3 % of the loop) the bound chosen in docs/design.md, "Speed targets"
+#: compile-free ratio, the 3 % of the loop) the bound chosen in docs/speed.md, "Speed targets"
 TARGETS = {
     "whole_command_warm_cpu_s": (
         f"warm `acdrive run {SCENARIO}` (data, summary, figures), whole process",

@@ -27,7 +27,7 @@ MAX_WORK = 1e9
 #: integrator steps (variants x samples x substeps) from which a batch of a system the native
 #: loop runs goes to numba's lockstep loop instead of the native loop per variant: the lockstep
 #: loop's compile (about 40 s) is paid back at about 0.7 us saved per step (3.5x the per-variant
-#: speed per CPU-second; docs/design.md, "Batches and sweeps")
+#: speed per CPU-second; docs/speed.md, "The batch loops")
 LOCKSTEP_PAYS_STEPS = 5e7
 
 

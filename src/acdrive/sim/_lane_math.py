@@ -5,8 +5,8 @@ In the lockstep batch loop (``sim._lockstep_source``) a kernel runs once per lan
 LLVM vectorises only if every operation in it has a vector form. ``np.sin`` and ``np.cos`` are
 calls into the C library, one per lane even where the loop around them vectorises, and
 ``np.abs`` of a complex number is a call to ``hypot``, which keeps a lane loop of the sampled
-controllers scalar. Measured on bodson-ramp (docs/design.md, "Lockstep"): libm's ``sincos`` and
-``hypot`` took about a quarter of a lockstep step.
+controllers scalar. Measured on bodson-ramp (docs/speed.md, "The batch loops"): libm's
+``sincos`` and ``hypot`` took about a quarter of a lockstep step.
 
 Here the same functions are written as arithmetic only:
 

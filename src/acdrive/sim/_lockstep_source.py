@@ -69,7 +69,8 @@ LANES = 48
 #: bytes of an AVX-512 vector: the block workspace starts at a multiple of it. numba aligns its
 #: arrays to 32 bytes, so without this about half the blocks had every 512-bit load and store of
 #: a lane row split over two cache lines (rows are LANES doubles, a multiple of 64 bytes); the
-#: batch's speed then changed from run to run with the allocation (docs/design.md, "Session 17").
+#: batch's speed then changed from run to run with the allocation (docs/speed.md, "The batch
+#: loops").
 VECTOR_BYTES = 64
 
 

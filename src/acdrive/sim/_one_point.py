@@ -10,7 +10,7 @@ directly, or through the acdrive helpers it calls) replaced by its one-point for
 the same number bit for bit: a one-point table ``[1, t_0, v_0]`` gives ``v_0`` at every time
 (``table_at``'s first branch). ``table_offset`` stays: at a call site its count of tables is a
 constant, so its loop unrolls (replacing it too by the fixed offsets of one-point tables was
-measured slower; docs/design.md, "Lockstep").
+measured slower; docs/speed.md, "The batch loops").
 
 The replacement goes through ``sim._rebind``, which also reaches the acdrive helpers a kernel
 calls; a helper reached as a module attribute (``module.helper``) keeps the search, which is

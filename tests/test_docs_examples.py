@@ -1,4 +1,6 @@
-"""The README's Python example for systems from parts runs as printed and does what it says."""
+"""The documentation's examples run as printed and do what they say, and its command table is the
+parser's: the system from parts (docs/guide/parts.md), the scenario with every mode it compares
+(docs/getting-started.md), the command table (docs/guide/commands.md)."""
 
 import math
 import re
@@ -10,16 +12,18 @@ import pytest
 
 matplotlib.use("Agg")
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+PARTS = DOCS / "guide" / "parts.md"
+GETTING_STARTED = DOCS / "getting-started.md"
+COMMANDS = DOCS / "guide" / "commands.md"
 
 
 def test_parts_example_runs_and_the_shorted_dfim_runs_up_to_synchronous_speed():
-    text = README.read_text()
-    section = text[text.index("## Build a system from parts") :]
+    text = PARTS.read_text()
+    section = text[text.index("## A system from parts") :]
     code = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
-    assert len(code.strip().splitlines()) <= 15
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102  (the README example itself)
+    exec(compile(code, str(PARTS), "exec"), scope)  # noqa: S102  (the guide's example itself)
     result, dfim = scope["result"], scope["dfim"]
     w = result.signal("shaft.w")
     synchronous = 2 * math.pi * 60.0 / 2  # 60 Hz, two pole pairs
@@ -35,21 +39,22 @@ def test_parts_example_runs_and_the_shorted_dfim_runs_up_to_synchronous_speed():
 
 
 def test_scenario_example_runs_every_mode_and_saves_into_new_folders(tmp_path, monkeypatch):
-    """The first Python example: a two-mode scenario gives both modes, and save() creates its
-    folder (the scenario is shortened here; the code is the README's)."""
+    """A two-mode scenario gives both modes, and save() creates its folder (the scenario is
+    shortened here; the code is the getting-started page's)."""
     import dataclasses
 
     from acdrive.scenarios import _loader as loader
 
-    text = README.read_text()
-    code = re.search(r"```python\n(from acdrive.scenarios import.*?)```", text, re.DOTALL).group(1)
+    text = GETTING_STARTED.read_text()
+    section = text[text.index("### Every mode a scenario compares") :]
+    code = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
     original = loader.load_scenario
     monkeypatch.setattr(
         loader, "load_scenario", lambda name: dataclasses.replace(original(name), duration=0.2)
     )
     monkeypatch.chdir(tmp_path)
     scope: dict = {}
-    exec(compile(code, "README.md", "exec"), scope)  # noqa: S102  (the README example itself)
+    exec(compile(code, str(GETTING_STARTED), "exec"), scope)  # noqa: S102  (the page's example)
     outcome = scope["outcome"]
     modes = set(original("bodson-step").compare_modes)
     assert set(outcome.results) == modes == {"voltage", "current"}
@@ -60,9 +65,9 @@ def test_scenario_example_runs_every_mode_and_saves_into_new_folders(tmp_path, m
 
 
 def _command_table() -> dict[str, str]:
-    """The README's command table: command name -> the row's first cell (its synopsis)."""
-    text = README.read_text()
-    section = text[text.index("## What you can do") :]
+    """The command table of the commands page: command name -> the row's first cell (synopsis)."""
+    text = COMMANDS.read_text()
+    section = text[text.index("# Commands") :]
     section = section[: section.index("\n\n", section.index("| command |"))]
     rows = {}
     for line in section.splitlines():
@@ -85,12 +90,12 @@ def _subcommands() -> dict:
 
 
 def test_command_table_lists_every_command_of_the_parser():
-    """Derived from the parser, so a new command without its README row fails here."""
+    """Derived from the parser, so a new command without its row in the table fails here."""
     commands = _subcommands()
     rows = _command_table()
     assert {"run", "sweep", "bench"} <= set(commands)  # the parser is really read
     missing = sorted(set(commands) - set(rows))
-    assert not missing, f"commands missing from the README's command table: {missing}"
+    assert not missing, f"commands missing from docs/guide/commands.md: {missing}"
 
 
 def test_options_in_the_command_table_exist():
