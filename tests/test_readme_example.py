@@ -76,3 +76,14 @@ def test_the_pmsm_example_runs_and_holds_its_speed_against_its_load(tmp_path, mo
     code = _block("Your own PMSM", "python")
     exec(compile(code, "README.md", "exec"), scope)  # noqa: S102  (the README example itself)
     assert scope["outcome"].summary["speed_final_rad_s"] == summary["speed_final_rad_s"]
+
+
+def test_a_broken_datasheet_value_is_refused_naming_its_field(tmp_path, monkeypatch, capsys):
+    """As the README says: one line naming ``machine.params.L_d``, exit code 2, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    text = _block("Your own PMSM", "toml").replace("L_d = 1.0e-3", "L_d = -1.0e-3")
+    (tmp_path / "my-pmsm.toml").write_text(text)
+    assert main(["run", "my-pmsm.toml"]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith("acdrive: error: machine.params.L_d:")
+    assert not (tmp_path / "acdrive-out").exists()
