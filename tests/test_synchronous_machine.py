@@ -28,7 +28,13 @@ from acdrive.machines import (
     SynchronousMachine,
     SynchronousMachineParams,
 )
-from acdrive.machines._synchronous_part import magnetic_currents, magnetic_energy
+from acdrive.analysis._kernel_jacobian import kernel_jacobian
+from acdrive.machines._pmsm import dq_current_ss
+from acdrive.machines._synchronous_part import (
+    magnetic_currents,
+    magnetic_energy,
+    synchronous_state_outputs,
+)
 from acdrive.plant._mechanics import PrescribedSpeed, Shaft
 from acdrive.sim import System, _native
 
@@ -150,6 +156,55 @@ def test_algebraic_model_with_linear_coefficients_is_the_linear_model():
         assert magnetic_currents(algebraic.p, psi_d, psi_q) == pytest.approx(expected, rel=1e-12)
         W = magnetic_energy(linear.values, psi_d, psi_q)
         assert magnetic_energy(algebraic.values, psi_d, psi_q) == pytest.approx(W, rel=1e-12)
+
+
+def test_torque_is_minus_the_energy_derivative_at_constant_stator_flux():
+    """tau_e = -dW/dtheta with the stator flux psi_s held (psi_dq = psi_s e^{-j n_p theta}): the
+    torque output of the kernel against a central difference of the closed-form energy, at
+    points over the grid and rotor angles, for the saturated SyRM and PM-SyRM."""
+    for params in (SYRM_6_7KW, PM_SYRM):
+        part = SynchronousMachine.from_params("sm", params)
+        tau_slot = part.OUTPUTS.slot("tau_e")
+        for k, (psi_d, psi_q) in enumerate(GRID):
+            theta, h = 0.1 * k, 1e-6
+            psi_s = complex(psi_d, psi_q) * np.exp(1j * params.n_p * theta)
+            x = part.initial_state(psi_dq=complex(psi_d, psi_q), theta=theta)
+            y = np.zeros(part.OUTPUTS.size())
+            synchronous_state_outputs(0.0, x, part.p, y)
+
+            def energy(angle):
+                psi_dq = psi_s * np.exp(-1j * params.n_p * angle)
+                return magnetic_energy(part.values, psi_dq.real, psi_dq.imag)
+
+            torque = -(energy(theta + h) - energy(theta - h)) / (2.0 * h)
+            assert y[tau_slot] == pytest.approx(torque, rel=1e-6, abs=1e-6)
+
+
+@pytest.mark.parametrize("w_r", [0.0, 150.0, -420.0])
+def test_kernel_jacobian_is_the_linear_pm_plant_and_the_saturated_incremental_model(w_r):
+    """The Jacobian of the part's kernels (``analysis._kernel_jacobian``), fed from the stationary
+    frame, central differences of step 1e-5 (the saturated kernel is not linear): with linear
+    magnetics, carried to current coordinates (A_i = L^-1 A_psi L), it is the PM
+    current subsystem of Ugalde-Loo et al. (9)-(11) (``dq_current_ss``); with saturation, d i/d psi
+    (its C block) is symmetric and A = -R_s d i/d psi - j w_r, the voltage equation linearised."""
+    rotate = np.array([[0.0, 1.0], [-1.0, 0.0]])  # -j as a real 2 x 2 gain
+    point = {"psi_dq": 0.45 - 0.2j, "theta": 0.7}
+    for part in (linear_from(SERVO), SynchronousMachine.from_params("sm", SYRM_6_7KW)):
+        e_r = np.exp(1j * part.values["n_p"] * point["theta"])
+        jac = kernel_jacobian(part, {**point, "e_r": e_r},
+                              {"v_s": (20.0 + 5.0j) * e_r, "w": w_r / part.values["n_p"]},
+                              relative_step=1e-5)  # fmt: skip
+        m, _, _ = jac.subsystem(("psi_dq",), ("v_s",), ("i_dq",))
+        A, C = m["A"], m["C"]
+        scale = np.max(np.abs(A))
+        assert np.max(np.abs(A - (-part.values["R_s"] * C + w_r * rotate))) < 1e-9 * scale
+        if part.values["saturation"] == 0:
+            L = np.diag([SERVO.L_d, SERVO.L_q])
+            A_i = np.linalg.inv(L) @ A @ L
+            expected = dq_current_ss(SERVO, w_r)[0]
+            assert np.max(np.abs(A_i - expected)) < 1e-9 * np.max(np.abs(expected))
+        else:
+            assert abs(C[0, 1]) > 1.0 and abs(C[0, 1] - C[1, 0]) < 1e-7 * np.max(np.abs(C))
 
 
 # --- energy balance of a run ------------------------------------------------------------------
