@@ -286,7 +286,7 @@ def test_native_loop_equals_numba_bit_for_bit(params, monkeypatch):
         ({"a_dd": -1.0}, r"sm\.a_dd: must be >= 0"),
         ({"S": 1.5}, r"sm\.S: must be an integer >= 0"),
         ({"T": -1}, r"sm\.T: must be an integer >= 0"),
-        ({"V": 13}, r"sm\.V: the exponents S, T, U, V of the algebraic model must be at most 12"),
+        ({"V": 16}, r"sm\.V: the exponents S, T, U, V of the algebraic model must be at most 15"),
         ({"psi_m": float("nan")}, r"sm\.psi_m"),
     ],
 )

@@ -43,7 +43,7 @@ inductance matrices are symmetric (reciprocity) by construction.
   the gradient of W = a_d0 psi_d^2 / 2 + a_dd |psi_d|^(S+2) / (S+2) + a_q0 psi_q^2 / 2
   + a_qq |psi_q|^(T+2) / (T+2) + a_dq |psi_d|^(U+2) |psi_q|^(V+2) / ((U+2) (V+2)).
   The exponents are whole numbers up to ``MAX_EXPONENT`` (the published SyRM and PM-SyRM fits
-  use 0 to 6; the kernel language has no general power).
+  use 0 to 6; the kernel language has no general power, ``whole_power`` multiplies).
 
 **Scaling of the algebraic model.** Its coefficients are the published ones, for peak-valued
 (amplitude-invariant) space vectors, as motulator uses them. acdrive's vectors are power-invariant,
@@ -74,8 +74,8 @@ from acdrive._jit import jit_fast, jit_inline
 from acdrive.core._signals import Layout, Relation, cplx, real
 from acdrive.machines._record import MachinePart
 
-#: the largest exponent S, T, U, V of the algebraic model (powers are repeated products)
-MAX_EXPONENT = 12
+#: the largest exponent S, T, U, V of the algebraic model (four binary digits, ``whole_power``)
+MAX_EXPONENT = 15
 #: 1 / sqrt(3/2): power-invariant -> peak-valued space vector
 OVER_K_PEAK = 1.0 / K_PEAK
 #: the values of ``saturation``
@@ -180,11 +180,23 @@ _Y_I_S, _Y_I_DQ, _Y_PSI_S, _Y_PSI_DQ, _Y_TAU, _Y_THETA = (
 
 @jit_inline
 def whole_power(x, n):
-    """x^n for a whole n from 0 to ``MAX_EXPONENT``, as repeated products (x^0 = 1)."""
+    """x^n for a whole n from 0 to ``MAX_EXPONENT`` = 15 (x^0 = 1): the product of the powers
+    x^8, x^4, x^2, x^1 that the binary digits of n select, digit by digit from the highest."""
+    x_2 = x * x
+    x_4 = x_2 * x_2
     power = 1.0
-    for k in range(MAX_EXPONENT):
-        if k < n:
-            power = power * x
+    rest = n
+    if rest >= 8.0:
+        power = x_4 * x_4
+        rest = rest - 8.0
+    if rest >= 4.0:
+        power = power * x_4
+        rest = rest - 4.0
+    if rest >= 2.0:
+        power = power * x_2
+        rest = rest - 2.0
+    if rest >= 1.0:
+        power = power * x
     return power
 
 
