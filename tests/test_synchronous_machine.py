@@ -1,4 +1,4 @@
-"""The synchronous machine with flux states and a magnetic model (``machines/_synchronous_part.py``).
+"""The synchronous machine with flux states and a magnetic model (``machines/_synchronous_part``).
 
 * linear magnetics: the same machine as the PM part (Ugalde-Loo et al. (7)-(8), current states),
   run for run, up to rounding (Runge-Kutta commutes with the affine change of state i -> psi);
@@ -18,6 +18,7 @@ import pytest
 from scipy.integrate import simpson
 
 from acdrive._frames import K_PEAK
+from acdrive.analysis._kernel_jacobian import kernel_jacobian
 from acdrive.control import ComplexProgram
 from acdrive.control._open_loop import VoltageProgram
 from acdrive.errors import InputError
@@ -28,7 +29,6 @@ from acdrive.machines import (
     SynchronousMachine,
     SynchronousMachineParams,
 )
-from acdrive.analysis._kernel_jacobian import kernel_jacobian
 from acdrive.machines._pmsm import dq_current_ss
 from acdrive.machines._synchronous_part import (
     magnetic_currents,
@@ -90,11 +90,12 @@ def published_currents(params, psi_d_pk, psi_q_pk):
     magnet's flux (peak psi_m)."""
     a = vars(params)
     d = psi_d_pk - params.psi_m
+    q = psi_q_pk
     g_d = (a["a_d0"] + a["a_dd"] * abs(d) ** a["S"]
-           + a["a_dq"] / (a["V"] + 2) * abs(d) ** a["U"] * abs(psi_q_pk) ** (a["V"] + 2))  # fmt: skip
-    g_q = (a["a_q0"] + a["a_qq"] * abs(psi_q_pk) ** a["T"]
-           + a["a_dq"] / (a["U"] + 2) * abs(d) ** (a["U"] + 2) * abs(psi_q_pk) ** a["V"])  # fmt: skip
-    return g_d * d, g_q * psi_q_pk
+           + a["a_dq"] / (a["V"] + 2) * abs(d) ** a["U"] * abs(q) ** (a["V"] + 2))  # fmt: skip
+    g_q = (a["a_q0"] + a["a_qq"] * abs(q) ** a["T"]
+           + a["a_dq"] / (a["U"] + 2) * abs(d) ** (a["U"] + 2) * abs(q) ** a["V"])  # fmt: skip
+    return g_d * d, g_q * q
 
 
 #: power-invariant fluxes across and beyond the 6.7-kW SyRM's range (its base flux is 0.45 Wb
@@ -158,6 +159,12 @@ def test_algebraic_model_with_linear_coefficients_is_the_linear_model():
         assert magnetic_energy(algebraic.values, psi_d, psi_q) == pytest.approx(W, rel=1e-12)
 
 
+def energy_at_angle(part, psi_s, theta):
+    """W at the rotor angle theta with the stator flux psi_s (stationary frame) held."""
+    psi_dq = psi_s * np.exp(-1j * part.values["n_p"] * theta)
+    return magnetic_energy(part.values, psi_dq.real, psi_dq.imag)
+
+
 def test_torque_is_minus_the_energy_derivative_at_constant_stator_flux():
     """tau_e = -dW/dtheta with the stator flux psi_s held (psi_dq = psi_s e^{-j n_p theta}): the
     torque output of the kernel against a central difference of the closed-form energy, at
@@ -172,11 +179,8 @@ def test_torque_is_minus_the_energy_derivative_at_constant_stator_flux():
             y = np.zeros(part.OUTPUTS.size())
             synchronous_state_outputs(0.0, x, part.p, y)
 
-            def energy(angle):
-                psi_dq = psi_s * np.exp(-1j * params.n_p * angle)
-                return magnetic_energy(part.values, psi_dq.real, psi_dq.imag)
-
-            torque = -(energy(theta + h) - energy(theta - h)) / (2.0 * h)
+            W = [energy_at_angle(part, psi_s, angle) for angle in (theta + h, theta - h)]
+            torque = -(W[0] - W[1]) / (2.0 * h)
             assert y[tau_slot] == pytest.approx(torque, rel=1e-6, abs=1e-6)
 
 
@@ -234,7 +238,8 @@ def test_energy_balance_of_a_run_closes_with_the_magnetic_energy(params):
     result = system.compile().run(END, 2e-5, 2, log=[sm.out.i_s, sm.out.psi_dq, sm.out.tau_e,
                                                      shaft.out.w, source.out.v_ref])  # fmt: skip
     t, i_s = result.t, result.signal(sm.out.i_s)
-    tau_e, w, psi = result.signal(sm.out.tau_e), result.signal(shaft.out.w), result.signal(sm.out.psi_dq)
+    tau_e, w = result.signal(sm.out.tau_e), result.signal(shaft.out.w)
+    psi = result.signal(sm.out.psi_dq)
     assert np.max(np.abs(psi)) > 0.55 and np.ptp(w) > 5.0  # saturated, and the shaft moved
     e_in = e_cu = e_mech = 0.0
     ends = [start for start, _ in STEPS[1:]] + [END]
@@ -332,8 +337,10 @@ def test_the_saturated_syrm_runs_in_fmus_as_in_the_loop(monkeypatch, tmp_path):
     native = system.compile().run(duration, T_s, 4, log=[syrm.out.i_s, shaft.out.w])
     export = to_c(system, T_s, name="syrm_controller", open_loop=True)
     plant_export = to_plant_c(system, T_s, 4, name="syrm_plant")
-    models = {"controller": controller_model(export, T_s, duration, "V/f program"),
-              "plant": plant_model(plant_export, system, None, T_s, duration, "SyRM on a shaft")}  # fmt: skip
+    models = {
+        "controller": controller_model(export, T_s, duration, "V/f program"),
+        "plant": plant_model(plant_export, system, None, T_s, duration, "SyRM on a shaft"),
+    }
     paths = {k: build_fmu(m, tmp_path / f"{m.identifier}.fmu") for k, m in models.items()}
     assert all(validate_fmu(str(p)) == [] for p in paths.values())
     fmu = _closed_loop(paths, round(duration / T_s), T_s)

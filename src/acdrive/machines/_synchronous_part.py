@@ -11,7 +11,7 @@ w_r = n_p w. Space vectors in acdrive's power-invariant scaling (``acdrive._fram
 motor (consumer) reference arrows as in ``machines._pmsm_part``:
 
     v_dq = v_s conj(e_r)                                   (stationary -> rotor coordinates)
-    dpsi_dq/dt = v_dq - R_s i_dq - j w_r psi_dq            (the voltage equation in rotor coordinates)
+    dpsi_dq/dt = v_dq - R_s i_dq - j w_r psi_dq            (voltage equation, rotor coordinates)
     i_dq = i(psi_dq)                                       (the magnetic model, below)
     tau_e = n_p Im(conj(psi_dq) i_dq) = n_p (psi_d i_q - psi_q i_d)
     dtheta/dt = w,   de_r/dt = j w_r e_r,   i_s = i_dq e_r,   psi_s = psi_dq e_r
@@ -33,7 +33,8 @@ inductance matrices are symmetric (reciprocity) by construction.
   + psi_q^2 / (2 L_q).
 * 1, algebraic saturation with cross-saturation, the power-function model of Hinkkanen,
   Pescetto, Molsa, Saarakkala, Pellegrino, Bojoi, "Sensorless self-commissioning of synchronous
-  reluctance motors at standstill without rotor locking", IEEE Trans. Ind. Appl. 53(3), 2017
+  reluctance motors at standstill without rotor locking", IEEE Trans. Ind. Appl., 2017
+  (doi 10.1109/TIA.2016.2644624)
   (the model motulator calls ``SaturationModelSyRM``), in the published peak-valued variables
   (d measured from the magnet's flux, below):
 
@@ -87,21 +88,15 @@ LINEAR, ALGEBRAIC = 0, 1
 PARAMS = Layout(
     real("R_s", "ohm", "stator resistance", "positive"),
     real("n_p", "", "pole pairs", "count"),
-    real("saturation", "", "magnetic model: 0 linear (L_d, L_q), 1 algebraic (a_*, S, T, U, V)",
-         "flag"),  # fmt: skip
-    real("psi_m", "Wb", "magnet flux linkage at zero current, peak per phase (0: SyRM)",
-         "nonnegative"),  # fmt: skip
+    real("saturation", "", "magnetic model: 0 linear (L_d, L_q), 1 algebraic (a_*)", "flag"),
+    real("psi_m", "Wb", "magnet flux linkage at zero current, peak per phase", "nonnegative"),
     real("L_d", "H", "direct-axis inductance of the linear model", "nonnegative"),
     real("L_q", "H", "quadrature-axis inductance of the linear model", "nonnegative"),
-    real("a_d0", "A/Wb", "d-axis inverse inductance at zero flux (peak-valued, as published)",
-         "nonnegative"),  # fmt: skip
-    real("a_dd", "A/Wb^(S+1)", "d-axis self-saturation coefficient (peak-valued)",
-         "nonnegative"),  # fmt: skip
+    real("a_d0", "A/Wb", "d-axis inverse inductance at zero flux (peak-valued)", "nonnegative"),
+    real("a_dd", "A/Wb^(S+1)", "d-axis self-saturation coefficient (peak-valued)", "nonnegative"),
     real("S", "", "d-axis self-saturation exponent", "whole"),
-    real("a_q0", "A/Wb", "q-axis inverse inductance at zero flux (peak-valued, as published)",
-         "nonnegative"),  # fmt: skip
-    real("a_qq", "A/Wb^(T+1)", "q-axis self-saturation coefficient (peak-valued)",
-         "nonnegative"),  # fmt: skip
+    real("a_q0", "A/Wb", "q-axis inverse inductance at zero flux (peak-valued)", "nonnegative"),
+    real("a_qq", "A/Wb^(T+1)", "q-axis self-saturation coefficient (peak-valued)", "nonnegative"),
     real("T", "", "q-axis self-saturation exponent", "whole"),
     real("a_dq", "A/Wb^(U+V+3)", "cross-saturation coefficient (peak-valued)", "nonnegative"),
     real("U", "", "cross-saturation exponent of |psi_d|", "whole"),
@@ -141,9 +136,9 @@ PARAMS = Layout(
         Relation(
             ("saturation", "L_d", "L_q", "psi_m"),
             "torque needs a magnet or saliency: psi_m > 0 or, in the linear model, L_d != L_q",
-            lambda saturation, L_d, L_q, psi_m: psi_m > 0.0
-            or (saturation == LINEAR and L_d != L_q)
-            or saturation == ALGEBRAIC,
+            lambda saturation, L_d, L_q, psi_m: (
+                psi_m > 0.0 or (saturation == LINEAR and L_d != L_q) or saturation == ALGEBRAIC
+            ),
             c="{psi_m} > 0.0 || ({saturation} == 0.0 && {L_d} != {L_q}) || {saturation} == 1.0",
         ),
     ),
@@ -213,11 +208,15 @@ def magnetic_currents(p, psi_d, psi_q):
         abs_d = abs(psi_d_magnet * OVER_K_PEAK)  # |psi_d|, |psi_q| peak-valued
         abs_q = abs(psi_q * OVER_K_PEAK)
         cross = p[_A_DQ] * whole_power(abs_d, p[_U]) * whole_power(abs_q, p[_V])
-        g_d = p[_A_D0] + p[_A_DD] * whole_power(abs_d, p[_S]) + cross * (abs_q * abs_q) / (
-            p[_V] + 2.0
+        g_d = (
+            p[_A_D0]
+            + p[_A_DD] * whole_power(abs_d, p[_S])
+            + cross * (abs_q * abs_q) / (p[_V] + 2.0)
         )
-        g_q = p[_A_Q0] + p[_A_QQ] * whole_power(abs_q, p[_T]) + cross * (abs_d * abs_d) / (
-            p[_U] + 2.0
+        g_q = (
+            p[_A_Q0]
+            + p[_A_QQ] * whole_power(abs_q, p[_T])
+            + cross * (abs_d * abs_d) / (p[_U] + 2.0)
         )
         i_d = g_d * psi_d_magnet  # K g(psi_pk) psi_pk = g(psi_pk) psi_pi
         i_q = g_q * psi_q
@@ -282,9 +281,8 @@ def magnetic_energy(values: dict, psi_d, psi_q):
 
 #: the parameters of the model the part does not use, by model: left at these values
 _UNUSED = {
-    LINEAR: {"a_d0": 0.0, "a_dd": 0.0, "S": 0, "a_q0": 0.0, "a_qq": 0.0, "T": 0, "a_dq": 0.0,
-             "U": 0, "V": 0},  # fmt: skip
-    ALGEBRAIC: {"L_d": 0.0, "L_q": 0.0},
+    LINEAR: dict.fromkeys(("a_d0", "a_dd", "S", "a_q0", "a_qq", "T", "a_dq", "U", "V"), 0.0),
+    ALGEBRAIC: dict.fromkeys(("L_d", "L_q"), 0.0),
 }
 
 
@@ -301,8 +299,12 @@ class SynchronousMachine(MachinePart):
     )
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
-    DEFAULTS: ClassVar[dict] = {"psi_m": 0.0, "saturation": LINEAR,
-                                **_UNUSED[LINEAR], **_UNUSED[ALGEBRAIC]}  # fmt: skip
+    DEFAULTS: ClassVar[dict] = {
+        "psi_m": 0.0,
+        "saturation": LINEAR,
+        **_UNUSED[LINEAR],
+        **_UNUSED[ALGEBRAIC],
+    }
     INITIAL: ClassVar[dict] = {"e_r": 1.0}
     state_outputs = synchronous_state_outputs
     rhs = synchronous_rhs
