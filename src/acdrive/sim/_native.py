@@ -52,11 +52,16 @@ from acdrive.core._parts import ContinuousPart, SampledPart
 from acdrive.errors import InputError
 
 #: compiler flags of the native library: the SIL build's (no contraction into fused
-#: multiply-adds, so the double build rounds as the kernels do), as a shared library, at -O1:
-#: measured against -O2 on this machine, it compiles in 0.16 s instead of 0.22 s (the matched
-#: IM case) and runs about as fast (bodson-ramp 5 % slower, im-foc-speed 11 % faster); no level
-#: changes a result, the arithmetic being strict IEEE at every level; -pipe: no temporary files
-#: between the compiler's passes
+#: multiply-adds, so the double build rounds as the kernels do), as a shared library, at -O1
+#: for the baseline instruction set of the target, chosen by measurement
+#: (``benchmarks/native_flags.py``: 2-core Xeon with AVX-512, gcc 12.2, three rounds of three
+#: runs interleaved, loop steps per CPU-s, median over -O1's): -O2 0.95 / 1.05 / 1.01 and -O3
+#: 0.95 / 1.07 / 1.00 on bodson-ramp / im-foc-speed / pm-bly171d-speed, at 1.5 to 2.2 times
+#: -O1's compile (0.37-0.39 CPU-s of cc); the host's instruction set (-march=native) 0.87 /
+#: 0.16 / 0.62 at -O2, and it changes results: gcc 12's vectoriser fuses complex products into
+#: vfmaddsub instructions under -ffp-contract=off when FMA is enabled (-O2 -mfma alone shows
+#: it; at -O1, which does not vectorise, the results stay bit-identical). -pipe: no temporary
+#: files between the compiler's passes
 NATIVE_CFLAGS = ("-std=c99", "-O1", "-ffp-contract=off", "-fPIC", "-pipe", "-shared")
 #: the C names of the generated pieces
 _CTL, _PLANT = "acdn_ctl", "acdn_plant"
