@@ -22,5 +22,9 @@ __all__, __getattr__, __dir__ = namespace(
         "Encoder": "._sensors",
         "CurrentSensors": "._sensors",
         "VoltageSensor": "._sensors",
+        "QuadratureEncoder": "._encoder",
+        "Resolver": "._resolver",
+        "HallSensors": "._hall",
+        "CurrentSensing": "._current_sensing",
     },
 )
