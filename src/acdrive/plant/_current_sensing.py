@@ -7,8 +7,8 @@ The phase currents are those of the stator current space vector ``i_s`` (power-i
 Bodson (2)): i_a = sqrt(2/3) Re i_s, i_b = sqrt(2/3) Re(i_s alpha^2), i_c = sqrt(2/3)
 Re(i_s alpha) with alpha = exp(j 2 pi / 3). Each sensed phase k reads
 
-    x_k = gain_k i_k + offset_k,   code_k = floor(x_k / q + 1/2) clipped to [-2^(bits-1), 2^(bits-1) - 1],
-    m_k = q code_k,   q = 2 full_scale / 2^bits                                             (C1)
+    x_k = gain_k i_k + offset_k,   q = 2 full_scale / 2^bits,
+    code_k = floor(x_k / q + 1/2) clipped to [-2^(bits-1), 2^(bits-1) - 1],   m_k = q code_k  (C1)
 
 so the ADC spans [-full_scale, full_scale) in 2^bits codes of one LSB q, and inside that span
 |m_k - x_k| <= q / 2. A code at either end raises ``clipped``. With ``phases = 2`` phases a and b

@@ -11,7 +11,8 @@ amplitude. With the disc angle ``phi = theta + offset`` the resolver's angle is
 revolution: an angle error at the first harmonic of the mechanical angle, of amplitude
 ``eccentricity`` in radians), and the envelopes are
 
-    S = (1 + imbalance) sin(theta_r) + offset_sin,   C = cos(theta_r + quadrature) + offset_cos  (R2)
+    S = (1 + imbalance) sin(theta_r) + offset_sin
+    C = cos(theta_r + quadrature) + offset_cos                                              (R2)
 
 (``imbalance`` the amplitude imbalance of the sine channel, ``quadrature`` the phase error of the
 cosine channel against exact quadrature, the offsets in units of the nominal amplitude). A single
@@ -127,9 +128,10 @@ class Resolver(SampledPart):
     def check(self) -> None:
         from acdrive.errors import InputError
 
-        if not self.values["imbalance"] > -1.0:
+        imbalance = self.values["imbalance"]
+        if not imbalance > -1.0:
             raise InputError(f"{self.name}.imbalance", "must be > -1 (the sine envelope's "
-                             f"amplitude 1 + a positive), got {self.values['imbalance']:g}")  # fmt: skip
+                             f"amplitude 1 + a positive), got {imbalance:g}")  # fmt: skip
 
     def check_run(self, sample_time: float) -> None:
         """The sampled loop (R3) is stable (Jury, see the module's docstring)."""
