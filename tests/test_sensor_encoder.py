@@ -1,5 +1,6 @@
 """The quadrature encoder and its counter (acdrive.plant.QuadratureEncoder): the reading
-truncates to the count (error in [0, one count)), the register's wrap gives no speed spike, the
+truncates to the count (error in [0, one count)) or, centred, is within half a count, the
+register's wrap gives no speed spike, the
 index bounds the drift of lost edges to one revolution's losses, and bad parameters are refused
 naming the field."""
 
@@ -66,6 +67,23 @@ def test_the_reading_truncates_to_the_count():
     assert np.array_equal(counts, np.floor(counts)) and counts.max() < 2000
 
 
+def test_a_centred_reading_is_within_half_a_count():
+    """With ``centred`` the angle is read at the count's centre: the error to the disc angle is
+    within half a count either way, and both halves are reached."""
+    encoder = QuadratureEncoder("enc", lines=500, pole_pairs=4, offset=0.7, centred=1)
+    theta = random_trajectory(40_000, 2, 300.0)
+    y, _ = step_through(encoder, theta)
+    half = TWO_PI / 2000 / 2
+    read = y[:, column(encoder, "theta")]
+    error = wrapped(theta + 0.7 - read)
+    assert np.max(np.abs(error)) <= half * (1 + 1e-9)
+    assert error.max() > 0.99 * half and error.min() < -0.99 * half
+    assert np.all((read >= 0.0) & (read < TWO_PI))
+    theta_e = y[:, column(encoder, "theta_e")]
+    assert np.all((theta_e >= 0.0) & (theta_e < TWO_PI))
+    assert np.max(np.abs(wrapped(theta_e - 4 * read))) < 1e-9
+
+
 def test_the_wrap_gives_no_speed_spike():
     """At a constant speed through many wraps of the register, the speed read equals the
     speed of the disc's count difference over each sample on every sample, the wraps included:
@@ -119,7 +137,7 @@ def test_lost_edges_drift_without_the_index_and_are_bounded_with_it():
 
 @pytest.mark.parametrize(("field", "value"), [("lines", 0), ("lines", 2.5), ("lines", 2**31),
                                               ("pole_pairs", 0), ("lose_every", -1),
-                                              ("index", 2)])  # fmt: skip
+                                              ("index", 2), ("centred", 0.5)])  # fmt: skip
 def test_bad_parameters_are_refused_naming_the_field(field, value):
     with pytest.raises(InputError, match=rf"^enc\.{field}: "):
         QuadratureEncoder("enc", **{"lines": 100, field: value})

@@ -8,8 +8,10 @@ offset). A disc of ``lines`` lines gives two square waves in quadrature, hence `
 edges per revolution (the "x4" decoding of a quadrature counter); the edge of count ``m`` is at
 ``phi = m 2 pi / N`` and the index pulse at ``phi = 0`` (the edge of count 0, every N counts).
 Between two samples the disc passes ``m_now - m_before`` edges, ``m = floor(phi N / (2 pi))``;
-the counter adds them, signed by the direction, minus the lost ones, modulo ``N``. The reading
-truncates: without lost edges the angle read lies in ``[phi - 2 pi / N, phi]`` (mod 2 pi).
+the counter adds them, signed by the direction, minus the lost ones, modulo ``N``. The count
+truncates: without lost edges the angle ``count 2 pi / N`` lies in ``(phi - 2 pi / N, phi]``
+(mod 2 pi), an error in [0, one count); with ``centred`` the angle is read at the count's
+centre, ``(count + 1/2) 2 pi / N``, an error within half a count either way.
 
 Lost edges: with ``lose_every = k`` (0: none) every k-th edge the disc passes is not counted,
 whatever its direction (the edges are numbered in the order they are passed, from the first
@@ -39,6 +41,7 @@ PARAMS = Layout(
     real("offset", "rad", "mounting offset: disc angle minus shaft angle", ""),
     real("index", "", "1: the index pulse resets the register once per revolution", "flag"),
     real("lose_every", "", "every k-th edge passed is not counted (0: none lost)", "whole"),
+    real("centred", "", "1: the angle read at the count's centre, (count + 1/2) 2 pi / N", "flag"),
 )
 STATES = Layout(
     real("started", "", "1 once the first sample has run"),
@@ -53,8 +56,8 @@ OUTPUTS = Layout(
     real("theta_e", "rad", "electrical angle pole_pairs theta, in [0, 2 pi)"),
     real("w", "rad/s", "speed from the register's wrapped difference over one sample"),
 )
-_LINES, _POLE_PAIRS, _OFFSET, _INDEX, _LOSE_EVERY = (
-    PARAMS.slot(n) for n in ("lines", "pole_pairs", "offset", "index", "lose_every")
+_LINES, _POLE_PAIRS, _OFFSET, _INDEX, _LOSE_EVERY, _CENTRED = (
+    PARAMS.slot(n) for n in ("lines", "pole_pairs", "offset", "index", "lose_every", "centred")
 )
 _STARTED, _EDGE, _PASSED, _REGISTER = (
     STATES.slot(n) for n in ("started", "edge", "passed", "counter")
@@ -100,9 +103,10 @@ def quadrature_encoder_step(t, T_s, u, p, s, y):
     s[_EDGE] = edge
     s[_REGISTER] = register
     step = TWO_PI / n
+    position = register + 0.5 if p[_CENTRED] != 0.0 else register
     y[_COUNT] = register
-    y[_THETA] = register * step
-    y[_THETA_E] = wrap_count(register * p[_POLE_PAIRS], n) * step
+    y[_THETA] = position * step
+    y[_THETA_E] = wrap_count(position * p[_POLE_PAIRS], n) * step
     difference = wrap_count(register - before + 0.5 * n, n) - 0.5 * n
     y[_W] = difference * step / T_s
     return events
@@ -111,14 +115,14 @@ def quadrature_encoder_step(t, T_s, u, p, s, y):
 class QuadratureEncoder(SampledPart):
     """Incremental encoder with its x4 quadrature counter: a register wrapping at 4 ``lines``
     counts, an optional index reset, every ``lose_every``-th edge lost; outputs the wrapped
-    mechanical and electrical angles (truncated to the count) and the speed from the wrapped
-    count difference."""
+    mechanical and electrical angles (at the count, or at its centre if ``centred``) and the
+    speed from the wrapped count difference."""
 
     SOURCE = "quadrature encoder and counter register (plant._encoder.quadrature_encoder_step)"
 
     PARAMS, STATES, INPUTS, OUTPUTS = PARAMS, STATES, INPUTS, OUTPUTS
     DEFAULTS: ClassVar[dict] = {"pole_pairs": 1.0, "offset": 0.0, "index": 0.0,
-                                "lose_every": 0.0}  # fmt: skip
+                                "lose_every": 0.0, "centred": 0.0}  # fmt: skip
     EVENTS = ("index", "edge_lost")
     step = quadrature_encoder_step
 
