@@ -53,6 +53,15 @@ _RULE_HOLDS: dict[str, Callable[[float], bool]] = {
 }
 
 
+#: the keywords of C99: a quantity's name is a member of the generated C structs
+#: (``sim._ccode``), so none of these can name one
+C_KEYWORDS = frozenset("""
+    auto break case char const continue default do double else enum extern float for goto if
+    inline int long register restrict return short signed sizeof static struct switch typedef
+    union unsigned void volatile while _Bool _Complex _Imaginary
+""".split())
+
+
 @dataclass(frozen=True)
 class Var:
     """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
@@ -74,6 +83,9 @@ class Var:
     def __post_init__(self):
         if not self.name.isidentifier():
             raise ValueError(f"Var name {self.name!r} must be an identifier")
+        if self.name in C_KEYWORDS:
+            raise ValueError(f"Var name {self.name!r} is a C keyword: the generated C names a "
+                             "quantity by its name (a struct member)")  # fmt: skip
         if self.kind not in KINDS:
             raise ValueError(f"Var {self.name}: kind must be one of {', '.join(KINDS)}")
         if not self.doc:
