@@ -7,7 +7,15 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from acdrive._figures import DPI, ENVELOPE_BINS, envelope, new_figure, save_figure
+from acdrive._figures import (
+    DPI,
+    ENVELOPE_BINS,
+    TIME_PLOT_MARGINS_IN,
+    envelope,
+    new_figure,
+    plot_trace,
+    save_figure,
+)
 from acdrive._frames import K_PEAK
 from acdrive.drives.dfim import _figures as dfim_figures
 from acdrive.drives.dfim._figures import current_limits, drive_figures
@@ -78,6 +86,40 @@ def test_short_traces_are_drawn_as_given():
     y = np.sin(t)
     t_kept, y_kept = envelope(t, y)
     assert t_kept is t and y_kept is y
+
+
+def _written_columns(ax, t):
+    """Pixel column of the written image (``DPI``) of each time ``t`` in ``ax``, from the axes'
+    position and limits alone."""
+    fig = ax.figure
+    width_px = fig.get_figwidth() * DPI
+    box = ax.get_position()
+    x0, x1 = ax.get_xlim()
+    return np.floor(box.x0 * width_px + (np.asarray(t) - x0) / (x1 - x0) * box.width * width_px)
+
+
+@pytest.mark.parametrize("margins", [TIME_PLOT_MARGINS_IN, None])
+def test_saved_trace_keeps_every_pixel_columns_highest_and_lowest_sample(tmp_path, margins):
+    n = 140_000
+    rng = np.random.default_rng(7)
+    t = 1e-4 * np.arange(n)
+    y = np.sin(2 * np.pi * 0.3 * t) + 0.3 * rng.standard_normal(n)
+    y[rng.choice(n, 60, replace=False)] += rng.choice([-4.0, 4.0], 60)  # one-sample spikes
+    fig, ax = new_figure((7, 3.5), margins_in=margins)
+    line = plot_trace(ax, t, y, lw=1, label="trace")
+    ax.set(xlabel="time (s)", ylabel="y", title="a long trace")
+    ax.legend()
+    save_figure(tmp_path / "trace.png", fig)
+    t_drawn, y_drawn = np.asarray(line.get_xdata()), np.asarray(line.get_ydata())
+    index = _kept_indices(t, t_drawn)
+    assert np.array_equal(y_drawn, y[index]), "drawn samples are the trace's own, in time order"
+    assert t_drawn.size < n / 10
+    column, drawn_column = _written_columns(ax, t), _written_columns(ax, t_drawn)
+    for c in np.unique(column):
+        full, drawn = y[column == c], y_drawn[drawn_column == c]
+        assert drawn.max() == full.max() and drawn.min() == full.min(), f"pixel column {c}"
+        assert drawn.size <= 4
+    assert t_drawn[0] == t[0] and t_drawn[-1] == t[-1]
 
 
 # --- saving ----------------------------------------------------------------------------------
