@@ -114,6 +114,10 @@ WIRES = {
     "bench-peers-dir": ("acdrive._bench.suite", "run_suite"),
     "bench-reference-cache": ("acdrive._bench.suite", "run_suite"),
     "bench-baseline": ("acdrive._bench.suite", "run_suite"),
+    **{
+        f"run-log-every-{case}": ("acdrive.drives.dfim._outcome", "run_scenario")
+        for case in ("zero", "text", "fraction", "too-large")
+    },
 }
 
 ROWS = [
@@ -129,7 +133,7 @@ ROWS = [
     ("pm-pwm", ["run", "{pm-pwm.toml}"], "converter.pwm_frequency_hz",
      ["1e-12 s", "whole number", "at most 10000 Hz"]),
     ("pm-duration", ["run", "{pm-duration.toml}"], "simulation.duration",
-     ["1e+12 s", "limit 2 GB"]),
+     ["1e+12 s", "limit 1e+09"]),  # the default log keeps 100,000 samples: the work is the bound
     ("pm-step-duration", ["run", "{pm-step-duration.toml}"], "simulation.duration",
      ["1e+12 s", "limit 2 GB"]),
     ("pm-step-substeps", ["run", "{pm-step-substeps.toml}"], "simulation.substeps",
@@ -194,6 +198,14 @@ ROWS = [
     ("identify-constant-speed", ["identify", "{constant-speed.csv}", "--kind", "mechanics",
                                  "--out", "{params.toml}"], "TEST_FILE_OR_SCENARIO: column 'w'",
      ["never changes", "100 rad/s", "two levels"]),  # fmt: skip
+    ("run-log-every-zero", ["run", "bodson-ramp", "--log-every", "0"], "--log-every",
+     [">= 1", "'0'"]),
+    ("run-log-every-text", ["run", "bodson-ramp", "--log-every", "often"], "--log-every",
+     ["integer", "'often'"]),
+    ("run-log-every-fraction", ["run", "bodson-ramp", "--log-every", "2.5"], "--log-every",
+     ["integer", "'2.5'"]),
+    ("run-log-every-too-large", ["run", "bodson-ramp", "--log-every", "70001"], "--log-every",
+     ["70000 control samples", "70001"]),
     # sweeps: a value of the wrong type is refused at load; a sweep with no valid variant fails
     ("sweep-wrong-type", ["sweep", "{sweep-type.toml}", "--out", "{out}", "--quiet"],
      "vary[0].values[0]", ["'fast'", "simulation.substeps", "must be an integer"]),

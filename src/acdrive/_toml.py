@@ -178,9 +178,12 @@ def simulation_span(sim: Section, duration: float, sample_time: float) -> tuple[
 
 def log_every_of(sim: Section, duration: float, sample_time: float) -> int:
     """``log_every`` of a ``[simulation]`` table: a positive integer at most the number of
-    control steps of the run (default 1)."""
-    log_every = sim.integer("log_every", 1)
+    control steps of the run (default: ``acdrive.sim._log_plan.default_log_every``, every sample
+    of a run of at most 100,000)."""
+    from acdrive.sim._log_plan import default_log_every
+
     steps = duration / sample_time  # a float: may be astronomically large
+    log_every = sim.integer("log_every", default_log_every(round(steps)) if math.isfinite(steps) else 1)
     if math.isfinite(steps) and log_every > round(steps):
         raise InputError(
             sim.field("log_every"),

@@ -38,18 +38,31 @@ def register(subparsers):
         "are in columns.md beside it",
     )
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument(
+        "--log-every",
+        metavar="K",
+        help="log every K-th control sample (an integer >= 1; default: the scenario's "
+        "simulation.log_every, else every sample of a run of at most 100,000 samples and every "
+        "k-th of a longer one so that at most 100,000 are kept)",
+    )
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
     from acdrive._progress import Progress
     from acdrive.drives import for_setup
-    from acdrive.scenarios._loader import load_scenario
+    from acdrive.scenarios._loader import build_setup, read_scenario
     from acdrive.sim import _codegen as codegen
 
-    setup = load_scenario(args.scenario)  # validates everything before any output exists
+    data = read_scenario(args.scenario)
+    setup = build_setup(data)  # validates everything before any output exists
     drive = for_setup(setup)
+    setup, plan = _log_choice(args.log_every, data, setup, drive)
     n_runs = drive.runs(setup)
+    if plan is not None:
+        runs = f"; each of {n_runs} runs" if n_runs > 1 else ""
+        print(f"running {setup.name}: {setup.duration:g} s, {plan.n_steps:,} samples{runs}; "
+              f"{plan.describe()}", flush=True)  # fmt: skip
     with (
         OutputFolder(args.out, setup.name) as output,  # --out checked before the simulation
         Progress(n_runs + 1, f"run {setup.name}") as bar,
@@ -67,9 +80,69 @@ def run(args) -> int:
         bar.advance()
         bar.phase("writing data" + (" and figures" if not args.no_figures else ""))
         summary = drive.write(outcome, output.staging, figures=not args.no_figures, fmt=args.format)
+        if plan is not None:
+            summary = _state_log(output.staging / "summary.json", summary, plan)
         target = output.publish()
         bar.advance()
     line, rows = drive.headline(outcome, summary)
     print(line)
     print_headline(rows, summary, target, args.format)
     return 0
+
+
+def _log_choice(flag, data: dict, setup, drive):
+    """(setup with the chosen ``log_every``, its ``LogPlan``; None where the drive cannot tell
+    its log before the run). ``--log-every`` wins over the scenario's ``simulation.log_every``,
+    which wins over the default the scenario loader applied."""
+    import dataclasses
+
+    from acdrive.errors import InputError
+    from acdrive.sim._compiled import LOG_BUDGET_BYTES
+    from acdrive.sim._log_plan import LogPlan, run_steps
+
+    chosen_by = "default"
+    simulation = data.get("simulation")
+    if isinstance(simulation, dict) and "log_every" in simulation:
+        chosen_by = "simulation.log_every"
+    has_log_every = hasattr(setup, "log_every")
+    if flag is not None:
+        if not has_log_every:
+            raise InputError("--log-every", f"scenario {setup.name!r} has no log to thin (its "
+                             "runs log what they compare)")  # fmt: skip
+        try:
+            every = int(flag)
+        except ValueError:
+            raise InputError("--log-every", f"must be an integer >= 1, got {flag!r}") from None
+        if every < 1:
+            raise InputError("--log-every", f"must be an integer >= 1, got {flag!r}")
+        steps = run_steps(setup.duration, setup.sample_time)
+        if every > steps:
+            raise InputError("--log-every", f"must not exceed the run's {steps} control samples, "
+                             f"got {every}")  # fmt: skip
+        setup = dataclasses.replace(setup, log_every=every)
+        chosen_by = "--log-every"
+    width = drive.log_width(setup) if has_log_every else None
+    if width is None:
+        return setup, None
+    plan = LogPlan(run_steps(setup.duration, setup.sample_time), setup.log_every, *width,
+                   chosen_by=chosen_by)  # fmt: skip
+    if plan.bytes > LOG_BUDGET_BYTES:
+        field = "--log-every" if chosen_by == "--log-every" else "simulation.log_every"
+        raise InputError(field, f"the log would take {plan.bytes / 1024**3:.3g} GB (limit "
+                         f"{LOG_BUDGET_BYTES / 1024**3:g} GB): log every k-th sample with a "
+                         "larger k")  # fmt: skip
+    return setup, plan
+
+
+def _state_log(path, summary: dict, plan) -> dict:
+    """summary.json at ``path`` (and ``summary``) with the run's log choice under ``log``."""
+    import json
+
+    from acdrive._output import strict_json
+
+    summary = dict(summary, log=plan.summary())
+    if path.is_file():
+        written = json.loads(path.read_text())
+        written["log"] = plan.summary()
+        path.write_text(strict_json(written, indent=2) + "\n")
+    return summary

@@ -52,6 +52,8 @@ class Drive:
     * ``build(setup)``: the drive's system of parts for one run, an object with ``system``
       (``acdrive.sim.System``) and ``initial()`` -> (initial states, held outputs): what a batch
       variant runs (a setup that compares several runs is refused with an ``InputError``).
+    * ``log_width(setup)``: (output values, event words) the loop logs per logged sample of one
+      run of ``setup`` (``acdrive.sim._log_plan.LogPlan``); None: not known before the run.
     * ``reducers(setup)``: the default on-line metrics of a batch or sweep
       (``acdrive.batch.Reducer``); ``verdict(setup, row)`` the batch row's ``stable`` column
       (None: the drive has no such verdict).
@@ -94,6 +96,9 @@ class Drive:
 
     def build(self, setup):
         raise NotImplementedError
+
+    def log_width(self, setup) -> tuple[int, int] | None:
+        return None
 
     def reducers(self, setup) -> list:
         return []

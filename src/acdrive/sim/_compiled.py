@@ -250,7 +250,7 @@ class CompiledSystem:
         for i, (part, names) in enumerate(self.system.event_names()):
             events[part] = {name: int(ECOUNT[i, b]) for b, name in enumerate(names)}
         return SystemResult(
-            t=t0 + np.arange(rows) * T_s * log_every,
+            t=t0 + (np.arange(rows) * log_every) * T_s,  # sample k at k T_s, whatever log_every
             data=LOG,
             columns=[c[0] for c in columns],
             units={c[0]: c[1] for c in columns},

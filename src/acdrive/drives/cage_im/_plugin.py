@@ -48,6 +48,13 @@ class CageIMDriveKind(Drive):
             raise InputError("compare", "a batch runs one controller per variant: no comparisons")
         return IMDrive(setup)
 
+    def log_width(self, setup: IMDriveSetup) -> tuple[int, int]:
+        from acdrive.drives.cage_im._drive import IMDrive
+
+        drive = IMDrive(setup)
+        ports = list(drive.log_ports().values())
+        return len(drive.system.log_columns(ports)), len(drive.system.event_names())
+
     def reducers(self, setup: IMDriveSetup) -> list:
         from acdrive.drives.cage_im._reducers import im_reducers
 

@@ -12,7 +12,7 @@ units in the key names where not SI; defaults in brackets):
     [simulation]  duration [0.2], sample_time [2e-5: the paper's 50 kHz], substeps [4] (steps
                   of the integrator per held segment), integrator ("rk4" | "rk6": classical
                   fourth-order or Butcher's sixth-order Runge-Kutta, ``sim.INTEGRATORS``)
-                  ["rk4"], log_every [1], metrics_from (s; start of the current-error window) [0]
+                  ["rk4"], log_every [every sample up to 100,000], metrics_from (s; start of the current-error window) [0]
     [machine]     machine ["delorenzo-im"; a built-in cage IM] or [machine.params]
                   (R_s, R_r, L_s, L_r, L_m, n_p): the nominal machine the controllers are
                   designed for; J [foc.J_ESTIMATE], viscous_friction, coulomb_friction [0],

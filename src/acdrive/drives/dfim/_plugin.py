@@ -51,6 +51,12 @@ class DFIMDriveKind(Drive):
             raise InputError("compare_modes", "a batch runs one mode per variant: no comparisons")
         return DFIMDrive(setup)
 
+    def log_width(self, setup: DriveSetup) -> tuple[int, int]:
+        from acdrive.drives.dfim._drive import DFIMDrive
+
+        drive = DFIMDrive(setup)
+        return len(drive.system.log_columns(drive.log_ports())), len(drive.system.event_names())
+
     def reducers(self, setup: DriveSetup) -> list:
         from acdrive.drives.dfim._reducers import dfim_reducers
 

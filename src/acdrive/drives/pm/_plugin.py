@@ -66,6 +66,16 @@ class PMDriveKind(Drive):
         built = build_scenario(setup)
         return _BatchRun(built.system, (built.initial, built.held))
 
+    def log_width(self, setup) -> tuple[int, int] | None:
+        from acdrive.drives.pm._entry import build_scenario
+
+        if isinstance(setup, CurrentStepSetup):
+            return None  # two runs of their own log (``_icad_step``)
+        built = build_scenario(setup)
+        return len(built.system.log_columns(list(built.log.values()))), len(
+            built.system.event_names()
+        )
+
     def reducers(self, setup) -> list:
         from acdrive.drives.pm._reducers import pm_reducers
 

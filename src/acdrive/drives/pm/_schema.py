@@ -22,7 +22,7 @@ broken rule raises ``InputError("<table>.<key>", "<rule>")`` (one line, before a
                   the current limit]
     [reference]   speed_rad_s | speed_rad_s_profile
     [sensors]     encoder_counts_per_rev [0: ideal], encoder_offset_rad [0]
-    [simulation]  duration, sample_time, substeps [4], log_every [1]
+    [simulation]  duration, sample_time, substeps [4], log_every [every sample up to 100,000]
 
 A current-step scenario (``kind = "current-step"``: seed 001's PMSG current subsystem under
 ICAD's controller, ``drives.pm._icad_step``) has instead:
@@ -51,6 +51,7 @@ from acdrive.drives.pm._setup import CONVERTERS, PMDriveSetup
 from acdrive.errors import InputError, require_nonnegative, require_positive
 from acdrive.machines._pmsm import PMSG_2MW, PMSGParams
 from acdrive.machines._record import electrical_fields
+from acdrive.sim._log_plan import default_log_every
 from acdrive.plant._sensors import check_counts_per_rev
 
 DRIVE = "pm"
@@ -151,8 +152,11 @@ def load(data: dict) -> PMDriveSetup | CurrentStepSetup:
         "duration": sim.number("duration", None, require_positive),
         "sample_time": sim.number("sample_time", None, require_positive),
         "substeps": sim.integer("substeps", 4),
-        "log_every": sim.integer("log_every", 1),
+        "log_every": sim.integer("log_every", 1) if sim.has("log_every") else None,
     }
+    if run["log_every"] is None:  # every sample up to 100,000, else every k-th (_log_plan)
+        steps = run["duration"] / run["sample_time"]
+        run["log_every"] = default_log_every(round(steps)) if math.isfinite(steps) else 1
     sim.done()
     top.done()
     try:
