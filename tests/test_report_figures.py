@@ -157,6 +157,22 @@ def _result(n=20_000, dt=1e-4):
     return DriveResult("synthetic", t, signals, dt, np.zeros(1))
 
 
+def test_drive_figures_drawn_in_turn_on_one_figure_are_those_of_figures_of_their_own(tmp_path):
+    result = _result()
+    synchronous = float(result.speed_rpm().max()) / 2  # crossed: the rotor-current figure too
+    limits = {"stator": 4.5, "rotor": 7.25}
+    (tmp_path / "shared").mkdir()
+    (tmp_path / "own").mkdir()
+    shared = dfim_figures.write_drive_figures(result, tmp_path / "shared", synchronous, limits)
+    own = drive_figures(result, synchronous, limits)
+    for name, fig in own.items():
+        save_figure(tmp_path / "own" / name, fig)
+    assert [path.name for path in shared] == list(own)
+    assert "fig7_rotor_currents.png" in own and len(own) == 5
+    for path in shared:
+        assert path.read_bytes() == (tmp_path / "own" / path.name).read_bytes(), path.name
+
+
 def _limit_lines(fig):
     """label -> y of the horizontal limit lines of the currents figure."""
     (ax,) = fig.axes
@@ -202,9 +218,11 @@ rotor_current_limit_pk = 7.5
     setup = load_scenario(path)
     assert current_limits(setup) == {"stator": 4.75, "rotor": 7.5}
     saved = {}
-    monkeypatch.setattr(dfim_figures, "save_figure", lambda p, fig: saved.setdefault(p.name, fig))
+    # the limit lines as each figure is saved (the time plots are drawn in turn on one figure)
+    monkeypatch.setattr(dfim_figures, "save_figure",
+                        lambda p, fig: saved.setdefault(p.name, _limit_lines(fig)))  # fmt: skip
     write_outcome(run_scenario(setup), tmp_path / "out")
-    assert _limit_lines(saved["fig6_currents.png"]) == {
+    assert saved["fig6_currents.png"] == {
         "4.75 A stator limit": 4.75,
         "7.5 A rotor limit": 7.5,
     }

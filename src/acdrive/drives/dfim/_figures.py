@@ -9,7 +9,13 @@ from pathlib import Path
 
 import numpy as np
 
-from acdrive._figures import TIME_PLOT_MARGINS_IN, new_figure, plot_trace, save_figure
+from acdrive._figures import (
+    TIME_PLOT_MARGINS_IN,
+    TimePlots,
+    new_figure,
+    plot_trace,
+    save_figure,
+)
 from acdrive.drives.dfim._result import DriveResult
 
 #: Colours of the stator and rotor curves of the current figures, and of their limit lines.
@@ -49,11 +55,20 @@ def limit_lines(limits_pk: dict[str, float]) -> list[tuple[float, str, str]]:
     ]
 
 
-def line_figure(curves, ylabel: str, title: str, limits=(), marker: float | None = None):
+#: size [in] of the single time plots
+TIME_PLOT_SIZE = (7, 3.5)
+
+
+def line_figure(curves, ylabel: str, title: str, limits=(), marker: float | None = None,
+                plots: TimePlots | None = None):  # fmt: skip
     """One time plot, not yet saved: ``curves`` is a list of (t, y, label[, style]) drawn as their
     envelopes; ``limits`` (value, label, colour) horizontal lines (``limit_lines``); an optional
-    vertical marker at synchronous speed."""
-    fig, ax = new_figure((7, 3.5), margins_in=TIME_PLOT_MARGINS_IN)
+    vertical marker at synchronous speed. Drawn on a figure of its own, or on the next plot of
+    ``plots`` (a ``TimePlots`` of ``TIME_PLOT_SIZE``: save it before the next)."""
+    if plots is None:
+        fig, ax = new_figure(TIME_PLOT_SIZE, margins_in=TIME_PLOT_MARGINS_IN)
+    else:
+        fig, ax = plots.next()
     for t, y, label, *style in curves:
         plot_trace(ax, t, y, *style, lw=1, label=label)
     for value, label, colour in limits:
@@ -72,6 +87,12 @@ def drive_figures(
     with ``current_limits_pk`` (Fig. 6; ``current_limits``), rotor phase currents X and Y around
     synchronous speed (Fig. 7); for several motors, speeds and torque commands (Figs. 12-13).
     Voltages and currents are motor 1's."""
+    plots = _drive_plots(result, synchronous_rpm, current_limits_pk)
+    return {name: line_figure(*args, **kwargs) for name, (args, kwargs) in plots.items()}
+
+
+def _drive_plots(result, synchronous_rpm, current_limits_pk) -> dict[str, tuple[tuple, dict]]:
+    """File name -> the (arguments, keyword arguments) of ``line_figure`` of ``drive_figures``."""
     t, n = result.t, result.n_motors
 
     def named(label, k):
@@ -83,18 +104,18 @@ def drive_figures(
                    (t, result.speed_rpm(k), named("speed", k))]  # fmt: skip
     currents = [(t, result.peak("i_s_mag"), "stator", _COLOURS["stator"]),
                 (t, result.peak("i_r_mag"), "rotor", _COLOURS["rotor"])]  # fmt: skip
-    figures = {
-        "fig4_speed.png": line_figure(speeds, "speed (rpm)",
-                                      f"{result.name}: speed (cf. Bodson Figs. 4, 12)"),
-        "fig5_voltages.png": line_figure(
+    plots = {
+        "fig4_speed.png": ((speeds, "speed (rpm)",
+                            f"{result.name}: speed (cf. Bodson Figs. 4, 12)"), {}),
+        "fig5_voltages.png": ((
             [(t, result.peak("v_s_mag"), "stator"), (t, result.peak("v_r_mag"), "rotor")],
-            "peak phase voltage (V)", "peak stator and rotor voltages (cf. Fig. 5)"),
-        "fig6_currents.png": line_figure(
-            currents, "peak phase current (A)", "peak stator and rotor currents (cf. Fig. 6)",
-            limits=limit_lines(current_limits_pk)),
-        "torque_commands.png": line_figure(
+            "peak phase voltage (V)", "peak stator and rotor voltages (cf. Fig. 5)"), {}),
+        "fig6_currents.png": ((
+            currents, "peak phase current (A)", "peak stator and rotor currents (cf. Fig. 6)"),
+            {"limits": limit_lines(current_limits_pk)}),
+        "torque_commands.png": ((
             [(t, result.signal("tau_com", k), f"motor {k + 1}") for k in range(n)],
-            "torque command (N m)", "torque commands (cf. Fig. 13)"),
+            "torque command (N m)", "torque commands (cf. Fig. 13)"), {}),
     }  # fmt: skip
     t_sync = first_crossing(result, synchronous_rpm)
     if t_sync is not None:
@@ -103,19 +124,22 @@ def drive_figures(
             (t[w], result.signal("i_rx")[w], "phase X"),
             (t[w], result.signal("i_ry")[w], "phase Y"),
         ]
-        figures["fig7_rotor_currents.png"] = line_figure(
-            curves, "rotor current (A)",
-            "rotor currents X, Y around synchronous speed (cf. Fig. 7)", marker=t_sync)  # fmt: skip
-    return figures
+        title = "rotor currents X, Y around synchronous speed (cf. Fig. 7)"
+        plots["fig7_rotor_currents.png"] = ((curves, "rotor current (A)", title), {"marker": t_sync})
+    return plots
 
 
 def write_drive_figures(
     result: DriveResult, folder: Path, synchronous_rpm: float, current_limits_pk: dict[str, float]
 ) -> list[Path]:
-    """Save ``drive_figures`` into ``folder``; returns their paths."""
+    """Save ``drive_figures`` into ``folder``, drawn in turn on one ``TimePlots``; returns their
+    paths."""
     folder = Path(folder)
-    figures = drive_figures(result, synchronous_rpm, current_limits_pk)
-    return [_save(fig, folder / name) for name, fig in figures.items()]
+    shared = TimePlots(TIME_PLOT_SIZE)
+    return [
+        _save(line_figure(*args, **kwargs, plots=shared), folder / name)
+        for name, (args, kwargs) in _drive_plots(result, synchronous_rpm, current_limits_pk).items()
+    ]
 
 
 def write_comparison_figures(results: dict, folder: Path, rotor_limit_pk: float) -> list[Path]:
@@ -127,11 +151,13 @@ def write_comparison_figures(results: dict, folder: Path, rotor_limit_pk: float)
     speeds = [(first.t, first.reference_rpm(), "reference", "k--")]
     speeds += [(r.t, r.speed_rpm(), labels.get(m, m)) for m, r in results.items()]
     currents = [(r.t, r.peak("i_r_mag"), labels.get(m, m)) for m, r in results.items()]
+    shared = TimePlots(TIME_PLOT_SIZE)
     return [
-        _save(line_figure(speeds, "speed (rpm)", "speed, voltage vs current command (cf. Figs. 8, 10)"),
+        _save(line_figure(speeds, "speed (rpm)", "speed, voltage vs current command (cf. Figs. 8, 10)",
+                          plots=shared),
               folder / "fig8_speed_vc_cc.png"),
         _save(line_figure(currents, "peak rotor current (A)", "peak rotor current (cf. Figs. 9, 11)",
-                          limits=limit_lines({"rotor": rotor_limit_pk})),
+                          limits=limit_lines({"rotor": rotor_limit_pk}), plots=shared),
               folder / "fig9_rotor_current_vc_cc.png"),
     ]  # fmt: skip
 
