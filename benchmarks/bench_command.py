@@ -18,6 +18,12 @@ children included once they are waited for):
   (``XDG_CACHE_HOME`` a fresh temporary folder, ``NUMBA_CACHE_DIR`` unset), M times; target
   6 s wall on an idle machine. Its CPU time is given too: on a loaded machine the wall time
   grows with the load, the CPU time much less.
+* **durations** (``--durations``): ``acdrive run --no-figures`` of copies of SCENARIO lasting
+  1, 10 and 100 s (its ``simulation.duration`` replaced), N times each, interleaved: the
+  process's CPU seconds per simulated second at each duration, the spread of those (target: the
+  largest at most 1.2 times the smallest, issue 39 item 4), and the CPU per simulated second
+  beyond the 1 s run, ``(cpu(D) - cpu(1 s)) / (D - 1 s)``, which leaves out what every process
+  pays once. The log each run keeps is the default (``acdrive.sim._log_plan``).
 * **floors**: the libraries' own costs, each a process of its own, N times: the
   interpreter (``python -c pass``), ``import numpy``, ``import numba``, ``import numba`` and
   one call of a function numba loads from its on-disk cache (the first such load initialises
@@ -43,9 +49,12 @@ import tempfile
 import time
 from pathlib import Path
 
-#: issue 21 item 3: whole-process CPU seconds of a warm run, and wall seconds of the first run
+#: whole-process CPU seconds of a warm run (with figures: issue 39 item 5; without: issue 21
+#: item 3), wall seconds of the first run (issue 21 item 3), and the largest over the smallest
+#: CPU per simulated second from 1 s to 100 s (issue 39 item 4)
 TARGETS = {
-    "warm_run_with_figures_cpu_s": 1.0,
+    "warm_run_with_figures_cpu_s": 0.6,
+    "cpu_per_simulated_second_spread": 1.2,
     "warm_run_no_figures_cpu_s": 0.6,
     "first_run_empty_cache_wall_s": 6.0,
 }
@@ -151,6 +160,52 @@ def warm_runs(scenario: str, runs: int, out: Path, baseline: str | None = None) 
     return out
 
 
+#: simulated seconds of the ``--durations`` runs
+DURATIONS_S = (1.0, 10.0, 100.0)
+
+
+def duration_runs(scenario: str, runs: int, scratch: Path) -> dict:
+    """``acdrive run --no-figures`` of copies of ``scenario`` lasting each of ``DURATIONS_S``
+    (module docstring), after one untimed run of each."""
+    import re
+
+    from acdrive.scenarios._loader import builtin_names, builtin_text
+
+    text = builtin_text(scenario) if scenario in builtin_names() else Path(scenario).read_text()
+    files = {}
+    for duration in DURATIONS_S:
+        copy, n = re.subn(r"(?m)^duration\s*=.*$", f"duration = {duration!r}", text, count=1)
+        if n != 1:
+            raise SystemExit(f"--durations: no 'duration = ...' line in {scenario}")
+        files[duration] = scratch / f"duration-{duration:g}s.toml"
+        files[duration].write_text(copy)
+    command = {d: [ACDRIVE, "run", str(f), "--no-figures", "--out", str(scratch / "durations")]
+               for d, f in files.items()}  # fmt: skip
+    for cmd in command.values():
+        timed(cmd)
+    cpu = {d: [] for d in DURATIONS_S}
+    for _ in range(runs):
+        for d, cmd in command.items():
+            cpu[d].append(timed(cmd)["cpu_s"])
+    median = {d: statistics.median(v) for d, v in cpu.items()}
+    per_second = {d: median[d] / d for d in DURATIONS_S}
+    first = DURATIONS_S[0]
+    out = {
+        "cpu_s": {f"{d:g}": spread(v) for d, v in cpu.items()},
+        "cpu_per_simulated_second": {f"{d:g}": per_second[d] for d in DURATIONS_S},
+        "cpu_per_simulated_second_beyond_first": {
+            f"{d:g}": (median[d] - median[first]) / (d - first) for d in DURATIONS_S[1:]
+        },
+    }
+    largest, smallest = max(per_second.values()), min(per_second.values())
+    out["cpu_per_simulated_second_spread"] = {
+        "value": largest / smallest,
+        "target": TARGETS["cpu_per_simulated_second_spread"],
+        "met": largest / smallest <= TARGETS["cpu_per_simulated_second_spread"],
+    }
+    return out
+
+
 def cold_runs(scenario: str, runs: int, out: Path) -> dict:
     """The first run after an empty cache, ``runs`` times, each with a cache folder of its own."""
     env = {k: v for k, v in os.environ.items()
@@ -201,6 +256,11 @@ def main(argv=None) -> int:
         help="the src folder of another acdrive checkout (e.g. a git worktree of main): its warm "
         "runs are timed interleaved with this one's",
     )
+    parser.add_argument(
+        "--durations",
+        action="store_true",
+        help="also time copies of the scenario lasting 1, 10 and 100 s (CPU per simulated second)",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON only")
     args = parser.parse_args(argv)
     if args.runs < 1 or args.cold_runs < 0:
@@ -219,6 +279,8 @@ def main(argv=None) -> int:
         report["warm"] = warm_runs(args.scenario, args.runs, scratch / "out", args.baseline)
         if args.cold_runs:
             report["cold"] = cold_runs(args.scenario, args.cold_runs, scratch / "out")
+        if args.durations:
+            report["durations"] = duration_runs(args.scenario, args.runs, scratch)
         report["floors_cpu_s"] = floors(args.runs, scratch)
     report["load_after"] = load()
     if args.json:
@@ -232,6 +294,16 @@ def main(argv=None) -> int:
         target = f" target {r['target']:g} -> {met}" if "target" in r else ""
         print(f"  {name:<34} min {r['min']:.3f}  median {r['median']:.3f}  max {r['max']:.3f}"
               f"  (n={r['n']}){target}")  # fmt: skip
+    if "durations" in report:
+        durations = report["durations"]
+        print("  CPU per simulated second (median process CPU / duration; beyond the 1 s run):")
+        for d, value in durations["cpu_per_simulated_second"].items():
+            beyond = durations["cpu_per_simulated_second_beyond_first"].get(d)
+            extra = f"  beyond 1 s {beyond * 1e3:.2f} ms" if beyond is not None else ""
+            print(f"    {d:>4} s  {value * 1e3:.2f} ms{extra}")
+        r = durations["cpu_per_simulated_second_spread"]
+        met = "met" if r["met"] else "NOT met"
+        print(f"    largest / smallest {r['value']:.2f}  target {r['target']:g} -> {met}")
     print("  floors (CPU s, median):")
     for name, r in report["floors_cpu_s"].items():
         print(f"    {name:<44} {r['median']:.3f}  (min {r['min']:.3f}, max {r['max']:.3f})")
