@@ -25,6 +25,7 @@ from pathlib import Path
 from acdrive.drives.pm import _build, _icad_step, _metrics
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._setup import PMDriveSetup
+from acdrive.sim._step_response import headline_rows
 from acdrive.sim._timing import run_timing, simulated_in
 
 #: labels of the results of one scenario, by kind
@@ -159,6 +160,7 @@ def headline(outcome: PMOutcome, summary: dict) -> tuple[str, list[tuple[str, st
     )
     rows = [
         ("MTPA at full current until", bound),
+        *headline_rows(summary["step_response"], "rad_s"),
         ("speed error, final", f"{summary['speed_error_final_rad_s']:.3g} rad/s"),
         ("current peak", current),
         ("d current (phase peak)", d_current),

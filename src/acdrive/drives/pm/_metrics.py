@@ -17,6 +17,10 @@ field weakening). A figure over the whole run ("min", "max", "peak") is an extre
 transient's (a step's); its steady value is the "final" figure beside it: the d current and the
 voltage command's use of the references' limit m V_dc / sqrt(2) are given both ways, the
 extreme with its instant (``..._time_s``; before ``final_window_from_s``: a transient's).
+The speed error RMS and largest |error| are taken over the whole run, the intended reference
+steps included; how the speed answers each step of its reference and of the load (rise time,
+overshoot, settling time, steady-state error, load-step dip and recovery) is ``step_response``
+(``sim._step_response``, in rad/s).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import numpy as np
 from acdrive._frames import K_PEAK
 from acdrive.drives.pm._build import build
 from acdrive.drives.pm._setup import PMDriveSetup
+from acdrive.sim._step_response import events, step_response
 
 #: the final window: the last 10 % of the run
 FINAL_FRACTION = 0.1
@@ -79,7 +84,13 @@ def summary(setup: PMDriveSetup, result, log: dict | None = None) -> dict:
         "final_window_from_s": float(t[final][0]),
         "voltage_limited_fraction": float(np.mean(margin < 0.0)),
         **event_totals(result),
+        "step_response": step_response(t, s["w"], s["w_ref"], step_events(setup)),
     }
+
+
+def step_events(setup: PMDriveSetup) -> list[dict]:
+    """The speed-reference changes and load steps of ``setup`` (``sim._step_response.events``)."""
+    return events(setup.speed_reference, {"load torque": (setup.load, "N m")}, setup.duration)
 
 
 def event_totals(result) -> dict:
