@@ -59,7 +59,9 @@ at zero (a demagnetised machine; the IFOC reports ``unmagnetised`` while the flu
   ``STEADY_FRACTION`` of the run, the largest deviation after each load change, the steady torque balance
   tau_e - (tau_L + k_b w + B w + tau_c tanh(w / W_COULOMB)); ``speed_outcome``: each disturbance
   of the scenario (load, brake, DC link) judged for largest error, recovery, reversal and stall
-  by the DFIM drive's rule (``sim._recovery``, in rpm);
+  by the DFIM drive's rule (``sim._recovery``, in rpm); ``step_response``: rise time,
+  overshoot, settling time and steady-state error after each speed-reference change, dip and
+  recovery after each load or brake step (``sim._step_response``, in rad/s);
 * the saturated ramp of (21) (a speed step with ``speed-p``): the ideal response with perfect
   current control and no friction is the constant-torque ramp w_0 + (tau_max / J)(t - t_step)
   while k_p (w_ref - w) > tau_max, until t_sat = t_step + J (w_ref - w_0 - tau_max / k_p) /

@@ -3,6 +3,7 @@ each computed from the summary the run wrote (``drives.cage_im._outputs``)."""
 
 from __future__ import annotations
 
+from acdrive.sim._step_response import headline_rows
 from acdrive.sim._timing import simulated_in
 
 
@@ -50,6 +51,8 @@ def _rows(summary: dict, setup) -> list[tuple[str, str]]:
                     ),
                 )
             )
+        if "step_response" in run:
+            rows += headline_rows(run["step_response"], "rad_s", f"{label}: " if several else "")
         if "speed_final_rad_s" in run:
             text = (
                 f"{run['speed_final_rad_s']:.2f} rad/s for "

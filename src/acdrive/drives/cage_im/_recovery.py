@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from acdrive.sim._metrics import RPM_PER_RAD_S
+from acdrive.sim._step_response import events
 from acdrive.sim._recovery import (
     POSITION_RULE,
     POSITION_SPEED_NOT_JUDGED,
@@ -76,3 +77,13 @@ def im_position_outcome(result) -> dict:
     return {"rule": POSITION_RULE, "windows_s": [[a, min(b, float(t[-1]))] for a, b in windows],
             "speed_not_judged": POSITION_SPEED_NOT_JUDGED, "disturbances": found,
             "warnings": warnings}  # fmt: skip
+
+
+def im_step_events(setup) -> list[dict]:
+    """The speed-reference changes and load steps (the active load torque and the brake
+    coefficient; none on a held shaft) of a cage-IM speed ``setup``
+    (``sim._step_response.events``)."""
+    m = setup.mechanics
+    loads = ({"load torque": (m.load, "N m"), "brake coefficient": (m.brake, "N m s/rad")}
+             if m.free else {})  # fmt: skip
+    return events(setup.speed_reference, loads, setup.duration)

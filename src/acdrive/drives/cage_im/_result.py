@@ -194,9 +194,10 @@ class IMDriveResult(Result):
         """The speed figures of the module docstring; the speed error over the whole run and
         where tracking is expected (``sim._metrics.speed_tracking`` under
         ``im_tracking_rule``: the batch's figures of the same names) with ``speed_tracking``."""
-        from acdrive.drives.cage_im._recovery import im_speed_outcome
+        from acdrive.drives.cage_im._recovery import im_speed_outcome, im_step_events
         from acdrive.drives.cage_im._tracking import im_tracking_rule
         from acdrive.sim._metrics import speed_tracking
+        from acdrive.sim._step_response import step_response
 
         t, w, w_ref = self.t, self.signal("w"), self.signal("w_ref")
         steady = _steady_mask(t)
@@ -216,6 +217,7 @@ class IMDriveResult(Result):
             out["speed_overshoot_rad_s"] = float(np.max(np.sign(final_ref) * (w - final_ref)))
         out["load_changes"] = [self._deviation(tc, w) for tc in self.load_changes()]
         out["speed_outcome"] = im_speed_outcome(self, mask)
+        out["step_response"] = step_response(t, w, w_ref, im_step_events(self.setup))
         tau_e, tau_l, tau_f = (
             self.signal(n)[steady] for n in ("tau_e", "tau_load", "tau_friction")
         )

@@ -1,11 +1,13 @@
 """The lines ``acdrive run`` prints for a DFIM drive run, each computed from its summary: the speed
 tracking error where tracking is expected (``acdrive.sim._metrics``: the intended reference steps
-and their settling are excluded, and said so), the same over the whole run, peak currents against
+and their settling are excluded, and said so), motor 1's step responses
+(``acdrive.sim._step_response``), the same over the whole run, peak currents against
 their limits, the relay's closing, events."""
 
 from __future__ import annotations
 
 from acdrive.drives.dfim._outcome import MODE_SUFFIX
+from acdrive.sim._step_response import headline_rows
 from acdrive.sim._timing import simulated_in
 
 
@@ -57,6 +59,10 @@ def headline(outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
         ]
     else:
         rows = [("speed tracking", tracking_row(summary["speed_tracking"]))]
+    for mode in outcome.results:
+        key = "step_response" if len(outcome.results) == 1 else f"step_response_{MODE_SUFFIX[mode]}"
+        label = f"{mode}: " if len(outcome.results) > 1 else ""
+        rows += headline_rows(summary[key], "rpm", label)
     rows.append(("speed error, whole run", whole_run_row(summary)))
     rows += [
         (

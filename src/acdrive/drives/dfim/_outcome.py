@@ -15,7 +15,7 @@ import numpy as np
 from acdrive._arguments import Function, Instance, Table, checked
 from acdrive.drives._registry import Setup
 from acdrive.drives.dfim._period import control_period_warnings
-from acdrive.drives.dfim._recovery import speed_outcome
+from acdrive.drives.dfim._recovery import speed_outcome, step_outcome
 from acdrive.drives.dfim._result import DriveResult
 from acdrive.drives.dfim._setup import DriveSetup, simulate
 from acdrive.drives.dfim._tracking import tracking_rule
@@ -285,6 +285,10 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
         warnings += speed.pop("warnings")
         key = "speed_outcome" if len(results) == 1 else f"speed_outcome_{MODE_SUFFIX[mode]}"
         summary[key] = speed
+    for mode, result in results.items():  # each motor's step responses (suffix: the batch's)
+        key = "step_response" if len(results) == 1 else f"step_response_{MODE_SUFFIX[mode]}"
+        for k in range(result.n_motors):
+            summary[key + ("" if k == 0 else f"_m{k}")] = step_outcome(result, setup, k)
     sync = synchronisation_summary(first, setup)
     if sync is not None:
         summary["synchronisation"] = sync

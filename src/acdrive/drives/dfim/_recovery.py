@@ -9,6 +9,7 @@ import math
 
 from acdrive.sim._metrics import RPM_PER_RAD_S
 from acdrive.sim._recovery import RULE, _departures, _steps, judge_speed
+from acdrive.sim._step_response import events, step_response
 
 
 def disturbances(setup) -> list[dict]:
@@ -57,3 +58,17 @@ def speed_outcome(result, rules_masks: list, setup, who: str = "") -> dict:
         warnings += judged["warnings"]
         end.append(judged["end_of_run"])
     return {"rule": RULE, "disturbances": found, "end_of_run": end, "warnings": warnings}
+
+
+def step_events(setup, k: int) -> list[dict]:
+    """The speed-reference changes and load steps of motor ``k`` of a DFIM ``setup``
+    (``sim._step_response.events``, described in rpm)."""
+    m = setup.motors[k]
+    return events(m.speed_reference, {"load torque": (m.load_torque, "N m")}, setup.duration,
+                  speed_unit="rpm", speed_scale=RPM_PER_RAD_S)  # fmt: skip
+
+
+def step_outcome(result, setup, k: int) -> dict:
+    """Motor ``k``'s ``step_response`` (``sim._step_response``) of a DFIM ``result``, in rpm."""
+    return step_response(result.t, result.signal("w", k), result.signal("w_ref", k),
+                         step_events(setup, k), scale=RPM_PER_RAD_S, unit="rpm")  # fmt: skip
