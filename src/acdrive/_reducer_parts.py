@@ -5,7 +5,8 @@ One "stats" part (peak, mean, RMS, exceed count, final value, one channel per si
 reference, window and limit; its step generated for its channels by ``_stats_source``), one
 part per oscillation metric (``oscillation_step``: the band-limited RMS in two late windows) and
 one per speed error (``speed_error_step``: the kernel of ``sim._metrics`` that a single run's
-summary runs on its logged samples).
+summary runs on its logged samples) and one per step response (``step_response_step``: the
+kernel of ``sim._step_response``, the figures a single run's summary computes).
 
 ``Reducer`` is the metric these parts compute, as a batch or a drive's robustness map declares it
 (re-exported by ``acdrive.batch``). It lives here, below the drives, because a drive names its
@@ -33,7 +34,18 @@ from acdrive.sim._metrics import (
     speed_error_update,
 )
 
-REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error")
+from acdrive.sim._step_response import (
+    EVENT_PARAMS,
+    EVENT_STATES,
+    NOT_YET,
+    figures,
+    flat,
+    initial_state,
+    step_response_update,
+)
+
+REDUCER_KINDS = ("peak", "mean", "rms", "exceed", "final", "oscillation", "speed_error",
+                 "step_response")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -46,7 +58,10 @@ class Reducer:
     the run; also ``<name>_growth``: the ratio to the RMS over the ``window`` s before),
     ``speed_error`` (``signal`` a speed, ``reference`` its reference, ``gate`` the relay state or
     None: the columns of ``sim._metrics.speed_error_figures`` in ``unit``, ``suffix`` appended,
-    the tracking window by ``rule``; ``name`` is not used). ``x`` is
+    the tracking window by ``rule``; ``name`` is not used), ``step_response`` (``signal`` a
+    speed, ``reference`` its reference, ``steps`` the events of ``sim._step_response.events``,
+    each as a tuple of its (key, value) items: the columns of ``sim._step_response.flat`` in
+    ``unit``, ``suffix`` appended; ``name`` is not used). ``x`` is
     ``signal`` ("part.output") minus ``reference`` if given; a space vector's magnitude. The
     window is [``start``, ``stop``] (``stop`` None: the end of the run). The value is multiplied
     by ``scale`` (e.g. rad/s -> rpm); ``limit`` is in the signal's unit.
@@ -66,6 +81,12 @@ class Reducer:
     rule: TrackingRule | None = None
     unit: str = "rpm"
     suffix: str = ""
+    steps: tuple = ()
+
+    def step_events(self) -> list[dict]:
+        """The events of a ``step_response`` reducer, as ``sim._step_response.events`` gives
+        them."""
+        return [dict(e) for e in self.steps]
 
     def column_units(self, signal_unit: str) -> dict[str, str]:
         """Column -> unit of this reducer's metrics, given the unit of its signal: the signal's
@@ -74,7 +95,7 @@ class Reducer:
         counts and ratios dimensionless; a speed error's columns by their names."""
         from acdrive.columns import unit_from_name
 
-        if self.kind == "speed_error":
+        if self.kind in ("speed_error", "step_response"):
             return {k: unit_from_name(k.removesuffix(self.suffix)) for k in self.columns()}
         value = signal_unit if abs(self.scale) == 1.0 else unit_from_name(self.name)
         if self.kind == "exceed":
@@ -86,8 +107,33 @@ class Reducer:
         if self.kind == "speed_error":
             state = np.ones(len(SPEED_ERROR_STATES))
             return [k + self.suffix for k in speed_error_figures(state, 1.0, self.unit)]
+        if self.kind == "step_response":
+            return list(self.reduce(initial_state(len(self.steps))))
         extra = {"peak": ["_time"], "exceed": ["_first_time"], "oscillation": ["_growth"]}
         return [self.name] + [self.name + s for s in extra.get(self.kind, [])]
+
+    def reduce(self, state) -> dict:
+        """A ``step_response`` reducer's columns from its part's final state."""
+        found = self.step_events()
+        step = {"events": figures(found, np.asarray(state), abs(self.scale), self.unit)}
+        return {k + self.suffix: v for k, v in flat(step, self.unit).items()}
+
+
+#: an over-limit count counts the samples more than this fraction above the limit (1 %): a
+#: current loop at its limit rides on it within its ripple and rounding (the Bodson drive's
+#: 6.002 A peak on a 6 A limit, +0.04 %), which is no excursion
+OVER_LIMIT_TOLERANCE = 0.01
+
+
+def over_limit(name: str, signal: str, limit: float) -> Reducer:
+    """The ``exceed`` reducer ``name`` counting the samples of |``signal``| above ``limit`` (in
+    the signal's unit) by more than OVER_LIMIT_TOLERANCE."""
+    return Reducer(name, "exceed", signal, limit=limit * (1.0 + OVER_LIMIT_TOLERANCE))
+
+
+def as_steps(found: list[dict]) -> tuple:
+    """``Reducer.steps`` of the events ``found`` (``sim._step_response.events``)."""
+    return tuple(tuple(e.items()) for e in found)
 
 
 REDUCER_PARAMS = Layout(
@@ -386,3 +432,45 @@ def _speed_error_class(unit: str, gated: bool, n_windows: int) -> type:
             },
         )
     return _SPEED_ERROR_CLASSES[key]
+
+
+@jit
+def step_response_step(t, T_s, u, p, s, y):
+    """The step-response figures (``sim._step_response.step_response_update``, the rule a single
+    run's summary applies to its logged samples) on line: inputs w, w_ref."""
+    logged, t = _logged_time(t, T_s, p[0])
+    if not logged:
+        return 0
+    step_response_update(t, u[0], u[1], p[1:], s)
+    return 0
+
+
+_STEP_RESPONSE_CLASSES: dict[tuple, type] = {}
+
+
+def _step_response_class(unit: str, n_events: int) -> type:
+    """The step-response part reading a speed in ``unit`` for ``n_events`` events."""
+    key = (unit, n_events)
+    if key not in _STEP_RESPONSE_CLASSES:
+        params = [real("every", "", "the metric reads every every-th control sample")]
+        states, initial = [], {}
+        for j in range(n_events):
+            params += [real(f"{n}{j}", u, f"event {j}: {d}") for n, u, d in EVENT_PARAMS]
+            states += [real(f"{n}{j}", u, f"event {j}: {d}") for n, u, d in EVENT_STATES]
+            initial |= {f"{n}{j}": v for n, v in zip(
+                (n for n, _, _ in EVENT_STATES), initial_state(1), strict=True) if v == NOT_YET}
+        _STEP_RESPONSE_CLASSES[key] = type(
+            "Reducer_step_response",
+            (SampledPart,),
+            {
+                "__doc__": "On-line step-response figures of a speed (acdrive.batch).",
+                "FACTORY_KEY": ("step_response", key),
+                "PARAMS": Layout(*params),
+                "STATES": Layout(*states),
+                "INPUTS": Layout(real("x", unit, "speed"), real("ref", unit, "speed reference")),
+                "OUTPUTS": Layout(),
+                "INITIAL": initial,
+                "step": step_response_step,
+            },
+        )
+    return _STEP_RESPONSE_CLASSES[key]

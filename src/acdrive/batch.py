@@ -75,6 +75,7 @@ from acdrive._reducer_parts import (
     Reducer,
     _reducer_class,
     _speed_error_class,
+    _step_response_class,
     _stats_class,
     band_coefficients,
 )
@@ -85,6 +86,7 @@ from acdrive.sim._metrics import (
     TrackingRule,
     speed_error_figures,
 )
+from acdrive.sim._step_response import EVENT_PARAMS, EVENT_STATES, event_params
 from acdrive.sim._system import System
 
 __all__ = [
@@ -125,6 +127,8 @@ def check_reducer(r: Reducer, where: str) -> Reducer:
         raise InputError(f"{where}.window", "window must be > 0, start and limit >= 0")
     if r.stop is not None and r.stop <= r.start:
         raise InputError(f"{where}.stop", "must be later than start")
+    if r.kind == "step_response" and r.reference is None:
+        raise InputError(f"{where}.reference", "a step response needs the speed's reference")
     lo, hi = r.band_hz
     if not 0 < lo < hi:
         raise InputError(f"{where}.band_hz", "must be two frequencies 0 < low < high")
@@ -383,6 +387,18 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
                 wires.append((gate, part.inp.gate))
             served.append((part.name, 0))
             continue
+        if r.kind == "step_response":
+            found = r.step_events()
+            cls = _step_response_class(x.var.unit, len(found))
+            values = {"every": float(every)}
+            for j, v in enumerate(event_params(found).reshape(len(found), -1)):
+                values |= {f"{n}{j}": float(a) for (n, _, _), a in zip(EVENT_PARAMS, v,
+                                                                         strict=True)}  # fmt: skip
+            part = cls(f"{REDUCER_PREFIX}step_response{len(served)}", **values)
+            parts.append(part)
+            wires += [(x, part.inp.x), (ref, part.inp.ref)]
+            served.append((part.name, 0))
+            continue
         stop = duration if r.stop is None else min(r.stop, duration)
         start, split, a_hp, b_lp = r.start, 0.0, 0.0, 0.0
         kind = "oscillation" if r.kind == "oscillation" else "stats"
@@ -448,6 +464,8 @@ def _reduce(r: Reducer, s: np.ndarray, n_ok: bool) -> dict:
     if r.kind == "speed_error":
         figures = speed_error_figures(s, abs(r.scale), r.unit)
         return {k + r.suffix: nan if v is None else v for k, v in figures.items()}
+    if r.kind == "step_response":
+        return r.reduce(s[: len(r.steps) * len(EVENT_STATES)])
     if r.kind == "oscillation":
         late = math.sqrt(s[7] / s[8]) * abs(r.scale) if s[8] else nan
         early = math.sqrt(s[5] / s[6]) * abs(r.scale) if s[6] else nan
@@ -647,7 +665,8 @@ def simulate_batch(base, variants, *, reducers=None, log=None, log_every: int | 
             for r, (part, offset) in m.reducers:
                 units.update(r.column_units(_port(first.system, r.signal, "signal").var.unit))
                 a = first.system.slots[part].s[0] + offset
-                width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES))
+                width = max(_NS, len(OSC_STATES), len(SPEED_ERROR_STATES),
+                            len(r.steps) * len(EVENT_STATES))  # fmt: skip
                 values = _reduce(r, S[b, a : a + width], ok)
                 row.update({k: float(x) for k, x in values.items()})
             for e, (part, events) in enumerate(names):

@@ -196,32 +196,31 @@ def step_response_update(t, w, w_ref, p, s):
     """Take one logged sample (time ``t`` [s], speed ``w``, its reference ``w_ref``) into the
     state ``s`` of every event whose window holds it (``p``: ``event_params``)."""
     for j in range(p.size // _NE_P):
-        q, k = _NE_P * j, _NE_S * j
-        if not (p[q + 1] <= t < p[q + 2]):
-            continue
-        e = w_ref - w
-        s[k + _N] += 1.0
-        if t >= p[q + 3]:
-            s[k + _SUM] += e
-            s[k + _N_STEADY] += 1.0
-        if p[q] == REFERENCE_CHANGE:
-            x = (w - p[q + 4]) / (p[q + 5] - p[q + 4])
-            if s[k + _RISE_FROM] < 0.0 and x >= RISE_FROM:
-                s[k + _RISE_FROM] = t
-            if s[k + _RISE_TO] < 0.0 and x >= RISE_TO:
-                s[k + _RISE_TO] = t
-            over = x - 1.0
-            off = abs(w - p[q + 5])
-        else:  # a load step
-            over = abs(e)
+        q = _NE_P * j
+        k = _NE_S * j
+        if p[q + 1] <= t < p[q + 2]:
+            e = w_ref - w
+            s[k + _N] += 1.0
+            if t >= p[q + 3]:
+                s[k + _SUM] += e
+                s[k + _N_STEADY] += 1.0
+            over = abs(e)  # a load step
             off = over
-        if s[k + _T_PEAK] < 0.0 or over > s[k + _PEAK]:
-            s[k + _PEAK] = over
-            s[k + _T_PEAK] = t
-        if off > p[q + 6]:
-            s[k + _INSIDE] = NOT_YET
-        elif s[k + _INSIDE] < 0.0:
-            s[k + _INSIDE] = t
+            if p[q] == REFERENCE_CHANGE:
+                x = (w - p[q + 4]) / (p[q + 5] - p[q + 4])
+                if s[k + _RISE_FROM] < 0.0 and x >= RISE_FROM:
+                    s[k + _RISE_FROM] = t
+                if s[k + _RISE_TO] < 0.0 and x >= RISE_TO:
+                    s[k + _RISE_TO] = t
+                over = x - 1.0
+                off = abs(w - p[q + 5])
+            if s[k + _T_PEAK] < 0.0 or over > s[k + _PEAK]:
+                s[k + _PEAK] = over
+                s[k + _T_PEAK] = t
+            if off > p[q + 6]:
+                s[k + _INSIDE] = NOT_YET
+            elif s[k + _INSIDE] < 0.0:
+                s[k + _INSIDE] = t
 
 
 def state_from_samples(t, w, w_ref, p) -> np.ndarray:
@@ -316,10 +315,15 @@ def step_response(t, w, w_ref, found: list[dict], scale: float = 1.0, unit: str 
             "events": figures(found, s, scale, unit)}  # fmt: skip
 
 
+#: the keys of an event's ``figures`` that the scenario states rather than the run measures
+SCENARIO_FACTS = ("what", "kind", "start_s", "judged_until_s")
+
+
 def flat(step: dict, unit: str) -> dict:
     """One row's columns of a ``step_response``: per reference change k (1, 2, ... in time
     order) ``speed_step<k>_<figure>``, per load step ``load_step<k>_<figure>``; the figures of
-    ``figures`` (None as NaN), without words."""
+    ``figures`` (None as NaN) without what the scenario states (SCENARIO_FACTS, the step and
+    the band: the same for every variant of a sweep unless its profiles vary)."""
     out, counts = {}, {"reference change": 0, "load step": 0}
     for e in step["events"]:
         counts[e["kind"]] += 1
@@ -327,7 +331,7 @@ def flat(step: dict, unit: str) -> dict:
             counts[e["kind"]]
         )
         for key, value in e.items():
-            if key in ("what", "kind", "judged_until_s") or key.endswith(f"band_{unit}"):
+            if key in SCENARIO_FACTS or key.endswith((f"band_{unit}", f"step_{unit}")):
                 continue
             out[f"{prefix}_{key}"] = math.nan if value is None else float(value)
     return out

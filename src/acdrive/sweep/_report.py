@@ -3,9 +3,11 @@
 Sections: what ran (variants, valid, ok, diverged); for a grid sweep, every metric against the
 swept parameters (``sweep._grid_figures``: lines, or heat maps); the distribution of every metric
 (count, min, 5th percentile, median, 95th percentile, max; a histogram per metric); the worst cases
-(largest ``report.worst``); the invalid variants with their reasons; the variants that tripped
-a limit (any ``*_over_limit`` metric > 0, or a ``limit`` / ``saturat`` event counted on at least
-one sample); the unstable variants (``stable`` false: diverged, or late speed oscillation above
+(largest ``report.worst``); the invalid variants with their reasons; the variants beyond a
+limit (any ``*_over_limit`` count > 0: samples more than ``OVER_LIMIT_TOLERANCE``, 1 %, above
+the limit, the tolerance stated in the report) and, apart from them, the variants in which a
+limiter acted (a ``limit`` / ``saturat`` event counted on at least one sample: a controller or
+converter holding its command at its limit, as designed, no excursion); the unstable variants (``stable`` false: diverged, or late speed oscillation above
 ``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
 speed-loop bandwidth per combination of the other varied fields, simulated against the
 linearised sampled drive (``analysis.max_stable_bandwidth``), with the verdict. Grid values in
@@ -29,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from acdrive._arguments import PATH, Instance, checked
+from acdrive._reducer_parts import OVER_LIMIT_TOLERANCE
 from acdrive.sweep._grid_figures import sweep_labels, write_grid_figures
 from acdrive.sweep._spec import SweepSpec
 
@@ -51,15 +54,28 @@ def metric_columns(table) -> list[str]:
     return out
 
 
-def tripped(table):
-    """Boolean Series: the variant tripped a limit (an over-limit count or a limit event)."""
+def beyond_limit(table):
+    """Boolean array: the variant went beyond a limit (an ``*_over_limit`` count > 0: samples
+    more than OVER_LIMIT_TOLERANCE above it)."""
     flags = np.zeros(len(table), dtype=bool)
     for name in table.columns:
-        is_count = name.endswith("_over_limit")
-        is_event = name.startswith("events.") and any(w in name for w in LIMIT_WORDS)
-        if is_count or is_event:
+        if name.endswith("_over_limit"):
             flags |= table[name].fillna(0).to_numpy() > 0
     return flags
+
+
+def limiter_acted(table) -> tuple[np.ndarray, list[str]]:
+    """(Boolean array: a limiter acted in the variant, the event columns that count it): a
+    ``limit`` / ``saturat`` event counted on at least one sample."""
+    flags = np.zeros(len(table), dtype=bool)
+    names = []
+    for name in table.columns:
+        if name.startswith("events.") and any(w in name for w in LIMIT_WORDS):
+            hit = table[name].fillna(0).to_numpy() > 0
+            flags |= hit
+            if hit.any():
+                names.append(name.removeprefix("events."))
+    return flags, names
 
 
 def _fmt(x) -> str:
@@ -218,14 +234,21 @@ def write_report(spec: SweepSpec, folder: Path, table) -> Path:
         lines += [f"- `{r.variant_id}`: {r.reason}" for r in bad.head(MAX_LISTED).itertuples()]
     else:
         lines.append("None.")
-    lines += ["", "## Variants that tripped a limit", ""]
-    trip = tripped(table) if n else np.zeros(0, dtype=bool)
+    lines += ["", "## Variants beyond a limit", ""]
+    trip = beyond_limit(table) if n else np.zeros(0, dtype=bool)
     lines.append(
-        f"{int(trip.sum())} of {n} (an `*_over_limit` count or a limit/saturation event > 0)"
-        + (":" if trip.any() else ".")
+        f"{int(trip.sum())} of {n} (an `*_over_limit` count > 0: samples more than "
+        f"{100 * OVER_LIMIT_TOLERANCE:g} % above the limit)" + (":" if trip.any() else ".")
     )
     if trip.any():
         lines += [""] + [f"- `{v}`" for v in table["variant_id"][trip].head(MAX_LISTED)]
+    acted, events = limiter_acted(table) if n else (np.zeros(0, dtype=bool), [])
+    lines += [
+        "",
+        f"A limiter acted (held its command at its limit, as designed; no excursion) in "
+        f"{int(acted.sum())} of {n}" + (f": {', '.join(f'`{e}`' for e in events)}." if events
+                                       else "."),
+    ]  # fmt: skip
     lines += ["", "## Unstable variants", ""]
     if "stable" in table:
         unstable = table["stable"].eq(False).fillna(False).to_numpy(dtype=bool)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 
 from acdrive._frames import K_PEAK as SQRT_3_2
-from acdrive._reducer_parts import Reducer
+from acdrive._reducer_parts import Reducer, as_steps, over_limit
 from acdrive.sim._metrics import OSCILLATION_FINDING_RPM, RPM_PER_RAD_S
 
 
@@ -16,7 +16,11 @@ def dfim_reducers(setup) -> list[Reducer]:
     ``sim._metrics.speed_error_figures``, the window of ``drives.dfim._tracking.tracking_rule``: the
     single run's figures of the same names), the band-limited speed oscillation over the last
     ``LATE_WINDOW_S`` and its growth (``speed_oscillation_late_rpm``), peak phase currents [A]
-    and samples above the controller's current limits, peak torque, final speed."""
+    and samples above the controller's current limits by more than OVER_LIMIT_TOLERANCE
+    (``acdrive._reducer_parts``), peak torque, final speed, and the step response of each
+    speed-reference change and load step (the columns of ``sim._step_response.flat``: the
+    summary's ``step_response`` figures, in rpm)."""
+    from acdrive.drives.dfim._recovery import step_events
     from acdrive.drives.dfim._tracking import tracking_rule
 
     out = []
@@ -39,20 +43,14 @@ def dfim_reducers(setup) -> list[Reducer]:
             Reducer(f"speed_oscillation_late_rpm{sfx}", "oscillation", w, ref, scale=RPM_PER_RAD_S),
             Reducer(f"peak_stator_current_a{sfx}", "peak", f"dfim{k}.i_s", scale=1 / SQRT_3_2),
             Reducer(f"peak_rotor_current_a{sfx}", "peak", f"dfim{k}.i_r_rotor", scale=1 / SQRT_3_2),
-            Reducer(
-                f"stator_current_over_limit{sfx}",
-                "exceed",
-                f"dfim{k}.i_s",
-                limit=SQRT_3_2 * c.stator_current_limit_pk,
-            ),
-            Reducer(
-                f"rotor_current_over_limit{sfx}",
-                "exceed",
-                f"dfim{k}.i_r_rotor",
-                limit=SQRT_3_2 * c.rotor_current_limit_pk,
-            ),
+            over_limit(f"stator_current_over_limit{sfx}", f"dfim{k}.i_s",
+                       SQRT_3_2 * c.stator_current_limit_pk),
+            over_limit(f"rotor_current_over_limit{sfx}", f"dfim{k}.i_r_rotor",
+                       SQRT_3_2 * c.rotor_current_limit_pk),
             Reducer(f"peak_torque_nm{sfx}", "peak", f"dfim{k}.tau_e"),
             Reducer(f"final_speed_rpm{sfx}", "final", w, scale=RPM_PER_RAD_S),
+            Reducer("speed_step", "step_response", w, ref, scale=RPM_PER_RAD_S, unit="rpm",
+                    suffix=sfx, steps=as_steps(step_events(setup, k))),  # fmt: skip
         ]
     return out
 
