@@ -129,6 +129,8 @@ def check_reducer(r: Reducer, where: str) -> Reducer:
         raise InputError(f"{where}.stop", "must be later than start")
     if r.kind == "step_response" and r.reference is None:
         raise InputError(f"{where}.reference", "a step response needs the speed's reference")
+    if r.kind == "step_response" and not r.steps:
+        raise InputError(f"{where}.steps", "a step response needs at least one event")
     lo, hi = r.band_hz
     if not 0 < lo < hi:
         raise InputError(f"{where}.band_hz", "must be two frequencies 0 < low < high")
@@ -391,7 +393,7 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             found = r.step_events()
             cls = _step_response_class(x.var.unit, len(found))
             values = {"every": float(every)}
-            for j, v in enumerate(event_params(found).reshape(len(found), -1)):
+            for j, v in enumerate(event_params(found).reshape(len(found), len(EVENT_PARAMS))):
                 values |= {f"{n}{j}": float(a) for (n, _, _), a in zip(EVENT_PARAMS, v,
                                                                          strict=True)}  # fmt: skip
             part = cls(f"{REDUCER_PREFIX}step_response{len(served)}", **values)

@@ -20,6 +20,7 @@ from acdrive.core._profile import Profile
 from acdrive.drives.dfim._converter_effect import ideal_converter
 from acdrive.drives.dfim._outcome import run_scenario
 from acdrive.scenarios._loader import load_scenario
+from acdrive.sim._step_response import events, step_response
 
 #: "Without overshoot" holds when the speed exceeds its new reference by at most this fraction of
 #: the step (0.1 %: well above the speed ripple of the simulated run, far below a visible bump).
@@ -59,11 +60,14 @@ def step_setup():
 
 def measured_overshoot(t, w, t_step: float, w_before: float, w_after: float) -> float:
     """Overshoot of ``w(t)`` after a step from ``w_before`` to ``w_after`` at ``t_step``, as a
-    fraction of the step (0 if it never exceeds the new reference)."""
-    after = np.asarray(t) >= t_step
-    step = w_after - w_before
-    peak = float(np.max((np.asarray(w)[after] - w_after) / step))
-    return max(peak, 0.0)
+    fraction of the step (0 if it never exceeds the new reference): the step-response metric
+    of every drive's summary (``sim._step_response``), over the samples from the step on."""
+    t = np.asarray(t, dtype=float)
+    end = float(t[-1]) + 1.0  # the step is the only event: judged to the last sample
+    reference = Profile([0.0, t_step, t_step], [w_before, w_before, w_after])
+    w_ref = np.where(t >= t_step, w_after, w_before)
+    (event,) = step_response(t, w, w_ref, events(reference, {}, end))["events"]
+    return event["overshoot_pct"] / 100.0
 
 
 def simulated_overshoot() -> tuple[float, object]:

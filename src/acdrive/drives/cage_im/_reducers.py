@@ -25,6 +25,8 @@ def im_reducers(setup) -> list[Reducer]:
     if setup.mode in ("speed-p", "speed-pi"):
         out.append(Reducer("speed", "speed_error", "shaft.w", "speed_reference.w_ref",
                            rule=im_tracking_rule(setup), unit="rad_s"))  # fmt: skip
-        out.append(Reducer("speed_step", "step_response", "shaft.w", "speed_reference.w_ref",
-                           unit="rad_s", steps=as_steps(im_step_events(setup))))  # fmt: skip
+        steps = as_steps(im_step_events(setup))
+        if steps:
+            out.append(Reducer("speed_step", "step_response", "shaft.w", "speed_reference.w_ref",
+                               unit="rad_s", steps=steps))  # fmt: skip
     return out

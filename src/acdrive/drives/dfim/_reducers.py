@@ -49,9 +49,11 @@ def dfim_reducers(setup) -> list[Reducer]:
                        SQRT_3_2 * c.rotor_current_limit_pk),
             Reducer(f"peak_torque_nm{sfx}", "peak", f"dfim{k}.tau_e"),
             Reducer(f"final_speed_rpm{sfx}", "final", w, scale=RPM_PER_RAD_S),
-            Reducer("speed_step", "step_response", w, ref, scale=RPM_PER_RAD_S, unit="rpm",
-                    suffix=sfx, steps=as_steps(step_events(setup, k))),  # fmt: skip
         ]
+        steps = as_steps(step_events(setup, k))
+        if steps:
+            out.append(Reducer("speed_step", "step_response", w, ref, scale=RPM_PER_RAD_S,
+                               unit="rpm", suffix=sfx, steps=steps))  # fmt: skip
     return out
 
 

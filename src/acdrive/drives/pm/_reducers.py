@@ -21,7 +21,7 @@ def pm_reducers(setup) -> list[Reducer]:
     (``sim._step_response.flat``)."""
     from acdrive.drives.pm._metrics import step_events
 
-    return [
+    out = [
         Reducer("speed_error_rms_rad_s", "rms", "shaft.w", "speed_reference.w_ref"),
         Reducer("speed_error_max_rad_s", "peak", "shaft.w", "speed_reference.w_ref"),
         Reducer("final_speed_rad_s", "final", "shaft.w"),
@@ -29,6 +29,9 @@ def pm_reducers(setup) -> list[Reducer]:
         over_limit("current_over_limit", "machine.i_s", setup.i_max),
         Reducer("torque_peak_n_m", "peak", "machine.tau_e"),
         Reducer("voltage_command_peak_v", "peak", "current.v_dq_wanted"),
-        Reducer("speed_step", "step_response", "shaft.w", "speed_reference.w_ref",
-                unit="rad_s", steps=as_steps(step_events(setup))),  # fmt: skip
     ]
+    steps = as_steps(step_events(setup))
+    if steps:
+        out.append(Reducer("speed_step", "step_response", "shaft.w", "speed_reference.w_ref",
+                           unit="rad_s", steps=steps))  # fmt: skip
+    return out
