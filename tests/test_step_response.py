@@ -174,8 +174,7 @@ def test_a_band_or_window_outside_zero_to_one_is_refused_by_name(name, value):
 
 
 def test_a_step_response_metric_without_reference_is_refused_by_name():
-    from acdrive.batch import check_reducer
-    from acdrive.batch import Reducer
+    from acdrive.batch import Reducer, check_reducer
 
     with pytest.raises(InputError, match=r"^metrics\[0\]\.reference: "):
         check_reducer(Reducer("speed_step", "step_response", "shaft.w"), "metrics[0]")

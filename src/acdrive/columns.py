@@ -70,7 +70,8 @@ _MATLAB_KEYWORDS = frozenset(
 #: the unit a metric's name ends with (summary.json keys and batch columns carry their unit in
 #: their name: ``peak_rotor_current_a``, ``speed_rms_error_tracking_rpm``), longest first
 UNIT_SUFFIXES = (
-    ("_pct", "%"), ("_rad_s2", "rad/s^2"), ("_rad_s", "rad/s"), ("_n_m", "N m"), ("_rpm", "rpm"), ("_rad", "rad"),
+    ("_pct", "%"), ("_rad_s2", "rad/s^2"), ("_rad_s", "rad/s"), ("_n_m", "N m"), ("_rpm", "rpm"),
+    ("_rad", "rad"),
     ("_var", "var"), ("_hz", "Hz"), ("_wb", "Wb"), ("_a", "A"), ("_v", "V"), ("_w", "W"),
     ("_j", "J"), ("_s", "s"),
 )  # fmt: skip

@@ -101,7 +101,7 @@ def check_band(field: str, value) -> float:
     """``value`` as float if it is a band fraction in (0, 1) (else InputError naming ``field``)."""
     value = require_finite(field, value)
     if not 0.0 < value < 1.0:
-        raise InputError(field, f"must be a fraction of the step above 0 and below 1, got {value:g}")
+        raise InputError(field, f"must be a fraction above 0 and below 1, got {value:g}")
     return value
 
 
@@ -360,8 +360,9 @@ def headline_rows(step: dict, unit: str, label: str = "") -> list[tuple[str, str
         else:
             text = (
                 f"dip {num(e[f'dip_{unit}'], '.3g', ' ' + shown)} at "
-                f"{num(e['dip_at_s'], '.4g', ' s')}, back within +-{e[f'recovery_band_{unit}']:.3g} "
-                f"{shown} after {num(e['recovery_time_s'], '.4g', ' s')}, {steady}"
+                f"{num(e['dip_at_s'], '.4g', ' s')}, back within "
+                f"+-{e[f'recovery_band_{unit}']:.3g} {shown} after "
+                f"{num(e['recovery_time_s'], '.4g', ' s')}, {steady}"
             )
         rows.append((name, text))
     return rows

@@ -7,7 +7,8 @@ swept parameters (``sweep._grid_figures``: lines, or heat maps); the distributio
 limit (any ``*_over_limit`` count > 0: samples more than ``OVER_LIMIT_TOLERANCE``, 1 %, above
 the limit, the tolerance stated in the report) and, apart from them, the variants in which a
 limiter acted (a ``limit`` / ``saturat`` event counted on at least one sample: a controller or
-converter holding its command at its limit, as designed, no excursion); the unstable variants (``stable`` false: diverged, or late speed oscillation above
+converter holding its command at its limit, as designed, no excursion); the unstable variants
+(``stable`` false: diverged, or late speed oscillation above
 ``OSCILLATION_FINDING_RPM``, ``acdrive.batch``); and, for a sweep with ``[crosscheck]``, the tolerated
 speed-loop bandwidth per combination of the other varied fields, simulated against the
 linearised sampled drive (``analysis.max_stable_bandwidth``), with the verdict. Grid values in

@@ -1,7 +1,7 @@
 """The lines ``acdrive run`` prints for a DFIM drive run, each computed from its summary: the speed
 tracking error where tracking is expected (``acdrive.sim._metrics``: the intended reference steps
 and their settling are excluded, and said so), motor 1's step responses
-(``acdrive.sim._step_response``), the same over the whole run, peak currents against
+(``acdrive.sim._step_response``), the speed error over the whole run, peak currents against
 their limits, the relay's closing, events."""
 
 from __future__ import annotations
