@@ -276,8 +276,8 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
                     what = "rotor" if name == "i_r_mag" else "stator"
                     warnings.append(
                         f"{mode} command, motor {k + 1}: {what} current above its "
-                        f"{e['limit_a']:g} A limit by more than the {100 * OVER_LIMIT_TOLERANCE:g} % "
-                        f"tolerance: peak {e['peak_a']:.2f} A "
+                        f"{e['limit_a']:g} A limit by more than the "
+                        f"{100 * OVER_LIMIT_TOLERANCE:g} % tolerance: peak {e['peak_a']:.2f} A "
                         f"({100 * (e['peak_a'] / e['limit_a'] - 1):+.2f} %), above the limit on "
                         f"{e['samples_above']} logged samples, first at {e['first_time_s']:.3f} s"
                     )
