@@ -344,6 +344,28 @@ def test_a_second_local_side_runs_after_the_peer_and_has_its_own_ratio():
     assert t["ratios"]["a_n1"]["median"] == pytest.approx(250.0)
 
 
+def test_a_faster_second_peer_repeats_its_run_to_fill_the_first_peers_window():
+    """motulator-export's C loop beside motulator: its one-run calibration (0.01 CPU-s) against
+    motulator's 2 CPU-s window gives 200 runs per window, so its per-run time is its window over
+    200 and the ratio between the peers is that of their per-step times."""
+    from acdrive._bench.windows import time_sides
+
+    m = FakeMachine()
+    local = {"acdrive": m.local("acdrive", 0.001, 100)}
+    peers = {
+        "slow": m.peer("slow", [2.0] * 3, 100),
+        "fast": m.peer("fast", [0.01] * 401, 100),
+    }
+    pairs = {"a_fast": ("acdrive", "fast"), "fast_slow": ("fast", "slow")}
+    t = time_sides(local, peers, pairs, 2, m.clock(), 1.0, 0.05)
+    assert t["runs_per_window"] == {"slow": 1, "fast": 200, "acdrive": 2000}
+    assert [w["side"] for w in t["windows"]] == ["acdrive", "slow", "fast"] * 2
+    fast = [w for w in t["windows"] if w["side"] == "fast"]
+    assert all(w["cpu_s"] == pytest.approx(2.0) for w in fast)
+    assert t["ratios"]["a_fast"]["median"] == pytest.approx(10.0)
+    assert t["ratios"]["fast_slow"]["median"] == pytest.approx(200.0)
+
+
 def test_without_a_peer_the_window_is_the_solo_length():
     from acdrive._bench.windows import time_sides
 

@@ -153,7 +153,7 @@ def _spread(median):
 def _measured_cases(**scale):
     """Every case behind the targets with the given numbers (defaults: all targets met)."""
     s = {"warm": 0.8, "no_fig": 0.5, "first": 5.0, "topo": 1.2, "simd": 7e6, "lanes": 4.0,
-         "empty": 0.9, "speedup": 12.0, "loop": 0.99, **scale}  # fmt: skip
+         "empty": 0.9, "speedup": 12.0, "loop": 0.99, "export_c": 12.0, **scale}  # fmt: skip
     return {
         "command": {
             "warm_figures": {"cpu_s": _spread(s["warm"])},
@@ -176,6 +176,17 @@ def _measured_cases(**scale):
             "time_ratio": {"empty_cache": _spread(s["empty"])},
             "speedup": {"warm_cache": _spread(s["speedup"])},
         },
+        "motulator_averaged": {
+            "motulator_export": {
+                "available": True,
+                "sides": {
+                    "motulator_export_c": {
+                        "acdrive_ratio": s["export_c"],
+                        "acdrive_ratio_spread": _spread(s["export_c"]),
+                    }
+                },
+            }
+        },
         "loop_speed": {
             "scenarios": {
                 name: {"loop": {"ratio_after_before_median": s["loop"]}}
@@ -189,10 +200,13 @@ def test_every_target_has_an_entry_and_its_flag_follows_its_number():
     section = targets.targets_section(_measured_cases(), {})
     assert set(section) == set(targets.TARGETS)
     assert all(e["met"] is True for e in section.values())
-    missed = targets.targets_section(_measured_cases(speedup=9.0, warm=1.1, loop=0.96), {})
+    missed = targets.targets_section(
+        _measured_cases(speedup=9.0, warm=1.1, loop=0.96, export_c=3.9), {}
+    )
     assert targets.summary(missed)["missed"] == [
         "whole_command_warm_cpu_s",
         "first_result_warm_speedup",
+        "ratio_vs_motulator_export_c",
         "loop_steps_per_cpu_s_bodson_ramp_vs_baseline",
         "loop_steps_per_cpu_s_im_foc_speed_vs_baseline",
     ]
@@ -215,6 +229,19 @@ def test_unmeasured_targets_say_why():
     assert section["whole_command_warm_cpu_s"]["met"] is True
     summary = targets.summary(section)
     assert len(summary["not_measured"]) == 5 and summary["missed"] == []
+
+
+def test_motulator_export_target_says_why_when_the_peer_is_missing():
+    cases = _measured_cases()
+    cases["motulator_averaged"]["motulator_export"] = {
+        "available": False,
+        "reason": "no Python that motulator-export supports (3.12, 3.13) was found",
+    }
+    entry = targets.targets_section(cases, {})["ratio_vs_motulator_export_c"]
+    assert entry["met"] is None and "motulator-export supports" in entry["not measured"]
+    del cases["motulator_averaged"]
+    entry = targets.targets_section(cases, {})["ratio_vs_motulator_export_c"]
+    assert "--only motulator_averaged" in entry["not measured"]
 
 
 def test_lockstep_option_is_read_from_the_batch_signature():
@@ -479,3 +506,36 @@ def test_the_compile_free_topology_is_the_same_drive():
     (w_a, i_a), (w_b, i_b) = runs
     assert np.max(w_a) > 10.0  # the speed step at 0.2 s is inside the run
     assert np.array_equal(w_a, w_b) and np.array_equal(i_a, i_b)
+
+
+def _export_python() -> Path | None:
+    from acdrive._bench.venvs import MOTULATOR_EXPORT, default_peers_dir
+
+    python = default_peers_dir() / MOTULATOR_EXPORT.folder / "bin" / "python"
+    return python if python.exists() else None
+
+
+@pytest.mark.skipif(
+    _motulator_python() is None or _export_python() is None,
+    reason="motulator's or motulator-export's virtualenv is absent",
+)
+def test_motulator_exports_recorded_states_are_motulators(tmp_path):
+    """The peer records motulator-export's state at every sampling instant: run with the case's
+    Python signals it is motulator's own run of the case (motulator-export ports the same
+    control and solver), to rounding, at every sample of 0.25 s (past the speed step); the C
+    loop's staircase load starts only at 0.75 s, so before it the two loops agree as well."""
+    from acdrive._bench.motulator_im import export_states, motulator_states, state_difference
+    from acdrive._bench.venvs import PeerProcess
+
+    with PeerProcess(str(_motulator_python()), "motulator_im.py", cwd=str(tmp_path)) as p:
+        p.ask("record", converter="averaged", seconds=0.25, out=str(tmp_path / "m.npz"))
+    with PeerProcess(str(_export_python()), "motulator_export_im.py", cwd=str(tmp_path)) as p:
+        for loop in ("callbacks", "c"):
+            p.ask("record", converter="averaged", seconds=0.25, loop=loop,
+                  out=str(tmp_path / f"{loop}.npz"))  # fmt: skip
+    m_states, _ = motulator_states(dict(np.load(tmp_path / "m.npz")))
+    for loop in ("callbacks", "c"):
+        x_states = export_states(dict(np.load(tmp_path / f"{loop}.npz")))
+        d = state_difference(x_states, m_states)
+        assert d["compared_samples"] >= round(0.25 / 125e-6)
+        assert d["speed_max_rel_to_peak"] < 1e-12 and d["current_max_rel_to_peak"] < 1e-12

@@ -80,6 +80,8 @@ K_T, K_PC, K_IC = ALPHA_C * L_SGM, 2 * ALPHA_C * L_SGM, ALPHA_C**2 * L_SGM
 W0 = N_P * W_REF  # rad/s, electrical frequency at the reference speed, no load
 
 CONVERTERS = ("averaged", "pwm")
+#: motulator-export's sides of the case: side name -> its loop (peers/motulator_export_im.py)
+EXPORT_SIDES = {"motulator_export_c": "c", "motulator_export_callbacks": "callbacks"}
 
 MATCHED = {
     "source": "motulator 0.18 examples/drive/current_vector/plot_2kw_im_sat_cvc.py "
@@ -503,6 +505,35 @@ def motulator_states(rec) -> tuple[np.ndarray, dict]:
     return states, seg
 
 
+def export_states(rec) -> np.ndarray:
+    """motulator-export's recorded states (``peers/motulator_export_im.py``: motulator's layout
+    without the segments) as the rows of ``motulator_states``."""
+    g = L_M / (L_M + L_SGM)
+    psi_s = np.append(rec["psi_s"], rec["final_psi_s"])
+    psi_R = g * np.append(rec["psi_r"], rec["final_psi_r"])
+    i_s = (psi_s - psi_R) / L_SGM
+    w = np.append(rec["w_M"], rec["final_w_M"])
+    return np.column_stack([K * i_s.real, K * i_s.imag, K * psi_R.real, K * psi_R.imag, w])
+
+
+def state_difference(a: np.ndarray, b: np.ndarray) -> dict:
+    """Largest |a - b| of two runs' state rows at their common sampling instants: the speed
+    [rad/s] and the current [A, peak-value scaling], absolute and relative to b's peak."""
+    n = min(a.shape[0], b.shape[0]) - 1
+    dw = np.abs(a[:n, 4] - b[:n, 4])
+    di = np.abs((a[:n, 0] - b[:n, 0]) + 1j * (a[:n, 1] - b[:n, 1])) / K
+    w_peak = float(np.max(np.abs(b[:n, 4])))
+    i_peak = float(np.max(np.abs(b[:n, 0] + 1j * b[:n, 1])) / K)
+    return {
+        "compared_samples": n,
+        "speed_max_abs_rad_s": float(dw.max()),
+        "speed_rms_rad_s": float(np.sqrt(np.mean(dw**2))),
+        "speed_max_rel_to_peak": float(dw.max()) / w_peak,
+        "current_max_abs_a": float(di.max()),
+        "current_max_rel_to_peak": float(di.max()) / i_peak,
+    }
+
+
 def speed_difference(a_w: np.ndarray, m_w: np.ndarray, t: np.ndarray) -> dict:
     """RMS and largest |acdrive's speed - motulator's| [rad/s and rpm] at the common sampling
     instants ``t``, over the whole run and over each phase of the case that it reaches:
@@ -575,6 +606,7 @@ def run_case(
     timing: dict | None = None,
     clock=None,
     reference_cache=None,
+    export_peer: dict | None = None,
 ) -> dict:
     """The matched case with ``converter``: acdrive and motulator (if ``peer`` is available:
     ``venvs.ensure_venv``'s answer) timed in ``rounds`` rounds of interleaved CPU-time windows
@@ -582,7 +614,8 @@ def run_case(
     speed-trajectory difference between the two, and both simulators' errors (if
     ``reference``). ``timing``: ``solo_window_cpu_s`` and ``min_calibration_cpu_s``; ``clock``: a
     ``windows.Clock``; ``reference_cache``: the folder of cached references (``_bench.refcache``,
-    None: computed every time)."""
+    None: computed every time); ``export_peer``: motulator-export's venv (``ensure_venv``), whose
+    native loop runs the same case beside motulator (``export_sides``)."""
     from acdrive._bench.reference import accuracy, error_verdicts, short_errors
     from acdrive._bench.venvs import PeerFailed, PeerProcess
     from acdrive._bench.windows import Clock, local_side, ratio_spread, time_sides
@@ -601,8 +634,16 @@ def run_case(
     tmp = tempfile.mkdtemp(prefix="acdrive_bench_")
     record = os.path.join(tmp, "motulator_run.npz")
     mot: dict = {"available": False, "reason": peer.get("reason", "not run")}
-    proc = None
+    export_peer = export_peer or {"available": False, "reason": "not run"}
+    mex: dict = {"available": False, "reason": export_peer.get("reason", "not run")}
+    proc = mex_proc = None
     try:
+        if export_peer.get("available"):
+            try:
+                mex_proc = PeerProcess(export_peer["python"], "motulator_export_im.py", cwd=tmp)
+                mex = {"available": True, **mex_proc.ask("about"), "converter": converter}
+            except PeerFailed as exc:
+                mex = {"available": False, "reason": str(exc)}
         if peer.get("available"):
             try:
                 proc = PeerProcess(peer["python"], "motulator_im.py", cwd=tmp)
@@ -613,15 +654,37 @@ def run_case(
         def motulator_window(runs):
             return proc.ask("window", converter=converter, seconds=duration, runs=runs)
 
+        def export_window(loop):
+            return lambda runs: mex_proc.ask(
+                "window", converter=converter, seconds=duration, runs=runs, loop=loop
+            )
+
         peers = {"motulator": motulator_window} if mot["available"] else {}
-        say(f"{converter}: interleaved CPU-time windows (acdrive{', motulator' * bool(peers)})")
+        if mex["available"]:
+            for side, loop in EXPORT_SIDES.items():
+                peers[side] = export_window(loop)
+                pairs[f"acdrive_vs_{side}"] = ("acdrive", side)
+                if mot["available"]:
+                    pairs[f"{side}_vs_motulator"] = (side, "motulator")
+        say(f"{converter}: interleaved CPU-time windows ({', '.join(['acdrive', *peers])})")
         try:
             t = time_sides(local, peers, pairs, rounds, clock, log=say, **timing)
-            if peers:
+            if mot["available"]:
                 say(f"motulator {converter}: recording a run")
                 mot.update(proc.ask("record", converter=converter, seconds=duration, out=record))
+            if mex["available"]:
+                mex["records"] = {}
+                for side, loop in EXPORT_SIDES.items():
+                    say(f"motulator-export {converter}: recording a run ({loop} loop)")
+                    got = mex_proc.ask(
+                        "record", converter=converter, seconds=duration, loop=loop,
+                        out=os.path.join(tmp, f"{side}.npz"),
+                    )  # fmt: skip
+                    mex["records"][side] = got
         except PeerFailed as exc:
             mot = {"available": False, "reason": str(exc)}
+            mex = {"available": False, "reason": str(exc)}
+            pairs = {k: v for k, v in pairs.items() if "motulator" not in k}
             t = time_sides(local, {}, {}, rounds, clock, log=say, **timing)
         out["timing"] = t
         out["acdrive"] = {
@@ -648,6 +711,21 @@ def run_case(
                 out["ratio_N1"] = t["ratios"]["acdrive_N1_vs_motulator"]["ratio"]
                 out["ratio_N1_spread"] = ratio_spread(t["ratios"]["acdrive_N1_vs_motulator"])
         out["motulator"] = mot
+        if mex["available"]:
+            mex["sides"] = {}
+            for side in EXPORT_SIDES:
+                mex["sides"][side] = {
+                    "steps_per_cpu_s": t["sides"][side]["steps_per_cpu_s"]["median"],
+                    "per_run_cpu_s": t["sides"][side]["per_run_cpu_s"],
+                    "acdrive_ratio": t["ratios"][f"acdrive_vs_{side}"]["ratio"],
+                    "acdrive_ratio_spread": ratio_spread(t["ratios"][f"acdrive_vs_{side}"]),
+                }
+                if mot["available"]:
+                    r = t["ratios"][f"{side}_vs_motulator"]
+                    mex["sides"][side]["ratio_vs_motulator"] = r["ratio"]
+                    mex["sides"][side]["ratio_vs_motulator_spread"] = ratio_spread(r)
+            out["ratio_vs_motulator_export_c"] = mex["sides"]["motulator_export_c"]["acdrive_ratio"]
+        out["motulator_export"] = mex
         primary = acd["variants"][acd["primary"]]
         system = acd["_system"]
         a_states = acdrive_states(primary, ports, system)
@@ -655,6 +733,18 @@ def run_case(
         if mot["available"]:
             m_states, m_seg = motulator_states(dict(np.load(record)))
             out["trajectories"] = compare_trajectories(a_states, m_states)
+        if mex["available"]:
+            mex["trajectories"] = {}
+            for side in EXPORT_SIDES:
+                x_states = export_states(dict(np.load(os.path.join(tmp, f"{side}.npz"))))
+                mex["trajectories"][side] = {
+                    "vs_acdrive": state_difference(x_states, a_states),
+                    **(
+                        {"vs_motulator": state_difference(x_states, m_states)}
+                        if m_states is not None
+                        else {}
+                    ),
+                }
         if reference:
             model = IMEquations()
             say(f"acdrive {converter}: accuracy against the references")
@@ -685,8 +775,9 @@ def run_case(
                 mot["error_summary"] = short_errors(m_err)
                 out["error_verdicts"] = error_verdicts(a_err, m_err)
     finally:
-        if proc is not None:
-            proc.close()
+        for p in (proc, mex_proc):
+            if p is not None:
+                p.close()
         shutil.rmtree(tmp, ignore_errors=True)  # the run's own temporary folder (mkdtemp)
     out["matched_case"] = MATCHED
     return out

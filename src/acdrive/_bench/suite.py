@@ -189,6 +189,8 @@ def run_suite(options: Options) -> dict:
     report["not_run"] = {}
     if any(c.startswith("motulator") or c == "first_result" for c in only):
         report["peers"]["motulator"] = _peer(venvs.MOTULATOR, options, say)
+    if any(c.startswith("motulator") for c in only):
+        report["peers"]["motulator-export"] = _peer(venvs.MOTULATOR_EXPORT, options, say)
     if "gem_dfim" in only:
         report["peers"]["gym-electric-motor"] = _peer(venvs.GEM, options, say)
     for name in only:
@@ -207,6 +209,7 @@ def run_suite(options: Options) -> dict:
                 say,
                 timing=_timing(settings),
                 reference_cache=ref_cache,
+                export_peer=report["peers"]["motulator-export"],
             )
         elif name == "gem_dfim":
             from acdrive._bench.gem_dfim import run_case
@@ -429,6 +432,7 @@ def table(report: dict) -> str:
                 f"  speed difference to motulator: RMS {diff['rms_rpm']:.3g} rpm, largest "
                 f"{diff['max_abs_rpm']:.3g} rpm over {diff['from_s']:g}-{diff['to_s']:g} s"
             )
+        lines += export_lines(c.get("motulator_export"))
     lines += race_lines(report["cases"].get("first_result"))
     if report.get("icad_ms") is not None:
         lines.append(f"icad: {report['icad_ms']:.1f} ms (full ICAD, 100 x 2,000)")
@@ -456,6 +460,32 @@ def table(report: dict) -> str:
     if report["warnings"]:
         lines.append(f"  rule: {report['load_rule']}")
     return "\n".join(lines)
+
+
+def export_lines(mex: dict | None) -> list[str]:
+    """motulator-export's sides of a matched case: acdrive's ratio to each (median, min-max),
+    each side's ratio to motulator, and how far its trajectory is from motulator's."""
+    if not mex:
+        return []
+    if not mex.get("available"):
+        return [f"  motulator-export not measured: {mex.get('reason')}"]
+    lines = []
+    for side, m in mex["sides"].items():
+        r = m["acdrive_ratio_spread"]
+        line = (
+            f"  acdrive vs {side}: {r['median']:.1f}x ({r['min']:.1f}-{r['max']:.1f}), "
+            f"{m['steps_per_cpu_s']:,.0f} steps/CPU s"
+        )
+        if "ratio_vs_motulator" in m:
+            line += f", itself {m['ratio_vs_motulator']:.0f}x motulator"
+        d = mex.get("trajectories", {}).get(side, {}).get("vs_motulator")
+        if d:
+            line += (
+                f"; vs motulator's run: speed {d['speed_max_rel_to_peak']:.1e}, current "
+                f"{d['current_max_rel_to_peak']:.1e} of the peak"
+            )
+        lines.append(line)
+    return lines
 
 
 def race_lines(race: dict | None) -> list[str]:

@@ -16,6 +16,8 @@ from the number one small measuring function produced:
   second and per CPU second, single-lane and, where the batch has a lockstep (SIMD) option
   (``lockstep_option``), across lanes;
 * ``first_result``: the race against motulator (``_bench.first_result``);
+* ``ratio_vs_motulator_export_c``: acdrive over motulator-export's pure C loop on the matched
+  averaged cage-IM case (``_bench.motulator_im``, issue 39);
 * ``loop_speed``: the specialised loop's steps per CPU second against a baseline source tree
   given with ``--baseline-src`` (``_bench.loop_speed``).
 
@@ -80,6 +82,11 @@ TARGETS = {
         ("specialised loop, `bodson-ramp`: steps per CPU second over the baseline tree's, "
          "interleaved in the same run"),
         0.97, "x", "at least",
+    ),
+    "ratio_vs_motulator_export_c": (
+        ("matched cage-IM case (averaged converter): acdrive's control steps per CPU second over "
+         "motulator-export 0.11's pure C loop, interleaved (median over the rounds)"),
+        10.0, "x", "at least",
     ),
     "loop_steps_per_cpu_s_im_foc_speed_vs_baseline": (
         ("specialised loop, `im-foc-speed`: steps per CPU second over the baseline tree's, "
@@ -401,6 +408,16 @@ def targets_section(cases: dict, not_run: dict) -> dict:
             reason,
             **({} if reason else {"spread": {k: r[k] for k in ("min", "median", "max", "n")}}),
         )
+    why = missing("motulator_averaged")
+    mex = cases.get("motulator_averaged", {}).get("motulator_export", {})
+    side = mex.get("sides", {}).get("motulator_export_c")
+    reason = why or (None if side else mex.get("reason", "motulator-export not measured"))
+    out["ratio_vs_motulator_export_c"] = target_entry(
+        "ratio_vs_motulator_export_c",
+        None if reason else side["acdrive_ratio"],
+        reason,
+        **({} if reason else {"spread": side["acdrive_ratio_spread"]}),
+    )
     why = missing("loop_speed")
     c = cases.get("loop_speed", {})
     for name, scenario in (

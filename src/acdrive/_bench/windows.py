@@ -255,7 +255,8 @@ def time_sides(
     """Time acdrive's ``local`` sides (name -> ``local_side`` window) against the ``peers``'
     (name -> window run by the peer's process). The first peer's calibration window (one run,
     also its warm-up) sets the target window length (``solo_window_cpu_s`` with no peer); each
-    local side is calibrated (``calibrate``) and repeats its run to fill that target. The
+    local side is calibrated (``calibrate``) and repeats its run to fill that target, as does each
+    further peer from its calibration window. The
     rounds run the first local side, the peers, then the other local sides. Returns the
     method, calibration, every window and ``summarise_windows``' spreads, ratios and load."""
     calibration: dict = {}
@@ -264,6 +265,9 @@ def time_sides(
         calibration[name] = {"runs": 1, "cpu_s": window(1)["cpu_s"]}
         runs[name] = 1
     target = calibration[next(iter(peers))]["cpu_s"] if peers else solo_window_cpu_s
+    for name in list(peers)[1:]:  # a faster peer repeats its run to fill the first one's window
+        runs[name] = runs_for_target(calibration[name]["cpu_s"], target)
+        calibration[name]["runs_for_target"] = runs[name]
     for name, window in local.items():
         per_run = calibrate(window, clock, min(min_calibration_cpu_s, target))
         calibration[name] = {"per_run_cpu_s": per_run}
