@@ -4,9 +4,9 @@ Each peer runs in its own virtualenv under ``peers_dir`` (default ``$XDG_CACHE_H
 or ``~/.cache/acdrive/peers``, outside the repository and outside any output folder, overridable
 with ``acdrive bench --peers-dir``), one folder per peer and pinned version, e.g.
 ``motulator-0.18``. A venv that already imports the pinned version is reused; otherwise it is made
-with a Python the peer supports (``PeerSpec.pythons``: motulator 0.18 and motulator-export 0.11 need 3.12; GEM 3.0.3 runs
-on the suite's own Python) and the pinned requirement is installed from the package index with
-pip. Every failure is returned as a reason, never raised: the suite still measures acdrive and the
+with a Python the peer supports (``PeerSpec.pythons``: motulator 0.18 and motulator-export 0.11
+need 3.12; GEM 3.0.3 runs on the suite's own Python) and the pinned requirement is installed from
+the package index with pip. Every failure is returned as a reason, never raised: the suite still measures acdrive and the
 JSON says why the peer is missing (``available: false``).
 """
 
