@@ -76,7 +76,38 @@ def load_torque(t: float) -> float:
     return nom.tau * min(max((t - T_LOAD) / LOAD_RAMP, 0.0), 1.0)
 
 
-def build(pwm: bool) -> model.Simulation:
+class ClampingSpeedPI(control.PIController):
+    """acdrive's speed PI law (``control._speed.speed_pi`` with K_F = 1) in motulator's speed
+    controller slot, for the ``clamping_speed_pi`` variant: tau = k_p e + k_i int(e) clipped to
+    [-tau_max, tau_max], the integral advancing (forward Euler) only while unclipped, whatever
+    torque the current limit then realises (motulator's own PI instead integrates towards the
+    realised torque, anti-windup by back-calculation)."""
+
+    def __init__(self, k_p: float, k_i: float, tau_max: float) -> None:
+        super().__init__(k_p=k_p, k_i=k_i)
+        self.k_i, self.tau_max = k_i, tau_max
+        self.e_int, self._step = 0.0, 0.0
+
+    def compute_output(self, y_ref: float, y: float, u_ff: float = 0.0) -> float:
+        e = y_ref - y
+        tau = self.k_p * e + self.k_i * self.e_int + u_ff
+        self._step = 0.0 if abs(tau) > self.tau_max else e
+        return min(max(tau, -self.tau_max), self.tau_max)
+
+    def update(self, T_s: float, u: float) -> None:
+        self.e_int += T_s * self._step
+
+
+#: the example as it is, and with acdrive's speed PI, for the measured account of the remaining
+#: differences (benchmarks/bench_matched_im.py)
+VARIANTS = ("example", "clamping_speed_pi")
+
+
+def build(pwm: bool, variant: str = "example", tau_max: float | None = None) -> model.Simulation:
+    """The case; ``variant`` (``VARIANTS``): ``clamping_speed_pi`` replaces the speed PI by
+    ``ClampingSpeedPI`` at ``tau_max`` [N m]."""
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     par = model.InductionMachineInvGammaPars(**PAR)
     mdl = model.Drive(
         model.InductionMachine(par),
@@ -89,7 +120,11 @@ def build(pwm: bool) -> model.Simulation:
         psi_s_nom=0.95 * base.psi, i_s_max=1.5 * base.i, T_s=T_S, sensorless=False
     )
     vector_ctrl = control.CurrentVectorController(control.InductionMachineInvGammaPars(**PAR), cfg)
-    ctrl = control.VectorControlSystem(vector_ctrl, control.PIController(k_p=1, k_i=10))
+    if variant == "example":
+        speed_ctrl = control.PIController(k_p=1, k_i=10)
+    else:
+        speed_ctrl = ClampingSpeedPI(k_p=1, k_i=10, tau_max=tau_max)
+    ctrl = control.VectorControlSystem(vector_ctrl, speed_ctrl)
     ctrl.set_speed_ref(speed_reference)
     return model.Simulation(mdl, ctrl, show_progress=False)
 
@@ -144,10 +179,13 @@ def window(converter: str, seconds: float, runs: int = 1) -> dict:
     return out
 
 
-def save_record(converter: str, seconds: float, out: str) -> dict:
+def save_record(
+    converter: str, seconds: float, out: str, variant: str = "example", tau_max=None
+) -> dict:
     """One more run recording the state and the segments at every sampling instant (``record``),
-    saved to ``out`` (.npz) for the suite's accuracy reference and trajectory comparison."""
-    sim = build(converter == "pwm")
+    saved to ``out`` (.npz) for the suite's accuracy reference and trajectory comparison;
+    ``variant`` and ``tau_max``: ``build``'s."""
+    sim = build(converter == "pwm", variant, tau_max)
     rec = record(sim)
     res = sim.simulate(t_stop=seconds)
     mdl = sim.mdl
