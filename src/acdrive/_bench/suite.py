@@ -3,7 +3,10 @@
 Cases (``CASES``; ``--only`` picks some):
 
 * ``motulator_averaged``: the 2.2 kW cage-IM speed drive against motulator 0.18 with an averaged
-  converter (``_bench.motulator_im``) -> ``ratio_vs_motulator``;
+  converter (``_bench.motulator_im``) -> ``ratio_vs_motulator``; motulator-export 0.11's native
+  simulation of the same motulator objects runs beside motulator, its C loop alone and with
+  Python signal callbacks (``cases.*.motulator_export``; the averaged C loop -> the target
+  ``ratio_vs_motulator_export_c``);
 * ``motulator_pwm``: the same drive with switching PWM -> ``ratio_vs_motulator_pwm``;
 * ``gem_dfim``: the open-loop DFIM against gym-electric-motor 3.0.3 (``_bench.gem_dfim``) ->
   ``ratio_vs_gem``;
