@@ -516,7 +516,7 @@ def targets_table(section: dict) -> list[str]:
     measured)."""
     if not section:
         return []
-    lines = ["issue 21 targets (value, target, met):"]
+    lines = ["speed targets, issues 21 and 39 (value, target, met):"]
     for name, e in section.items():
         if e["met"] is None:
             lines.append(f"  {name}: not measured ({e['not measured']})")
