@@ -3,8 +3,10 @@ difference accounts for how much (``acdrive._bench.motulator_im.remaining_differ
 
 motulator runs the case as its example has it, then with acdrive's speed PI law (clamping
 anti-windup at the fixed torque limit) in place of its own (back-calculation on the torque the
-current limit realises). Each line prints the largest speed and current
-differences to acdrive's run relative to motulator's peaks, and the speed difference per phase.
+current limit realises), and with its own PI clipped at acdrive's fixed torque limit before the
+current limit (what a back-calculating speed PI at a fixed limit would leave). Each line prints the largest speed and current
+differences to acdrive's run relative to motulator's peaks, the speed difference per phase, and
+the variant's own distance from motulator's example.
 Needs motulator's virtualenv (``acdrive bench`` makes it; ``--peers-dir`` as there):
 
     python benchmarks/bench_matched_im.py [--seconds 1.5] [--converter averaged] [--json]
@@ -40,9 +42,12 @@ def main() -> int:
         phases = ", ".join(
             f"{k} {v['max_abs_rad_s'] * rpm:.3g} rpm" for k, v in d["speed_by_phase"].items()
         )
+        own = d["vs_motulators_example"]
         print(
-            f"{name:<28} speed {d['speed_max_rel_to_peak']:.2e}, current "
-            f"{d['current_max_rel_to_peak']:.2e} of the peak; largest |dw| by phase: {phases}"
+            f"{name:<22} to acdrive: speed {d['speed_max_rel_to_peak']:.2e}, current "
+            f"{d['current_max_rel_to_peak']:.2e} of the peak; largest |dw| by phase: {phases}; "
+            f"to motulator's example: speed {own['speed_max_abs_rad_s'] * rpm:.3g} rpm "
+            f"({own['speed_max_rel_to_peak']:.2e} of the peak)"
         )
     return 0
 

@@ -784,9 +784,9 @@ def run_case(
 
 
 # --- the remaining differences, measured -------------------------------------------------------
-#: motulator's variants of the case (peers/motulator_im.py VARIANTS): the example, then with
-#: acdrive's speed PI law in place of its own
-MOTULATOR_VARIANTS = ("example", "clamping_speed_pi")
+#: motulator's variants of the case (peers/motulator_im.py VARIANTS): the example, with acdrive's
+#: speed PI law in place of its own, and with its own held to acdrive's fixed torque limit
+MOTULATOR_VARIANTS = ("example", "clamping_speed_pi", "fixed_limit_speed_pi")
 
 
 def remaining_differences(peer: dict, duration: float = DURATION, converter: str = "averaged",
@@ -794,7 +794,8 @@ def remaining_differences(peer: dict, duration: float = DURATION, converter: str
     """acdrive's run of the matched case against motulator's runs of its ``MOTULATOR_VARIANTS``
     (each recorded by the peer process in motulator's venv, ``peer``: ``ensure_venv``'s answer):
     per variant the largest speed and current differences relative to motulator's peaks
-    (``state_difference``) and the speed difference per phase (``speed_difference``). The step
+    (``state_difference``), the speed difference per phase (``speed_difference``), and the
+    variant's own distance from motulator's example (``vs_motulators_example``). The step
     between the variants is what the speed PI's anti-windup accounts for; what the last variant
     leaves is the current controller, the computational delay and the flux model
     (``MATCHED["control"]["differences"]``)."""
@@ -816,9 +817,11 @@ def remaining_differences(peer: dict, duration: float = DURATION, converter: str
                 proc.ask("record", converter=converter, seconds=duration, out=path,
                          variant=variant, tau_max=TAU_MAX)  # fmt: skip
                 m_states, _ = motulator_states(dict(np.load(path)))
+                example = m_states if variant == "example" else example
                 n = min(a_states.shape[0], m_states.shape[0]) - 1
                 out["variants"][variant] = {
                     **state_difference(a_states, m_states),
+                    "vs_motulators_example": state_difference(m_states, example),
                     "speed_by_phase": speed_difference(
                         a_states[:n, 4], m_states[:n, 4], np.arange(n) * T_S
                     ),

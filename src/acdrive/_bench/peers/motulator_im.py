@@ -98,14 +98,36 @@ class ClampingSpeedPI(control.PIController):
         self.e_int += T_s * self._step
 
 
-#: the example as it is, and with acdrive's speed PI, for the measured account of the remaining
-#: differences (benchmarks/bench_matched_im.py)
-VARIANTS = ("example", "clamping_speed_pi")
+class FixedLimitSpeedPI(control.PIController):
+    """motulator's speed PI (back-calculation on the realised torque) with its output clipped at
+    a fixed ``tau_max`` before the current limit, for the ``fixed_limit_speed_pi`` variant: the
+    integral then follows the fixed limit rather than the flux-dependent torque the current
+    limit realises."""
+
+    def __init__(self, k_p: float, k_i: float, tau_max: float) -> None:
+        super().__init__(k_p=k_p, k_i=k_i)
+        self.tau_max, self._u = tau_max, 0.0
+
+    def compute_output(self, y_ref: float, y: float, u_ff: float = 0.0) -> float:
+        u = super().compute_output(y_ref, y, u_ff)
+        self._u = min(max(u, -self.tau_max), self.tau_max)
+        return self._u
+
+    def update(self, T_s: float, u: float) -> None:
+        super().update(T_s, self._u)
+
+
+#: the example as it is, with acdrive's speed PI, and with its own PI held to acdrive's fixed
+#: torque limit, for the measured account of the remaining differences
+#: (benchmarks/bench_matched_im.py)
+VARIANTS = ("example", "clamping_speed_pi", "fixed_limit_speed_pi")
+SPEED_PIS = {"clamping_speed_pi": ClampingSpeedPI, "fixed_limit_speed_pi": FixedLimitSpeedPI}
 
 
 def build(pwm: bool, variant: str = "example", tau_max: float | None = None) -> model.Simulation:
     """The case; ``variant`` (``VARIANTS``): ``clamping_speed_pi`` replaces the speed PI by
-    ``ClampingSpeedPI`` at ``tau_max`` [N m]."""
+    ``ClampingSpeedPI`` at ``tau_max`` [N m], ``fixed_limit_speed_pi`` by
+    ``FixedLimitSpeedPI``."""
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
     par = model.InductionMachineInvGammaPars(**PAR)
@@ -123,7 +145,7 @@ def build(pwm: bool, variant: str = "example", tau_max: float | None = None) -> 
     if variant == "example":
         speed_ctrl = control.PIController(k_p=1, k_i=10)
     else:
-        speed_ctrl = ClampingSpeedPI(k_p=1, k_i=10, tau_max=tau_max)
+        speed_ctrl = SPEED_PIS[variant](k_p=1, k_i=10, tau_max=tau_max)
     ctrl = control.VectorControlSystem(vector_ctrl, speed_ctrl)
     ctrl.set_speed_ref(speed_reference)
     return model.Simulation(mdl, ctrl, show_progress=False)
