@@ -36,8 +36,9 @@ def test_acdrive_run_runs_a_pm_scenario(tmp_path, capsys):
     assert (folder / "data.parquet").is_file() and (folder / "columns.md").is_file()
     assert summary["speed_final_rad_s"] == pytest.approx(W_REF, abs=0.05)
     assert summary["torque_final_n_m"] == pytest.approx(LOAD + B * W_REF, rel=0.01)
-    out = capsys.readouterr().out
-    assert out.startswith(f"{SCENARIO}: final speed")
+    announced, headline = capsys.readouterr().out.splitlines()[:2]
+    assert announced.startswith(f"running {SCENARIO}: ")
+    assert headline.startswith(f"{SCENARIO}: final speed")
 
 
 def test_a_batch_of_pm_variants_carries_each_load():
