@@ -25,6 +25,7 @@ __all__, __getattr__, __dir__ = namespace(
         "PositionP": "._foc",
         "ComputationDelay": "._delay",
         "SpeedReference": "._speed",
+        "SynchronousFluxObserver": "._flux_observer",
         "SpeedPIGains": "._speed",
         "VoltageProgram": "._open_loop",
         "ComplexProgram": "._open_loop",
