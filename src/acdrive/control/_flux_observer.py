@@ -4,7 +4,12 @@ Mölsä, Tuovinen, "Observers for sensorless synchronous motor drives: framework
 analysis", IEEE Trans. Ind. Appl. 54(6), 2018 (the reduced-order observer with a complex gain
 pair k_1, k_2 and an angle-error signal driving a phase-locked loop), derived here for acdrive's
 machine model (``machines._pmsm_part``: power-invariant space vectors, psi_pm = sqrt(3/2) psi_m,
-motor reference arrows).
+motor reference arrows). The labels (O1)-(P2) are this module's own, not the paper's equation
+numbers: the error dynamics and the gain pair (G1) below are derived from the machine model here.
+The framework's gain pair uses an auxiliary flux in the place of a; a as defined in (O2) carries
+the saliency term (L_d - L_q) conj(i), which keeps the decoupling exact at a loaded operating
+point of a salient machine (without it the designed poles are missed:
+``tests/test_flux_observer.py``).
 
 **Model.** In coordinates at the estimated electrical angle theta (speed w_c = dtheta/dt) the
 stator flux obeys the voltage equation and the current model (hats: the observer's estimates of
