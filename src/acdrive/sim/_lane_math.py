@@ -23,7 +23,8 @@ Here the same functions are written as arithmetic only:
 
 ``LANE_MATH`` is the rebinding table (``sim._rebind``) that makes a kernel call these instead of
 numpy's: its ``np`` becomes ``LANE_NUMPY``, numpy's namespace with ``sin``, ``cos``, ``abs`` and
-``sqrt`` replaced. Every compiled tier uses it: the generated loops rebind each kernel they
+``sqrt`` replaced, and its ``math`` becomes ``LANE_PYTHON_MATH`` (``sin``, ``cos``, ``sqrt``).
+Every compiled tier uses it: the generated loops rebind each kernel they
 inline (``sim._loop_source``, the single and the lockstep loops, and ``sim._kernels``, a
 kind's kernels compiled alone), and the exported C and the native tier compute the same (the double
 build's ``acd_sincos`` and ``acd_cabs``, ``sim._ccode._prelude``, with these constants from
@@ -33,6 +34,7 @@ Python code outside the compiled loops (designs, analyses, reports) keeps numpy'
 
 from __future__ import annotations
 
+import math
 import types
 
 import numpy as np
@@ -156,5 +158,13 @@ LANE_NUMPY.__dict__.update({k: v for k, v in np.__dict__.items() if not k.starts
 LANE_NUMPY.sin, LANE_NUMPY.cos, LANE_NUMPY.abs = lane_sin, lane_cos, lane_abs
 LANE_NUMPY.sqrt = lane_sqrt
 
-#: the rebinding table (``sim._rebind``): a kernel's numpy becomes ``LANE_NUMPY``
-LANE_MATH = {id(np): LANE_NUMPY}
+#: Python's ``math`` with the lane forms of sin, cos and sqrt: a kernel may call either module,
+#: and the C translation maps both to the same functions (``sim._ccode._translate``)
+LANE_PYTHON_MATH = types.ModuleType("acdrive.sim._lane_python_math", "math with the lane forms "
+                                    "of sin, cos and sqrt (acdrive.sim._lane_math)")  # fmt: skip
+LANE_PYTHON_MATH.__dict__.update({k: v for k, v in math.__dict__.items() if not k.startswith("__")})
+LANE_PYTHON_MATH.sin, LANE_PYTHON_MATH.cos, LANE_PYTHON_MATH.sqrt = lane_sin, lane_cos, lane_sqrt
+
+#: the rebinding table (``sim._rebind``): a kernel's numpy becomes ``LANE_NUMPY``, its ``math``
+#: ``LANE_PYTHON_MATH``
+LANE_MATH = {id(np): LANE_NUMPY, id(math): LANE_PYTHON_MATH}
