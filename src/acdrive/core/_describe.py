@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from acdrive.core._signals import RULES, Var, pack_table
+from acdrive.core._signals import RULES, Var, pack_table, pack_table2d, unpack_table2d
 
 #: (section title, layout attribute) in the order a table lists them
 SECTIONS = (
@@ -157,7 +157,7 @@ def rule_text(var: Var) -> str:
 
 
 def kind_text(var: Var) -> str:
-    return "profile" if var.kind == "table" else var.kind
+    return {"table": "profile", "table2d": "2-D table"}.get(var.kind, var.kind)
 
 
 def format_number(x) -> str:
@@ -172,6 +172,13 @@ def format_number(x) -> str:
 
 def format_value(var: Var, value) -> str:
     """A parameter value without its unit: a number, or a profile's point count and span."""
+    if var.kind == "table2d":
+        try:
+            x, y, values = unpack_table2d(pack_table2d(var.name, value))
+        except (ValueError, TypeError):
+            return repr(value)
+        return (f"2-D table, {len(x)} x {len(y)} points, x {format_number(x[0])}.."
+                f"{format_number(x[-1])}, y {format_number(y[0])}..{format_number(y[-1])}")  # fmt: skip
     if var.kind != "table":
         return format_number(value)
     try:
@@ -186,7 +193,7 @@ def format_value(var: Var, value) -> str:
 
 
 def with_unit(text: str, unit: str) -> str:
-    return f"{text} {unit}" if unit and not text.startswith("profile") else text
+    return f"{text} {unit}" if unit and not text.startswith(("profile", "2-D table")) else text
 
 
 #: a full stop that ends a sentence: followed by a capital, not the dot of "et al." or "e.g."

@@ -15,6 +15,13 @@ Kinds:
   or a list of ``[time_s, value]`` points), stored at the *end* of a
   parameter layout as ``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]``; its length is chosen per instance,
   so kernels find it with :func:`acdrive.core.table_at` from a fixed start slot.
+* ``table2d``: a function of two variables on a rectangular grid (:class:`Table2D`: n_x >= 2
+  strictly increasing x breakpoints, n_y >= 2 strictly increasing y breakpoints, n_x x n_y
+  values, all finite), stored after every ``table`` as
+  ``[n_x, n_y, x_0 .. x_{n_x-1}, y_0 .. y_{n_y-1}, v_00, v_01 .. v_{n_x-1,n_y-1}]`` (the value
+  at (x_i, y_j) at ``v_{i n_y + j}``); kernels read it bilinearly with
+  :func:`acdrive.core.table2d_at` (clamped to the grid at its edges), from the slot
+  :func:`acdrive.core.table2d_offset` gives.
 """
 
 from __future__ import annotations
@@ -22,13 +29,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from acdrive.core._profile import ACCEPTED, Profile
 from acdrive.errors import InputError, UnknownField
 
-KINDS = ("real", "complex", "table")
+KINDS = ("real", "complex", "table", "table2d")
+#: the kinds sized per instance, stored after the fixed part of a layout in this order
+TABLE_KINDS = ("table", "table2d")
 #: value rules a real quantity or a table's values may declare, checked whenever values are
 #: packed (a part checks its parameters at construction)
 RULES = {
@@ -65,8 +75,8 @@ C_KEYWORDS = frozenset("""
 @dataclass(frozen=True)
 class Var:
     """One declared quantity: ``name`` (an identifier), SI ``unit`` ("" if dimensionless),
-    ``kind`` (real, complex or table), a one-line ``doc`` and, for a real quantity or a table
-    (each of its values), a value ``rule`` (one of ``RULES``) that packing enforces.
+    ``kind`` (real, complex, table or table2d), a one-line ``doc`` and, for a real quantity or a
+    table (each of its values), a value ``rule`` (one of ``RULES``) that packing enforces.
 
     ``derived`` marks a parameter that is not a free number of the built part: computed when
     the part is constructed (a discretised matrix, an order) or read only then (a gain that
@@ -113,6 +123,15 @@ class Var:
             n = int(packed[0])
             for value in packed[1 + n :]:
                 self.check(field, float(value))
+        return packed
+
+    def check_table2d(self, field: str, packed: np.ndarray) -> np.ndarray:
+        """A packed 2-D table (:func:`pack_table2d`) if each of its values obeys the declared
+        rule, else an InputError naming ``field.values`` and the first value that breaks it."""
+        if self.rule:
+            n_x, n_y = int(packed[0]), int(packed[1])
+            for value in packed[2 + n_x + n_y :]:
+                self.check(f"{field}.values", float(value))
         return packed
 
     @property
@@ -165,6 +184,11 @@ def table(name: str, unit: str, doc: str, rule: str = "") -> Var:
     return Var(name, unit, doc, "table", rule)
 
 
+def table2d(name: str, unit: str, doc: str, rule: str = "") -> Var:
+    """A 2-D table parameter (:class:`Table2D`); ``unit`` is the unit of its values."""
+    return Var(name, unit, doc, "table2d", rule)
+
+
 class Layout:
     """Ordered declarations and the flat float64 slots they occupy.
 
@@ -186,14 +210,19 @@ class Layout:
             for f in relation.fields:
                 if f not in names or self.var(f).kind != "real":
                     raise ValueError(f"relation {relation.rule!r}: {f} is not a declared real")
-        seen_table = False
+        seen_table = seen_table2d = False
         self._slots: dict[str, int] = {}
         offset = 0
         for v in self.vars:
+            if v.kind == "table2d":
+                seen_table2d = True
+                continue
             if v.kind == "table":
+                if seen_table2d:
+                    raise ValueError(f"{v.name}: 2-D tables must come after every table")
                 seen_table = True
                 continue
-            if seen_table:
+            if seen_table or seen_table2d:
                 raise ValueError(
                     f"{v.name}: tables must come after every real and complex quantity"
                 )
@@ -201,7 +230,10 @@ class Layout:
             offset += v.width
         self.fixed_size = offset
         self.tables = tuple(v for v in self.vars if v.kind == "table")
-        self._one_point_size = self.fixed_size + 3 * len(self.tables)  # size() of one-point tables
+        #: the 2-D tables, stored after the tables (``core._tables.table2d_offset``)
+        self.tables2d = tuple(v for v in self.vars if v.kind == "table2d")
+        # size() of one-point tables and 2 x 2 2-D tables
+        self._one_point_size = self.fixed_size + 3 * len(self.tables) + 10 * len(self.tables2d)
 
     def extended(self, *variables: Var) -> Layout:
         """This layout with ``variables`` appended and the same relations: every quantity
@@ -243,14 +275,18 @@ class Layout:
         """Floats needed for this layout with the given number of points per table."""
         if not table_lengths:
             return self._one_point_size
-        return self.fixed_size + sum(1 + 2 * table_lengths.get(v.name, 1) for v in self.tables)
+        return (
+            self.fixed_size
+            + sum(1 + 2 * table_lengths.get(v.name, 1) for v in self.tables)
+            + 10 * len(self.tables2d)
+        )
 
     def columns(self, prefix: str = "") -> list[tuple[str, str, str, int]]:
         """(column name, unit, kind, first slot) per float of the fixed part: a complex
         quantity gives ``name.re`` and ``name.im``."""
         out = []
         for v in self.vars:
-            if v.kind == "table":
+            if v.kind in TABLE_KINDS:
                 continue
             full = f"{prefix}{v.name}"
             s = self._slots[v.name]
@@ -276,12 +312,15 @@ class Layout:
                 f"is not declared by {owner} ({', '.join(v.name for v in self.vars)})",
             )
         fixed = np.zeros(self.fixed_size)
-        tables = []
+        tables, tables2d = [], []
         for v in self.vars:
             field = f"{owner}.{v.name}"
             if v.name not in merged:
                 raise InputError(field, "must be given")
             value = merged[v.name]
+            if v.kind == "table2d":
+                tables2d.append(v.check_table2d(field, pack_table2d(field, value)))
+                continue
             if v.kind == "table":
                 tables.append(v.check_table(field, pack_table(field, value)))
                 continue
@@ -293,13 +332,13 @@ class Layout:
                 fixed[s] = v.checked(field, value)
         if self.relations:
             self.check_relations(owner, {n: float(fixed[s]) for n, s in self._slots.items()})
-        return np.concatenate([fixed, *tables]) if tables else fixed
+        return np.concatenate([fixed, *tables, *tables2d]) if tables or tables2d else fixed
 
     def unpack(self, array: np.ndarray) -> dict:
         """name -> value (float or complex) for the fixed part of ``array``."""
         out = {}
         for v in self.vars:
-            if v.kind == "table":
+            if v.kind in TABLE_KINDS:
                 continue
             s = self._slots[v.name]
             out[v.name] = (
@@ -359,3 +398,77 @@ def pack_table(field: str, value) -> np.ndarray:
     if times[0] < 0 or np.any(np.diff(times) < 0):
         raise InputError(field, "times must be >= 0 and non-decreasing")
     return np.concatenate([[float(times.size)], times, values])
+
+
+class Table2D(NamedTuple):
+    """The value of a ``table2d`` parameter: ``values[i][j]`` at (``x[i]``, ``y[j]``); ``x``
+    and ``y`` strictly increasing, at least two breakpoints each, everything finite. Read
+    bilinearly inside the grid, clamped at its edges (``core._tables.table2d_at``)."""
+
+    x: object
+    y: object
+    values: object
+
+
+#: the forms a 2-D table parameter is given in
+ACCEPTED_2D = "Table2D(x, y, values) or a table {x = [...], y = [...], values = [[...], ...]}"
+
+
+def pack_table2d(field: str, value) -> np.ndarray:
+    """``[n_x, n_y, x.., y.., values row by row]`` from a :class:`Table2D` or a mapping with keys
+    ``x``, ``y``, ``values`` (a scenario's table); an InputError naming ``field`` (or
+    ``field.x``, ``field.y``, ``field.values``) and the rule otherwise."""
+    if isinstance(value, dict):
+        unknown = sorted(set(value) - {"x", "y", "values"})
+        if unknown:
+            raise InputError(f"{field}.{unknown[0]}", f"is not a key of a 2-D table ({ACCEPTED_2D})")
+        missing = [k for k in ("x", "y", "values") if k not in value]
+        if missing:
+            raise InputError(f"{field}.{missing[0]}", f"must be given ({ACCEPTED_2D})")
+        value = Table2D(value["x"], value["y"], value["values"])
+    if not isinstance(value, Table2D):
+        raise InputError(field, f"must be {ACCEPTED_2D}")
+    axes = []
+    for name in ("x", "y"):
+        where = f"{field}.{name}"
+        try:
+            axis = np.asarray(getattr(value, name), dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(where, "must be a list of numbers") from None
+        if axis.ndim != 1 or axis.size < 2:
+            raise InputError(where, f"must be a list of at least 2 numbers, got shape {axis.shape}")
+        if not np.all(np.isfinite(axis)):
+            raise InputError(where, "must be finite (not NaN or infinite)")
+        steps = np.diff(axis)
+        if np.any(steps <= 0.0):
+            k = int(np.argmax(steps <= 0.0))
+            raise InputError(
+                where,
+                f"must be strictly increasing, got {axis[k]:g} then {axis[k + 1]:g} "
+                f"(entries {k} and {k + 1})",
+            )
+        axes.append(axis)
+    x, y = axes
+    try:
+        values = np.asarray(value.values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{field}.values", "must be a list of rows of numbers") from None
+    if values.shape != (x.size, y.size):
+        raise InputError(
+            f"{field}.values",
+            f"must have len(x) = {x.size} rows of len(y) = {y.size} values, got shape "
+            f"{values.shape}",
+        )
+    if not np.all(np.isfinite(values)):
+        i, j = np.argwhere(~np.isfinite(values))[0]
+        raise InputError(f"{field}.values", f"must be finite, got {values[i, j]} at row {i}, column {j}")
+    return np.concatenate([[float(x.size), float(y.size)], x, y, values.ravel()])
+
+
+def unpack_table2d(packed: np.ndarray) -> Table2D:
+    """The :class:`Table2D` of a packed 2-D table (arrays)."""
+    n_x, n_y = int(packed[0]), int(packed[1])
+    x = np.array(packed[2 : 2 + n_x])
+    y = np.array(packed[2 + n_x : 2 + n_x + n_y])
+    values = np.array(packed[2 + n_x + n_y : 2 + n_x + n_y + n_x * n_y]).reshape(n_x, n_y)
+    return Table2D(x, y, values)

@@ -1,7 +1,8 @@
 """Piecewise-linear tables stored inside a part's flat parameter array (see ``core._signals``).
 
 A table occupies ``[n, t_0 .. t_{n-1}, v_0 .. v_{n-1}]``; tables follow one another after the
-fixed parameters, so the k-th table starts where the (k-1)-th ends.
+fixed parameters, so the k-th table starts where the (k-1)-th ends. 2-D tables
+``[n_x, n_y, x.., y.., values]`` follow the tables the same way.
 """
 
 from __future__ import annotations
@@ -81,3 +82,62 @@ def tables_next_time(p, first, count, t):
             earliest = later
         offset += 1 + 2 * int(p[offset])
     return earliest
+
+
+@jit_inline
+def table2d_offset(p, first, k):
+    """Start slot of the k-th 2-D table (0-based) when the first 2-D table starts at ``first``
+    (``[n_x, n_y, x.., y.., values]`` each, ``core._signals``)."""
+    offset = first
+    for _ in range(k):
+        n_x = int(p[offset])
+        n_y = int(p[offset + 1])
+        offset += 2 + n_x + n_y + n_x * n_y
+    return offset
+
+
+@jit_inline
+def table2d_at(p, offset, x, y):
+    """Bilinear interpolation at (x, y) of the 2-D table starting at slot ``offset``; a point
+    outside the grid is first clamped to it (each coordinate to its axis's range), so the edge
+    values are held outside. In the cell x_i <= x <= x_{i+1}, y_j <= y <= y_{j+1}, with
+    f_x = (x - x_i) / (x_{i+1} - x_i) and f_y likewise:
+    v = a + (b - a) f_y, a = v_ij + (v_{i+1,j} - v_ij) f_x, b = v_{i,j+1} + (v_{i+1,j+1} - v_{i,j+1}) f_x."""
+    n_x = int(p[offset])
+    n_y = int(p[offset + 1])
+    x0 = offset + 2
+    y0 = x0 + n_x
+    v0 = y0 + n_y
+    if x < p[x0]:
+        x = p[x0]
+    if x > p[x0 + n_x - 1]:
+        x = p[x0 + n_x - 1]
+    if y < p[y0]:
+        y = p[y0]
+    if y > p[y0 + n_y - 1]:
+        y = p[y0 + n_y - 1]
+    lo, hi = 0, n_x - 1  # invariant: x_lo <= x <= x_hi, the cell [lo, lo + 1] at the end
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if p[x0 + mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    i = lo
+    lo, hi = 0, n_y - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if p[y0 + mid] <= y:
+            lo = mid
+        else:
+            hi = mid
+    j = lo
+    f_x = (x - p[x0 + i]) / (p[x0 + i + 1] - p[x0 + i])
+    f_y = (y - p[y0 + j]) / (p[y0 + j + 1] - p[y0 + j])
+    v_00 = p[v0 + i * n_y + j]
+    v_01 = p[v0 + i * n_y + j + 1]
+    v_10 = p[v0 + (i + 1) * n_y + j]
+    v_11 = p[v0 + (i + 1) * n_y + j + 1]
+    a = v_00 + (v_10 - v_00) * f_x
+    b = v_01 + (v_11 - v_01) * f_x
+    return a + (b - a) * f_y

@@ -145,7 +145,7 @@ def _parameters(parts, prefix) -> list[Variable]:
     out = []
     for part in parts:
         for v in part.PARAMS:
-            if v.kind == "table":
+            if v.kind in ("table", "table2d"):  # fixed in the exported C, not FMU variables
                 continue
             k = part.PARAMS.slot(v.name)
             causality = "calculatedParameter" if v.derived else "parameter"

@@ -87,6 +87,11 @@ def _ctype(member: Member, real, types: dict):
     if spec[0] == "table":
         n = spec[1]
         return _structure(f"table_{n}", [("n", ctypes.c_int), ("t", real * n), ("v", real * n)])
+    if spec[0] == "table2d":
+        nx, ny = spec[1], spec[2]
+        return _structure(f"table2d_{nx}_{ny}", [("nx", ctypes.c_int), ("ny", ctypes.c_int),
+                                                 ("x", real * nx), ("y", real * ny),
+                                                 ("v", real * (nx * ny))])  # fmt: skip
     return types[spec[1]]
 
 

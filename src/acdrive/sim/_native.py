@@ -338,12 +338,12 @@ def native_source(system) -> NativeSource:
                 continue
             target = f"pp->{part.name}"
         for v in part.PARAMS:
-            if v.kind == "table":
+            if v.kind in ("table", "table2d"):
                 continue
             k = part.PARAMS.slot(v.name)
             for j, lv in enumerate(_value(f"{target}.{v.name}", v)):
                 P_lines.append(f"    {lv} = P[PO[{i}] + {k + j}];")
-        if part.PARAMS.tables:
+        if part.PARAMS.tables or part.PARAMS.tables2d:
             P_lines.append(f"    o = PO[{i}] + {part.PARAMS.table_start};")
         for v in part.PARAMS.tables:
             tab = f"{target}.{v.name}"
@@ -352,6 +352,16 @@ def native_source(system) -> NativeSource:
                         f"        {tab}.t[j] = P[o + 1 + j];",
                         f"        {tab}.v[j] = P[o + 1 + n + j];", "    }",
                         "    o += 1 + 2 * (int64_t)n;"]  # fmt: skip
+        for v in part.PARAMS.tables2d:  # [n_x, n_y, x.., y.., values] after the tables
+            tab = f"{target}.{v.name}"
+            P_lines += [f"    {tab}.nx = (int)P[o];", f"    {tab}.ny = (int)P[o + 1];",
+                        f"    for (j = 0; j < {tab}.nx; ++j) {{",
+                        f"        {tab}.x[j] = P[o + 2 + j];", "    }",
+                        f"    for (j = 0; j < {tab}.ny; ++j) {{",
+                        f"        {tab}.y[j] = P[o + 2 + {tab}.nx + j];", "    }",
+                        f"    for (j = 0; j < {tab}.nx * {tab}.ny; ++j) {{",
+                        f"        {tab}.v[j] = P[o + 2 + {tab}.nx + {tab}.ny + j];", "    }",
+                        f"    o += 2 + {tab}.nx + {tab}.ny + (int64_t){tab}.nx * {tab}.ny;"]  # fmt: skip
     chain_args = "".join(f", acdn_{m.chain.name} *c_{m.chain.name}" for m in models)
     emit(
         f"static void acdn_params(const double *P, const int64_t *PO, {_PLANT}_params *pp{chain_args})"

@@ -43,8 +43,8 @@ def layout_of(part, role: str):
 
 @dataclass
 class Member:
-    """One struct member: ``spec`` is "real", "complex", "uint32", ("table", points) or
-    ("struct", type name, [members])."""
+    """One struct member: ``spec`` is "real", "complex", "uint32", ("table", points),
+    ("table2d", x points, y points) or ("struct", type name, [members])."""
 
     name: str
     spec: object
@@ -82,6 +82,24 @@ def _tables(part) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def _tables2d(part) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Each 2-D table parameter of ``part``: (x, y, values row by row), read from its packed
+    parameters (after its tables)."""
+    out, offset = {}, part.PARAMS.table_start
+    for v in part.PARAMS.tables:
+        offset += 1 + 2 * int(part.p[offset])
+    for v in part.PARAMS.tables2d:
+        n_x, n_y = int(part.p[offset]), int(part.p[offset + 1])
+        x0 = offset + 2
+        out[v.name] = (
+            part.p[x0 : x0 + n_x],
+            part.p[x0 + n_x : x0 + n_x + n_y],
+            part.p[x0 + n_x + n_y : x0 + n_x + n_y + n_x * n_y],
+        )
+        offset += 2 + n_x + n_y + n_x * n_y
+    return out
+
+
 def _comment(var) -> str:
     return f"[{var.unit or '-'}] {var.doc}"
 
@@ -111,14 +129,17 @@ def kind_types(parts, lookup=c_step_of) -> dict[type, KindTypes]:
                 if v.kind == "table":
                     points = len(_tables(part)[v.name][0])
                     members.append(Member(v.name, ("table", points), _comment(v)))
+                elif v.kind == "table2d":
+                    x, y, _ = _tables2d(part)[v.name]
+                    members.append(Member(v.name, ("table2d", len(x), len(y)), _comment(v)))
                 else:
                     members.append(Member(v.name, v.kind, _comment(v)))
             old = entry.members.get(role)
             if old is None:
                 entry.members[role] = members
                 continue
-            if [(m.name, m.spec if not isinstance(m.spec, tuple) else "table") for m in old] != [
-                (m.name, m.spec if not isinstance(m.spec, tuple) else "table") for m in members
+            if [(m.name, m.spec if not isinstance(m.spec, tuple) else m.spec[0]) for m in old] != [
+                (m.name, m.spec if not isinstance(m.spec, tuple) else m.spec[0]) for m in members
             ]:
                 raise InputError(
                     part.name,
@@ -126,8 +147,10 @@ def kind_types(parts, lookup=c_step_of) -> dict[type, KindTypes]:
                     "one C kind needs one layout",
                 )
             for a, b in zip(old, members, strict=True):
-                if isinstance(a.spec, tuple):
+                if isinstance(a.spec, tuple) and a.spec[0] == "table":
                     a.spec = ("table", max(a.spec[1], b.spec[1]))
+                elif isinstance(a.spec, tuple) and a.spec[0] == "table2d":
+                    a.spec = ("table2d", max(a.spec[1], b.spec[1]), max(a.spec[2], b.spec[2]))
     return kinds
 
 
@@ -156,6 +179,11 @@ def _declaration(m: Member, kind: str = "") -> str:
     if m.spec[0] == "table":
         n = f"ACD_{kind.upper()}_{m.name.upper()}_POINTS" if kind else m.spec[1]
         return f"struct {{ int n; ACDRIVE_REAL t[{n}]; ACDRIVE_REAL v[{n}]; }} {m.name};"
+    if m.spec[0] == "table2d":
+        name = f"ACD_{kind.upper()}_{m.name.upper()}"
+        nx, ny = (f"{name}_X_POINTS", f"{name}_Y_POINTS") if kind else m.spec[1:]
+        return (f"struct {{ int nx; int ny; ACDRIVE_REAL x[{nx}]; ACDRIVE_REAL y[{ny}]; "
+                f"ACDRIVE_REAL v[({nx}) * ({ny})]; }} {m.name};")  # fmt: skip
     return f"{m.spec[1]} {m.name};"
 
 
@@ -270,6 +298,14 @@ def part_params_lines(part) -> list[str]:
             for i, (a, b) in enumerate(zip(times, values, strict=True)):
                 lines.append(f"p->{part.name}.{v.name}.t[{i}] = {literal(a, where)};")
                 lines.append(f"p->{part.name}.{v.name}.v[{i}] = {literal(b, where)};")
+            continue
+        if v.kind == "table2d":
+            target = f"p->{part.name}.{v.name}"
+            x, y, values = _tables2d(part)[v.name]
+            lines += [f"{target}.nx = {len(x)};", f"{target}.ny = {len(y)};"]
+            for axis, points in (("x", x), ("y", y), ("v", values)):
+                lines += [f"{target}.{axis}[{i}] = {literal(a, where)};"
+                          for i, a in enumerate(points)]  # fmt: skip
             continue
         k = part.PARAMS.slot(v.name)
         lines += _value_lines(f"p->{part.name}.{v.name}", v, part.p[k : k + v.width], where)
@@ -404,6 +440,10 @@ def kind_declarations(kinds) -> list[str]:
                     H.append(
                         f"#define ACD_{entry.cname.upper()}_{m.name.upper()}_POINTS {m.spec[1]}"
                     )
+                if isinstance(m.spec, tuple) and m.spec[0] == "table2d":
+                    name = f"ACD_{entry.cname.upper()}_{m.name.upper()}"
+                    H += [f"#define {name}_X_POINTS {m.spec[1]}",
+                          f"#define {name}_Y_POINTS {m.spec[2]}"]  # fmt: skip
             H += _struct_lines(
                 f"acd_{entry.cname}_{role}", members, f"{cls.__name__} {role}: {first}", entry.cname
             )

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import inspect
 
-from acdrive.sim._ccode._pieces import TABLE_AT, TANH, CStep, CSupport, PlantC, kind_name
+from acdrive.sim._ccode._pieces import TABLE2D_AT, TABLE_AT, TANH, CStep, CSupport, PlantC, kind_name
 from acdrive.sim._ccode._translate import (
     Role,
     Translated,
@@ -117,7 +117,7 @@ def _kernel_layouts(cls, part=None) -> dict[str, Role]:
 
 def _support(translated: Translated) -> tuple:
     helpers = tuple(CSupport(name, text) for name, text in translated.helpers)
-    return (TABLE_AT, TANH, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
+    return (TABLE_AT, TABLE2D_AT, TANH, CSupport("kernel_arithmetic", KERNEL_ARITHMETIC), *helpers)
 
 
 #: translations of per-instance kinds, by what they depend on (``_structure``): the body and the

@@ -139,6 +139,63 @@ static ACDRIVE_REAL acd_table_at(int n, const ACDRIVE_REAL *times, const ACDRIVE
 """,
 )
 
+#: core._tables.table2d_at: bilinear in the grid, each coordinate clamped to its axis first; the
+#: same operations in the same order. 32 bisection passes cover any axis an int counts.
+TABLE2D_AT = CSupport(
+    "table2d_at",
+    r"""
+static ACDRIVE_REAL acd_table2d_at(int nx, int ny, const ACDRIVE_REAL *xs, const ACDRIVE_REAL *ys,
+                                   const ACDRIVE_REAL *v, ACDRIVE_REAL x, ACDRIVE_REAL y)
+{
+    int lo, hi, i, j, pass;
+    ACDRIVE_REAL fx, fy, v00, v01, v10, v11, a, b;
+    if (x < xs[0]) {
+        x = xs[0];
+    }
+    if (x > xs[nx - 1]) {
+        x = xs[nx - 1];
+    }
+    if (y < ys[0]) {
+        y = ys[0];
+    }
+    if (y > ys[ny - 1]) {
+        y = ys[ny - 1];
+    }
+    lo = 0;
+    hi = nx - 1;
+    for (pass = 0; pass < 32 && hi - lo > 1; ++pass) { /* xs[lo] <= x <= xs[hi] */
+        int mid = (lo + hi) / 2;
+        if (xs[mid] <= x) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    i = lo;
+    lo = 0;
+    hi = ny - 1;
+    for (pass = 0; pass < 32 && hi - lo > 1; ++pass) { /* ys[lo] <= y <= ys[hi] */
+        int mid = (lo + hi) / 2;
+        if (ys[mid] <= y) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    j = lo;
+    fx = (x - xs[i]) / (xs[i + 1] - xs[i]);
+    fy = (y - ys[j]) / (ys[j + 1] - ys[j]);
+    v00 = v[i * ny + j];
+    v01 = v[i * ny + j + 1];
+    v10 = v[(i + 1) * ny + j];
+    v11 = v[(i + 1) * ny + j + 1];
+    a = v00 + (v10 - v00) * fx;
+    b = v01 + (v11 - v01) * fx;
+    return a + (b - a) * fy;
+}
+""",
+)
+
 #: tanh by precision (newlib's libm has both), for the shaft's Coulomb friction (np.tanh of a kernel)
 TANH = CSupport(
     "tanh",

@@ -7,7 +7,9 @@ The kernel language is the subset of Python the part kernels are written in (doc
   slots that are constants of the module (``y[_F_O_IS]``, ``y[_F_O_IS + 1]``, ``u[i]`` inside a
   ``for i in range(4)`` with a constant bound). Each slot resolves through the layout to a struct
   member: a real quantity ``p->R_r``, the parts of a complex one ``y->i_s_ref.re`` and ``.im``;
-  a table by ``table_at(p, TABLE, t)`` (its start slot, or ``table_offset(p, START, k)``); a
+  a table by ``table_at(p, TABLE, t)`` (its start slot, or ``table_offset(p, START, k)``), a
+  2-D table by ``table2d_at(p, TABLE2D, x, y)`` (the start slot of the layout's tables when it
+  has no 1-D table, or ``table2d_offset(p, START, k)`` from there); a
   modulator's segment lengths ``dt[i]`` and outputs ``v[i, SLOT]`` at run-time indices; an
   array passed on to a helper, which is then written for that kind's struct;
 * **scalars**: float, int and bool locals (declared at the top of the C function with the type
@@ -319,7 +321,7 @@ class _Function:
             self.fail(node, f"the slot of {node.value.id}[...] is not a constant of the module")
         k += role.offset
         for v in role.layout:
-            if v.kind == "table":
+            if v.kind in ("table", "table2d"):
                 continue
             first = role.layout.slot(v.name)
             if first <= k < first + v.width:
@@ -668,6 +670,10 @@ class _Function:
             return self._table_at(node)
         if target is _tables.table_offset:
             return self._table_offset(node)
+        if target is _tables.table2d_at:
+            return self._table2d_at(node)
+        if target is _tables.table2d_offset:
+            return self._table2d_offset(node)
         if target is not None and _is_kernel_function(target):
             return self._helper_call(node, target)
         args = [self.expr(a) for a in node.args]
@@ -732,11 +738,14 @@ class _Function:
         role = self.roles.get(array.id) if isinstance(array, ast.Name) else None
         if role is None:
             self.fail(node, f"{where} of other than one of the kernel's arrays")
+        names = [v.name for v in role.layout.tables]
         if isinstance(where_node := node.args[1], ast.Name) and where_node.id in self.tables:
+            if self.tables[where_node.id] not in names:
+                self.fail(node, f"{where} of a 2-D table")
             return role, self.tables[where_node.id]
         if isinstance(where_node, ast.Call):
             text, t = self.expr(where_node)
-            if isinstance(t, tuple) and t[0] == "table":
+            if isinstance(t, tuple) and t[0] == "table" and t[1] in names:
                 return role, t[1]
         start = self.constant(where_node)
         tables = role.layout.tables
@@ -770,6 +779,57 @@ class _Function:
                 or not 0 <= first + k < len(role.layout.tables)):  # fmt: skip
             self.fail(node, "table_offset of other than a table of the kernel's layouts")
         return "", ("table", role.layout.tables[first + k].name)
+
+    def _table2d(self, node, where_node) -> tuple[Role, str]:
+        """(role, 2-D table name) of ``table2d_at``'s first two arguments: the layout's table
+        start slot (the first 2-D table of a layout without tables), a local holding a
+        ``table2d_offset`` or a ``table2d_offset`` call."""
+        array = node.args[0]
+        role = self.roles.get(array.id) if isinstance(array, ast.Name) else None
+        if role is None:
+            self.fail(node, "table2d_at of other than one of the kernel's arrays")
+        names = [v.name for v in role.layout.tables2d]
+        if isinstance(where_node, ast.Name) and where_node.id in self.tables:
+            if self.tables[where_node.id] not in names:
+                self.fail(node, "table2d_at of a table that is not a 2-D table")
+            return role, self.tables[where_node.id]
+        if isinstance(where_node, ast.Call):
+            _, t = self.expr(where_node)
+            if isinstance(t, tuple) and t[0] == "table" and t[1] in names:
+                return role, t[1]
+        start = self.constant(where_node)
+        if not names or role.layout.tables or start != role.layout.table_start:
+            self.fail(node, "table2d_at of other than a 2-D table of the kernel's layouts")
+        return role, names[0]
+
+    def _table2d_at(self, node):
+        if len(node.args) != 4:
+            self.fail(node, "table2d_at other than table2d_at(p, TABLE2D, x, y)")
+        role, name = self._table2d(node, node.args[1])
+        x, tx = self.expr(node.args[2])
+        y, ty = self.expr(node.args[3])
+        v = f"{role.name}->{name}"
+        return (f"acd_table2d_at({v}.nx, {v}.ny, {v}.x, {v}.y, {v}.v, {self.as_real(x, tx)}, "
+                f"{self.as_real(y, ty)})", REAL)  # fmt: skip
+
+    def _table2d_offset(self, node):
+        """``table2d_offset(p, START, k)``: 2-D table k of a layout without tables (START its
+        table start slot); ``table2d_offset(p, q, k)`` with ``q`` a 2-D table of the layout:
+        the k-th 2-D table after it (a name, no C)."""
+        if len(node.args) != 3 or not isinstance(node.args[0], ast.Name):
+            self.fail(node, "table2d_offset other than table2d_offset(p, START, k)")
+        role = self.roles.get(node.args[0].id)
+        k = self.constant(node.args[2])
+        start, first = node.args[1], None
+        names = [v.name for v in role.layout.tables2d] if role is not None else []
+        if (role is not None and not role.layout.tables
+                and self.constant(start) == role.layout.table_start):  # fmt: skip
+            first = 0
+        elif isinstance(start, ast.Name) and self.tables.get(start.id) in names:
+            first = names.index(self.tables[start.id])
+        if first is None or not isinstance(k, int) or not 0 <= first + k < len(names):
+            self.fail(node, "table2d_offset of other than a 2-D table of the kernel's layouts")
+        return "", ("table", names[first + k])
 
     def _helper_call(self, node, target):
         """A call of another kernel-language function. An array argument passes the struct
