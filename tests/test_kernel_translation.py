@@ -134,14 +134,15 @@ _ROLES = (("in", "INPUTS", "u"), ("params", "PARAMS", "p"), ("state", "STATES", 
 
 
 def _members(layout) -> list[Member]:
-    return [Member(v.name, ("table", POINTS) if v.kind == "table" else v.kind) for v in layout]
+    specs = {"table": ("table", POINTS), "table2d": ("table2d", POINTS, POINTS)}
+    return [Member(v.name, specs.get(v.kind, v.kind)) for v in layout]
 
 
 def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]:
     """C lines copying between a flat array (the kernel's) and a struct (the C step's)."""
     lines = []
     for v in layout:
-        if v.kind == "table":
+        if v.kind in ("table", "table2d"):
             continue
         k = layout.slot(v.name)
         parts = [(f"{struct}.{v.name}.re", k), (f"{struct}.{v.name}.im", k + 1)] if (
@@ -158,6 +159,16 @@ def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]
                       f"        {struct}.{v.name}.v[i] = {array}[{offset} + 1 + {POINTS} + i];",
                       "    }"]  # fmt: skip
         offset += 1 + 2 * POINTS
+    for v in layout.tables2d:  # POINTS x POINTS grids
+        if into_struct:
+            lines += [f"    {struct}.{v.name}.nx = {POINTS};", f"    {struct}.{v.name}.ny = {POINTS};",
+                      f"    for (i = 0; i < {POINTS}; ++i) {{",
+                      f"        {struct}.{v.name}.x[i] = {array}[{offset} + 2 + i];",
+                      f"        {struct}.{v.name}.y[i] = {array}[{offset} + 2 + {POINTS} + i];",
+                      "    }", f"    for (i = 0; i < {POINTS * POINTS}; ++i) {{",
+                      f"        {struct}.{v.name}.v[i] = {array}[{offset} + 2 + {2 * POINTS} + i];",
+                      "    }"]  # fmt: skip
+        offset += 2 + 2 * POINTS + POINTS * POINTS
     return lines
 
 
@@ -246,6 +257,9 @@ def _flat(rng, layout) -> tuple[np.ndarray, list[float]]:
         t[2] = t[1]  # a vertical step
         tables += [np.array([float(POINTS)]), t, _values(rng, POINTS)]
         times += list(t)
+    for _ in layout.tables2d:  # strictly increasing axes in [-2, 2], where draws land often
+        axes = [np.sort(rng.uniform(-2.0, 2.0, POINTS)) for _ in range(2)]
+        tables += [np.array([float(POINTS), float(POINTS)]), *axes, _values(rng, POINTS**2)]
     return np.concatenate([fixed, *tables]) if tables else fixed, times
 
 

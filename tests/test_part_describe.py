@@ -56,7 +56,7 @@ def test_describe_lists_exactly_the_declarations(name):
         assert [r.name for r in section.rows] == [v.name for v in layout]
         for row, var in zip(section.rows, layout, strict=True):
             assert row.unit == var.unit and row.description == var.doc
-            assert row.kind == ("profile" if var.kind == "table" else var.kind)
+            assert row.kind == {"table": "profile", "table2d": "2-D table"}.get(var.kind, var.kind)
         if title == "parameters":
             for row in section.rows:
                 assert (row.value == "required") == (row.name not in kind.DEFAULTS)
