@@ -30,7 +30,6 @@ from acdrive.machines import (
     read_syre_mat,
     write_flux_map_csv,
 )
-from acdrive.machines._flux_map import bilinear
 from acdrive.machines._synchronous_part import magnetic_currents
 from acdrive.plant._mechanics import Shaft
 from acdrive.sim import System, _native
@@ -100,7 +99,7 @@ def flux_map_of(machine: SynchronousMachine, i_d, i_q) -> FluxMap:
 
 
 def vf_run(machine, J, duration=0.06):
-    """An open-loop V/f program into ``machine`` on a free shaft (as in test_synchronous_machine)."""
+    """An open-loop V/f program into ``machine`` on a free shaft (test_synchronous_machine's)."""
     shaft = Shaft("shaft", J=J, B=1e-4)
     program = VoltageProgram("program", V_pk=[[0.0, 5.0], [0.05, 60.0]],
                              f=[[0.0, 1.0], [0.05, 20.0]])  # fmt: skip
@@ -145,8 +144,9 @@ def test_a_map_of_the_algebraic_model_runs_as_it_within_the_interpolation_bound(
     )
     bound = 0.0
     for t in machine.tables():
-        second = np.abs(np.diff(t.values, 2, axis=0)).max() + np.abs(np.diff(t.values, 2, axis=1)).max()
-        bound = max(bound, second / 8.0)
+        along_d = np.abs(np.diff(t.values, 2, axis=0)).max()
+        along_q = np.abs(np.diff(t.values, 2, axis=1)).max()
+        bound = max(bound, (along_d + along_q) / 8.0)
     reference, run = run_of(syrm, SYRM_6_7KW.J), run_of(machine, SYRM_6_7KW.J)
     i_ref = reference.signal(syrm.out.i_dq)
     assert 30.0 < np.max(np.abs(i_ref)) < 80.0  # saturating, inside the map
@@ -202,7 +202,8 @@ def test_a_map_that_folds_is_refused_naming_the_point():
     d, q, psi_d, psi_q = linear_map(grid, grid)
     psi_d = psi_d + 4e-3 * q * (d >= 8.0)  # d psi_d/d i_q = 4e-3 only in the last column
     psi_q = psi_q + 4e-3 * d * (q >= 8.0)
-    with pytest.raises(InputError, match=r"^flux_map: is not invertible at \(i_d, i_q\) = \(8, 8\) A: .* determinant -6e-06"):
+    with pytest.raises(InputError, match=(r"^flux_map: is not invertible at \(i_d, i_q\) = "
+                                          r"\(8, 8\) A: .* determinant -6e-06")):  # fmt: skip
         FluxMap(grid, grid, psi_d, psi_q)
 
 
@@ -249,7 +250,8 @@ def test_a_csv_with_a_missing_point_is_refused_naming_it(tmp_path):
     path = write_flux_map_csv(FluxMap(grid, grid, *linear_map(grid, grid)[2:]), tmp_path / "m.csv")
     lines = path.read_text().splitlines()
     path.write_text("\n".join(lines[:-1]) + "\n")
-    with pytest.raises(InputError, match=r"every grid point once: \(i_d, i_q\) = \(10, 10\) A is there not at all"):
+    with pytest.raises(InputError, match=(r"every grid point once: \(i_d, i_q\) = \(10, 10\) "
+                                          r"A is there not at all")):  # fmt: skip
         read_flux_map_csv(path)
     path.write_text("\n".join(["# scaling: rms", *lines[1:]]))
     with pytest.raises(InputError, match=r"m\.csv:1: must be '# scaling: peak or power-invariant'"):

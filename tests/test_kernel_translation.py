@@ -161,7 +161,8 @@ def _copy_lines(layout, struct: str, array: str, into_struct: bool) -> list[str]
         offset += 1 + 2 * POINTS
     for v in layout.tables2d:  # POINTS x POINTS grids
         if into_struct:
-            lines += [f"    {struct}.{v.name}.nx = {POINTS};", f"    {struct}.{v.name}.ny = {POINTS};",
+            lines += [f"    {struct}.{v.name}.nx = {POINTS};",
+                      f"    {struct}.{v.name}.ny = {POINTS};",
                       f"    for (i = 0; i < {POINTS}; ++i) {{",
                       f"        {struct}.{v.name}.x[i] = {array}[{offset} + 2 + i];",
                       f"        {struct}.{v.name}.y[i] = {array}[{offset} + 2 + {POINTS} + i];",

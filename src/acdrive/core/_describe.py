@@ -174,11 +174,12 @@ def format_value(var: Var, value) -> str:
     """A parameter value without its unit: a number, or a profile's point count and span."""
     if var.kind == "table2d":
         try:
-            x, y, values = unpack_table2d(pack_table2d(var.name, value))
+            x, y, _ = unpack_table2d(pack_table2d(var.name, value))
         except (ValueError, TypeError):
             return repr(value)
-        return (f"2-D table, {len(x)} x {len(y)} points, x {format_number(x[0])}.."
-                f"{format_number(x[-1])}, y {format_number(y[0])}..{format_number(y[-1])}")  # fmt: skip
+        x_span = f"{format_number(x[0])}..{format_number(x[-1])}"
+        y_span = f"{format_number(y[0])}..{format_number(y[-1])}"
+        return f"2-D table, {len(x)} x {len(y)} points, x {x_span}, y {y_span}"
     if var.kind != "table":
         return format_number(value)
     try:

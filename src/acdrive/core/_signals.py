@@ -421,7 +421,9 @@ def pack_table2d(field: str, value) -> np.ndarray:
     if isinstance(value, dict):
         unknown = sorted(set(value) - {"x", "y", "values"})
         if unknown:
-            raise InputError(f"{field}.{unknown[0]}", f"is not a key of a 2-D table ({ACCEPTED_2D})")
+            raise InputError(
+                f"{field}.{unknown[0]}", f"is not a key of a 2-D table ({ACCEPTED_2D})"
+            )
         missing = [k for k in ("x", "y", "values") if k not in value]
         if missing:
             raise InputError(f"{field}.{missing[0]}", f"must be given ({ACCEPTED_2D})")
@@ -461,7 +463,9 @@ def pack_table2d(field: str, value) -> np.ndarray:
         )
     if not np.all(np.isfinite(values)):
         i, j = np.argwhere(~np.isfinite(values))[0]
-        raise InputError(f"{field}.values", f"must be finite, got {values[i, j]} at row {i}, column {j}")
+        raise InputError(
+            f"{field}.values", f"must be finite, got {values[i, j]} at row {i}, column {j}"
+        )
     return np.concatenate([[float(x.size), float(y.size)], x, y, values.ravel()])
 
 

@@ -101,8 +101,8 @@ def table2d_at(p, offset, x, y):
     """Bilinear interpolation at (x, y) of the 2-D table starting at slot ``offset``; a point
     outside the grid is first clamped to it (each coordinate to its axis's range), so the edge
     values are held outside. In the cell x_i <= x <= x_{i+1}, y_j <= y <= y_{j+1}, with
-    f_x = (x - x_i) / (x_{i+1} - x_i) and f_y likewise:
-    v = a + (b - a) f_y, a = v_ij + (v_{i+1,j} - v_ij) f_x, b = v_{i,j+1} + (v_{i+1,j+1} - v_{i,j+1}) f_x."""
+    f_x = (x - x_i) / (x_{i+1} - x_i) and f_y likewise: v = a + (b - a) f_y with
+    a = v_ij + (v_{i+1,j} - v_ij) f_x and b = v_{i,j+1} + (v_{i+1,j+1} - v_{i,j+1}) f_x."""
     n_x = int(p[offset])
     n_y = int(p[offset + 1])
     x0 = offset + 2

@@ -103,7 +103,9 @@ class FluxMap:
 
     def __post_init__(self):
         if self.scaling not in SCALINGS:
-            raise InputError("flux_map.scaling", f"must be one of {', '.join(SCALINGS)}, got {self.scaling!r}")
+            raise InputError(
+                "flux_map.scaling", f"must be one of {', '.join(SCALINGS)}, got {self.scaling!r}"
+            )
         d = Table2D(self.i_d, self.i_q, self.psi_d)
         q = Table2D(self.i_d, self.i_q, self.psi_q)
         packed_d = pack_table2d("flux_map.psi_d", d)
@@ -237,8 +239,11 @@ class FluxMap:
                 raise InputError(name, f"must be an integer >= 2, got {n!r}")
         d_lo, d_hi, q_lo, q_hi = self.flux_box()
         if not (d_lo < d_hi and q_lo < q_hi):
-            raise InputError("flux_map", "the image of its current grid holds no box of fluxes "
-                             f"(psi_d {d_lo:.6g}..{d_hi:.6g} Wb, psi_q {q_lo:.6g}..{q_hi:.6g} Wb)")  # fmt: skip
+            raise InputError(
+                "flux_map",
+                "the image of its current grid holds no box of fluxes "
+                f"(psi_d {d_lo:.6g}..{d_hi:.6g} Wb, psi_q {q_lo:.6g}..{q_hi:.6g} Wb)",
+            )
         psi_d, psi_q = np.linspace(d_lo, d_hi, n_d), np.linspace(q_lo, q_hi, n_q)
         i_d, i_q = self.currents(*np.meshgrid(psi_d, psi_q, indexing="ij"))
         return Table2D(psi_d, psi_q, i_d), Table2D(psi_d, psi_q, i_q)
@@ -303,14 +308,19 @@ def read_flux_map_csv(path) -> FluxMap:
     key, _, scaling = lines[0].lstrip("#").partition(":")
     scaling = scaling.strip()
     if key.strip() != "scaling" or scaling not in SCALINGS:
-        raise InputError(f"{where}:1", f"must be '# scaling: {' or '.join(SCALINGS)}', got {lines[0]!r}")
+        raise InputError(
+            f"{where}:1", f"must be '# scaling: {' or '.join(SCALINGS)}', got {lines[0]!r}"
+        )
     rows = list(csv.reader(lines[1:]))
-    if not rows:
-        raise InputError(f"{where}:2", "must be the header " + ",".join(f"{n} [{u}]" for n, u in CSV_COLUMNS.items()))
-    header = [c.strip() for c in rows[0]]
     wanted = [f"{n} [{u}]" for n, u in CSV_COLUMNS.items()]
+    if not rows:
+        raise InputError(f"{where}:2", f"must be the header {','.join(wanted)}")
+    header = [c.strip() for c in rows[0]]
     if sorted(header) != sorted(wanted):
-        raise InputError(f"{where}:2", f"the header must name the columns {', '.join(wanted)}, got {', '.join(header)}")
+        raise InputError(
+            f"{where}:2",
+            f"the header must name the columns {', '.join(wanted)}, got {', '.join(header)}",
+        )
     order = [header.index(w) for w in wanted]
     data = []
     for number, row in enumerate(rows[1:], start=3):
@@ -333,7 +343,11 @@ def read_flux_map_csv(path) -> FluxMap:
     if np.any(seen != 1):
         k, l = np.argwhere(seen != 1)[0]
         count = "twice or more" if seen[k, l] > 1 else "not at all"
-        raise InputError(where, f"must hold every grid point once: (i_d, i_q) = ({i_d[k]:g}, {i_q[l]:g}) A is there {count}")
+        raise InputError(
+            where,
+            f"must hold every grid point once: (i_d, i_q) = ({i_d[k]:g}, {i_q[l]:g}) A is "
+            f"there {count}",
+        )
     psi_d[a, b], psi_q[a, b] = data[:, 2], data[:, 3]
     return FluxMap(i_d, i_q, psi_d, psi_q, scaling=scaling)
 
@@ -350,7 +364,9 @@ def read_syre_mat(path) -> FluxMap:
         raise InputError(where, f"cannot be read as a .mat file ({exc})") from None
     missing = [n for n in ("Id", "Iq", "Fd", "Fq") if n not in content]
     if missing:
-        raise InputError(where, f"must hold SyR-e's matrices Id, Iq, Fd, Fq ({', '.join(missing)} missing)")
+        raise InputError(
+            where, f"must hold SyR-e's matrices Id, Iq, Fd, Fq ({', '.join(missing)} missing)"
+        )
     Id, Iq, Fd, Fq = (np.asarray(content[n], dtype=float) for n in ("Id", "Iq", "Fd", "Fq"))
     if not (Id.shape == Iq.shape == Fd.shape == Fq.shape and Id.ndim == 2):
         raise InputError(where, "Id, Iq, Fd, Fq must be matrices of one shape")

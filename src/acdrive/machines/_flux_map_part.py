@@ -24,8 +24,9 @@ from typing import ClassVar
 import numpy as np
 
 from acdrive._jit import jit_fast
-from acdrive.core._signals import Layout, Table2D, real, table2d
+from acdrive.core._signals import Layout, Table2D, pack_table2d, real, table2d, unpack_table2d
 from acdrive.core._tables import table2d_at, table2d_offset
+from acdrive.errors import InputError
 from acdrive.machines import _synchronous_part as synchronous
 from acdrive.machines._flux_map import FluxMap, bilinear
 from acdrive.machines._record import MachinePart
@@ -33,8 +34,8 @@ from acdrive.machines._record import MachinePart
 PARAMS = Layout(
     real("R_s", "ohm", "stator resistance", "positive"),
     real("n_p", "", "pole pairs", "count"),
-    table2d("i_d", "A", "d-axis current i_d(psi_d, psi_q) of the inverse flux map (power-invariant)"),
-    table2d("i_q", "A", "q-axis current i_q(psi_d, psi_q) of the inverse flux map (power-invariant)"),
+    table2d("i_d", "A", "d-axis current i_d(psi_d, psi_q), the inverse flux map (power-invariant)"),
+    table2d("i_q", "A", "q-axis current i_q(psi_d, psi_q), the inverse flux map (power-invariant)"),
 )
 assert all(PARAMS.slot(n) == synchronous.PARAMS.slot(n) for n in ("R_s", "n_p"))
 _N_P = PARAMS.slot("n_p")
@@ -82,23 +83,22 @@ class FluxMapSynchronousMachine(MachinePart):
     project = synchronous.synchronous_project
 
     @classmethod
-    def from_flux_map(cls, name: str, flux_map: FluxMap, R_s: float, n_p: int,
-                      flux_points: tuple[int, int] | None = None) -> FluxMapSynchronousMachine:  # fmt: skip
+    def from_flux_map(
+        cls, name: str, flux_map: FluxMap, R_s: float, n_p: int,
+        flux_points: tuple[int, int] | None = None,
+    ) -> FluxMapSynchronousMachine:  # fmt: skip
         """The machine whose currents invert ``flux_map`` (``FluxMap.inverted``: ``flux_points``
         evenly spaced fluxes per axis over the largest box inside the map's image, the current
         grid's counts if None)."""
         if not isinstance(flux_map, FluxMap):
-            raise_type = type(flux_map).__name__
-            from acdrive.errors import InputError
-
-            raise InputError("flux_map", f"must be a machines.FluxMap, got {raise_type}")
+            raise InputError(
+                "flux_map", f"must be a machines.FluxMap, got {type(flux_map).__name__}"
+            )
         i_d, i_q = flux_map.inverted(flux_points)
         return cls(name, R_s=R_s, n_p=n_p, i_d=i_d, i_q=i_q)
 
     def tables(self) -> tuple[Table2D, Table2D]:
         """The inverse map as packed: (i_d table, i_q table)."""
-        from acdrive.core._signals import pack_table2d, unpack_table2d
-
         return (unpack_table2d(pack_table2d(f"{self.name}.i_d", self.values["i_d"])),
                 unpack_table2d(pack_table2d(f"{self.name}.i_q", self.values["i_q"])))  # fmt: skip
 

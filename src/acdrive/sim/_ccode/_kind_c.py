@@ -9,7 +9,15 @@ from __future__ import annotations
 
 import inspect
 
-from acdrive.sim._ccode._pieces import TABLE2D_AT, TABLE_AT, TANH, CStep, CSupport, PlantC, kind_name
+from acdrive.sim._ccode._pieces import (
+    TABLE2D_AT,
+    TABLE_AT,
+    TANH,
+    CStep,
+    CSupport,
+    PlantC,
+    kind_name,
+)
 from acdrive.sim._ccode._translate import (
     Role,
     Translated,

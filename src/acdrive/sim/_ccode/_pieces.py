@@ -144,8 +144,9 @@ static ACDRIVE_REAL acd_table_at(int n, const ACDRIVE_REAL *times, const ACDRIVE
 TABLE2D_AT = CSupport(
     "table2d_at",
     r"""
-static ACDRIVE_REAL acd_table2d_at(int nx, int ny, const ACDRIVE_REAL *xs, const ACDRIVE_REAL *ys,
-                                   const ACDRIVE_REAL *v, ACDRIVE_REAL x, ACDRIVE_REAL y)
+static ACDRIVE_REAL acd_table2d_at(int nx, int ny, const ACDRIVE_REAL *xs,
+                                   const ACDRIVE_REAL *ys, const ACDRIVE_REAL *v, ACDRIVE_REAL x,
+                                   ACDRIVE_REAL y)
 {
     int lo, hi, i, j, pass;
     ACDRIVE_REAL fx, fy, v00, v01, v10, v11, a, b;
