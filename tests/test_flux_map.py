@@ -271,3 +271,44 @@ def test_syre_mat_layout_reads_as_the_peak_valued_map(tmp_path):
     d, q = np.meshgrid(flux_map.i_d, flux_map.i_q, indexing="ij")
     assert np.allclose(flux_map.psi_d, 5e-3 * d + K_PEAK * 0.1)
     assert np.allclose(flux_map.psi_q, 2e-3 * q)
+
+
+# --- FMUs ---------------------------------------------------------------------------------------
+@pytest.mark.slow
+@pytest.mark.skipif(_native.compiler() is None, reason="no C compiler on this machine")
+def test_the_flux_map_machine_runs_in_a_plant_fmu_as_in_the_loop(monkeypatch, tmp_path):
+    """The V/f program as a controller FMU and the flux-map SyRM (its 2-D tables written into
+    the plant's C) with its shaft as a plant FMU, stepped by a Gauss-Seidel master: the loop's
+    run to 1e-9."""
+    from fmpy.validation import validate_fmu
+
+    from acdrive.export import to_c
+    from acdrive.export._fmu import build_fmu, controller_model, plant_model
+    from acdrive.export._fmu_check import _closed_loop
+    from acdrive.sim._ccode._plant_source import to_plant_c
+
+    T_s, duration = 1e-4, 0.06
+    monkeypatch.setenv("ACDRIVE_LOOP_TIER", "native")
+    grid = np.linspace(-80.0, 80.0, 9)
+    syrm = FluxMapSynchronousMachine.from_flux_map(
+        "syrm", flux_map_of(SynchronousMachine.from_params("sm", SYRM_6_7KW), grid, grid),
+        R_s=SYRM_6_7KW.R_s, n_p=SYRM_6_7KW.n_p,
+    )
+    system = vf_run(syrm, SYRM_6_7KW.J)
+    shaft = next(p for p in system.parts if p.name == "shaft")
+    native = system.compile().run(duration, T_s, 4, log=[syrm.out.i_s, shaft.out.w])
+    export = to_c(system, T_s, name="fm_controller", open_loop=True)
+    plant_export = to_plant_c(system, T_s, 4, name="fm_plant")
+    models = {
+        "controller": controller_model(export, T_s, duration, "V/f program"),
+        "plant": plant_model(plant_export, system, None, T_s, duration, "flux-map SyRM"),
+    }
+    paths = {k: build_fmu(m, tmp_path / f"{m.identifier}.fmu") for k, m in models.items()}
+    assert all(validate_fmu(str(p)) == [] for p in paths.values())
+    fmu = _closed_loop(paths, round(duration / T_s), T_s)
+    i_s, w = native.signal(syrm.out.i_s), native.signal(shaft.out.w)
+    for name, reference in (("syrm.i_s.re", i_s.real), ("syrm.i_s.im", i_s.imag),
+                            ("shaft.w", w)):  # fmt: skip
+        peak = np.max(np.abs(reference))
+        assert peak > 0.5, name
+        assert np.max(np.abs(fmu[name] - reference)) <= 1e-9 * peak, name
