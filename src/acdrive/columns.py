@@ -252,16 +252,21 @@ def written(target, fmt: str) -> str:
     return text + (f", {figures} figure{'s' * (figures != 1)}" if figures else "")
 
 
-def print_headline(rows: list[tuple[str, str]], summary: dict, target, fmt: str) -> None:
-    """The end of a run command's output: the aligned ``rows`` (label, value), the summary's
-    finding, warnings and note where it has them, and what was written where."""
-    width = max(len(label) for label, _ in rows)
-    for label, value in rows:
-        print(f"  {label:<{width}} {value}")
+def headline_lines(rows: list[tuple[str, str]], summary: dict) -> list[str]:
+    """The aligned ``rows`` (label, value) of a run's headline, then the summary's finding,
+    warnings and note where it has them."""
+    width = max((len(label) for label, _ in rows), default=0)
+    lines = [f"  {label:<{width}} {value}" for label, value in rows]
     if "finding" in summary:
-        print(f"  finding: {summary['finding']}")
-    for warning in summary.get("warnings", []):
-        print(f"  warning: {warning}")
+        lines.append(f"  finding: {summary['finding']}")
+    lines += [f"  warning: {warning}" for warning in summary.get("warnings", [])]
     if "note" in summary:
-        print(f"  note: {summary['note']}")
+        lines.append(f"  note: {summary['note']}")
+    return lines
+
+
+def print_headline(rows: list[tuple[str, str]], summary: dict, target, fmt: str) -> None:
+    """The end of a run command's output: ``headline_lines`` and what was written where."""
+    for line in headline_lines(rows, summary):
+        print(line)
     print(f"wrote {target}/: {written(target, fmt)}")

@@ -3,7 +3,8 @@
 ``register``, ``get``, ``for_setup``, ``kinds``; docs/design.md, "Drives as plug-ins").
 
 ``run_scenario(setup)`` runs the setup of any drive (``acdrive.scenarios.load_scenario``) and
-returns that drive's outcome. The other names are one drive's own and take that drive's setups
+returns that drive's ``Outcome`` (the same members for every drive: ``name``, ``kind``,
+``results``, ``summary``, ``headline()``, ``figures(folder)``, ``write(folder)``). The other names are one drive's own and take that drive's setups
 only: ``simulate``, ``simulate_slow``, ``DFIMDrive`` the DFIM's (``DriveSetup``),
 ``run_im_scenario`` and ``IMDrive`` the cage IM's (``IMDriveSetup``)."""
 
@@ -27,6 +28,7 @@ __all__, __getattr__, __dir__ = namespace(
         "DriveResult": ".dfim._result",
         "ScenarioOutcome": ".dfim._outcome",
         "run_scenario": "._registry",
+        "Outcome": "._outcome",
         "IMDrive": ".cage_im._drive",
         "IMDriveSetup": ".cage_im._setup",
         "IMDriveResult": ".cage_im._result",

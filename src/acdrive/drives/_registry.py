@@ -43,8 +43,8 @@ class Drive:
     * ``load(data)``: the validated setup of a parsed scenario (a ``dict`` from TOML); every
       error an ``InputError`` naming the field by its dotted path, before any simulation.
     * ``run(setup, on_run=None)``: simulate; returns the outcome, an object with ``results``
-      (label -> result with ``wall_time`` [s]) and ``summary`` (a dict: summary.json's
-      figures). ``on_run(label)`` is called before each simulation (``runs(setup)`` of them).
+      (label -> result with ``wall_time`` [s]) and ``summary`` (a dict: what summary.json
+      holds); a built-in drive's is an ``acdrive.drives.Outcome``. ``on_run(label)`` is called before each simulation (``runs(setup)`` of them).
     * ``write(outcome, folder, figures, fmt)``: the data files (``acdrive.columns.FORMATS``),
       figures and summary.json into ``folder``; returns the summary written.
     * ``headline(outcome, summary)``: (first line, rows of (label, text)) that ``acdrive run``
@@ -234,7 +234,9 @@ def is_setup(value) -> bool:
 def run_scenario(setup, on_run=None):
     """Simulate the setup of any registered drive (what ``acdrive.scenarios.load_scenario``
     returns) with that drive's ``run`` and return its outcome: the object ``acdrive run`` writes,
-    with ``results`` (label -> result) and ``summary`` (summary.json's figures). ``on_run(label)``,
+    for a built-in drive an ``acdrive.drives.Outcome`` (``name``, ``kind``, ``results`` by run
+    label, ``summary`` as summary.json holds it, ``headline()``, ``figures(folder)``,
+    ``write(folder)``). ``on_run(label)``,
     if given, is called before each simulation (a progress display). A value that is not a
     registered drive's setup is an ``InputError`` on ``setup``, before any work."""
     return _owner(setup).run(setup, on_run)

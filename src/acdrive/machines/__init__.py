@@ -17,6 +17,7 @@ __all__, __getattr__, __dir__ = namespace(
         "DELORENZO_IM_13": "._induction",
         "UGALDE_IM_300W": "._induction",
         "PMSGParams": "._pmsm",
+        "PMSMParams": "._pmsm",
         "PMSG_2MW": "._pmsm",
         "DoublyFedMachine": "._dfim_part",
         "CageInductionMachine": "._cage_part",

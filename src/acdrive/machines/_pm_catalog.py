@@ -1,7 +1,7 @@
 """Permanent-magnet machines with published parameters, for the PM drive's scenarios and the
 identification benches (``identify._builtin``).
 
-Each record is a ``machines.PMSGParams`` (R_s, L_d, L_q per phase; psi_m the magnet's peak flux
+Each record is a ``machines.PMSMParams`` (R_s, L_d, L_q per phase; psi_m the magnet's peak flux
 linkage per phase; n_p; J of the rotor alone) with the source of every number. Printed values
 are taken as printed; where a source rounds, the rounding is said here.
 
@@ -38,10 +38,10 @@ from __future__ import annotations
 
 import math
 
-from acdrive.machines._pmsm import PMSGParams
+from acdrive.machines._pmsm import PMSMParams
 
 #: Anaheim Automation BLY171D-24V-4000 (module docstring): 8-pole surface PMSM.
-BLY171D = PMSGParams(R_s=0.75, L_d=0.0010, L_q=0.0010, psi_m=0.0052, n_p=4, J=2.4019e-06)
+BLY171D = PMSMParams(R_s=0.75, L_d=0.0010, L_q=0.0010, psi_m=0.0052, n_p=4, J=2.4019e-06)
 #: its viscous friction [N m s/rad], rated phase-peak current [A], rated torque [N m], DC link
 #: [V], back-EMF constant [V peak line-to-line per 1000 rpm] and speed limit [rad/s] from the
 #: same table
@@ -53,7 +53,7 @@ BLY171D_KE = 3.8
 BLY171D_N_MAX = 10000.0 * 2.0 * math.pi / 60.0
 
 #: motulator's 2.2-kW interior PMSM (module docstring); psi_m = motulator's psi_f (peak scaling)
-IPMSM_2KW2 = PMSGParams(R_s=3.6, L_d=0.036, L_q=0.051, psi_m=0.545, n_p=3, J=0.015)
+IPMSM_2KW2 = PMSMParams(R_s=3.6, L_d=0.036, L_q=0.051, psi_m=0.545, n_p=3, J=0.015)
 #: its DC link [V] and nominal values from the same source: line voltage [V rms], current
 #: [A rms], electrical frequency [Hz], power [W], torque [N m]
 IPMSM_2KW2_V_DC = 540.0

@@ -21,6 +21,11 @@ class PMSGParams:
     None (unknown) because the current subsystem does not use it."""
 
 
+#: The same record under a motor's name: a PM synchronous motor from its datasheet (R_s, L_d,
+#: L_q, psi_m as the peak flux per phase, n_p, J) is a ``PMSMParams``.
+PMSMParams = PMSGParams
+
+
 def dq_current_ss(p: PMSGParams, w_r: float):
     """Real state-space (A, B, C, D) of the PMSG dq current subsystem, Ugalde-Loo et al. (9)-(11).
 

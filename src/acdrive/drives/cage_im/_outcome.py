@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._arguments import Instance, Table, checked
+from acdrive.drives._outcome import Outcome
 from acdrive.drives._registry import Setup
 from acdrive.drives.cage_im._drive import IMDrive
 from acdrive.drives.cage_im._result import IMDriveResult
@@ -19,8 +20,9 @@ from acdrive.drives.cage_im._setup import IMDriveSetup
     setup=Instance(IMDriveSetup), results=Table(Instance(IMDriveResult)), summary=Table(empty=True),
 )
 @dataclass
-class IMOutcome:
-    """The runs of one scenario (label -> result) and its summary (summary.json)."""
+class IMOutcome(Outcome):
+    """The cage IM's ``Outcome``: the runs of one scenario (label -> result) and its summary
+    (summary.json)."""
 
     setup: IMDriveSetup
     results: dict[str, IMDriveResult]
@@ -29,6 +31,11 @@ class IMOutcome:
     @property
     def main(self) -> IMDriveResult:
         return next(iter(self.results.values()))
+
+    def figures(self, folder) -> list:
+        from acdrive.drives.cage_im._outputs import write_figures
+
+        return write_figures(self, folder)
 
 
 #: metrics compared between runs at the top level of summary.json, with a label inserted before
@@ -87,7 +94,13 @@ def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
         del summary["warnings"]
     if setup.note:
         summary["note"] = setup.note
-    return IMOutcome(setup=setup, results=results, summary=summary)
+    outcome = IMOutcome(setup=setup, results=results, summary=summary)
+    # the simulated current steps beside the linear closed loop's, and every data column's unit
+    from acdrive.drives.cage_im._outputs import step_summary
+
+    summary.update(step_summary(outcome))
+    summary["units"] = {c.name: c.unit for c in outcome.main.table_columns()}
+    return outcome
 
 
 def _span(result: IMDriveResult, flag: str) -> str:

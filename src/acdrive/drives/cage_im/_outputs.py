@@ -461,25 +461,35 @@ def write_comparison_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
 # --- everything ------------------------------------------------------------------------------
 
 
+def write_figures(outcome: IMOutcome, folder: Path) -> list[Path]:
+    """Draw the figures of every run (one sub-folder per run when there are several) and the
+    comparison figures into ``folder``; returns their paths."""
+    folder = Path(folder)
+    paths = []
+    for label, result in outcome.results.items():
+        sub = folder if len(outcome.results) == 1 else folder / label
+        sub.mkdir(parents=True, exist_ok=True)
+        paths += write_run_figures(result, sub)
+    if len(outcome.results) > 1 or step_comparison(outcome.main) is not None:
+        paths += write_comparison_figures(outcome, folder)
+    return paths
+
+
 def write_im_outcome(
     outcome: IMOutcome, folder: Path, figures: bool = True, fmt: str = "parquet"
 ) -> dict:
-    """Write the data (as ``fmt``, ``acdrive.columns.FORMATS``, with columns.md) and figures of
-    every run, the comparison figures and summary.json (the outcome's summary, the step-response
-    comparison where the runs are current steps, and the unit of every data column) into
-    ``folder``; returns the summary written."""
+    """Write the data (as ``fmt``, ``acdrive.columns.FORMATS``, with columns.md) of every run,
+    the figures (``write_figures``) and summary.json (the outcome's summary: with the
+    step-response comparison where the runs are current steps, and the unit of every data
+    column) into ``folder``; returns the summary written."""
     folder = Path(folder)
     for label, result in outcome.results.items():
         sub = folder if len(outcome.results) == 1 else folder / label
         sub.mkdir(parents=True, exist_ok=True)
         result.save(sub, fmt)
-        if figures:
-            write_run_figures(result, sub)
-    if figures and (len(outcome.results) > 1 or step_comparison(outcome.main) is not None):
-        write_comparison_figures(outcome, folder)
+    if figures:
+        write_figures(outcome, folder)
     summary = dict(outcome.summary)
-    summary.update(step_summary(outcome))
-    summary["units"] = {c.name: c.unit for c in outcome.main.table_columns()}
     # strict JSON: a non-finite figure is written as null
     (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n")
     return summary

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from acdrive._arguments import Function, Instance, Table, checked
+from acdrive.drives._outcome import Outcome
 from acdrive.drives._registry import Setup
 from acdrive.drives.dfim._period import control_period_warnings
 from acdrive._reducer_parts import OVER_LIMIT_TOLERANCE
@@ -174,7 +175,9 @@ def tracking_windows(result: DriveResult, setup: DriveSetup, motor: int = 0) -> 
     setup=Instance(DriveSetup), results=Table(Instance(DriveResult)), summary=Table(empty=True),
 )
 @dataclass
-class ScenarioOutcome:
+class ScenarioOutcome(Outcome):
+    """The DFIM's ``Outcome``: its runs (one per compared mode) and summary."""
+
     setup: DriveSetup
     results: dict[str, DriveResult]  # label -> result ("main", or one per compared mode)
     summary: dict = field(default_factory=dict)
@@ -182,6 +185,11 @@ class ScenarioOutcome:
     @property
     def main(self) -> DriveResult:
         return next(iter(self.results.values()))
+
+    def figures(self, folder) -> list:
+        from acdrive.drives.dfim._outputs import write_figures
+
+        return write_figures(self, folder)
 
 
 def synchronous_rpm(setup: DriveSetup) -> float:
@@ -310,4 +318,12 @@ def run_scenario(setup: DriveSetup, on_run=None) -> ScenarioOutcome:
     fallback = first.first_event_time("sensor_fallback")
     if fallback is not None:
         summary["sensor_fallback_time_s"] = fallback
-    return ScenarioOutcome(setup=setup, results=results, summary=summary)
+    outcome = ScenarioOutcome(setup=setup, results=results, summary=summary)
+    # where a rotor converter has dead time or device drops: the steady-state stator reactive
+    # power and torque-command offset it causes (drives.dfim._converter_effect)
+    from acdrive.drives.dfim import _converter_effect
+
+    side_effect = _converter_effect.summary(outcome)  # None with ideal converters
+    if side_effect is not None:
+        summary["converter_side_effect"] = side_effect
+    return outcome

@@ -19,6 +19,7 @@ __all__, __getattr__, __dir__ = namespace(
         "PMDriveSetup": "._setup",
         "build": "._build",
         "run": "._entry",
+        "PMOutcome": "._entry",
         "Built": "._build",
         "controller_parts": "._build",
         "summary": "._metrics",

@@ -11,17 +11,18 @@ and its comparison with ICAD's (10)).
 * ``run_outcome(setup, on_run)``: a ``PMOutcome`` (``results`` by label with their wall time,
   ``summary``);
 * ``write(outcome, folder, figures, fmt)``: each result's table (``SystemResult.save``), a figure
-  of its signals, and ``summary.json``; returns the summary written;
+  of its signals (``write_figures``), and ``summary.json``; returns the summary written;
 * ``headline(outcome, summary)``: the first line and the (label, text) rows a command prints,
   every number read from the summary.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from acdrive._output import strict_json
+from acdrive.drives._outcome import Outcome
 from acdrive.drives.pm import _build, _icad_step, _metrics
 from acdrive.drives.pm._icad_step import CurrentStepSetup
 from acdrive.drives.pm._setup import PMDriveSetup
@@ -77,12 +78,16 @@ def runs(setup) -> int:
 
 
 @dataclass
-class PMOutcome:
-    """One scenario's results by label (``SystemResult``, each with ``wall_time``) and summary."""
+class PMOutcome(Outcome):
+    """The PM drive's ``Outcome``: one scenario's results by label (``SystemResult``, each with
+    ``wall_time``) and summary."""
 
     setup: PMDriveSetup | CurrentStepSetup
     results: dict
     summary: dict
+
+    def figures(self, folder) -> list[Path]:
+        return write_figures(self, folder)
 
 
 def run_outcome(setup, on_run=None) -> PMOutcome:
@@ -111,19 +116,34 @@ def run_scenario(setup, compiled=None):
     return run(setup, compiled)
 
 
+def write_figures(outcome: PMOutcome, folder) -> list[Path]:
+    """A figure of each result's signals (``signals.png``, in ``folder/<label>/`` when there are
+    several); returns their paths."""
+    folder = Path(folder)
+    paths = []
+    for label, result in outcome.results.items():
+        where = folder / label if len(outcome.results) > 1 else folder
+        where.mkdir(parents=True, exist_ok=True)
+        # matplotlib only here, on the Agg canvas without pyplot
+        result.plot(pyplot=False).savefig(where / "signals.png", dpi=100)
+        paths.append(where / "signals.png")
+    return paths
+
+
 def write(outcome: PMOutcome, folder, figures: bool = True, fmt: str = "parquet") -> dict:
-    """Each result's table and figure (in ``folder/<label>/`` when there are several) and
-    ``summary.json``; returns the summary written."""
+    """Each result's table (in ``folder/<label>/`` when there are several), its figure
+    (``write_figures``) and ``summary.json`` (strict JSON: a non-finite number as null); returns
+    the summary written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for label, result in outcome.results.items():
         where = folder / label if len(outcome.results) > 1 else folder
         where.mkdir(parents=True, exist_ok=True)
         result.save(where, fmt)
-        if figures:  # matplotlib only here, on the Agg canvas without pyplot
-            result.plot(pyplot=False).savefig(where / "signals.png", dpi=100)
+    if figures:
+        write_figures(outcome, folder)
     summary = outcome.summary
-    (folder / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    (folder / "summary.json").write_text(strict_json(summary, indent=2) + "\n", encoding="utf-8")
     return summary
 
 
