@@ -4,8 +4,8 @@
 
 ``run_scenario(setup)`` runs the setup of any drive (``acdrive.scenarios.load_scenario``) and
 returns that drive's ``Outcome`` (the same members for every drive: ``name``, ``kind``,
-``results``, ``summary``, ``headline()``, ``figures(folder)``, ``write(folder)``). The other names are one drive's own and take that drive's setups
-only: ``simulate``, ``simulate_slow``, ``DFIMDrive`` the DFIM's (``DriveSetup``),
+``results``, ``summary``, ``headline()``, ``figures(folder)``, ``write(folder)``). The other
+names are one drive's own and take that drive's setups only: ``simulate``, ``simulate_slow``, ``DFIMDrive`` the DFIM's (``DriveSetup``),
 ``run_im_scenario`` and ``IMDrive`` the cage IM's (``IMDriveSetup``)."""
 
 from acdrive._lazy import namespace

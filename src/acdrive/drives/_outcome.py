@@ -62,7 +62,7 @@ class Outcome:
     def figures(self, folder) -> list[Path]:
         """Draw into ``folder`` the figures ``acdrive run`` draws (PNG, one sub-folder per run
         when the scenario compares runs); returns their paths."""
-        raise NotImplementedError
+        return self.drive.figures(self, Path(folder))
 
     def write(self, folder, figures: bool = True, fmt: str = "parquet") -> dict:
         """Write what ``acdrive run`` writes into ``folder`` (data as ``fmt``, one of

@@ -44,9 +44,12 @@ class Drive:
       error an ``InputError`` naming the field by its dotted path, before any simulation.
     * ``run(setup, on_run=None)``: simulate; returns the outcome, an object with ``results``
       (label -> result with ``wall_time`` [s]) and ``summary`` (a dict: what summary.json
-      holds); a built-in drive's is an ``acdrive.drives.Outcome``. ``on_run(label)`` is called before each simulation (``runs(setup)`` of them).
+      holds); a built-in drive's is an ``acdrive.drives.Outcome``. ``on_run(label)`` is
+      called before each simulation (``runs(setup)`` of them).
     * ``write(outcome, folder, figures, fmt)``: the data files (``acdrive.columns.FORMATS``),
       figures and summary.json into ``folder``; returns the summary written.
+    * ``figures(outcome, folder)``: the figures ``write`` draws, alone (``Outcome.figures``);
+      returns their paths.
     * ``headline(outcome, summary)``: (first line, rows of (label, text)) that ``acdrive run``
       prints, each computed from the summary.
     * ``build(setup)``: the drive's system of parts for one run, an object with ``system``
@@ -92,6 +95,9 @@ class Drive:
         raise NotImplementedError
 
     def headline(self, outcome, summary: dict) -> tuple[str, list[tuple[str, str]]]:
+        raise NotImplementedError
+
+    def figures(self, outcome, folder) -> list:
         raise NotImplementedError
 
     def build(self, setup):

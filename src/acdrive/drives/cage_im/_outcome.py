@@ -32,11 +32,6 @@ class IMOutcome(Outcome):
     def main(self) -> IMDriveResult:
         return next(iter(self.results.values()))
 
-    def figures(self, folder) -> list:
-        from acdrive.drives.cage_im._outputs import write_figures
-
-        return write_figures(self, folder)
-
 
 #: metrics compared between runs at the top level of summary.json, with a label inserted before
 #: the unit suffix (``current_rms_error_a`` -> ``current_rms_error_<label>_a``)
@@ -96,7 +91,7 @@ def run_im_scenario(setup: IMDriveSetup) -> IMOutcome:
         summary["note"] = setup.note
     outcome = IMOutcome(setup=setup, results=results, summary=summary)
     # the simulated current steps beside the linear closed loop's, and every data column's unit
-    from acdrive.drives.cage_im._outputs import step_summary
+    from acdrive.drives.cage_im._step_comparison import step_summary
 
     summary.update(step_summary(outcome))
     summary["units"] = {c.name: c.unit for c in outcome.main.table_columns()}

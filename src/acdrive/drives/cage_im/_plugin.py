@@ -36,6 +36,11 @@ class CageIMDriveKind(Drive):
 
         return write_im_outcome(outcome, folder, figures=figures, fmt=fmt)
 
+    def figures(self, outcome, folder) -> list:
+        from acdrive.drives.cage_im._outputs import write_figures
+
+        return write_figures(outcome, folder)
+
     def headline(self, outcome, summary: dict):
         from acdrive.drives.cage_im._headline import headline
 

@@ -36,8 +36,8 @@ from acdrive._verdicts import (
     window_drift,
     within_abs,
 )
-from acdrive.drives.dfim._outcome import OSCILLATION_FINDING_RPM
 from acdrive.drives.dfim._setup import ConverterLosses, DriveSetup
+from acdrive.sim._metrics import OSCILLATION_FINDING_RPM
 
 #: A sample is steady once the speed reference has been constant for this long [s] with the
 #: stator relay closed (the speed loop's transient after a step or a ramp end has settled).

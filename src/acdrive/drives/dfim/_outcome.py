@@ -186,11 +186,6 @@ class ScenarioOutcome(Outcome):
     def main(self) -> DriveResult:
         return next(iter(self.results.values()))
 
-    def figures(self, folder) -> list:
-        from acdrive.drives.dfim._outputs import write_figures
-
-        return write_figures(self, folder)
-
 
 def synchronous_rpm(setup: DriveSetup) -> float:
     return 60.0 * float(setup.supply.frequency_hz[1][0]) / setup.motors[0].machine.n_p

@@ -39,6 +39,11 @@ class DFIMDriveKind(Drive):
 
         return write_outcome(outcome, folder, figures=figures, fmt=fmt)
 
+    def figures(self, outcome, folder) -> list:
+        from acdrive.drives.dfim._outputs import write_figures
+
+        return write_figures(outcome, folder)
+
     def headline(self, outcome, summary: dict):
         from acdrive.drives.dfim._headline import headline
 

@@ -86,9 +86,6 @@ class PMOutcome(Outcome):
     results: dict
     summary: dict
 
-    def figures(self, folder) -> list[Path]:
-        return write_figures(self, folder)
-
 
 def run_outcome(setup, on_run=None) -> PMOutcome:
     """Simulate ``setup``; ``on_run(label)`` is called before (the runs of a current step are

@@ -51,6 +51,11 @@ class PMDriveKind(Drive):
 
         return write(outcome, folder, figures=figures, fmt=fmt)
 
+    def figures(self, outcome, folder) -> list:
+        from acdrive.drives.pm._entry import write_figures
+
+        return write_figures(outcome, folder)
+
     def headline(self, outcome, summary: dict):
         from acdrive.drives.pm._entry import headline
 
