@@ -1,6 +1,7 @@
 """One way in: ``acdrive.drives.run_scenario(load_scenario(name))`` runs a scenario of every drive
 kind and returns an ``acdrive.drives.Outcome`` whose common members are what ``acdrive run``
-gives for that scenario: its summary is summary.json, its headline the lines printed, its
+gives for that scenario: its summary is summary.json (less ``log``, the logging the command
+chose and states), its headline the lines printed after the run's announcement, its
 figures the PNG files drawn. One short built-in scenario per drive kind (durations shortened in
 a copy of its file), each comparing runs where the drive can."""
 
@@ -69,7 +70,8 @@ def test_run_scenario_gives_what_acdrive_run_writes(kind, tmp_path, monkeypatch,
 
     (cli_outcome,) = ran
     assert json.loads(strict_json(cli_outcome.summary)) == written
-    assert cli_outcome.headline() == printed[:-1]  # then "wrote <folder>/: ..."
+    assert printed[0].startswith(f"running {setup.name}: ")  # the run and its log, announced
+    assert cli_outcome.headline() == printed[1:-1]  # then "wrote <folder>/: ..."
     assert printed[-1].startswith("wrote ")
     drawn = cli_outcome.figures(tmp_path / "figures")
     assert drawn and all(p.suffix == ".png" and p.is_file() for p in drawn)
@@ -84,7 +86,10 @@ def test_run_scenario_gives_what_acdrive_run_writes(kind, tmp_path, monkeypatch,
     assert (len(outcome.results) > 1) == (kind != "pm")  # the compared runs, one each
     assert outcome.main is next(iter(outcome.results.values()))
     assert all(r.wall_time > 0 for r in outcome.results.values())
-    assert _without_timing(json.loads(strict_json(outcome.summary))) == _without_timing(written)
+    # less the log's choice, which acdrive run states (``--log-every`` is the command's)
+    command_made = {k: v for k, v in written.items() if k != "log"}
+    assert "log" in written and "log" not in outcome.summary
+    assert _without_timing(json.loads(strict_json(outcome.summary))) == _without_timing(command_made)
     lines = outcome.headline()
     assert setup.name in lines[0] and all(isinstance(x, str) for x in lines)
     assert outcome.write(tmp_path / "again", figures=False) == outcome.summary

@@ -76,12 +76,12 @@ def run(args) -> int:
             bar.phase(f"simulating ({label})")
 
         outcome = drive.run(setup, on_run=on_run)
+        if plan is not None:  # the log this command chose, stated with the run's summary
+            outcome.summary["log"] = plan.summary()
         codegen.record_compile_times()
         bar.advance()
         bar.phase("writing data" + (" and figures" if not args.no_figures else ""))
         summary = drive.write(outcome, output.staging, figures=not args.no_figures, fmt=args.format)
-        if plan is not None:
-            summary = _state_log(output.staging / "summary.json", summary, plan)
         target = output.publish()
         bar.advance()
     line, rows = drive.headline(outcome, summary)
@@ -132,17 +132,3 @@ def _log_choice(flag, data: dict, setup, drive):
                          f"{LOG_BUDGET_BYTES / 1024**3:g} GB): log every k-th sample with a "
                          "larger k")  # fmt: skip
     return setup, plan
-
-
-def _state_log(path, summary: dict, plan) -> dict:
-    """summary.json at ``path`` (and ``summary``) with the run's log choice under ``log``."""
-    import json
-
-    from acdrive._output import strict_json
-
-    summary = dict(summary, log=plan.summary())
-    if path.is_file():
-        written = json.loads(path.read_text())
-        written["log"] = plan.summary()
-        path.write_text(strict_json(written, indent=2) + "\n")
-    return summary

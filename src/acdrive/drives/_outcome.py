@@ -4,7 +4,8 @@
 (DFIM ``ScenarioOutcome``, cage IM ``IMOutcome``, PM ``PMOutcome``), each a subclass of
 ``Outcome`` with the same public members: the scenario's ``name`` and drive ``kind``, the
 ``results`` by run label (``main`` the first), the ``summary`` (what ``acdrive run`` writes to
-summary.json), the ``headline()`` lines it prints, ``figures(folder)`` (the figures it draws)
+summary.json; the command adds ``log``, the logging it chose, before writing), the
+``headline()`` lines it prints after announcing the run, ``figures(folder)`` (the figures it draws)
 and ``write(folder)`` (everything it writes). A drive's own members stay on its subclass.
 """
 
