@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_synchronous_machine import SERVO, linear_from
+from test_synchronous_machine import SERVO, assert_fmu_pair_runs_as_the_loop, linear_from
 
 from acdrive._frames import K_PEAK
 from acdrive._jit import jit
@@ -280,13 +280,6 @@ def test_the_flux_map_machine_runs_in_a_plant_fmu_as_in_the_loop(monkeypatch, tm
     """The V/f program as a controller FMU and the flux-map SyRM (its 2-D tables written into
     the plant's C) with its shaft as a plant FMU, stepped by a Gauss-Seidel master: the loop's
     run to 1e-9."""
-    from fmpy.validation import validate_fmu
-
-    from acdrive.export import to_c
-    from acdrive.export._fmu import build_fmu, controller_model, plant_model
-    from acdrive.export._fmu_check import _closed_loop
-    from acdrive.sim._ccode._plant_source import to_plant_c
-
     T_s, duration = 1e-4, 0.06
     monkeypatch.setenv("ACDRIVE_LOOP_TIER", "native")
     grid = np.linspace(-80.0, 80.0, 9)
@@ -296,19 +289,5 @@ def test_the_flux_map_machine_runs_in_a_plant_fmu_as_in_the_loop(monkeypatch, tm
     )
     system = vf_run(syrm, SYRM_6_7KW.J)
     shaft = next(p for p in system.parts if p.name == "shaft")
-    native = system.compile().run(duration, T_s, 4, log=[syrm.out.i_s, shaft.out.w])
-    export = to_c(system, T_s, name="fm_controller", open_loop=True)
-    plant_export = to_plant_c(system, T_s, 4, name="fm_plant")
-    models = {
-        "controller": controller_model(export, T_s, duration, "V/f program"),
-        "plant": plant_model(plant_export, system, None, T_s, duration, "flux-map SyRM"),
-    }
-    paths = {k: build_fmu(m, tmp_path / f"{m.identifier}.fmu") for k, m in models.items()}
-    assert all(validate_fmu(str(p)) == [] for p in paths.values())
-    fmu = _closed_loop(paths, round(duration / T_s), T_s)
-    i_s, w = native.signal(syrm.out.i_s), native.signal(shaft.out.w)
-    for name, reference in (("syrm.i_s.re", i_s.real), ("syrm.i_s.im", i_s.imag),
-                            ("shaft.w", w)):  # fmt: skip
-        peak = np.max(np.abs(reference))
-        assert peak > 0.5, name
-        assert np.max(np.abs(fmu[name] - reference)) <= 1e-9 * peak, name
+    assert_fmu_pair_runs_as_the_loop(system, syrm, shaft, T_s, duration, tmp_path,
+                                     "flux-map SyRM")  # fmt: skip

@@ -313,11 +313,10 @@ def test_the_record_is_validated_as_the_part_and_the_built_in_is_the_published_m
 
 
 # --- FMUs ---------------------------------------------------------------------------------------
-@pytest.mark.slow
-@pytest.mark.skipif(_native.compiler() is None, reason="no C compiler on this machine")
-def test_the_saturated_syrm_runs_in_fmus_as_in_the_loop(monkeypatch, tmp_path):
-    """The V/f program as a controller FMU and the SyRM with its shaft as a plant FMU, both from
-    the C generated from the kernels, stepped by a Gauss-Seidel master: the loop's run to 1e-9."""
+def assert_fmu_pair_runs_as_the_loop(system, machine, shaft, T_s, duration, folder, what):
+    """The system's sampled part as a controller FMU and its ``machine`` with its ``shaft`` as a
+    plant FMU (the C generated from the kernels), stepped by a Gauss-Seidel master: the stator
+    current and the speed of the loop's run to 1e-9 of their peaks (``what`` names the plant)."""
     from fmpy.validation import validate_fmu
 
     from acdrive.export import to_c
@@ -325,6 +324,29 @@ def test_the_saturated_syrm_runs_in_fmus_as_in_the_loop(monkeypatch, tmp_path):
     from acdrive.export._fmu_check import _closed_loop
     from acdrive.sim._ccode._plant_source import to_plant_c
 
+    native = system.compile().run(duration, T_s, 4, log=[machine.out.i_s, shaft.out.w])
+    export = to_c(system, T_s, name=f"{machine.name}_controller", open_loop=True)
+    plant_export = to_plant_c(system, T_s, 4, name=f"{machine.name}_plant")
+    models = {
+        "controller": controller_model(export, T_s, duration, "V/f program"),
+        "plant": plant_model(plant_export, system, None, T_s, duration, what),
+    }
+    paths = {k: build_fmu(m, folder / f"{m.identifier}.fmu") for k, m in models.items()}
+    assert all(validate_fmu(str(p)) == [] for p in paths.values())
+    fmu = _closed_loop(paths, round(duration / T_s), T_s)
+    i_s, w = native.signal(machine.out.i_s), native.signal(shaft.out.w)
+    for name, reference in ((f"{machine.name}.i_s.re", i_s.real),
+                            (f"{machine.name}.i_s.im", i_s.imag), ("shaft.w", w)):  # fmt: skip
+        peak = np.max(np.abs(reference))
+        assert peak > 0.5, name
+        assert np.max(np.abs(fmu[name] - reference)) <= 1e-9 * peak, name
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(_native.compiler() is None, reason="no C compiler on this machine")
+def test_the_saturated_syrm_runs_in_fmus_as_in_the_loop(monkeypatch, tmp_path):
+    """The V/f program as a controller FMU and the saturated SyRM with its shaft as a plant FMU,
+    the C generated from the kernels, stepped by a Gauss-Seidel master: the loop's run to 1e-9."""
     T_s, duration = 1e-4, 0.08
     monkeypatch.setenv("ACDRIVE_LOOP_TIER", "native")
     syrm = SynchronousMachine.from_params("syrm", SYRM_6_7KW)
@@ -334,19 +356,5 @@ def test_the_saturated_syrm_runs_in_fmus_as_in_the_loop(monkeypatch, tmp_path):
     wires = [(program.out.v_ref, syrm.inp.v_s), (shaft.out.w, syrm.inp.w),
              (syrm.out.tau_e, shaft.inp.tau_e)]  # fmt: skip
     system = System([program, syrm, shaft], wires)
-    native = system.compile().run(duration, T_s, 4, log=[syrm.out.i_s, shaft.out.w])
-    export = to_c(system, T_s, name="syrm_controller", open_loop=True)
-    plant_export = to_plant_c(system, T_s, 4, name="syrm_plant")
-    models = {
-        "controller": controller_model(export, T_s, duration, "V/f program"),
-        "plant": plant_model(plant_export, system, None, T_s, duration, "SyRM on a shaft"),
-    }
-    paths = {k: build_fmu(m, tmp_path / f"{m.identifier}.fmu") for k, m in models.items()}
-    assert all(validate_fmu(str(p)) == [] for p in paths.values())
-    fmu = _closed_loop(paths, round(duration / T_s), T_s)
-    i_s, w = native.signal(syrm.out.i_s), native.signal(shaft.out.w)
-    for name, reference in (("syrm.i_s.re", i_s.real), ("syrm.i_s.im", i_s.imag),
-                            ("shaft.w", w)):  # fmt: skip
-        peak = np.max(np.abs(reference))
-        assert peak > 0.5, name
-        assert np.max(np.abs(fmu[name] - reference)) <= 1e-9 * peak, name
+    assert_fmu_pair_runs_as_the_loop(system, syrm, shaft, T_s, duration, tmp_path,
+                                     "SyRM on a shaft")  # fmt: skip
