@@ -147,11 +147,12 @@ SIZES = {
         "<= 1000",
     ),
     "duration 1e308": ("duration = 1e308", "simulation.duration", "GB"),
-    "log budget": ("duration = 3000", "simulation.duration", "GB"),
+    # a log of every sample asked for (the default thins a long run's log to 100,000 rows)
+    "log budget": ("duration = 3000\nlog_every = 1", "simulation.duration", "GB"),
     "sample time 1e-300": (
         "duration = 0.01\nsample_time = 1e-300",
         "simulation.sample_time",
-        "GB",
+        "control steps",
     ),
     "hours of work": (
         "duration = 1e5\nlog_every = 1000000",
@@ -182,8 +183,8 @@ def test_sizes_are_bounded(tmp_path, capsys, case):
 
 
 def test_log_budget_message_gives_the_estimate(tmp_path, capsys):
-    # 3000 s / 200 us = 1.5e7 rows x 23 signals x 8 bytes = 2.57 GB
-    path = _scenario(tmp_path, "duration = 3000")
+    # 3000 s / 200 us = 1.5e7 rows x 23 signals x 8 bytes = 2.57 GB, every sample logged
+    path = _scenario(tmp_path, "duration = 3000\nlog_every = 1")
     _, _, err = _main(capsys, "run", path, "--out", tmp_path / "out")
     assert "about 2.57 GB (limit 2 GB)" in err
 
