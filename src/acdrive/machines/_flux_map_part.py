@@ -30,6 +30,7 @@ from acdrive.errors import InputError
 from acdrive.machines import _synchronous_part as synchronous
 from acdrive.machines._flux_map import FluxMap, bilinear
 from acdrive.machines._record import MachinePart
+from acdrive.machines._synchronous_part import write_outputs
 
 PARAMS = Layout(
     real("R_s", "ohm", "stator resistance", "positive"),
@@ -38,12 +39,8 @@ PARAMS = Layout(
     table2d("i_q", "A", "q-axis current i_q(psi_d, psi_q), the inverse flux map (power-invariant)"),
 )
 assert all(PARAMS.slot(n) == synchronous.PARAMS.slot(n) for n in ("R_s", "n_p"))
-_N_P = PARAMS.slot("n_p")
 _I_D_TABLE = PARAMS.table_start  # the first 2-D table (the layout has no 1-D table)
-_PSI_DQ, _E_R, _THETA = (synchronous.STATES.slot(n) for n in ("psi_dq", "e_r", "theta"))
-_Y_I_S, _Y_I_DQ, _Y_PSI_S, _Y_PSI_DQ, _Y_TAU, _Y_THETA = (
-    synchronous.OUTPUTS.slot(n) for n in ("i_s", "i_dq", "psi_s", "psi_dq", "tau_e", "theta")
-)
+_PSI_DQ = synchronous.STATES.slot("psi_dq")
 
 
 @jit_fast
@@ -51,15 +48,7 @@ def flux_map_state_outputs(t, x, p, y):
     psi_d, psi_q = x[_PSI_DQ], x[_PSI_DQ + 1]
     i_d = table2d_at(p, _I_D_TABLE, psi_d, psi_q)
     i_q = table2d_at(p, table2d_offset(p, _I_D_TABLE, 1), psi_d, psi_q)
-    e_r = complex(x[_E_R], x[_E_R + 1])
-    i_s = complex(i_d, i_q) * e_r
-    psi_s = complex(psi_d, psi_q) * e_r
-    y[_Y_I_S], y[_Y_I_S + 1] = i_s.real, i_s.imag
-    y[_Y_I_DQ], y[_Y_I_DQ + 1] = i_d, i_q
-    y[_Y_PSI_S], y[_Y_PSI_S + 1] = psi_s.real, psi_s.imag
-    y[_Y_PSI_DQ], y[_Y_PSI_DQ + 1] = psi_d, psi_q
-    y[_Y_TAU] = p[_N_P] * (psi_d * i_q - psi_q * i_d)  # n_p Im(conj(psi_dq) i_dq)
-    y[_Y_THETA] = x[_THETA]
+    write_outputs(x, p, y, i_d, i_q)
 
 
 class FluxMapSynchronousMachine(MachinePart):

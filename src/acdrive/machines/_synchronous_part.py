@@ -225,8 +225,16 @@ def magnetic_currents(p, psi_d, psi_q):
 
 @jit_fast
 def synchronous_state_outputs(t, x, p, y):
+    i_d, i_q = magnetic_currents(p, x[_PSI_DQ], x[_PSI_DQ + 1])
+    write_outputs(x, p, y, i_d, i_q)
+
+
+@jit_inline
+def write_outputs(x, p, y, i_d, i_q):
+    """The outputs of the flux states ``x`` with the currents i_d, i_q a magnetic model gives for
+    them (this part's or the flux map's, ``machines._flux_map_part``): the currents and fluxes in
+    both frames and tau_e = n_p Im(conj(psi_dq) i_dq)."""
     psi_d, psi_q = x[_PSI_DQ], x[_PSI_DQ + 1]
-    i_d, i_q = magnetic_currents(p, psi_d, psi_q)
     e_r = complex(x[_E_R], x[_E_R + 1])
     i_s = complex(i_d, i_q) * e_r
     psi_s = complex(psi_d, psi_q) * e_r
