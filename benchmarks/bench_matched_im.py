@@ -1,5 +1,5 @@
 """How far acdrive's matched cage-IM case is from motulator 0.18's, and which controller
-difference accounts for how much (``acdrive._bench.motulator_im.remaining_differences``).
+difference accounts for how much (``acdrive._bench.matched_differences.remaining_differences``).
 
 motulator runs the case as its example has it, then with acdrive's speed PI law (clamping
 anti-windup at the fixed torque limit) in place of its own (back-calculation on the torque the
@@ -17,7 +17,8 @@ import json
 import sys
 from pathlib import Path
 
-from acdrive._bench.motulator_im import CONVERTERS, DURATION, remaining_differences
+from acdrive._bench.matched_differences import remaining_differences
+from acdrive._bench.motulator_im import CONVERTERS, DURATION
 from acdrive._bench.venvs import MOTULATOR, default_peers_dir, ensure_venv
 
 

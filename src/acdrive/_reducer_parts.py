@@ -38,6 +38,7 @@ from acdrive.sim._step_response import (
     EVENT_PARAMS,
     EVENT_STATES,
     NOT_YET,
+    event_params,
     figures,
     flat,
     initial_state,
@@ -474,3 +475,14 @@ def _step_response_class(unit: str, n_events: int) -> type:
             },
         )
     return _STEP_RESPONSE_CLASSES[key]
+
+
+def step_response_part(r: Reducer, unit: str, name: str, every: int) -> SampledPart:
+    """The part ``name`` that measures the step responses of ``r`` (a ``step_response``
+    reducer) on line, reading a speed in ``unit`` every ``every``-th control sample: one set of
+    ``EVENT_PARAMS`` per event of ``r.step_events()``."""
+    found = r.step_events()
+    values = {"every": float(every)}
+    for j, v in enumerate(event_params(found).reshape(len(found), len(EVENT_PARAMS))):
+        values |= {f"{n}{j}": float(a) for (n, _, _), a in zip(EVENT_PARAMS, v, strict=True)}
+    return _step_response_class(unit, len(found))(name, **values)

@@ -75,9 +75,9 @@ from acdrive._reducer_parts import (
     Reducer,
     _reducer_class,
     _speed_error_class,
-    _step_response_class,
     _stats_class,
     band_coefficients,
+    step_response_part,
 )
 from acdrive.errors import InputError, UnknownField
 from acdrive.sim._loop_source import STATUS_OK
@@ -86,7 +86,7 @@ from acdrive.sim._metrics import (
     TrackingRule,
     speed_error_figures,
 )
-from acdrive.sim._step_response import EVENT_PARAMS, EVENT_STATES, event_params
+from acdrive.sim._step_response import EVENT_STATES
 from acdrive.sim._system import System
 
 __all__ = [
@@ -390,13 +390,8 @@ def _with_reducers(drive, reducers: list[Reducer], duration: float, sample_time:
             served.append((part.name, 0))
             continue
         if r.kind == "step_response":
-            found = r.step_events()
-            cls = _step_response_class(x.var.unit, len(found))
-            values = {"every": float(every)}
-            for j, v in enumerate(event_params(found).reshape(len(found), len(EVENT_PARAMS))):
-                values |= {f"{n}{j}": float(a) for (n, _, _), a in zip(EVENT_PARAMS, v,
-                                                                         strict=True)}  # fmt: skip
-            part = cls(f"{REDUCER_PREFIX}step_response{len(served)}", **values)
+            name = f"{REDUCER_PREFIX}step_response{len(served)}"
+            part = step_response_part(r, x.var.unit, name, every)
             parts.append(part)
             wires += [(x, part.inp.x), (ref, part.inp.ref)]
             served.append((part.name, 0))
