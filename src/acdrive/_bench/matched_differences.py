@@ -48,6 +48,7 @@ def remaining_differences(peer: dict, duration: float = DURATION, converter: str
                  "variants": {}}  # fmt: skip
     tmp = tempfile.mkdtemp(prefix="acdrive_bench_")
     try:
+        example = None  # motulator's example run, the first variant
         with PeerProcess(peer["python"], "motulator_im.py", cwd=tmp) as proc:
             for variant in MOTULATOR_VARIANTS:
                 say(f"motulator {converter}: recording the {variant} variant")
